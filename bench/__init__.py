@@ -1,0 +1,1 @@
+"""Benchmarks (JSON + Markdown in bench/results/); not tests."""

@@ -1,0 +1,120 @@
+"""Benchmark of the generated rod kernels: ``python -m bench.kernels``.
+
+Reports, for N = 25, 50, 200, 1000: per-cell cost of the residual and of residual plus
+banded Jacobian through the compiled C API (ctypes, one call per evaluation), the compile
+time of the generated C (fresh cache), and the generated code size. Writes
+``bench/results/kernels.json`` and ``bench/results/kernels.md``.
+Targets (design section 7): residual <= 0.1 us/cell, residual + Jacobian <= 1 us/cell,
+compile <= 5 s independent of N.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from runtime import build
+from runtime.rod import RodModel, RodParameters
+
+SIZES = (25, 50, 200, 1000)
+RESULTS = Path(__file__).resolve().parent / "results"
+
+
+def _best_per_call(fn, min_time: float = 0.3, repeat: int = 5) -> float:
+    """Best-of-`repeat` mean time per call (s), each batch lasting about min_time."""
+    fn()
+    k, t = 1, 0.0
+    while True:
+        t0 = time.perf_counter()
+        for _ in range(k):
+            fn()
+        t = time.perf_counter() - t0
+        if t > min_time / 5:
+            break
+        k *= 4
+    best = t / k
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        for _ in range(k):
+            fn()
+        best = min(best, (time.perf_counter() - t0) / k)
+    return best
+
+
+def compile_time() -> float:
+    """Seconds to compile the generated C into an empty cache."""
+    cc = build.find_compiler()
+    if cc is None:
+        return float("nan")
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        build.compile_library(cc, outdir=Path(tmp))
+        return time.perf_counter() - t0
+
+
+def run() -> dict:
+    gdir = build.generated_dir()
+    sizes = {f: (gdir / f).stat().st_size for f in (*build.SOURCES, *build.HEADERS)}
+    rows = []
+    for N in SIZES:
+        P = RodParameters(0.3, N, 1000.0, 1e6, 0.3, 0.04, 0.04, 0.01, 0.01)
+        m = RodModel(P, tip_force=(0.05, 0.0, 0.0))
+        rng = np.random.default_rng(0)
+        y = m.initial_state() + 1e-3 * rng.standard_normal(m.n)
+        yp = rng.standard_normal(m.n)
+        res = np.empty(m.n)
+        ab = np.zeros((2 * m.kl + m.ku + 1, m.n), order="F")
+        t_res = _best_per_call(lambda m=m, y=y, yp=yp, res=res: m.residual(0.0, y, yp, res))
+        t_jac = _best_per_call(lambda m=m, y=y, yp=yp, ab=ab: m.jacobian_band(0.0, y, yp, 10.0,
+                                                                              ab))
+        rows.append({"N": N, "n": m.n, "backend": m.backend,
+                     "residual_us_per_cell": 1e6 * t_res / N,
+                     "jacobian_us_per_cell": 1e6 * t_jac / N,
+                     "residual_plus_jacobian_us_per_cell": 1e6 * (t_res + t_jac) / N,
+                     "residual_us_per_call": 1e6 * t_res, "jacobian_us_per_call": 1e6 * t_jac})
+    return {"machine": {"platform": platform.platform(), "cpus": os.cpu_count(),
+                        "compiler": build.find_compiler(), "cflags": list(build.CFLAGS)},
+            "generated_bytes": sizes, "generated_bytes_total": sum(sizes.values()),
+            "compile_seconds": compile_time(), "results": rows,
+            "targets": {"residual_us_per_cell": 0.1, "residual_plus_jacobian_us_per_cell": 1.0,
+                        "compile_seconds": 5.0}}
+
+
+def markdown(doc: dict) -> str:
+    lines = ["# Rod kernel benchmark", "",
+             f"compiler `{doc['machine']['compiler']}` {' '.join(doc['machine']['cflags'])}, "
+             f"{doc['machine']['cpus']} CPUs; generated C+H "
+             f"{doc['generated_bytes_total'] / 1024:.0f} KiB (independent of N); "
+             f"compile {doc['compile_seconds']:.2f} s (target <= 5 s).", "",
+             "| N | n | residual us/cell | Jacobian us/cell | residual+Jacobian us/cell |",
+             "|---:|---:|---:|---:|---:|"]
+    for r in doc["results"]:
+        lines.append(f"| {r['N']} | {r['n']} | {r['residual_us_per_cell']:.3f} | "
+                     f"{r['jacobian_us_per_cell']:.3f} | "
+                     f"{r['residual_plus_jacobian_us_per_cell']:.3f} |")
+    lines += ["", "Targets: residual <= 0.1 us/cell, residual+Jacobian <= 1 us/cell."]
+    return "\n".join(lines) + "\n"
+
+
+def _write(path: Path, text: str) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text)
+    tmp.replace(path)
+
+
+def main() -> None:
+    doc = run()
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    _write(RESULTS / "kernels.json", json.dumps(doc, indent=2) + "\n")
+    _write(RESULTS / "kernels.md", markdown(doc))
+    print(markdown(doc))
+
+
+if __name__ == "__main__":
+    main()

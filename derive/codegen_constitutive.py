@@ -1,0 +1,185 @@
+"""Render generated/constitutive.py from the formula table with a Jinja2 template."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import jinja2
+import sympy as sp
+from sympy.printing.numpy import NumPyPrinter
+
+from derive.artifacts import Artifact, sha256_text
+from derive.formulas import formulas, in_material_parameters
+from derive.pipeline import run
+from derive.steps import sections as sec
+from derive.symbols import (
+    I1,
+    I2,
+    I3,
+    A,
+    E,
+    kappa_1,
+    kappa_2,
+    kappa_3,
+    nu,
+    tau_B,
+    tau_S,
+)
+
+TEMPLATE_DIR = Path(__file__).parent / "templates"
+TEMPLATE = "constitutive.py.jinja"
+RECTANGLE_TERMS = 400
+
+
+@dataclass(frozen=True)
+class Range:
+    low: str
+    high: str
+    low_incl: bool
+    high_incl: bool
+    unit: str
+
+
+#: allowed parameter ranges (rendered into the generated module)
+RANGES: dict[str, Range] = {
+    "E": Range("0.0", "math.inf", False, False, "Pa"),
+    "nu": Range("-1.0", "0.5", False, True, ""),
+    "nu_compressible": Range("-1.0", "0.5", False, False, ""),
+    "tau_S": Range("0.0", "math.inf", True, False, "s"),
+    "tau_B": Range("0.0", "math.inf", True, False, "s"),
+    "eta": Range("0.0", "math.inf", True, False, "Pa s"),
+    "zeta": Range("0.0", "math.inf", True, False, "Pa s"),
+    "length": Range("0.0", "math.inf", False, False, "m"),
+    "section": Range("0.0", "math.inf", False, False, "m^2 or m^4"),
+    "kappa": Range("0.0", "1.0", False, True, ""),
+}
+
+
+class _Printer(NumPyPrinter):
+    """NumPy printer with 'numpy' as module name and plain float rationals."""
+
+    def __init__(self):
+        super().__init__({"fully_qualified_modules": True, "strict": True})
+
+
+def code(expr: sp.Basic, allowed: set[sp.Symbol]) -> str:
+    """Python source of ``expr``; refuses expressions with symbols outside ``allowed``."""
+    extra = expr.free_symbols - allowed
+    if extra:
+        raise ValueError(f"expression {expr} has symbols {extra} outside {allowed}")
+    return _Printer().doprint(expr)
+
+
+def _fn(name, args, doc, step, eqs, arg_docs, returns, expr, checks):
+    allowed = {sp.Symbol(a, **({"real": True} if a == "nu" else {"positive": True}))
+               for a in args}
+    return {"name": name, "args": list(args), "doc": doc, "step": step, "equations": eqs,
+            "arg_docs": arg_docs, "returns": returns, "body": code(expr, allowed),
+            "checks": checks}
+
+
+def _context() -> dict:
+    f = formulas()
+    steps = run()
+    cs = steps["cross_sections"].results
+    nu_doc = "nu: Poisson's ratio [-]"
+    functions = [
+        _fn("shear_modulus", ["E", "nu"], "Shear modulus G = mu [Pa].", "isotropic_moduli",
+            "Sect. 3.3", ["E: Young's modulus [Pa]", nu_doc], "G [Pa]", f["G_of_E"],
+            [("E", "E"), ("nu", "nu")]),
+        _fn("bulk_modulus", ["E", "nu"], "Bulk modulus K = lambda + 2 mu/3 [Pa].",
+            "isotropic_moduli", "Sect. 3.3", ["E: Young's modulus [Pa]", nu_doc + " (< 1/2)"],
+            "K [Pa]", f["K_of_E"], [("E", "E"), ("nu", "nu_compressible")]),
+        _fn("lame_lambda", ["E", "nu"], "Lame constant lambda [Pa].", "isotropic_moduli",
+            "Sect. 3.3", ["E: Young's modulus [Pa]", nu_doc + " (< 1/2)"], "lambda [Pa]",
+            f["lambda_of_E"], [("E", "E"), ("nu", "nu_compressible")]),
+        _fn("extensional_viscosity", ["zeta", "eta", "nu"],
+            "Extensional viscosity eta_E from the dissipation function [Pa s].",
+            "dissipation", "(5)", ["zeta: bulk viscosity [Pa s]", "eta: shear viscosity [Pa s]",
+                                   nu_doc], "eta_E [Pa s]", f["eta_E"],
+            [("zeta", "zeta"), ("eta", "eta"), ("nu", "nu")]),
+        _fn("extensional_viscosity_naive", ["zeta", "eta", "nu"],
+            "Extensional viscosity eta~_E of the naive resultant route [Pa s].",
+            "naive_resultants", "Sect. 4.2", ["zeta: bulk viscosity [Pa s]",
+                                              "eta: shear viscosity [Pa s]", nu_doc],
+            "eta~_E [Pa s]", f["eta_E_naive"], [("zeta", "zeta"), ("eta", "eta"), ("nu", "nu")]),
+        _fn("in_plane_dissipation", ["zeta", "eta", "nu"],
+            "Coefficient of (dH3/dt)^2 the resultant route misses, eta_E - eta~_E [Pa s].",
+            "naive_resultants", "Sect. 4.2", ["zeta: bulk viscosity [Pa s]",
+                                              "eta: shear viscosity [Pa s]", nu_doc],
+            "eta_E - eta~_E [Pa s]", f["in_plane_dissipation"],
+            [("zeta", "zeta"), ("eta", "eta"), ("nu", "nu")]),
+        _fn("retardation_time_extension", ["tau_B", "tau_S", "nu"],
+            "Extensional retardation time tau_E = eta_E/E [s].", "dissipation", "(6)",
+            ["tau_B: bulk retardation time zeta/K [s]", "tau_S: shear retardation time eta/G [s]",
+             nu_doc], "tau_E [s]", f["tau_E"],
+            [("tau_B", "tau_B"), ("tau_S", "tau_S"), ("nu", "nu")]),
+        _fn("retardation_time_extension_naive", ["tau_B", "tau_S"],
+            "Naive extensional retardation time tau~_E = eta~_E/E [s] (independent of nu).",
+            "naive_resultants", "Sect. 4.2",
+            ["tau_B: bulk retardation time [s]", "tau_S: shear retardation time [s]"],
+            "tau~_E [s]", f["tau_E_naive"], [("tau_B", "tau_B"), ("tau_S", "tau_S")]),
+    ]
+    mat_args = {E, nu, A, I1, I2, I3, kappa_1, kappa_2, kappa_3}
+    damp_args = mat_args | {tau_S, tau_B}
+    CF = in_material_parameters(f["C_F"])
+    CM = in_material_parameters(f["C_M"])
+    VF, VM = in_material_parameters(f["V_F"]), in_material_parameters(f["V_M"])
+    VFn, VMn = in_material_parameters(f["V_F_naive"]), in_material_parameters(f["V_M_naive"])
+    b, d, a_e, b_e = sec.b, sec.d, sec.a_e, sec.b_e
+    rect_args = {b, d, nu}
+    ell_args = {a_e, b_e, nu}
+    m = sec.m
+    term = cs["rectangle_J_T_tanh_term"]
+    return {
+        "functions": functions,
+        "ranges": list(RANGES.items()),
+        "CF": [code(CF[i, i], mat_args) for i in range(3)],
+        "CM": [code(CM[i, i], mat_args) for i in range(3)],
+        "VF": [code(VF[i, i], damp_args) for i in range(3)],
+        "VM": [code(VM[i, i], damp_args) for i in range(3)],
+        "VFn": [code(VFn[i, i], damp_args) for i in range(3)],
+        "VMn": [code(VMn[i, i], damp_args) for i in range(3)],
+        "rect": {"A": code(cs["rectangle_A"], rect_args), "I1": code(cs["rectangle_I1"], rect_args),
+                 "I2": code(cs["rectangle_I2"], rect_args),
+                 "kappa": code(cs["cowper_rectangle"], rect_args)},
+        "rect_power": code(cs["rectangle_J_T_power_sum"], rect_args),
+        "rect_term": code(term, rect_args | {m}),
+        "rect_terms": RECTANGLE_TERMS,
+        "rect_terms_var": "terms",
+        "rect_J_doc": "J_T = b d^3/3 - 64 d^4/pi^5 sum tanh((2m+1) pi b/(2d))/(2m+1)^5",
+        "ell": {"A": code(cs["ellipse_A"], ell_args), "I1": code(cs["ellipse_I1"], ell_args),
+                "I2": code(cs["ellipse_I2"], ell_args), "J_T": code(cs["ellipse_J_T"], ell_args),
+                "kappa_a": code(cs["cowper_ellipse_along_a"], ell_args),
+                "kappa_b": code(cs["cowper_ellipse_along_b"], ell_args)},
+    }
+
+
+def render_constitutive() -> tuple[str, str]:
+    """(module text, sha256 of its inputs: template text and the rendering context)."""
+    env = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATE_DIR),
+                             keep_trailing_newline=True, autoescape=False,
+                             undefined=jinja2.StrictUndefined)
+    ctx = _context()
+    text = env.get_template(TEMPLATE).render(**ctx)
+    template_text = (TEMPLATE_DIR / TEMPLATE).read_text()
+    return text, sha256_text(template_text, repr(sorted((k, repr(v)) for k, v in ctx.items())))
+
+
+def artifacts() -> list[Artifact]:
+    """The generated constitutive module."""
+    text, h = render_constitutive()
+    return [Artifact(path="constitutive.py", text=text, source=f"derive/templates/{TEMPLATE}",
+                     step="isotropic_moduli, stored_energy, dissipation, naive_resultants, "
+                          "cross_sections",
+                     inputs_hash=h,
+                     signature={"functions": ["shear_modulus", "bulk_modulus", "lame_lambda",
+                                              "extensional_viscosity",
+                                              "extensional_viscosity_naive",
+                                              "in_plane_dissipation",
+                                              "retardation_time_extension",
+                                              "retardation_time_extension_naive",
+                                              "rectangle_section", "ellipse_section",
+                                              "circle_section", "stiffness_matrices",
+                                              "damping_matrices"]})]

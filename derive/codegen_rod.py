@@ -1,0 +1,116 @@
+"""Generate the discrete rod's C kernels, assembly loop, layout module and serialised
+CasADi functions (issue 3; design section 3).
+
+Files (all in ``generated/``):
+
+* ``rod_kernels.c`` / ``rod_kernels.h``: every kernel of :func:`derive.discrete_rod.kernels`
+  through one ``casadi.CodeGenerator`` (size independent of N);
+* ``rod_assembly.c`` / ``rod_assembly.h``: the C API (residual, banded Jacobian,
+  diagnostics) rendered from ``templates/rod_assembly.*.jinja``;
+* ``rod_layout.py``: state/parameter layout (``templates/rod_layout.py.jinja``);
+* ``rod_<kernel>.casadi``: each kernel serialised (in-process fallback, IDAS cross-check).
+"""
+
+from __future__ import annotations
+
+import json
+import tempfile
+from functools import lru_cache
+from pathlib import Path
+
+import casadi as ca
+import jinja2
+
+from derive import discrete_rod as dr
+from derive.artifacts import Artifact, sha256_text
+
+STEP = "discrete_rod"
+TEMPLATES = Path(__file__).resolve().parent / "templates"
+#: CasADi CodeGenerator options (part of every inputs hash)
+CODEGEN_OPTIONS = {"with_header": True, "indent": 2, "casadi_int": "long long int"}
+
+
+def _env() -> jinja2.Environment:
+    return jinja2.Environment(loader=jinja2.FileSystemLoader(str(TEMPLATES)),
+                              undefined=jinja2.StrictUndefined, keep_trailing_newline=True,
+                              autoescape=False)
+
+
+def _signature(f: ca.Function) -> dict:
+    return {
+        "inputs": {f.name_in(i): list(f.size_in(i)) for i in range(f.n_in())},
+        "outputs": {f.name_out(i): list(f.size_out(i)) for i in range(f.n_out())},
+    }
+
+
+@lru_cache(maxsize=1)
+def _build() -> tuple[list[ca.Function], str, str, tuple, tuple]:
+    fns = dr.kernels()
+    cg = ca.CodeGenerator("rod_kernels.c", CODEGEN_OPTIONS)
+    for f in fns:
+        cg.add(f)
+    with tempfile.TemporaryDirectory() as tmp:
+        cg.generate(tmp + "/")
+        c_text = (Path(tmp) / "rod_kernels.c").read_text()
+        h_text = (Path(tmp) / "rod_kernels.h").read_text()
+    bands = tuple(dr.bandwidths(n) for n in (1, 2, 3, 4))
+    sbands = tuple(dr.static_bandwidths(n) for n in (1, 2, 3))
+    return fns, c_text, h_text, bands, sbands
+
+
+def _context() -> dict:
+    fns, _, _, bands, sbands = _build()
+    kl, ku = bands[-1]
+    if bands[1] != bands[-1] or bands[2] != bands[-1]:
+        raise RuntimeError(f"band widths not constant for N >= 2: {bands}")
+    skl, sku = max(b[0] for b in sbands), max(b[1] for b in sbands)
+    small = {n: b for n, b in zip((1,), bands[:1], strict=True) if b != (kl, ku)}
+    max_jac = max(f.nnz_out(0) for f in fns if f.name().endswith("_jac"))
+    return {
+        "cell0_fields": dr.CELL0_FIELDS, "cell_fields": dr.CELL_FIELDS,
+        "cell0_size": dr.CELL0_SIZE, "cell_size": dr.CELL_SIZE,
+        "cell0_offsets": dr.CELL0_OFFSETS, "cell_offsets": dr.CELL_OFFSETS,
+        "static_cell0_fields": dr.STATIC_CELL0_FIELDS,
+        "static_cell_fields": dr.STATIC_CELL_FIELDS,
+        "static_cell0_size": sum(s for _, s in dr.STATIC_CELL0_FIELDS),
+        "static_cell_size": sum(s for _, s in dr.STATIC_CELL_FIELDS),
+        "kl": kl, "ku": ku, "small_bands": small, "static_kl": skl, "static_ku": sku,
+        "params": dr.PARAMS, "n_params": dr.N_PARAMS, "param_offsets": dr.PARAM_OFFSETS,
+        "param_sizes": dr.PARAM_SIZES, "diag_scalars": dr.DIAG_SCALARS,
+        "n_diag_scalars": len(dr.DIAG_SCALARS),
+        "kernels": {f.name(): _signature(f) for f in fns},
+        "max_w": max(1, max(f.sz_w() for f in fns)),
+        "max_iw": max(1, max(f.sz_iw() for f in fns)),
+        "max_arg": max(f.sz_arg() for f in fns), "max_res": max(f.sz_res() for f in fns),
+        "max_jac": max_jac,
+    }
+
+
+def _render(template: str, ctx: dict) -> str:
+    return _env().get_template(template).render(**ctx)
+
+
+def artifacts() -> list[Artifact]:
+    """All rod artifacts (bodies without provenance header), deterministic."""
+    fns, c_text, h_text, _, _ = _build()
+    ctx = _context()
+    opts = json.dumps(CODEGEN_OPTIONS, sort_keys=True)
+    serial = {f.name(): f.serialize() for f in fns}
+    kernels_hash = sha256_text(opts, *(serial[k] for k in sorted(serial)))
+    sigs = {f.name(): _signature(f) for f in fns}
+    ctx_json = json.dumps(ctx, sort_keys=True, default=str)
+    out = [
+        Artifact("rod_kernels.c", c_text, "casadi.CodeGenerator(" + ", ".join(sorted(serial))
+                 + ")", STEP, kernels_hash, {"functions": sigs}),
+        Artifact("rod_kernels.h", h_text, "casadi.CodeGenerator (header)", STEP, kernels_hash),
+    ]
+    for tpl, path in (("rod_assembly.c.jinja", "rod_assembly.c"),
+                      ("rod_assembly.h.jinja", "rod_assembly.h"),
+                      ("rod_layout.py.jinja", "rod_layout.py")):
+        text = _render(tpl, ctx)
+        out.append(Artifact(path, text, "derive/templates/" + tpl, STEP,
+                            sha256_text((TEMPLATES / tpl).read_text(), ctx_json)))
+    for name in sorted(serial):
+        out.append(Artifact(f"{name}.casadi", serial[name], f"casadi.Function {name}", STEP,
+                            sha256_text(serial[name]), {name: sigs[name]}))
+    return out

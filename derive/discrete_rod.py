@@ -1,0 +1,621 @@
+"""Discrete Cosserat rod with Kelvin-Voigt damping as CasADi SX kernels (design section 4).
+
+Quaternion staggered grid of Lang, Linn and Arnold (2011):
+
+* nodes ``phi_0 .. phi_N`` (positions, m) with velocities ``v_i`` (m/s), uniform element
+  length ``h = L/N``;
+* segments ``i = 1..N`` between nodes ``i-1`` and ``i`` carry a quaternion ``p_i``
+  (scalar part first) and the material angular velocity ``Omega_i`` (rad/s);
+* shear/extension strain on segments, ``V_i = R(p_i)^T (phi_i - phi_{i-1})/h``, reference
+  ``V_0 = e3``;
+* curvature at a joint between neighbouring frames a, b (Cayley form)
+  ``U = (2/h_j) Im(r)/Re(r)``, ``r = conj(p_a) p_b`` (= rotation angle/h_j + O(theta^3)),
+  with ``h_j = h`` at interior joints and ``h_j = h/2`` between a clamp frame and the
+  adjacent segment (a half-length curvature cell keeps the O(h^2) accuracy that fixing
+  p_1 to the clamp frame would lose, design section 7).
+
+Functionals (paper eqs. (10), (11), footnote 4):
+
+* elastic energy ``W = sum_seg h/2 dV^T C_F dV + sum_joints h_j/2 dU^T C_M dU``;
+* dissipation function ``D = sum_seg h/2 Vdot^T V_F Vdot + sum_joints h_j/2 Udot^T V_M Udot``
+  with the *exact* time derivatives of the discrete strains along ``phi' = v``,
+  ``p' = 1/2 p*(0, Omega)`` (forward AD), so the viscous resultants are ``V_F Vdot`` and
+  ``V_M Udot`` and the viscous generalized forces are ``-dD/d(v, Omega)``;
+* kinetic energy with lumped nodal masses ``rho A h`` (half at the ends) and segment rotary
+  inertia ``rho h diag(I1, I2, I3)``.
+
+Elastic forces are ``-dW/dphi``; the material torque conjugate to ``Omega`` is
+``T = -1/2 vec(L(p)^T dW/dp)`` with ``L(p)`` the left quaternion multiplication matrix.
+Because all forces are derivatives of W and D, the discrete model is objective and
+satisfies ``d/dt (T + W) = -2 D + P_ext`` exactly along its flow.
+
+**Definitions and kernels.** :func:`segment_functionals` / :func:`joint_functionals` define
+V, U, W, D with the rates by forward AD (``jtimes``), and :func:`segment_forces_ad` /
+:func:`joint_torques_ad` the forces by CasADi AD of W and D -- the definitions. The kernels
+evaluate the same quantities in closed (virtual-work) form through the stress resultants
+(:func:`segment_quantities`, :func:`joint_quantities`); their Jacobians are formed along
+rotation increments, in closed form for the segment (:func:`segment_jacobian`) and by
+CasADi AD in the increment for the joint (:func:`joint_jacobian`). All of this is
+identical as functions to the AD of the definitions (tests compare them to rounding, and
+the assembled Jacobians to finite differences) and makes the residual about 2x and the
+Jacobian about 2x cheaper than AD of the definitions.
+
+**Quaternion norm.** We use the *kinematic form* ``p' = 1/2 p*(0, Omega)`` without a norm
+constraint. In exact time it preserves ``|p|``; the integrator's drift of ``|p|`` is
+harmless because every strain measure is homogeneous of degree 0 in each quaternion:
+``R(p)`` is written as ``[(p0^2 - |q|^2) I + 2 q q^T + 2 p0 [q]x] / |p|^2`` and the
+Cayley curvature ``Im(r)/Re(r)`` is a ratio of two bilinear forms. Energies, dissipation
+and forces therefore do not change when a quaternion is scaled (tested), the torque
+formula above is valid for any ``|p|``, and the static solver renormalises after every
+update. No square root appears anywhere.
+
+Everything the runtime needs about the state and parameter vectors is defined here once
+(:data:`CELL_FIELDS`, :data:`PARAMS`) and rendered into ``generated/rod_layout.py``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+
+# --------------------------------------------------------------------------------------
+# Layout: the single source of truth (rendered into generated/rod_layout.py)
+# --------------------------------------------------------------------------------------
+
+#: fields of cell 0 (node 0 only), in order, with sizes
+CELL0_FIELDS: tuple[tuple[str, int], ...] = (("phi", 3), ("v", 3))
+#: fields of cell i = 1..N (segment i and node i), in order, with sizes
+CELL_FIELDS: tuple[tuple[str, int], ...] = (("p", 4), ("Omega", 3), ("phi", 3), ("v", 3))
+
+#: the global parameter vector passed to every kernel: (name, size, unit, meaning)
+PARAMS: tuple[tuple[str, int, str, str], ...] = (
+    ("h", 1, "m", "element length L/N"),
+    ("C_F", 3, "N", "diagonal of C_F = diag(GA_1, GA_2, EA), eq. (7)"),
+    ("C_M", 3, "N m^2", "diagonal of C_M = diag(EI_1, EI_2, GJ_T), eq. (7)"),
+    ("V_F", 3, "N s", "diagonal of V_F, eq. (9)"),
+    ("V_M", 3, "N m^2 s", "diagonal of V_M, eq. (9)"),
+    ("U0", 3, "1/m", "reference curvature (material)"),
+    ("rhoA", 1, "kg/m", "mass per length rho A"),
+    ("rhoI", 3, "kg m", "rotary inertia per length rho diag(I1, I2, I3)"),
+    ("gravity", 3, "m/s^2", "gravitational acceleration (spatial)"),
+    ("tip_force", 3, "N", "dead force at node N (spatial)"),
+    ("tip_moment", 3, "N m", "dead moment on segment N (spatial)"),
+    ("load_scale", 1, "1", "factor on all external loads (load stepping)"),
+    ("p_start", 4, "1", "clamp frame quaternion at s = 0 (scalar first)"),
+    ("p_end", 4, "1", "clamp frame quaternion at s = L (scalar first)"),
+    ("fix_start", 1, "1", "1: node 0 position fixed (clamped or pinned), else 0"),
+    ("clamp_start", 1, "1", "1: frame clamped at s = 0 (half-length joint), else 0"),
+    ("fix_end", 1, "1", "1: node N position fixed, else 0"),
+    ("clamp_end", 1, "1", "1: frame clamped at s = L, else 0"),
+)
+
+
+def _offsets(fields) -> dict[str, int]:
+    out, k = {}, 0
+    for f in fields:
+        out[f[0]] = k
+        k += f[1]
+    return out
+
+
+CELL0_SIZE = sum(s for _, s in CELL0_FIELDS)
+CELL_SIZE = sum(s for _, s in CELL_FIELDS)
+CELL0_OFFSETS = _offsets(CELL0_FIELDS)
+CELL_OFFSETS = _offsets(CELL_FIELDS)
+PARAM_OFFSETS = _offsets(PARAMS)
+PARAM_SIZES = {name: size for name, size, *_ in PARAMS}
+N_PARAMS = sum(s for _, s, *_ in PARAMS)
+
+#: reduced coordinates of the static problem: cell 0 = dphi_0, cell i = (dtheta_i, dphi_i)
+STATIC_CELL0_FIELDS: tuple[tuple[str, int], ...] = (("phi", 3),)
+STATIC_CELL_FIELDS: tuple[tuple[str, int], ...] = (("theta", 3), ("phi", 3))
+
+#: diagnostics vector: scalars then per-element arrays (sizes in multiples of N or N+1)
+DIAG_SCALARS = ("kinetic", "elastic", "dissipation_rate", "external_power")
+
+# --------------------------------------------------------------------------------------
+# Quaternion algebra (scalar part first), CasADi SX
+# --------------------------------------------------------------------------------------
+
+
+def skew(a):
+    """[a]x, the 3x3 cross-product matrix."""
+    return ca.vertcat(
+        ca.horzcat(0, -a[2], a[1]),
+        ca.horzcat(a[2], 0, -a[0]),
+        ca.horzcat(-a[1], a[0], 0),
+    )
+
+
+def qmul(a, b):
+    """Quaternion product a*b (4-vectors, scalar first)."""
+    a0, av, b0, bv = a[0], a[1:4], b[0], b[1:4]
+    return ca.vertcat(a0 * b0 - ca.dot(av, bv), a0 * bv + b0 * av + ca.cross(av, bv))
+
+
+def qconj(a):
+    """Conjugate quaternion."""
+    return ca.vertcat(a[0], -a[1:4])
+
+
+def left_matrix(p):
+    """L(p) with p*q = L(p) q (4x4)."""
+    p0, q = p[0], p[1:4]
+    top = ca.horzcat(p0, -q.T)
+    bot = ca.horzcat(q, p0 * ca.SX.eye(3) + skew(q))
+    return ca.vertcat(top, bot)
+
+
+def rotation(p):
+    """R(p), homogeneous of degree 0 in p: [(p0^2-|q|^2) I + 2 q q^T + 2 p0 [q]x] / |p|^2."""
+    p0, q = p[0], p[1:4]
+    n2 = ca.dot(p, p)
+    return ((p0**2 - ca.dot(q, q)) * ca.SX.eye(3) + 2 * (q @ q.T) + 2 * p0 * skew(q)) / n2
+
+
+def qdot(p, omega):
+    """Kinematic equation p' = 1/2 p*(0, Omega) (material angular velocity)."""
+    return 0.5 * qmul(p, ca.vertcat(0, omega))
+
+
+def torque_from_gradient(p, dWdp):
+    """Material torque conjugate to Omega: T = -1/2 vec(L(p)^T dW/dp) (valid for any |p|)."""
+    return -0.5 * (left_matrix(p).T @ dWdp)[1:4]
+
+
+def _par(par, name):
+    k, s = PARAM_OFFSETS[name], PARAM_SIZES[name]
+    return par[k] if s == 1 else par[k : k + s]
+
+
+def _quad(diag, x):
+    return ca.dot(x, diag * x)
+
+
+# --------------------------------------------------------------------------------------
+# Strains and element functionals
+# --------------------------------------------------------------------------------------
+
+
+def shear_strain(phi_a, phi_b, p, h):
+    """V = R(p)^T (phi_b - phi_a)/h (3,), dimensionless."""
+    return rotation(p).T @ (phi_b - phi_a) / h
+
+
+def curvature(p_a, p_b, hj):
+    """Cayley curvature U = (2/h_j) Im(r)/Re(r), r = conj(p_a) p_b (3,), 1/m."""
+    r = qmul(qconj(p_a), p_b)
+    return 2.0 / hj * r[1:4] / r[0]
+
+
+@dataclass(frozen=True)
+class _Sym:
+    phi_a: ca.SX
+    phi_b: ca.SX
+    p: ca.SX
+    v_a: ca.SX
+    v_b: ca.SX
+    omega: ca.SX
+    p_b: ca.SX
+    omega_b: ca.SX
+    hj: ca.SX
+    par: ca.SX
+
+
+def _symbols() -> _Sym:
+    S = ca.SX.sym
+    return _Sym(S("phi_a", 3), S("phi_b", 3), S("p", 4), S("v_a", 3), S("v_b", 3),
+                S("Omega", 3), S("p_b", 4), S("Omega_b", 3), S("h_j", 1), S("par", N_PARAMS))
+
+
+def rotate_transposed(p, x):
+    """R(p)^T x without forming R (degree 0 in p)."""
+    p0, q = p[0], p[1:4]
+    return ((p0**2 - ca.dot(q, q)) * x + 2 * ca.dot(q, x) * q - 2 * p0 * ca.cross(q, x)) / ca.dot(
+        p, p)
+
+
+def rotate(p, x):
+    """R(p) x without forming R (degree 0 in p)."""
+    p0, q = p[0], p[1:4]
+    return ((p0**2 - ca.dot(q, q)) * x + 2 * ca.dot(q, x) * q + 2 * p0 * ca.cross(q, x)) / ca.dot(
+        p, p)
+
+
+# -- the functionals (definitions) -----------------------------------------------------
+
+
+def segment_functionals(s: _Sym) -> dict[str, ca.SX]:
+    """V, its exact rate Vdot, elastic energy W and dissipation function D of a segment.
+
+    ``W = h/2 dV^T C_F dV`` (10), ``D = h/2 Vdot^T V_F Vdot`` (11). The rate is the
+    forward-AD derivative of V along ``phi' = v``, ``p' = 1/2 p*(0, Omega)``.
+    """
+    h = _par(s.par, "h")
+    V = shear_strain(s.phi_a, s.phi_b, s.p, h)
+    Vdot = ca.jtimes(V, ca.vertcat(s.phi_a, s.phi_b, s.p),
+                     ca.vertcat(s.v_a, s.v_b, qdot(s.p, s.omega)))
+    dV = V - ca.DM([0, 0, 1])
+    return {"V": V, "Vdot": Vdot, "W": h / 2 * _quad(_par(s.par, "C_F"), dV),
+            "D": h / 2 * _quad(_par(s.par, "V_F"), Vdot)}
+
+
+def joint_functionals(s: _Sym) -> dict[str, ca.SX]:
+    """U, its exact rate Udot, W and D of a joint of length h_j (Cayley curvature)."""
+    U = curvature(s.p, s.p_b, s.hj)
+    Udot = ca.jtimes(U, ca.vertcat(s.p, s.p_b),
+                     ca.vertcat(qdot(s.p, s.omega), qdot(s.p_b, s.omega_b)))
+    dU = U - _par(s.par, "U0")
+    return {"U": U, "Udot": Udot, "W": s.hj / 2 * _quad(_par(s.par, "C_M"), dU),
+            "D": s.hj / 2 * _quad(_par(s.par, "V_M"), Udot)}
+
+
+def segment_forces_ad(s: _Sym) -> ca.SX:
+    """Generalized forces of a segment by CasADi AD of W and D (the definition).
+
+    ``Q = [-dW/dphi_a - dD/dv_a; -dW/dphi_b - dD/dv_b; T]`` with the torque
+    ``T = -1/2 vec(L(p)^T dW/dp) - dD/dOmega``.
+    """
+    f = segment_functionals(s)
+    gW = ca.gradient(f["W"], ca.vertcat(s.phi_a, s.phi_b, s.p))
+    gD = ca.gradient(f["D"], ca.vertcat(s.v_a, s.v_b, s.omega))
+    return ca.vertcat(-gW[0:3], -gW[3:6], torque_from_gradient(s.p, gW[6:10])) - gD
+
+
+def joint_torques_ad(s: _Sym) -> ca.SX:
+    """Torques of a joint on its two segments by CasADi AD of W and D (the definition)."""
+    f = joint_functionals(s)
+    gW = ca.gradient(f["W"], ca.vertcat(s.p, s.p_b))
+    gD = ca.gradient(f["D"], ca.vertcat(s.omega, s.omega_b))
+    return ca.vertcat(torque_from_gradient(s.p, gW[0:4]),
+                      torque_from_gradient(s.p_b, gW[4:8])) - gD
+
+
+# -- the same quantities in closed form (what the kernels evaluate) --------------------
+
+
+def segment_quantities(s: _Sym) -> dict[str, ca.SX]:
+    """Closed forms of the segment's strain, rate, W, D, resultant and forces.
+
+    With the resultant ``n = C_F dV + V_F Vdot`` (eq. (1)) the virtual work of W and D gives
+    ``f_b = -R n``, ``f_a = R n``, ``T = h V x n``; the rate is
+    ``Vdot = R^T (v_b - v_a)/h + V x Omega``. These are identically the AD derivatives
+    (:func:`segment_forces_ad`, :func:`segment_functionals`; equality is tested to
+    rounding) but cost about a third to evaluate and to differentiate again.
+    """
+    h = _par(s.par, "h")
+    V = rotate_transposed(s.p, s.phi_b - s.phi_a) / h
+    dV = V - ca.DM([0, 0, 1])
+    Vdot = rotate_transposed(s.p, s.v_b - s.v_a) / h + ca.cross(V, s.omega)
+    C_F, V_F = _par(s.par, "C_F"), _par(s.par, "V_F")
+    n = C_F * dV + V_F * Vdot
+    Rn = rotate(s.p, n)
+    Q = ca.vertcat(Rn, -Rn, h * ca.cross(V, n))
+    return {"V": V, "Vdot": Vdot, "W": h / 2 * _quad(C_F, dV), "D": h / 2 * _quad(V_F, Vdot),
+            "Q": Q, "F": n}
+
+
+def joint_quantities(s: _Sym) -> dict[str, ca.SX]:
+    """Closed forms of the joint's curvature, rate, W, D, resultant and torques.
+
+    With ``r = conj(p_a) p_b``, ``u = Im(r)/Re(r)``, ``U = (2/h_j) u``,
+    ``A = I + [u]x + u u^T`` (so that ``dU = (1/h_j) A dtheta_b`` for
+    ``p_b <- p_b*exp(dtheta_b/2)``), ``w = Omega_b - R(r)^T Omega_a``:
+    ``Udot = A w / h_j``, resultant ``m = C_M dU + V_M Udot``, torques
+    ``T_b = -A^T m``, ``T_a = R(r) A^T m``. Identically the AD derivatives
+    (:func:`joint_torques_ad`; tested).
+    """
+    r = qmul(qconj(s.p), s.p_b)
+    return _joint_of_r(r, s.omega, s.omega_b, s.hj, s.par)
+
+
+def _joint_of_r(r, oa, ob, hj, par) -> dict[str, ca.SX]:
+    u = r[1:4] / r[0]
+    U = 2.0 / hj * u
+    w = ob - rotate_transposed(r, oa)
+    Aw = w + ca.cross(u, w) + u * ca.dot(u, w)
+    Udot = Aw / hj
+    dU = U - _par(par, "U0")
+    C_M, V_M = _par(par, "C_M"), _par(par, "V_M")
+    m = C_M * dU + V_M * Udot
+    Atm = m - ca.cross(u, m) + u * ca.dot(u, m)
+    T = ca.vertcat(rotate(r, Atm), -Atm)
+    return {"U": U, "Udot": Udot, "W": hj / 2 * _quad(C_M, dU), "D": hj / 2 * _quad(V_M, Udot),
+            "T": T, "M": m}
+
+
+def _joint_torques_of_r(r, oa, ob, hj, par) -> ca.SX:
+    return _joint_of_r(r, oa, ob, hj, par)["T"]
+
+
+def _increment_projection(p):
+    """P(p) (3x4) with dtheta = P(p) dp for p <- p*exp(dtheta/2): 2 vec(conj(p) dp)/|p|^2.
+
+    Exact for the derivative of any function that is homogeneous of degree 0 in p (the
+    radial part of dp does not change it)."""
+    return 2 / ca.dot(p, p) * ca.horzcat(-p[1:4], p[0] * ca.SX.eye(3) - skew(p[1:4]))
+
+
+def _right_matrix(q):
+    """Rm(q) with a*q = Rm(q) a (4x4)."""
+    q0, v = q[0], q[1:4]
+    return ca.vertcat(ca.horzcat(q0, -v.T), ca.horzcat(v, q0 * ca.SX.eye(3) - skew(v)))
+
+
+def segment_jacobian(s: _Sym) -> ca.SX:
+    """d(f_b, T)/d(phi_b, p, v_b, Omega) (6x13) of :func:`segment_quantities`, closed form.
+
+    With R = R(p), V = R^T d/h, g = R^T (v_b - v_a)/h, n = C_F dV + V_F (g + V x Omega),
+    ``dn/dV = C_F - V_F [Omega]x`` and, for the rotation increment p <- p*exp(theta/2)
+    (V -> V + V x theta, g -> g + g x theta, R -> R (I + [theta]x)),
+    ``dn/dtheta = C_F [V]x + V_F ([g]x - [Omega]x [V]x)``; f_b = -R n and T = h V x n give
+    the blocks below. The p columns are d/dtheta times :func:`_increment_projection`
+    (exact because f_b and T are homogeneous of degree 0 in p). Equal to CasADi AD of
+    :func:`segment_forces_ad` to rounding (tested); about 3x cheaper.
+    """
+    h = _par(s.par, "h")
+    R = rotation(s.p)
+    RT = R.T
+    V = RT @ (s.phi_b - s.phi_a) / h
+    g = RT @ (s.v_b - s.v_a) / h
+    C, Vf = ca.diag(_par(s.par, "C_F")), ca.diag(_par(s.par, "V_F"))
+    n = C @ (V - ca.DM([0, 0, 1])) + Vf @ (g + ca.cross(V, s.omega))
+    Vx, nx, Ox = skew(V), skew(n), skew(s.omega)
+    NV = C - Vf @ Ox
+    Nth = C @ Vx + Vf @ (skew(g) - Ox @ Vx)
+    J_phi = ca.vertcat(-R @ NV @ RT / h, (Vx @ NV - nx) @ RT)
+    J_th = ca.vertcat(-R @ (Nth - nx), h * (Vx @ Nth - nx @ Vx))
+    J_v = ca.vertcat(-R @ Vf @ RT / h, Vx @ Vf @ RT)
+    J_om = ca.vertcat(-R @ Vf @ Vx, h * Vx @ Vf @ Vx)
+    return ca.horzcat(J_phi, J_th @ _increment_projection(s.p), J_v, J_om)
+
+
+def joint_jacobian(s: _Sym) -> ca.SX:
+    """d(T_a, T_b)/d(p_a, p_b, Omega_a, Omega_b) (6x14) of :func:`joint_quantities`.
+
+    The torques depend on the quaternions through r = conj(p_a) p_b only and are homogeneous
+    of degree 0 in r. Under r <- r*exp(theta/2): u <- u + 1/2 A theta, R(r) <- R(r)(I +
+    [theta]x) to first order; CasADi AD in theta at 0 gives J_theta (6x3), and
+    ``p_b <- p_b*exp(theta_b/2)`` is ``theta = theta_b``, ``p_a <- p_a*exp(theta_a/2)`` is
+    ``theta = -R(r)^T theta_a``, so d/dp_b = J_theta P(p_b) and
+    d/dp_a = -J_theta R(r)^T P(p_a) (:func:`_increment_projection`).
+    """
+    pa, pb, oa, ob, hj, par = s.p, s.p_b, s.omega, s.omega_b, s.hj, s.par
+    r = qmul(qconj(pa), pb)
+    u0 = r[1:4] / r[0]
+    a0 = rotate_transposed(r, oa)
+    th = ca.SX.sym("theta", 3)
+    u = u0 + 0.5 * (th + ca.cross(u0, th) + u0 * ca.dot(u0, th))
+    w = ob - (a0 + ca.cross(a0, th))
+    Aw = w + ca.cross(u, w) + u * ca.dot(u, w)
+    m = _par(par, "C_M") * (2.0 / hj * u - _par(par, "U0")) + _par(par, "V_M") * Aw / hj
+    Atm = m - ca.cross(u, m) + u * ca.dot(u, m)
+    T = ca.vertcat(rotate(r, Atm + ca.cross(th, Atm)), -Atm)
+    J_th = ca.substitute(ca.jacobian(T, th), th, ca.DM.zeros(3))
+    # T is affine in w = Omega_b - R^T Omega_a: dT_b/dw = -A^T V_M A / h_j, dT_a/dw = -R dT_b/dw
+    R = rotation(r)
+    A = ca.SX.eye(3) + skew(u0) + u0 @ u0.T
+    K = A.T @ (ca.diag(_par(par, "V_M")) @ A) / hj
+    J_w = ca.vertcat(R @ K, -K)
+    return ca.horzcat(-J_th @ R.T @ _increment_projection(pa),
+                      J_th @ _increment_projection(pb), -J_w @ R.T, J_w)
+
+
+# --------------------------------------------------------------------------------------
+# Kernels
+# --------------------------------------------------------------------------------------
+
+_OPTS = {"cse": True}
+
+
+def _fn(name, ins: dict, outs: dict) -> ca.Function:
+    return ca.Function(name, list(ins.values()), list(outs.values()), list(ins), list(outs),
+                       _OPTS)
+
+
+def kernels() -> list[ca.Function]:
+    """All per-element CasADi kernels, in a fixed order (see their docstrings in layout).
+
+    Segment stencil inputs: phi_a, phi_b (3), p (4), v_a, v_b (3), Omega (3), par.
+    Joint stencil inputs: p_a, p_b (4), Omega_a, Omega_b (3), h_j (1), par.
+    Jacobian kernels return dense blocks (column-major in C). The segment Jacobian is
+    reduced: rows (force on node b, torque), columns (phi_b, p, v_b, Omega); since the
+    segment depends on phi_b - phi_a and v_b - v_a only and its forces balance
+    (f_a = -f_b), d/dphi_a = -d/dphi_b, d/dv_a = -d/dv_b and df_a = -df_b.
+    """
+    s = _symbols()
+    S = ca.SX.sym
+    seg_in = {"phi_a": s.phi_a, "phi_b": s.phi_b, "p": s.p, "v_a": s.v_a, "v_b": s.v_b,
+              "Omega": s.omega, "par": s.par}
+    seg = segment_quantities(s)
+    jnt_in = {"p_a": s.p, "p_b": s.p_b, "Omega_a": s.omega, "Omega_b": s.omega_b,
+              "h_j": s.hj, "par": s.par}
+    jnt = joint_quantities(s)
+
+    # segment inertia and kinematics rows: [p' - 1/2 p*(0,Omega); J Omega' + Omega x J Omega]
+    p, om = s.p, s.omega
+    pd, omd = S("p_dot", 4), S("Omega_dot", 3)
+    tip, fixed, m = S("tip"), S("fixed"), S("m")
+    cy, cj = S("c_y"), S("c_j")
+    h = _par(s.par, "h")
+    Jd = h * _par(s.par, "rhoI")
+    ls = _par(s.par, "load_scale")
+    r_seg = ca.vertcat(pd - qdot(p, om), Jd * omd + ca.cross(om, Jd * om))
+    xs, xds = ca.vertcat(p, om), ca.vertcat(pd, omd)
+    J_seg = cy * ca.jacobian(r_seg, xs) + cj * ca.jacobian(r_seg, xds)
+    seg_in_in = {"p": p, "Omega": om, "p_dot": pd, "Omega_dot": omd, "par": s.par}
+    # dead tip moment (spatial) as a material torque on the last segment
+    T_tip = ls * rotate_transposed(p, _par(s.par, "tip_moment"))
+    kin_seg = 0.5 * ca.dot(om, Jd * om)
+    pow_seg = tip * ca.dot(T_tip, om)
+
+    # node rows: [phi' - v; (1-fixed) (m v' - load_scale (m g + tip F)) + fixed v]
+    phi, v = s.phi_a, s.v_a
+    phid, vd = S("phi_dot", 3), S("v_dot", 3)
+    f_ext = ls * (m * _par(s.par, "gravity") + tip * _par(s.par, "tip_force"))
+    r_node = ca.vertcat(phid - v, (1 - fixed) * (m * vd - f_ext) + fixed * v)
+    xn, xdn = ca.vertcat(phi, v), ca.vertcat(phid, vd)
+    J_node = cy * ca.jacobian(r_node, xn) + cj * ca.jacobian(r_node, xdn)
+    node_in = {"phi": phi, "v": v, "phi_dot": phid, "v_dot": vd, "m": m, "tip": tip,
+               "fixed": fixed, "par": s.par}
+    kin_node = 0.5 * m * ca.dot(v, v)
+    pow_node = ca.dot(f_ext, v)
+
+    return [
+        _fn("rod_segment_forces", seg_in, {"Q": seg["Q"]}),
+        _fn("rod_segment_forces_jac", seg_in, {"dQb_dxb": ca.densify(segment_jacobian(s))}),
+        _fn("rod_joint_torques", jnt_in, {"T": jnt["T"]}),
+        _fn("rod_joint_torques_jac", jnt_in, {"dT_dx": ca.densify(joint_jacobian(s))}),
+        _fn("rod_segment_inertia", seg_in_in, {"r": r_seg}),
+        _fn("rod_segment_inertia_jac", {**seg_in_in, "c_y": cy, "c_j": cj},
+            {"J": ca.densify(J_seg)}),
+        _fn("rod_tip_moment", {"p": p, "par": s.par}, {"T": T_tip}),
+        _fn("rod_tip_moment_jac", {"p": p, "par": s.par},
+            {"dT_dp": ca.densify(ca.jacobian(T_tip, p))}),
+        _fn("rod_node_inertia", node_in, {"r": r_node}),
+        _fn("rod_node_inertia_jac", {**node_in, "c_y": cy, "c_j": cj}, {"J": ca.densify(J_node)}),
+        _fn("rod_segment_diagnostics", seg_in,
+            {"W": seg["W"], "D": seg["D"], "V": seg["V"], "F": seg["F"]}),
+        _fn("rod_joint_diagnostics", jnt_in,
+            {"W": jnt["W"], "D": jnt["D"], "U": jnt["U"], "M": jnt["M"]}),
+        _fn("rod_segment_kinetic", {"p": p, "Omega": om, "tip": tip, "par": s.par},
+            {"T": kin_seg, "P_ext": pow_seg}),
+        _fn("rod_node_kinetic", {"v": v, "m": m, "tip": tip, "par": s.par},
+            {"T": kin_node, "P_ext": pow_node}),
+    ]
+
+
+# --------------------------------------------------------------------------------------
+# Whole-rod structure (for exact band widths; symbolic, small N only)
+# --------------------------------------------------------------------------------------
+
+
+def cell_start(i: int) -> int:
+    """Index of the first unknown of cell i in y."""
+    return 0 if i == 0 else CELL0_SIZE + CELL_SIZE * (i - 1)
+
+
+def whole_rod_residual(n_elements: int, start_clamped: bool = True,
+                       end_clamped: bool = True) -> ca.Function:
+    """F(y, yp, par) for a whole rod built from the kernels (symbolic; for structure/tests)."""
+    N = n_elements
+    ks = {f.name(): f for f in kernels()}
+    n = CELL0_SIZE + CELL_SIZE * N
+    y, yp, par = ca.SX.sym("y", n), ca.SX.sym("yp", n), ca.SX.sym("par", N_PARAMS)
+    co = CELL_OFFSETS
+
+    def fld(vec, i, name):
+        if i == 0:
+            k = CELL0_OFFSETS[name]
+            return vec[k : k + 3]
+        k = cell_start(i) + co[name]
+        return vec[k : k + (4 if name == "p" else 3)]
+
+    res = [None] * n
+    h = par[PARAM_OFFSETS["h"]]
+    rhoA = par[PARAM_OFFSETS["rhoA"]]
+    parts = []
+    for i in range(N + 1):
+        m = rhoA * h * (0.5 if i in (0, N) else 1.0)
+        fixed = par[PARAM_OFFSETS["fix_start"]] if i == 0 else (
+            par[PARAM_OFFSETS["fix_end"]] if i == N else 0)
+        r = ks["rod_node_inertia"](fld(y, i, "phi"), fld(y, i, "v"), fld(yp, i, "phi"),
+                                   fld(yp, i, "v"), m, float(i == N), fixed, par)
+        parts.append((cell_start(i) + (CELL0_OFFSETS["phi"] if i == 0 else co["phi"]), r))
+    for i in range(1, N + 1):
+        r = ks["rod_segment_inertia"](fld(y, i, "p"), fld(y, i, "Omega"), fld(yp, i, "p"),
+                                      fld(yp, i, "Omega"), par)
+        if i == N:
+            r = r - ca.vertcat(ca.DM.zeros(4), ks["rod_tip_moment"](fld(y, i, "p"), par))
+        parts.append((cell_start(i) + co["p"], r))
+    for k, r in parts:
+        for j in range(r.shape[0]):
+            res[k + j] = r[j]
+
+    def vidx(i):
+        return (CELL0_OFFSETS["v"] if i == 0 else cell_start(i) + co["v"])
+
+    def oidx(i):
+        return cell_start(i) + co["Omega"]
+
+    def sub(k, val, mask=1):
+        for j in range(3):
+            res[k + j] = res[k + j] - mask * val[j]
+
+    fs, fe = par[PARAM_OFFSETS["fix_start"]], par[PARAM_OFFSETS["fix_end"]]
+    for i in range(1, N + 1):
+        Q = ks["rod_segment_forces"](fld(y, i - 1, "phi"), fld(y, i, "phi"), fld(y, i, "p"),
+                                     fld(y, i - 1, "v"), fld(y, i, "v"), fld(y, i, "Omega"), par)
+        sub(vidx(i - 1), Q[0:3], (1 - fs) if i - 1 == 0 else 1)
+        sub(vidx(i), Q[3:6], (1 - fe) if i == N else 1)
+        sub(oidx(i), Q[6:9])
+    for i in range(1, N):
+        T = ks["rod_joint_torques"](fld(y, i, "p"), fld(y, i + 1, "p"), fld(y, i, "Omega"),
+                                    fld(y, i + 1, "Omega"), h, par)
+        sub(oidx(i), T[0:3])
+        sub(oidx(i + 1), T[3:6])
+    zero = ca.DM.zeros(3)
+    if start_clamped:
+        ps = par[PARAM_OFFSETS["p_start"] : PARAM_OFFSETS["p_start"] + 4]
+        T = ks["rod_joint_torques"](ps, fld(y, 1, "p"), zero, fld(y, 1, "Omega"), h / 2, par)
+        sub(oidx(1), T[3:6])
+    if end_clamped:
+        pe = par[PARAM_OFFSETS["p_end"] : PARAM_OFFSETS["p_end"] + 4]
+        T = ks["rod_joint_torques"](fld(y, N, "p"), pe, fld(y, N, "Omega"), zero, h / 2, par)
+        sub(oidx(N), T[0:3])
+    return ca.Function("rod_residual", [y, yp, par], [ca.vertcat(*res)], ["y", "yp", "par"],
+                       ["F"])
+
+
+def bandwidths(n_elements: int) -> tuple[int, int]:
+    """Exact (kl, ku) of dF/dy + c dF/dy' (both ends clamped: the widest pattern)."""
+    f = whole_rod_residual(n_elements)
+    y, yp = f.sx_in(0), f.sx_in(1)
+    F = f(y, yp, f.sx_in(2))
+    sp = ca.jacobian(F, ca.vertcat(y)).sparsity() + ca.jacobian(F, yp).sparsity()
+    rows, cols = sp.get_triplet()
+    return max(r - c for r, c in zip(rows, cols, strict=True)), max(
+        c - r for r, c in zip(rows, cols, strict=True))
+
+
+def static_bandwidths(n_elements: int) -> tuple[int, int]:
+    """Exact (kl, ku) of the static Jacobian in reduced coordinates (dphi, dtheta).
+
+    Static rows are the momentum rows (node forces, segment torques) of each cell; columns
+    are dphi for nodes and dtheta for segments (dtheta couples exactly like p).
+    """
+    N = n_elements
+    f = whole_rod_residual(N)
+    y, yp = f.sx_in(0), f.sx_in(1)
+    sp = ca.jacobian(f(y, yp, f.sx_in(2)), y).sparsity()
+    rows, cols = sp.get_triplet()
+
+    def static_cols(k):
+        """static columns a dynamic column k maps to (p -> the 3 dtheta of its segment)."""
+        if k < CELL0_SIZE:
+            return [k] if k < 3 else []
+        i, o = divmod(k - CELL0_SIZE, CELL_SIZE)
+        base = 3 + 6 * i
+        if o < 4:
+            return [base, base + 1, base + 2]
+        return [base + 3 + o - 7] if 7 <= o < 10 else []
+
+    def static_row(k):
+        """static row of a dynamic momentum row k (None for kinematic rows)."""
+        if k < CELL0_SIZE:
+            return k - 3 if k >= 3 else None
+        i, o = divmod(k - CELL0_SIZE, CELL_SIZE)
+        base = 3 + 6 * i
+        if 4 <= o < 7:
+            return base + o - 4
+        return base + 3 + o - 10 if o >= 10 else None
+
+    kl = ku = 0
+    for r, c in zip(rows, cols, strict=True):
+        rs = static_row(r)
+        if rs is None:
+            continue
+        for cc in static_cols(c):
+            kl, ku = max(kl, rs - cc), max(ku, cc - rs)
+    return kl, ku

@@ -1,0 +1,96 @@
+"""The formula table: the derivation's end results under stable names (issue 2, item 3).
+
+Every entry is taken from a derived step result (never typed in). Symbols are those of
+:mod:`derive.symbols`: ``E, nu, G, K, eta, zeta, tau_S, tau_B, A, I1, I2, I3, kappa_1,
+kappa_2, kappa_3`` and, for the densities, ``V1..U3``, ``U01..U03``, ``dV1..dU3``.
+"""
+
+from __future__ import annotations
+
+import sympy as sp
+
+from derive.pipeline import run
+from derive.steps.energy import SHEAR_CORRECTION_F, SHEAR_CORRECTION_M, shear_correct
+from derive.symbols import G, K, eta, tau_B, tau_S, zeta
+
+FORMULA_DOCS: dict[str, str] = {
+    "eta_E": "extensional viscosity from the dissipation function (5) [Pa s]",
+    "eta_E_naive": "extensional viscosity of the naive resultant route eta~_E [Pa s]",
+    "tau_E": "extensional retardation time eta_E/E (6) [s]",
+    "tau_E_naive": "naive extensional retardation time eta~_E/E [s]",
+    "in_plane_dissipation": "coefficient of (dH3)^2 in the in-plane dissipation missed by "
+                            "the resultant route, eta_E - eta~_E [Pa s]",
+    "C_F": "force stiffness matrix, shear-corrected (7) [N]",
+    "C_M": "moment stiffness matrix, torsion-corrected (7) [N m^2]",
+    "V_F": "force damping matrix, shear-corrected (8)-(9) [N s]",
+    "V_M": "moment damping matrix, torsion-corrected (8)-(9) [N m^2 s]",
+    "V_F_naive": "force damping matrix of the naive resultant route, shear-corrected [N s]",
+    "V_M_naive": "moment damping matrix of the naive resultant route [N m^2 s]",
+    "stored_energy_density_2x": "2 <Psi_SVK>_A, the integrand of (10) with (2) [N]",
+    "dissipation_density_2x": "2 <Psi_KV>_A, the integrand of (11) with (3)-(4) [N/s]",
+    "G_of_E": "shear modulus E/(2(1+nu)) [Pa]",
+    "K_of_E": "bulk modulus E/(3(1-2nu)) [Pa]",
+    "lambda_of_E": "Lame constant [Pa]",
+    "eta_of_tau": "shear viscosity G tau_S [Pa s]",
+    "zeta_of_tau": "bulk viscosity K tau_B [Pa s]",
+}
+
+
+_COLLECT = (zeta, eta, tau_B, tau_S)
+
+
+def tidy(expr: sp.Basic) -> sp.Basic:
+    """Readable normal form: collect in the viscosities/retardation times, factor the rest."""
+    if isinstance(expr, sp.MatrixBase):
+        return expr.applyfunc(tidy)
+    present = [v for v in _COLLECT if expr.has(v)]
+    if not present:
+        return sp.factor(expr)
+    return sp.collect(sp.expand(expr), present, sp.factor)
+
+
+def formulas() -> dict[str, sp.Basic]:
+    """Name -> SymPy expression (3x3 Matrix for C_F, C_M, V_F, V_M and their variants)."""
+    steps = run()
+    moduli, energy = steps["isotropic_moduli"], steps["stored_energy"]
+    diss, naive = steps["dissipation"], steps["naive_resultants"]
+    res = naive.results["resultants"]
+    rates = sp.symbols("dV1 dV2 dV3 dU1 dU2 dU3", real=True)
+    V_naive = res.jacobian(sp.Matrix(rates)).applyfunc(
+        lambda c: sp.factor(c).subs(sp.Symbol("I1", positive=True)
+                                    + sp.Symbol("I2", positive=True),
+                                    sp.Symbol("I3", positive=True)))
+    table = {
+        "eta_E": diss.results["eta_E"],
+        "eta_E_naive": naive.results["eta_E_naive"],
+        "tau_E": diss.results["tau_E"],
+        "tau_E_naive": naive.results["tau_E_naive"],
+        "in_plane_dissipation": naive.results["in_plane_dissipation"],
+        "C_F": energy.results["C_F_corrected"],
+        "C_M": energy.results["C_M_corrected"],
+        "V_F": diss.results["V_F_corrected"],
+        "V_M": diss.results["V_M_corrected"],
+        "V_F_naive": shear_correct(V_naive[:3, :3], SHEAR_CORRECTION_F),
+        "V_M_naive": shear_correct(V_naive[3:, 3:], SHEAR_CORRECTION_M),
+        "stored_energy_density_2x": energy.results["stored_energy_density_2x"],
+        "dissipation_density_2x": diss.results["dissipation_density_2x"],
+        "G_of_E": moduli.results["G"],
+        "K_of_E": moduli.results["K"],
+        "lambda_of_E": moduli.results["lambda"],
+        "eta_of_tau": G * tau_S,
+        "zeta_of_tau": K * tau_B,
+    }
+    keep = ("stored_energy_density_2x", "dissipation_density_2x")
+    return {k: (v if k in keep else tidy(v)) for k, v in table.items()}
+
+
+def in_material_parameters(expr: sp.Basic) -> sp.Basic:
+    """Rewrite an expression in E, nu, tau_S, tau_B (eta = G tau_S, zeta = K tau_B,
+    G and K from the isotropic moduli), cancelling (1 - 2 nu) where it divides."""
+    f = formulas()
+    sub = {eta: G * tau_S, zeta: K * tau_B}
+    moduli = {G: f["G_of_E"], K: f["K_of_E"]}
+    out = expr.subs(sub).subs(moduli)
+    if isinstance(out, sp.MatrixBase):
+        return out.applyfunc(lambda c: sp.factor(sp.cancel(c)))
+    return sp.factor(sp.cancel(out))

@@ -1,0 +1,60 @@
+"""Render notes/derivation.md from the pipeline with a Jinja2 template."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import jinja2
+import sympy as sp
+
+from derive.formulas import formulas
+from derive.pipeline import run
+
+TEMPLATE_DIR = Path(__file__).parent / "templates"
+#: results larger than this many characters of LaTeX are shown abbreviated in the notes
+MAX_LATEX = 1500
+
+
+def _tex(value) -> str:
+    tex = sp.latex(value)
+    if len(tex) > MAX_LATEX:
+        return r"\text{(" + str(len(tex)) + r" characters of LaTeX; see kvrod derive show)}"
+    return tex
+
+
+def render_derivation_notes() -> str:
+    """The Markdown text of notes/derivation.md."""
+    steps = run()
+    f = formulas()
+    naive = steps["naive_resultants"].results
+    rows = []
+    for s in steps.values():
+        rows.append({
+            "name": s.name, "title": s.title, "equations": s.equations, "inputs": s.inputs,
+            "assumptions": s.assumptions, "symbol_assumptions": s.symbol_assumptions,
+            "notes": s.notes, "stated": s.stated, "all_match": s.all_match,
+            "rows": [(k, _tex(v), s.stated.get(k), s.matches.get(k)) for k, v in s.results.items()],
+        })
+    n_checks = sum(len(s.matches) for s in steps.values())
+    n_match = sum(sum(s.matches.values()) for s in steps.values())
+    latex = {
+        "eta_E": sp.latex(f["eta_E"]), "tau_E": sp.latex(f["tau_E"]),
+        "eta_E_naive": sp.latex(f["eta_E_naive"]), "tau_E_naive": sp.latex(f["tau_E_naive"]),
+        "S_in_plane": sp.latex(naive["S_viscous_in_plane"]),
+        "in_plane": sp.latex(f["in_plane_dissipation"]),
+        "tau_diff": sp.latex(naive["tau_E_minus_naive"]),
+    }
+    env = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATE_DIR),
+                             keep_trailing_newline=True, autoescape=False,
+                             undefined=jinja2.StrictUndefined)
+    return env.get_template("derivation.md.jinja").render(
+        steps=rows, n_steps=len(rows), n_checks=n_checks, n_match=n_match, latex=latex)
+
+
+def write_derivation_notes(path: Path) -> Path:
+    """Write the notes atomically; returns the path."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(render_derivation_notes())
+    tmp.replace(path)
+    return path

@@ -1,0 +1,1 @@
+"""The derivation steps, one module per part of the paper (design section 2)."""

@@ -1,0 +1,190 @@
+"""The `kvrod` command line.
+
+Every command imports its layer lazily, so `kvrod simulate` never loads SymPy and a bad
+flag is rejected before any heavy import. Errors are one line on stderr with a non-zero
+exit code; library code never prints, this module does.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+
+class CliError(Exception):
+    """A user error: printed as one line, exit code 2."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str):  # one line instead of usage + message
+        raise CliError(f"{self.prog}: {message} (see `{self.prog} --help`)")
+
+
+def _cmd_derive_list(args) -> int:
+    from derive.pipeline import PIPELINE
+
+    if args.json:
+        print(json.dumps([{"name": e.name, "inputs": list(e.inputs)} for e in PIPELINE]))
+        return 0
+    from derive.pipeline import run
+
+    steps = run()
+    width = max(len(n) for n in steps)
+    for name, s in steps.items():
+        ok = "ok " if s.all_match else "DIFF"
+        print(f"{name:<{width}}  {ok}  {' '.join(s.equations):<28} {s.title}")
+    return 0
+
+
+def _show_text(s) -> str:
+    import sympy as sp
+
+    out = [f"{s.name}: {s.title}", f"paper: {', '.join(s.equations)}",
+           f"inputs: {', '.join(s.inputs) or '(3-D theory)'}", "assumptions:"]
+    out += [f"  - {a}" for a in s.assumptions + s.symbol_assumptions]
+    out.append("results:")
+    for k, v in s.results.items():
+        mark = ""
+        if k in s.matches:
+            mark = "   [= paper]" if s.matches[k] else "   [DIFFERS from paper]"
+        out.append(f"  {k}{mark}:")
+        pretty = sp.pretty(v, use_unicode=True, wrap_line=False)
+        out += ["    " + line for line in pretty.splitlines()]
+    if s.notes:
+        out.append("notes:")
+        out += [f"  - {n}" for n in s.notes]
+    return "\n".join(out)
+
+
+def _show_latex(s) -> str:
+    import sympy as sp
+
+    from derive.step import latex_name
+
+    out = [f"% {s.name}: {s.title} -- paper {', '.join(s.equations)}", r"\begin{align}"]
+    rows = [rf"{latex_name(k)} &= {sp.latex(v)}" for k, v in s.results.items()]
+    out.append(" \\\\\n".join(rows))
+    out.append(r"\end{align}")
+    return "\n".join(out)
+
+
+def _cmd_derive_show(args) -> int:
+    from derive.pipeline import STEP_NAMES, step
+
+    if args.step not in STEP_NAMES:
+        raise CliError(f"kvrod derive show: unknown step {args.step!r}; "
+                       f"steps are: {', '.join(STEP_NAMES)}")
+    s = step(args.step)
+    print(_show_latex(s) if args.latex else _show_text(s))
+    return 0
+
+
+def _cmd_derive_export(args) -> int:
+    import sympy as sp
+
+    from derive.pipeline import STEP_NAMES, run
+
+    names = args.steps or list(STEP_NAMES)
+    bad = [n for n in names if n not in STEP_NAMES]
+    if bad:
+        raise CliError(f"kvrod derive export: unknown step(s) {', '.join(map(repr, bad))}; "
+                       f"steps are: {', '.join(STEP_NAMES)}")
+    steps = run()
+    doc = {n: {"title": steps[n].title, "equations": list(steps[n].equations),
+               "assumptions": list(steps[n].assumptions), "inputs": list(steps[n].inputs),
+               "results": {k: {"latex": sp.latex(v), "text": sp.sstr(v), "srepr": sp.srepr(v)}
+                           for k, v in steps[n].results.items()},
+               "matches_paper": dict(steps[n].matches)} for n in names}
+    text = json.dumps(doc, indent=1)
+    if args.out:
+        Path(args.out).write_text(text + "\n")
+        print(f"wrote {args.out}")
+    else:
+        print(text)
+    return 0
+
+
+def _cmd_derive_notes(args) -> int:
+    from derive.notes import write_derivation_notes
+
+    path = write_derivation_notes(Path(args.out))
+    print(f"wrote {path}")
+    return 0
+
+
+def _cmd_generate(args) -> int:
+    from derive.artifacts import check_tree, write_tree
+
+    if args.check:
+        problems = check_tree(Path(args.out) if args.out else None)
+        if problems:
+            print("generated/ is stale; run `kvrod generate`:", file=sys.stderr)
+            for p in problems:
+                print("  " + p.replace("\n", "\n    "), file=sys.stderr)
+            return 1
+        print("generated/ is up to date")
+        return 0
+    paths = write_tree(Path(args.out) if args.out else None)
+    print(f"wrote {len(paths)} files to {paths[0].parent}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="kvrod", description=__doc__.splitlines()[0] if __doc__ else None)
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    d = sub.add_parser("derive", help="inspect the SymPy derivation")
+    dsub = d.add_subparsers(dest="derive_command", required=True, parser_class=_Parser)
+    dl = dsub.add_parser("list", help="list the derivation steps")
+    dl.add_argument("--json", action="store_true", help="names and inputs as JSON (no SymPy)")
+    dl.set_defaults(func=_cmd_derive_list)
+    ds = dsub.add_parser("show", help="show one step")
+    ds.add_argument("step")
+    ds.add_argument("--latex", action="store_true", help="LaTeX instead of pretty text")
+    ds.set_defaults(func=_cmd_derive_show)
+    de = dsub.add_parser("export", help="export steps as JSON (LaTeX, text, srepr)")
+    de.add_argument("steps", nargs="*", help="step names (default: all)")
+    de.add_argument("--out", help="output file (default: stdout)")
+    de.set_defaults(func=_cmd_derive_export)
+    dn = dsub.add_parser("notes", help="write notes/derivation.md")
+    dn.add_argument("--out", default="notes/derivation.md")
+    dn.set_defaults(func=_cmd_derive_notes)
+
+    g = sub.add_parser("generate", help="regenerate generated/ (or --check it)")
+    g.add_argument("--check", action="store_true", help="fail if generated/ is stale")
+    g.add_argument("--out", help="target folder (default: the generated/ package)")
+    g.set_defaults(func=_cmd_generate)
+
+    try:
+        from kvrod import cli_runtime
+    except ImportError:  # pragma: no cover
+        return p
+    cli_runtime.add_commands(sub, _Parser)
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the `kvrod` console script."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+        return int(args.func(args) or 0)
+    except CliError as exc:
+        print(str(exc), file=sys.stderr)
+        return 2
+    except BrokenPipeError:  # e.g. `kvrod derive show X | head`
+        sys.stderr.close()
+        return 0
+    except KeyboardInterrupt:
+        print("kvrod: interrupted", file=sys.stderr)
+        return 130
+    except ValueError as exc:  # parameter errors from the layers: one line
+        print(f"kvrod: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

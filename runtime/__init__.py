@@ -1,0 +1,1 @@
+"""kvrod runtime: implicit integrator, static solver, scenarios, analysis and I/O."""

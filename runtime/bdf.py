@@ -1,0 +1,767 @@
+"""Variable-order, variable-step BDF for ``F(t, y, y') = 0`` in the form of SUNDIALS IDA.
+
+The method is the fixed-leading-coefficient BDF of Brenan, Campbell and Petzold as
+implemented in IDA (see IDA's theory guide and ``ida.c``): the history is kept as
+modified divided differences ``phi[0..k]`` scaled to the step (``phi[j] ~ h^j y^(j)``),
+the predictor is the interpolating polynomial through the last ``k + 1`` points, the
+corrector solves ``F(t_n, y_pred + e, y'_pred + cj e) = 0`` for the correction ``e``
+by simplified Newton with the iteration matrix ``J = dF/dy + cj dF/dy'`` (cj = alpha_s/h),
+factorised by LAPACK's banded LU and reused across iterations and steps.  The local
+error test, the order and step selection, and the failure handling follow IDA's
+heuristics and constants.
+
+Units: ``t`` and ``h`` are in the problem's time unit (s for the rod); ``y`` is (n,).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.linalg.lapack import dgbtrf, dgbtrs
+
+from .errors import ParameterError
+from .problem import ResidualProblem, band_storage
+
+__all__ = ["BDF", "BDFDenseOutput", "IntegrationError"]
+
+# IDA's constants.
+_EPS_NEWT = 0.33  # Newton tolerance, relative to the error-test norm (IDA's epcon)
+_TOL_DEL = 1e-4 * _EPS_NEWT  # first-correction tolerance for immediate acceptance
+_RATE_MAX = 0.9  # Newton convergence-rate bound
+_XRATE = 0.25  # cj ratio band: re-factorise outside [(1-x)/(1+x), (1+x)/(1-x)]
+_CJ_LO = (1.0 - _XRATE) / (1.0 + _XRATE)
+_CJ_HI = 1.0 / _CJ_LO
+
+_OK = 0
+_CONV_FAIL = 1
+_ERR_FAIL = 2
+
+
+class IntegrationError(RuntimeError):
+    """The integrator could not continue.
+
+    Attributes
+    ----------
+    t, y, yp : time and state (copies) of the last accepted step.
+    h : the step size last attempted.
+    residual_norm : max-norm of the residual at the last attempted iterate (inf if
+        non-finite).
+    worst_index : index of the component that caused the failure: the first non-finite
+        residual entry, else the largest weighted Newton correction or local error.
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        t: float,
+        y: np.ndarray,
+        yp: np.ndarray,
+        h: float,
+        residual_norm: float,
+        worst_index: int,
+    ) -> None:
+        super().__init__(message)
+        self.t = t
+        self.y = y
+        self.yp = yp
+        self.h = h
+        self.residual_norm = residual_norm
+        self.worst_index = worst_index
+
+
+def _interp_coefficients(
+    t: np.ndarray, tn: float, psi: np.ndarray, k: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """IDA's interpolation weights: ``y(t) = sum c_j phi_j``, ``y'(t) = sum d_j phi_j``.
+
+    ``t`` has shape (m,); returns ``c`` of shape (k+1, m) and ``d`` of shape (k+1, m)
+    (``d[0] = 0``).
+    """
+    delt = t - tn
+    c = np.empty((k + 1, t.size))
+    d = np.zeros((k + 1, t.size))
+    cc = np.ones_like(delt)
+    dd = np.zeros_like(delt)
+    gam = delt / psi[0]
+    c[0] = 1.0
+    for j in range(1, k + 1):
+        dd = dd * gam + cc / psi[j - 1]
+        cc = cc * gam
+        gam = (delt + psi[j - 1]) / psi[j] if j < k else gam
+        c[j] = cc
+        d[j] = dd
+    return c, d
+
+
+class BDFDenseOutput:
+    """The BDF interpolating polynomial of one step, valid on ``[t_old, t]``.
+
+    Calling it gives ``y(t)`` with shape (n,) for scalar ``t`` or (n, m) for an array;
+    ``derivative(t)`` gives ``y'(t)`` in the same shapes.
+    """
+
+    def __init__(self, t_old: float, t: float, phi: np.ndarray, psi: np.ndarray) -> None:
+        self.t_old = t_old
+        self.t = t
+        self.t_min, self.t_max = min(t_old, t), max(t_old, t)
+        self._phi = phi  # (k+1, n)
+        self._psi = psi  # (k,) at least
+        self._k = phi.shape[0] - 1
+
+    def _eval(self, t: float | np.ndarray, deriv: bool) -> np.ndarray:
+        ta = np.atleast_1d(np.asarray(t, dtype=float))
+        c, d = _interp_coefficients(ta, self.t, self._psi, self._k)
+        out = self._phi.T @ (d if deriv else c)
+        return out[:, 0] if np.ndim(t) == 0 else out
+
+    def __call__(self, t: float | np.ndarray) -> np.ndarray:
+        return self._eval(t, False)
+
+    def derivative(self, t: float | np.ndarray) -> np.ndarray:
+        return self._eval(t, True)
+
+
+class BDF:
+    """IDA-style variable-order (1..5) variable-step BDF solver for ``F(t, y, y') = 0``.
+
+    Shaped like :class:`scipy.integrate.OdeSolver`: call :meth:`step` until ``status``
+    is ``'finished'``; ``t``, ``y``, ``yp`` are the last accepted point (``y`` and ``yp``
+    are internal buffers: copy them to keep them past the next step).
+
+    Parameters
+    ----------
+    problem : a :class:`~runtime.problem.ResidualProblem`.
+    t0, y0, yp0 : consistent initial values (see ``consistent_initial``).
+    t_bound : end of the integration; the last step lands on it exactly.
+    rtol, atol : tolerances; weights ``1/(rtol |y_i| + atol_i)``, ``atol`` scalar or (n,).
+    max_order : highest BDF order, 1..5.
+    first_step : initial step size (default: IDA's choice from ``|y'|``).
+    max_step : largest step size magnitude.
+    suppress_alg : exclude algebraic components from the local error test.
+    fixed_step : if given, take steps of exactly this size without error control (order
+        rises by one per step up to ``max_order``; ``max_step`` is ignored); for
+        convergence studies.
+    max_nonlinear_iter : Newton iterations per attempt (IDA: 4).
+    max_conv_fails, max_error_fails : consecutive failures on one step before giving up.
+    min_step : smallest step size magnitude allowed (besides round-off at ``t``).
+
+    Counters: ``nstep``, ``nfev`` (residual calls), ``njev`` (Jacobian calls), ``nlu``
+    (factorisations), ``nni`` (Newton iterations), ``netf`` (error-test failures),
+    ``ncfn`` (Newton convergence failures).
+    """
+
+    def __init__(
+        self,
+        problem: ResidualProblem,
+        t0: float,
+        y0: np.ndarray,
+        yp0: np.ndarray,
+        t_bound: float,
+        rtol: float = 1e-6,
+        atol: float | np.ndarray = 1e-8,
+        max_order: int = 5,
+        first_step: float | None = None,
+        max_step: float = np.inf,
+        suppress_alg: bool = False,
+        *,
+        fixed_step: float | None = None,
+        max_nonlinear_iter: int = 4,
+        max_conv_fails: int = 10,
+        max_error_fails: int = 10,
+        min_step: float = 0.0,
+    ) -> None:
+        n = int(problem.n)
+        y0 = np.asarray(y0, dtype=float)
+        yp0 = np.asarray(yp0, dtype=float)
+        if y0.shape != (n,) or yp0.shape != (n,):
+            raise ValueError(f"y0 and yp0 must have shape ({n},), got {y0.shape}, {yp0.shape}")
+        if not 1 <= max_order <= 5:
+            raise ParameterError("max_order", max_order, "integers 1..5")
+        if not (rtol == 0.0 or rtol >= 100 * np.finfo(float).eps):
+            raise ParameterError("rtol", rtol, f"0 or >= {100 * np.finfo(float).eps:.3g}")
+        atol_arr = np.broadcast_to(np.asarray(atol, dtype=float), (n,)).copy()
+        if not np.all(atol_arr > 0.0):
+            raise ParameterError("atol", atol, f"> 0, scalar or shape ({n},)")
+        if not max_step > 0.0:
+            raise ParameterError("max_step", max_step, "> 0")
+        if fixed_step is not None and not abs(fixed_step) > 0.0:
+            raise ParameterError("fixed_step", fixed_step, "nonzero or None")
+        if not (np.all(np.isfinite(y0)) and np.all(np.isfinite(yp0))):
+            raise ValueError("y0 and yp0 must be finite")
+
+        self.problem = problem
+        self.n = n
+        self.kl, self.ku = int(problem.kl), int(problem.ku)
+        self.t_bound = float(t_bound)
+        self.direction = 1.0 if self.t_bound >= t0 else -1.0
+        self.rtol = float(rtol)
+        self.atol = atol_arr
+        self.max_order = int(max_order)
+        self.max_step = float(max_step)
+        self.suppress_alg = bool(suppress_alg)
+        self.fixed_step = None if fixed_step is None else abs(float(fixed_step))
+        self.max_nonlinear_iter = int(max_nonlinear_iter)
+        self.max_conv_fails = int(max_conv_fails)
+        self.max_error_fails = int(max_error_fails)
+        self.min_step = float(min_step)
+        self.status = "running" if self.t_bound != t0 else "finished"
+
+        self.nstep = self.nfev = self.njev = self.nlu = 0
+        self.nni = self.netf = self.ncfn = 0
+
+        # Work arrays (all allocated once).
+        mo = self.max_order
+        self._phi = np.zeros((mo + 2, n))
+        self._y = y0.copy()  # accepted y, yp at self.t
+        self._yp = yp0.copy()
+        self._yy = np.empty(n)  # Newton iterates
+        self._ypw = np.empty(n)
+        self._ee = np.zeros(n)
+        self._res = np.empty(n)
+        self._tmp = np.empty(n)
+        self._ewt = np.empty(n)
+        diff = np.asarray(problem.differential, dtype=bool)
+        self._errmask = diff.astype(float) if self.suppress_alg else None
+        self._ewt_err = np.empty(n) if self.suppress_alg else self._ewt
+        self._ab = band_storage(n, self.kl, self.ku)
+        self._ipiv = np.zeros(n, dtype=np.int32)
+        self._have_lu = False
+
+        # IDA's scalar state; coefficient lists are Python floats (fast scalar loops).
+        self._psi = [0.0] * (mo + 2)
+        self._alpha = [0.0] * (mo + 2)
+        self._beta = [0.0] * (mo + 2)
+        self._sigma = [0.0] * (mo + 2)
+        self._gamma = [0.0] * (mo + 2)
+        self._gamma_arr = np.zeros(mo + 2)  # numpy copy of gamma for the predictor
+        self._ones = np.ones(mo + 2)
+        self._kk = 1
+        self._kused = 0
+        self._knew = 1
+        self._hused = 0.0
+        self._ns = 0
+        self._phase = 0
+        self._cj = 0.0
+        self._cjold = 0.0
+        self._cjlast = 0.0
+        self._cjratio = 1.0
+        self._ss = 20.0
+        self._oldnrm = 0.0
+        self._rr = 1.0
+        self._hmax_inv = 1.0 / self.max_step
+        self._fail_index = -1  # component blamed in failure reports
+
+        self.t = float(t0)
+        self.t_old: float | None = None
+        self._update_weights()
+
+        # Reject a non-finite initial residual at once.
+        problem.residual(self.t, self._y, self._yp, self._res)
+        self.nfev += 1
+        if not np.all(np.isfinite(self._res)):
+            self._raise_nonfinite(self.t, self._y, self._yp, 0.0)
+
+        tdist = abs(self.t_bound - self.t)
+        if self.fixed_step is not None:
+            h = self.fixed_step
+        elif first_step is not None:
+            h = abs(float(first_step))
+            if not h > 0.0:
+                raise ParameterError("first_step", first_step, "nonzero or None")
+        else:
+            h = 0.001 * tdist if tdist > 0 else 1.0
+            ypnorm = self._wrms(self._yp, self._ewt_err)
+            if ypnorm > 0.5 / h:
+                h = 0.5 / ypnorm
+        if self.fixed_step is None:
+            h = min(h, self.max_step)
+        if tdist > 0:
+            h = min(h, tdist)
+        self._hh = self.direction * h
+        self._phi[0] = self._y
+        np.multiply(self._yp, self._hh, out=self._phi[1])
+        self._psi[0] = self._hh
+        self._cj = 1.0 / self._hh
+
+    # ------------------------------------------------------------------ public API
+    @property
+    def y(self) -> np.ndarray:
+        """State at ``t`` (shape (n,)); an internal buffer valid until the next step."""
+        return self._y
+
+    @property
+    def yp(self) -> np.ndarray:
+        """Derivative ``y'`` at ``t`` (shape (n,)); an internal buffer."""
+        return self._yp
+
+    @property
+    def step_size(self) -> float | None:
+        """Size of the last accepted step (None before the first)."""
+        return None if self.t_old is None else abs(self.t - self.t_old)
+
+    @property
+    def order(self) -> int:
+        """Order used on the last accepted step (0 before the first)."""
+        return self._kused
+
+    @property
+    def counters(self) -> dict[str, int]:
+        return {
+            "nstep": self.nstep,
+            "nfev": self.nfev,
+            "njev": self.njev,
+            "nlu": self.nlu,
+            "nni": self.nni,
+            "netf": self.netf,
+            "ncfn": self.ncfn,
+        }
+
+    def step(self) -> str | None:
+        """Take one accepted step; return None, or a message when finished.
+
+        Raises :class:`IntegrationError` on failure (``status`` becomes ``'failed'``).
+        """
+        if self.status != "running":
+            raise RuntimeError("Attempt to step on a failed or finished solver.")
+        if self.n == 0 or self.t == self.t_bound:
+            self.t_old = self.t
+            self.t = self.t_bound
+            self.status = "finished"
+            return None
+        try:
+            self._step_impl()
+        except IntegrationError:
+            self.status = "failed"
+            raise
+        if self.direction * (self.t - self.t_bound) >= 0.0:
+            self.status = "finished"
+        return None
+
+    def dense_output(self) -> BDFDenseOutput:
+        """Interpolant of the last accepted step (y and y'), valid on ``[t_old, t]``."""
+        if self.t_old is None:
+            raise RuntimeError("dense_output() is available after the first step")
+        k = max(self._kused, 1)
+        return BDFDenseOutput(
+            self.t_old, self.t, self._phi[: k + 1].copy(), np.array(self._psi[: k + 1])
+        )
+
+    # ------------------------------------------------------------------ internals
+    def _wrms(self, v: np.ndarray, w: np.ndarray) -> float:
+        tmp = self._tmp
+        np.multiply(v, w, out=tmp)
+        return math.sqrt(float(np.dot(tmp, tmp)) / self.n)
+
+    def _update_weights(self) -> None:
+        ewt = self._ewt
+        np.abs(self._y, out=ewt)
+        ewt *= self.rtol
+        ewt += self.atol
+        np.reciprocal(ewt, out=ewt)
+        if self._errmask is not None:
+            np.multiply(ewt, self._errmask, out=self._ewt_err)
+
+    def _hmin(self) -> float:
+        return max(self.min_step, 16.0 * np.finfo(float).eps * abs(self.t), 1e-300)
+
+    def _set_coeffs(self) -> float:
+        """IDASetCoeffs: BDF coefficients for the current h and order; phi -> phi*."""
+        kk, hh = self._kk, self._hh
+        psi, alpha, beta, sigma, gamma = (
+            self._psi,
+            self._alpha,
+            self._beta,
+            self._sigma,
+            self._gamma,
+        )
+        if hh != self._hused or kk != self._kused:
+            self._ns = 0
+        self._ns = min(self._ns + 1, self._kused + 2)
+        ns = self._ns
+        if kk + 1 >= ns:
+            beta[0] = alpha[0] = sigma[0] = 1.0
+            gamma[0] = 0.0
+            temp1 = hh
+            for i in range(1, kk + 1):
+                temp2 = psi[i - 1]
+                psi[i - 1] = temp1
+                beta[i] = beta[i - 1] * psi[i - 1] / temp2
+                temp1 = temp2 + hh
+                alpha[i] = hh / temp1
+                sigma[i] = i * sigma[i - 1] * alpha[i]
+                gamma[i] = gamma[i - 1] + alpha[i - 1] / hh
+            psi[kk] = temp1
+            self._gamma_arr[: kk + 1] = gamma[: kk + 1]
+        alphas = 0.0
+        alpha0 = 0.0
+        for i in range(kk):
+            alphas -= 1.0 / (i + 1)
+            alpha0 -= alpha[i]
+        self._cjlast = self._cj
+        self._cj = -alphas / hh
+        ck = abs(alpha[kk] + alphas - alpha0)
+        ck = max(ck, alpha[kk])
+        phi = self._phi
+        for i in range(ns, kk + 1):
+            phi[i] *= beta[i]
+        return ck
+
+    def _predict(self) -> None:
+        kk = self._kk
+        phi = self._phi
+        # Straight into the Newton iterates (the corrector starts from the prediction).
+        np.dot(self._ones[: kk + 1], phi[: kk + 1], out=self._yy)
+        np.dot(self._gamma_arr[1 : kk + 1], phi[1 : kk + 1], out=self._ypw)
+
+    def _restore(self) -> None:
+        """IDARestore: undo the phi* scaling and the psi update of a failed attempt."""
+        kk, hh = self._kk, self._hh
+        psi = self._psi
+        for j in range(1, kk + 1):
+            psi[j - 1] = psi[j] - hh
+        phi, beta = self._phi, self._beta
+        for j in range(self._ns, kk + 1):
+            phi[j] *= 1.0 / beta[j]
+
+    def _setup(self, t: float) -> bool:
+        """Evaluate and factorise J at the current iterate; False if J is singular."""
+        ab = self._ab
+        ab.fill(0.0)
+        self.problem.jacobian_band(t, self._yy, self._ypw, self._cj, ab)
+        self.njev += 1
+        self._ipiv = None  # free the old pivots first (dgbtrf allocates new ones)
+        _, ipiv, info = dgbtrf(ab, self.kl, self.ku, overwrite_ab=1)
+        self.nlu += 1
+        self._ipiv = ipiv
+        self._cjold = self._cj
+        self._cjratio = 1.0
+        self._ss = 20.0
+        self._have_lu = info == 0
+        return info == 0
+
+    def _nls(self, tnew: float) -> int:
+        """Corrector: simplified Newton for the correction ``ee``; _OK or _CONV_FAIL."""
+        call_setup = False
+        if self.nstep == 0 and not self._have_lu:
+            self._cjold = self._cj
+            self._ss = 20.0
+            call_setup = True
+        self._cjratio = self._cj / self._cjold
+        if self._cjratio < _CJ_LO or self._cjratio > _CJ_HI or not self._have_lu:
+            call_setup = True
+        if self._cj != self._cjlast:
+            self._ss = 100.0
+
+        problem = self.problem
+        yy, ypw, ee, res = self._yy, self._ypw, self._ee, self._res
+        ab, kl, ku = self._ab, self.kl, self.ku
+        ewt, tmp = self._ewt, self._tmp
+        inv_n = 1.0 / self.n
+        maxcor = self.max_nonlinear_iter
+
+        first = True
+        while True:
+            if not first:
+                self._predict()  # retry from the prediction with a fresh Jacobian
+            first = False
+            ee.fill(0.0)
+            problem.residual(tnew, yy, ypw, res)
+            self.nfev += 1
+            jcur = False
+            if call_setup:
+                jcur = True
+                if not self._setup(tnew):
+                    self._fail_index = int(np.argmax(np.abs(res, out=self._tmp)))
+                    return _CONV_FAIL
+            cj = self._cj
+            scale = 2.0 / (1.0 + self._cjratio) if self._cjratio != 1.0 else 1.0
+            ipiv = self._ipiv
+            m = 0
+            while True:
+                dgbtrs(ab, kl, ku, res, ipiv, overwrite_b=1)
+                if scale != 1.0:
+                    res *= scale
+                np.multiply(res, ewt, out=tmp)
+                delnrm = math.sqrt(float(np.dot(tmp, tmp)) * inv_n)
+                if not math.isfinite(delnrm):
+                    self._raise_nonfinite(tnew, yy, ypw, self._hh)
+                ee -= res
+                yy -= res
+                np.multiply(res, cj, out=tmp)
+                ypw -= tmp
+                self.nni += 1
+                if m == 0:
+                    self._oldnrm = delnrm
+                    if delnrm <= _TOL_DEL:
+                        return _OK
+                else:
+                    rate = (delnrm / self._oldnrm) ** (1.0 / m)
+                    if rate > _RATE_MAX:
+                        break
+                    self._ss = rate / (1.0 - rate)
+                if self._ss * delnrm <= _EPS_NEWT:
+                    return _OK
+                m += 1
+                if m >= maxcor:
+                    break
+                problem.residual(tnew, yy, ypw, res)
+                self.nfev += 1
+            # Recoverable failure: retry once with a fresh Jacobian, else report the
+            # component with the largest weighted correction.
+            np.multiply(res, ewt, out=tmp)
+            self._fail_index = int(np.argmax(np.abs(tmp, out=tmp)))
+            if jcur:
+                return _CONV_FAIL
+            call_setup = True
+
+    def _test_error(self, ck: float) -> tuple[int, float, float, float]:
+        """IDATestError: local error estimates at orders k, k-1, k-2 and the test."""
+        kk = self._kk
+        sigma = self._sigma
+        ee, phi, w = self._ee, self._phi, self._ewt_err
+        enorm_k = self._wrms(ee, w)
+        err_k = sigma[kk] * enorm_k
+        terr_k = (kk + 1) * err_k
+        err_km1 = err_km2 = 0.0
+        self._knew = kk
+        if kk > 1:
+            delta = self._res  # free here: it held the last Newton correction
+            np.add(phi[kk], ee, out=delta)
+            err_km1 = sigma[kk - 1] * self._wrms(delta, w)
+            terr_km1 = kk * err_km1
+            if kk > 2:
+                delta += phi[kk - 1]
+                err_km2 = sigma[kk - 2] * self._wrms(delta, w)
+                terr_km2 = (kk - 1) * err_km2
+                if max(terr_km1, terr_km2) <= terr_k:
+                    self._knew = kk - 1
+            elif terr_km1 <= 0.5 * terr_k:
+                self._knew = kk - 1
+        if ck * enorm_k > 1.0:
+            np.multiply(ee, w, out=self._tmp)
+            self._fail_index = int(np.argmax(np.abs(self._tmp, out=self._tmp)))
+            return _ERR_FAIL, err_k, err_km1, err_km2
+        return _OK, err_k, err_km1, err_km2
+
+    def _step_impl(self) -> None:
+        ncf = nef = 0
+        tn = self.t
+        while True:
+            # Land exactly on t_bound (stretching h by round-off rather than leaving a
+            # sliver of a step behind).
+            remaining = self.t_bound - tn
+            if self.direction * (self._hh - remaining) > -1e-8 * abs(self._hh):
+                if self.nstep == 0:
+                    self._phi[1] *= remaining / self._hh
+                    self._psi[0] = remaining
+                self._hh = remaining
+            hh = self._hh
+            if abs(hh) < self._hmin():
+                # The error estimate drove h below round-off at t (t + h == t): stalled.
+                self._raise_failure(
+                    f"the step size {abs(hh):.3g} chosen by error control is below the "
+                    f"minimum {self._hmin():.3g} (t + h no longer advances t)",
+                    at_accepted=True,
+                )
+            ck = self._set_coeffs()
+            tnew = tn + hh
+            if hh == remaining:
+                tnew = self.t_bound
+            self._predict()
+            nflag = self._nls(tnew)
+            err_k = err_km1 = 0.0
+            if nflag == _OK and self.fixed_step is None:
+                nflag, err_k, err_km1, _ = self._test_error(ck)
+            if nflag == _OK:
+                break
+            self._restore()
+            if nflag == _CONV_FAIL:
+                ncf += 1
+            else:
+                nef += 1
+            self._handle_failure(nflag, ncf, nef, err_k, err_km1)
+            if self.nstep == 0:
+                # IDAReset: rescale h*y'0 to the new step.
+                self._psi[0] = self._hh
+                self._phi[1] *= self._rr
+        self._complete_step(tnew, err_k, err_km1)
+
+    def _handle_failure(self, nflag: int, ncf: int, nef: int, err_k: float, err_km1: float) -> None:
+        """IDAHandleNFlag: shrink h (and maybe the order) or raise IntegrationError."""
+        self._phase = 1
+        if nflag == _CONV_FAIL:
+            self.ncfn += 1
+            if self.fixed_step is not None:
+                self._raise_failure("the Newton iteration failed at the fixed step size")
+            if ncf >= self.max_conv_fails:
+                self._raise_failure(f"the Newton iteration failed to converge {ncf} times in a row")
+            self._rr = 0.25
+        else:
+            self.netf += 1
+            if nef == 1:
+                err_knew = err_k if self._kk == self._knew else err_km1
+                self._kk = self._knew
+                rr = 0.9 * (2.0 * err_knew + 1e-4) ** (-1.0 / (self._kk + 1))
+                self._rr = max(0.25, min(0.9, rr))
+            elif nef == 2:
+                self._kk = self._knew
+                self._rr = 0.25
+            else:
+                self._kk = 1
+                self._rr = 0.25
+            if nef >= self.max_error_fails:
+                self._raise_failure(f"the local error test failed {nef} times in a row")
+        self._hh *= self._rr
+        if abs(self._hh) < self._hmin():
+            what = "Newton convergence" if nflag == _CONV_FAIL else "the local error test"
+            self._raise_failure(
+                f"the step size fell below the minimum {self._hmin():.3g} after failures of {what}"
+            )
+
+    def _complete_step(self, tnew: float, err_k: float, err_km1: float) -> None:
+        """IDACompleteStep: accept, choose the next order and step, update phi."""
+        self.nstep += 1
+        kk = self._kk
+        kdiff = kk - self._kused
+        self._kused = kk
+        self._hused = self._hh
+        mo = self.max_order
+        phi, ee = self._phi, self._ee
+
+        if self.fixed_step is not None:
+            if self.nstep > 1 and kk < mo:
+                self._kk = kk + 1
+            self._hh = self.direction * self.fixed_step
+        else:
+            if self._knew == kk - 1 or kk == mo:
+                self._phase = 1
+            if self._phase == 0:
+                if self.nstep > 1:
+                    self._kk = kk + 1
+                    hnew = 2.0 * self._hh
+                    tmp = abs(hnew) * self._hmax_inv
+                    if tmp > 1.0:
+                        hnew /= tmp
+                    self._hh = hnew
+            else:
+                action = 0  # -1 lower, 0 maintain, +1 raise
+                err_kp1 = 0.0
+                if self._knew == kk - 1:
+                    action = -1
+                elif kk == mo or kk + 1 >= self._ns or kdiff == 1:
+                    action = 0
+                else:
+                    delta = self._res
+                    np.subtract(ee, phi[kk + 1], out=delta)
+                    err_kp1 = self._wrms(delta, self._ewt_err) / (kk + 2)
+                    terr_k = (kk + 1) * err_k
+                    terr_kp1 = (kk + 2) * err_kp1
+                    if kk == 1:
+                        action = 0 if terr_kp1 >= 0.5 * terr_k else 1
+                    else:
+                        terr_km1 = kk * err_km1
+                        if terr_km1 <= min(terr_k, terr_kp1):
+                            action = -1
+                        elif terr_kp1 >= terr_k:
+                            action = 0
+                        else:
+                            action = 1
+                if action == 1:
+                    self._kk = kk + 1
+                    err_knew = err_kp1
+                elif action == -1:
+                    self._kk = kk - 1
+                    err_knew = err_km1
+                else:
+                    err_knew = err_k
+                hnew = self._hh
+                rr = (2.0 * err_knew + 1e-4) ** (-1.0 / (self._kk + 1))
+                if rr >= 2.0:
+                    hnew = 2.0 * self._hh
+                    tmp = abs(hnew) * self._hmax_inv
+                    if tmp > 1.0:
+                        hnew /= tmp
+                elif rr <= 1.0:
+                    rr = max(0.5, min(0.9, rr))
+                    hnew = self._hh * rr
+                self._hh = hnew
+
+        kused = self._kused
+        if kused < mo:
+            np.copyto(phi[kused + 1], ee)
+        phi[kused] += ee
+        for j in range(kused - 1, -1, -1):
+            phi[j] += phi[j + 1]
+
+        self.t_old = self.t
+        self.t = tnew
+        # Accept the Newton iterate by swapping buffers (no copies).
+        self._y, self._yy = self._yy, self._y
+        self._yp, self._ypw = self._ypw, self._yp
+        self._update_weights()
+
+    # ------------------------------------------------------------------ failures
+    def _residual_report(self, t: float, y: np.ndarray, yp: np.ndarray) -> tuple[float, int]:
+        r = np.empty(self.n)
+        self.problem.residual(t, y, yp, r)
+        self.nfev += 1
+        bad = ~np.isfinite(r)
+        if bad.any():
+            return math.inf, int(np.argmax(bad))
+        return float(np.max(np.abs(r), initial=0.0)), -1
+
+    def _raise_nonfinite(self, t: float, y: np.ndarray, yp: np.ndarray, h: float) -> None:
+        rnorm, idx = self._residual_report(t, y, yp)
+        if idx < 0:
+            detail = (
+                "the Newton correction is not finite although the residual is "
+                "(singular or overflowing iteration matrix)"
+            )
+            idx = int(np.argmax(~np.isfinite(self._res)))
+        else:
+            detail = f"the residual is not finite (first bad component {idx})"
+        self.status = "failed"
+        where = (
+            "at the initial values"
+            if h == 0.0
+            else f"while trying a step of h = {h:.3g} to t = {t:.9g}"
+        )
+        raise IntegrationError(
+            f"Integration stopped at t = {self.t:.9g} (last accepted point) {where}: "
+            f"{detail}. Nothing was integrated over the non-finite values; check the "
+            "model and its inputs near this state.",
+            t=self.t,
+            y=self._y.copy(),
+            yp=self._yp.copy(),
+            h=h,
+            residual_norm=rnorm,
+            worst_index=idx,
+        )
+
+    def _raise_failure(self, reason: str, *, at_accepted: bool = False) -> None:
+        h = self._hh
+        if at_accepted:
+            # No attempt was made: report the accepted point and its largest local error.
+            rnorm, bad = self._residual_report(self.t, self._y, self._yp)
+            np.multiply(self._ee, self._ewt, out=self._tmp)
+            self._fail_index = int(np.argmax(np.abs(self._tmp, out=self._tmp)))
+        else:
+            rnorm, bad = self._residual_report(self.t + h, self._yy, self._ypw)
+        where = "accepted point" if at_accepted else "iterate"
+        idx = bad if bad >= 0 else self._fail_index
+        self.status = "failed"
+        raise IntegrationError(
+            f"Integration failed after the accepted point t = {self.t:.9g}: {reason} "
+            f"(last attempted step h = {h:.3g}, order {self._kk}). The residual max-norm "
+            f"at the last {where} is {rnorm:.3g} and the worst component is index {idx}. "
+            "This usually means a singularity or blow-up of the solution, an inconsistent "
+            "or wrong Jacobian, or tolerances too strict for the problem's scaling.",
+            t=self.t,
+            y=self._y.copy(),
+            yp=self._yp.copy(),
+            h=h,
+            residual_norm=rnorm,
+            worst_index=idx,
+        )

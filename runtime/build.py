@@ -1,0 +1,168 @@
+"""Compile and load the generated rod C code (issue 3, item 4).
+
+On first use the C sources in ``generated/`` (``rod_kernels.c``, ``rod_assembly.c``) are
+compiled with the system C compiler into a shared library in a cache folder keyed by the
+sha256 of the sources, the flags and the compiler path. The cache folder is
+``$KVROD_CACHE_DIR`` when set, else the platformdirs user cache dir of ``kvrod``.
+The library is built under a unique temporary name in the cache folder and moved into
+place with :func:`os.replace`, so concurrent first uses from several processes cannot
+corrupt it (the last rename wins; both files are complete and identical).
+
+If no compiler is found, compilation fails, or ``KVROD_NO_COMPILER=1``, :func:`load_library`
+returns ``None`` after ONE ``warnings.warn``; callers then evaluate the serialised CasADi
+kernels (``generated/rod_*.casadi``) in-process instead.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import warnings
+from functools import lru_cache
+from pathlib import Path
+
+import generated
+from runtime.errors import GeneratedCodeError
+
+SOURCES = ("rod_kernels.c", "rod_assembly.c")
+HEADERS = ("rod_kernels.h", "rod_assembly.h")
+CFLAGS = ("-O2", "-fPIC", "-shared", "-std=c99")
+LIBS = ("-lm",)
+
+_warned = False
+
+
+def generated_dir() -> Path:
+    """The ``generated/`` package folder."""
+    return Path(generated.__file__).resolve().parent
+
+
+def cache_dir() -> Path:
+    """Cache folder for compiled libraries ($KVROD_CACHE_DIR or the user cache dir)."""
+    env = os.environ.get("KVROD_CACHE_DIR")
+    if env:
+        return Path(env)
+    import platformdirs
+
+    return Path(platformdirs.user_cache_dir("kvrod"))
+
+
+def find_compiler() -> str | None:
+    """Path of the C compiler ($CC, cc, gcc, clang) or None; None if KVROD_NO_COMPILER=1."""
+    if os.environ.get("KVROD_NO_COMPILER", "") not in ("", "0"):
+        return None
+    for cand in (os.environ.get("CC"), "cc", "gcc", "clang"):
+        if cand and (path := shutil.which(cand)):
+            return path
+    return None
+
+
+def _manifest_hash(text: str) -> str:
+    # same convention as derive.artifacts.sha256_text (content followed by NUL)
+    return hashlib.sha256(text.encode() + b"\0").hexdigest()
+
+
+def verify_manifest(gdir: Path | None = None) -> None:
+    """Check the C files against generated/MANIFEST.json (entries that exist only).
+
+    Raises GeneratedCodeError naming the file and telling the user to regenerate.
+    """
+    gdir = gdir or generated_dir()
+    mpath = gdir / "MANIFEST.json"
+    if not mpath.exists():
+        return
+    files = json.loads(mpath.read_text()).get("files", {})
+    for name in SOURCES + HEADERS:
+        entry = files.get(name)
+        if entry is None:
+            continue
+        if _manifest_hash((gdir / name).read_text()) != entry.get("sha256"):
+            raise GeneratedCodeError(
+                f"generated/{name} does not match generated/MANIFEST.json (edited by hand or "
+                "stale); run `kvrod generate` to regenerate it")
+
+
+def library_key(compiler: str, gdir: Path | None = None) -> str:
+    """sha256 of sources, headers, flags and compiler path (the cache key)."""
+    gdir = gdir or generated_dir()
+    h = hashlib.sha256()
+    for name in SOURCES + HEADERS:
+        h.update(name.encode() + b"\0" + (gdir / name).read_bytes() + b"\0")
+    h.update(" ".join((compiler, *CFLAGS, *LIBS)).encode())
+    return h.hexdigest()
+
+
+def compile_library(compiler: str, gdir: Path | None = None, outdir: Path | None = None) -> Path:
+    """Compile (or reuse) the shared library; returns its path. Atomic under concurrency."""
+    gdir = gdir or generated_dir()
+    outdir = outdir or cache_dir()
+    outdir.mkdir(parents=True, exist_ok=True)
+    suffix = ".dll" if sys.platform == "win32" else ".so"
+    target = outdir / f"kvrod_rod_{library_key(compiler, gdir)[:32]}{suffix}"
+    if target.exists():
+        return target
+    fd, tmp = tempfile.mkstemp(prefix=target.name + ".", suffix=".tmp", dir=outdir)
+    os.close(fd)
+    try:
+        cmd = [compiler, *CFLAGS, "-I", str(gdir), "-o", tmp,
+               *(str(gdir / s) for s in SOURCES), *LIBS]
+        proc = subprocess.run(cmd, capture_output=True, text=True)
+        if proc.returncode != 0:
+            raise RuntimeError(f"C compilation failed ({' '.join(cmd)}):\n{proc.stderr}")
+        os.replace(tmp, target)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return target
+
+
+def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
+    i, d, p = ctypes.c_int, ctypes.c_double, ctypes.c_void_p
+    lib.kvrod_residual.argtypes = [i, p, d, p, p, p]
+    lib.kvrod_jacobian_band.argtypes = [i, p, d, p, p, d, i, p]
+    lib.kvrod_jacobian_band2.argtypes = [i, p, d, p, p, d, d, i, p]
+    lib.kvrod_diagnostics.argtypes = [i, p, d, p, p, p]
+    for name in ("kvrod_residual", "kvrod_jacobian_band", "kvrod_jacobian_band2",
+                 "kvrod_diagnostics", "kvrod_n_state"):
+        getattr(lib, name).restype = i
+    lib.kvrod_n_state.argtypes = [i]
+    return lib
+
+
+@lru_cache(maxsize=1)
+def _load_cached() -> ctypes.CDLL | None:
+    global _warned
+    verify_manifest()
+    compiler = find_compiler()
+    reason = None
+    if compiler is None:
+        reason = ("no C compiler found" if not os.environ.get("KVROD_NO_COMPILER")
+                  else "KVROD_NO_COMPILER is set")
+    else:
+        try:
+            return _declare(ctypes.CDLL(str(compile_library(compiler))))
+        except (RuntimeError, OSError) as exc:
+            reason = f"compiling the generated C code failed: {exc}"
+    if not _warned:
+        warnings.warn(f"kvrod: {reason}; evaluating the CasADi kernels in-process instead "
+                      "(same results, much slower)", RuntimeWarning, stacklevel=3)
+        _warned = True
+    return None
+
+
+def load_library() -> ctypes.CDLL | None:
+    """The compiled rod library (ctypes), or None for the in-process CasADi fallback."""
+    return _load_cached()
+
+
+def clear_cache() -> None:
+    """Forget the loaded library (tests switch KVROD_NO_COMPILER / KVROD_CACHE_DIR)."""
+    global _warned
+    _load_cached.cache_clear()
+    _warned = False

@@ -1,0 +1,16 @@
+"""Project error classes (design section 5)."""
+
+from __future__ import annotations
+
+
+class ParameterError(ValueError):
+    """A bad parameter value; the message names the parameter, its value and the range."""
+
+    def __init__(self, name: str, value: object, allowed: str) -> None:
+        self.name, self.value, self.allowed = name, value, allowed
+        super().__init__(f"parameter {name!r} = {value!r} is outside the allowed range: "
+                         f"{allowed}")
+
+
+class GeneratedCodeError(RuntimeError):
+    """generated/ is inconsistent with its manifest (regenerate with `kvrod generate`)."""

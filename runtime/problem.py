@@ -1,0 +1,149 @@
+"""Problem protocols seen by the integrator and the static solver, plus small adapters.
+
+The integrator works on IDA's implicit form ``F(t, y, y') = 0`` and needs the iteration
+matrix ``J = dF/dy + cj dF/dy'`` in LAPACK general-band storage (as used by ``dgbtrf``):
+an array ``ab`` of shape ``(2*kl + ku + 1, n)``, Fortran order, with element ``J[i, j]``
+at ``ab[kl + ku + i - j, j]``.  The top ``kl`` rows are workspace for the LU factors.
+Callers zero ``ab`` before asking a problem to fill it, so a problem only writes the
+entries inside its band.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+__all__ = [
+    "ResidualProblem",
+    "StaticProblem",
+    "DenseProblem",
+    "band_storage",
+    "dense_to_band",
+    "band_to_dense",
+]
+
+
+@runtime_checkable
+class ResidualProblem(Protocol):
+    """A DAE/ODE in IDA form ``F(t, y, y') = 0`` with a banded iteration matrix.
+
+    Attributes
+    ----------
+    n : number of unknowns.
+    kl, ku : lower / upper bandwidth of ``dF/dy + cj dF/dy'``.
+    differential : bool array (n,); False marks algebraic components (zero dF/dy' column).
+    """
+
+    n: int
+    kl: int
+    ku: int
+    differential: np.ndarray
+
+    def residual(self, t: float, y: np.ndarray, yp: np.ndarray, out: np.ndarray) -> None:
+        """Write ``F(t, y, y')`` (shape (n,)) into ``out``."""
+        ...
+
+    def jacobian_band(
+        self, t: float, y: np.ndarray, yp: np.ndarray, cj: float, out_ab: np.ndarray
+    ) -> None:
+        """Write ``dF/dy + cj dF/dy'`` into the (pre-zeroed) band array ``out_ab``."""
+        ...
+
+
+@runtime_checkable
+class StaticProblem(Protocol):
+    """Equilibrium ``R(y; load_scale) = 0`` in reduced coordinates (increments ``dx``).
+
+    ``y`` is the full state (whatever the problem uses, e.g. with unit quaternions);
+    residual, Jacobian and increments live in the reduced space of size ``n_static``.
+    """
+
+    n_static: int
+    kl_static: int
+    ku_static: int
+    load_scale: float
+
+    def static_residual(self, y: np.ndarray, out: np.ndarray) -> None:
+        """Write the residual (shape (n_static,)) at state ``y`` into ``out``."""
+        ...
+
+    def static_jacobian_band(self, y: np.ndarray, out_ab: np.ndarray) -> None:
+        """Write ``dR/dx`` at ``y`` into the (pre-zeroed) band array ``out_ab``."""
+        ...
+
+    def static_retract(self, y: np.ndarray, dx: np.ndarray) -> np.ndarray:
+        """Return a new full state from ``y`` moved by the reduced increment ``dx``."""
+        ...
+
+
+def band_storage(n: int, kl: int, ku: int) -> np.ndarray:
+    """Return a zeroed Fortran-ordered array of shape (2*kl+ku+1, n) for ``dgbtrf``."""
+    return np.zeros((2 * kl + ku + 1, n), order="F")
+
+
+def dense_to_band(a: np.ndarray, kl: int, ku: int, out_ab: np.ndarray) -> None:
+    """Copy the band of the dense (n, n) matrix ``a`` into ``dgbtrf`` storage ``out_ab``."""
+    n = a.shape[0]
+    for d in range(-kl, ku + 1):  # d = j - i
+        row = kl + ku - d
+        if d >= 0:
+            out_ab[row, d:] = np.diagonal(a, d)
+        else:
+            out_ab[row, : n + d] = np.diagonal(a, d)
+
+
+def band_to_dense(ab: np.ndarray, kl: int, ku: int) -> np.ndarray:
+    """Return the dense (n, n) matrix stored in rows ``kl:`` of ``dgbtrf`` storage ``ab``."""
+    n = ab.shape[1]
+    a = np.zeros((n, n))
+    for d in range(-kl, ku + 1):
+        row = kl + ku - d
+        idx = np.arange(max(0, -d), min(n, n - d))
+        a[idx, idx + d] = ab[row, idx + d]
+    return a
+
+
+class DenseProblem:
+    """Adapter: a small residual problem given by callables with dense Jacobians.
+
+    Parameters
+    ----------
+    residual : ``f(t, y, yp) -> (n,)`` array.
+    jac_y, jac_yp : ``(t, y, yp) -> (n, n)`` arrays ``dF/dy`` and ``dF/dy'``.
+    n : number of unknowns.
+    differential : bool array (n,), False for algebraic components; default all True.
+    kl, ku : bandwidths; default ``n - 1`` (full).
+    """
+
+    def __init__(
+        self,
+        residual: Callable[[float, np.ndarray, np.ndarray], np.ndarray],
+        jac_y: Callable[[float, np.ndarray, np.ndarray], np.ndarray],
+        jac_yp: Callable[[float, np.ndarray, np.ndarray], np.ndarray],
+        n: int,
+        differential: np.ndarray | None = None,
+        kl: int | None = None,
+        ku: int | None = None,
+    ) -> None:
+        self.n = int(n)
+        self.kl = self.n - 1 if kl is None else int(kl)
+        self.ku = self.n - 1 if ku is None else int(ku)
+        self.differential = (
+            np.ones(self.n, dtype=bool) if differential is None else np.asarray(differential, bool)
+        )
+        self._f = residual
+        self._jy = jac_y
+        self._jyp = jac_yp
+
+    def residual(self, t: float, y: np.ndarray, yp: np.ndarray, out: np.ndarray) -> None:
+        out[:] = self._f(t, y, yp)
+
+    def jacobian_band(
+        self, t: float, y: np.ndarray, yp: np.ndarray, cj: float, out_ab: np.ndarray
+    ) -> None:
+        a = np.asarray(self._jy(t, y, yp), dtype=float) + cj * np.asarray(
+            self._jyp(t, y, yp), dtype=float
+        )
+        dense_to_band(a, self.kl, self.ku, out_ab)

@@ -1,0 +1,104 @@
+"""The derived rod parameters against independent numerical 3-D evaluations and limits."""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from derive import formulas, step
+from derive.symbols import eta, nu, tau_B, tau_S, zeta
+
+
+def kv_dissipation_density_numeric(dH, zeta_, eta_, nu_):
+    """2 Psi_KV from a plain NumPy 3-D evaluation (no SymPy): the ULC strain rate
+    (dH (x) e3 + e3 (x) dH)/2 - nu dH3 (I - e3 e3), contracted with
+    V = zeta I(x)I + 2 eta (II - I(x)I/3)."""
+    e3 = np.array([0.0, 0.0, 1.0])
+    D = 0.5 * (np.outer(dH, e3) + np.outer(e3, dH)) - nu_ * dH[2] * (np.eye(3) - np.outer(e3, e3))
+    tr = np.trace(D)
+    S = zeta_ * tr * np.eye(3) + 2 * eta_ * (D - tr / 3 * np.eye(3))
+    return float(np.sum(S * D)), S, D
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.floats(-0.99, 0.5), st.floats(0.0, 10.0), st.floats(0.01, 10.0),
+       st.lists(st.floats(-1, 1), min_size=3, max_size=3))
+def test_eta_E_equals_numeric_3d_dissipation(nu_, zeta_, eta_, dH):
+    dH = np.array(dH)
+    two_psi, S, D = kv_dissipation_density_numeric(dH, zeta_, eta_, nu_)
+    f = formulas()
+    eta_E = float(f["eta_E"].subs({zeta: zeta_, eta: eta_, nu: nu_}))
+    predicted = eta_E * dH[2] ** 2 + eta_ * (dH[0] ** 2 + dH[1] ** 2)
+    assert np.isclose(two_psi, predicted, rtol=1e-10, atol=1e-12)
+    # what the resultants see: only the S_i3 column pairs with the rates
+    seen = 2 * (S[0, 2] * D[0, 2] + S[1, 2] * D[1, 2]) + S[2, 2] * D[2, 2]
+    eta_E_naive = float(f["eta_E_naive"].subs({zeta: zeta_, eta: eta_, nu: nu_}))
+    assert np.isclose(seen, eta_E_naive * dH[2] ** 2 + eta_ * (dH[0] ** 2 + dH[1] ** 2),
+                      rtol=1e-10, atol=1e-12)
+    missed = float(f["in_plane_dissipation"].subs({zeta: zeta_, eta: eta_, nu: nu_}))
+    assert np.isclose(two_psi - seen, missed * dH[2] ** 2, rtol=1e-9, atol=1e-12)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.floats(0.01, 0.5), st.floats(0.0, 1.0), st.floats(0.001, 1.0))
+def test_naive_too_small_iff_tau_B_below_tau_S(nu_, tB, tS):
+    f = formulas()
+    vals = {nu: nu_, tau_B: tB, tau_S: tS}
+    diff = float((f["tau_E"] - f["tau_E_naive"]).subs(vals))
+    assert np.isclose(diff, 2 * nu_ / 3 * (tS - tB), rtol=1e-12, atol=1e-15)
+    if tB < tS:
+        assert diff > 0
+
+
+def test_trouton_and_special_cases():
+    f = formulas()
+    assert sp.simplify(f["eta_E"].subs(nu, sp.Rational(1, 2)) - 3 * eta) == 0
+    assert sp.simplify(f["eta_E_naive"].subs(nu, sp.Rational(1, 2)) - 2 * eta) == 0
+    assert sp.simplify(f["eta_E"].subs(nu, 0) - f["eta_E_naive"].subs(nu, 0)) == 0
+    assert sp.simplify(f["tau_E"].subs(tau_B, tau_S) - tau_S) == 0
+    assert sp.simplify(f["tau_E_naive"].subs(tau_B, tau_S) - tau_S) == 0
+
+
+def test_footnote14_elastic_analogue_is_E():
+    analogue = step("dissipation").results["elastic_analogue_footnote14"]
+    assert analogue == sp.Symbol("E", positive=True)
+
+
+def test_damping_is_stiffness_times_retardation_times():
+    r = step("dissipation").results
+    expected = sp.diag(tau_S, tau_S, r["tau_E"])
+    assert all(sp.simplify(a - b) == 0 for a, b in zip(r["tau_matrix_F"], expected, strict=True))
+
+
+def test_moment_rules_agree_with_explicit_integration():
+    r = step("cross_sections").results
+    keys = [k for k in r if k.endswith("_explicit_minus_rules")]
+    assert len(keys) == 4
+    assert all(r[k] == 0 for k in keys)
+
+
+def test_square_torsion_constant_against_reference_table():
+    """J_T of a square = 0.1406 a^4 (Timoshenko & Goodier's table value beta = 0.141)."""
+    from tests.reference.beams import rectangle_torsion_constant
+
+    r = step("cross_sections").results
+    b, d, m = sp.symbols("b d", positive=True) + (sp.Symbol("m", nonnegative=True, integer=True),)
+    expr = r["rectangle_J_T"].subs({b: 1, d: 1})
+    value = float(sp.N(expr.replace(sp.Sum, lambda f, lim: sp.Sum(f, (lim[0], 0, 200)).doit())))
+    assert abs(value - 0.140577) < 2e-6
+    assert abs(value - rectangle_torsion_constant(1.0, 1.0)) < 1e-9
+
+
+def test_ellipse_kappa3_below_one_and_circle_one():
+    r = step("cross_sections").results
+    a, b = sp.symbols("a b", positive=True)
+    k = sp.lambdify((a, b), r["ellipse_kappa_3"])
+    assert abs(k(1.0, 1.0) - 1) < 1e-15
+    assert k(1.0, 2.0) < 1 and k(3.0, 1.0) < 1
+
+
+def test_maxwell_limit():
+    r = step("maxwell_limit").results
+    assert r["error_order_omega"] == 2

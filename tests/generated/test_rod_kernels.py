@@ -1,0 +1,154 @@
+"""The generated rod code: up to date, deterministic, and equal to in-process CasADi."""
+
+from __future__ import annotations
+
+import importlib
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from derive import codegen_rod
+from derive import discrete_rod as dr
+from derive.artifacts import generated_dir, render
+from generated import rod_layout as L
+from runtime.rod import CasadiBackend, RodModel, RodParameters, load_kernels
+
+BCS = [("clamped", "free"), ("pinned", "pinned"), ("clamped", "clamped"), ("free", "pinned")]
+
+
+def _model(N, start, end, backend="auto"):
+    P = RodParameters(0.3, N, 1000.0, 1e6, 0.3, 0.04, 0.02, 0.01, 0.012)
+    return RodModel(P, start, end, tip_force=(0.05, 0.01, -0.02), tip_moment=(1e-3, 0, 2e-3),
+                    gravity=(0, -9.81, 0), backend=backend)
+
+
+def _state(m, rng):
+    y = m.initial_state() + 0.05 * rng.standard_normal(m.n)
+    return y, rng.standard_normal(m.n)
+
+
+def test_committed_rod_files_equal_a_fresh_generation():
+    codegen_rod._build.cache_clear()
+    fresh = codegen_rod.artifacts()
+    codegen_rod._build.cache_clear()
+    again = codegen_rod.artifacts()
+    assert [a.text for a in fresh] == [a.text for a in again]  # byte-deterministic
+    gdir = generated_dir()
+    for a in fresh:
+        assert a.path.startswith("rod_")
+        assert (gdir / a.path).read_text() == render(a), f"{a.path}: run `kvrod generate`"
+    c = next(a for a in fresh if a.path == "rod_kernels.c").text
+    assert "/tmp" not in c and "/work" not in c
+
+
+def test_layout_module_renders_the_derive_constants():
+    lay = importlib.reload(L)
+    assert lay.CELL_SIZE == dr.CELL_SIZE == 13 and lay.CELL0_SIZE == dr.CELL0_SIZE == 6
+    assert lay.CELL_OFFSETS == dr.CELL_OFFSETS and lay.PARAM_OFFSETS == dr.PARAM_OFFSETS
+    assert lay.N_PARAMS == dr.N_PARAMS
+    assert lay.n_state(10) == 6 + 13 * 10
+    for n in (1, 2, 3, 5):
+        assert lay.bandwidths(n) == dr.bandwidths(n)
+    assert (lay.STATIC_KL, lay.STATIC_KU) == dr.static_bandwidths(4)
+    assert set(lay.KERNELS) == {f.name() for f in dr.kernels()}
+
+
+def _rel(a, b):
+    a, b = np.array(a, dtype=float), np.array(b, dtype=float)
+    return np.abs(a - b).max() / max(np.abs(b).max(), 1e-300)
+
+
+def test_kernel_closed_forms_equal_casadi_ad_of_the_functionals():
+    """Rates, energies, forces/torques and Jacobian blocks evaluated by the kernels equal the
+    CasADi AD derivatives of W and D (eqs. (10), (11)) to rounding, for non-unit p."""
+    s = dr._symbols()
+    seg, jnt = dr.segment_quantities(s), dr.joint_quantities(s)
+    sf, jf = dr.segment_functionals(s), dr.joint_functionals(s)
+    Qad, Tad = dr.segment_forces_ad(s), dr.joint_torques_ad(s)
+    xs = ca.vertcat(s.phi_b, s.p, s.v_b, s.omega)
+    xj = ca.vertcat(s.p, s.p_b, s.omega, s.omega_b)
+    ins = [s.phi_a, s.phi_b, s.p, s.v_a, s.v_b, s.omega, s.p_b, s.omega_b, s.hj, s.par]
+    pairs = [(seg["Vdot"], sf["Vdot"]), (seg["W"], sf["W"]), (seg["D"], sf["D"]),
+             (seg["Q"], Qad), (jnt["Udot"], jf["Udot"]), (jnt["W"], jf["W"]),
+             (jnt["D"], jf["D"]), (jnt["T"], Tad),
+             (dr.segment_jacobian(s), ca.jacobian(Qad[3:9], xs)),
+             (dr.joint_jacobian(s), ca.jacobian(Tad, xj))]
+    f = ca.Function("f", ins, [x for pair in pairs for x in pair])
+    rng = np.random.default_rng(0)
+    for _ in range(5):
+        args = [rng.standard_normal(k) for k in (3, 3, 4, 3, 3, 3, 4, 3)]
+        args[6] = args[2] * 1.2 + 0.3 * rng.standard_normal(4)
+        args += [0.1, np.abs(rng.standard_normal(dr.N_PARAMS)) + 0.1]
+        out = f(*args)
+        for k in range(0, len(out), 2):
+            assert _rel(out[k], out[k + 1]) < 1e-11, k
+
+
+@pytest.mark.parametrize("start,end", BCS)
+def test_compiled_kernels_equal_in_process_casadi(start, end):
+    mc, mp = _model(6, start, end), _model(6, start, end, backend="casadi")
+    if mc.backend != "c":
+        pytest.skip("no C compiler")
+    rng = np.random.default_rng(1)
+    y, yp = _state(mc, rng)
+    r1, r2 = np.empty(mc.n), np.empty(mc.n)
+    mc.residual(0.0, y, yp, r1)
+    mp.residual(0.0, y, yp, r2)
+    assert np.abs(r1 - r2).max() <= 1e-12 * np.abs(r1).max()
+    for cy, cj in ((1.0, 0.0), (0.0, 1.0), (1.0, 123.0)):
+        a1 = np.zeros((mc.ldab, mc.n), order="F")
+        a2 = np.zeros((mc.ldab, mc.n), order="F")
+        mc.jacobian_band2(0.0, y, yp, cy, cj, a1)
+        mp.jacobian_band2(0.0, y, yp, cy, cj, a2)
+        assert np.abs(a1 - a2).max() <= 1e-12 * np.abs(a1).max()
+    d1, d2 = mc.diagnostics(0.0, y, yp), mp.diagnostics(0.0, y, yp)
+    for key in ("kinetic", "elastic", "dissipation_rate", "external_power"):
+        assert d1[key] == pytest.approx(d2[key], rel=1e-12)
+    for group in ("strains", "resultants"):
+        for k, v in d1[group].items():
+            assert np.allclose(v, d2[group][k], rtol=1e-12, atol=1e-12 * np.abs(v).max())
+
+
+@pytest.mark.parametrize("start,end", BCS)
+def test_c_assembly_equals_symbolic_whole_rod(start, end):
+    """The C loop against an independent whole-rod CasADi assembly (derive)."""
+    N = 4
+    m = _model(N, start, end)
+    f = dr.whole_rod_residual(N, start == "clamped", end == "clamped")
+    rng = np.random.default_rng(2)
+    y, yp = _state(m, rng)
+    r = np.empty(m.n)
+    m.residual(0.0, y, yp, r)
+    ref = np.array(f(y, yp, m.par)).ravel()
+    assert np.abs(r - ref).max() <= 1e-12 * np.abs(ref).max()
+    ysym = f.sx_in(0)
+    Fs = f(ysym, f.sx_in(1), m.par)
+    J = ca.Function("J", [ysym, f.sx_in(1)], [ca.jacobian(Fs, ysym)])
+    Jref = np.array(J(y, yp))
+    Jc = m.dF_dy_sparse(0.0, y, yp).toarray()
+    assert np.abs(Jc - Jref).max() <= 1e-11 * np.abs(Jref).max()
+
+
+def test_mx_whole_rod_function_and_serialised_kernels():
+    m = _model(5, "clamped", "free")
+    rng = np.random.default_rng(3)
+    y, yp = _state(m, rng)
+    r = np.empty(m.n)
+    m.residual(0.0, y, yp, r)
+    F = m.casadi_residual_function()
+    assert np.abs(np.array(F(0.0, y, yp)).ravel() - r).max() <= 1e-12 * np.abs(r).max()
+    ks = load_kernels()
+    for f in dr.kernels():
+        g = ks[f.name()]
+        args = [np.random.default_rng(4).standard_normal(f.size_in(i)) + 1.0
+                for i in range(f.n_in())]
+        for a, b in zip(f.call(args), g.call(args), strict=True):
+            assert np.array_equal(np.array(a), np.array(b))
+    assert isinstance(CasadiBackend(2).k, dict)
+
+
+def test_generated_c_size_is_independent_of_N():
+    gdir = generated_dir()
+    size = sum((gdir / f).stat().st_size for f in ("rod_kernels.c", "rod_assembly.c"))
+    assert size < 1_000_000  # per-element kernels: one file for every N

@@ -1,0 +1,99 @@
+"""Build and load of the generated C (runtime/build.py): cache, concurrency, manifest check,
+fallback to in-process CasADi with one warning."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from runtime import build
+from runtime.errors import GeneratedCodeError
+from runtime.rod import RodModel, RodParameters
+
+ROOT = Path(__file__).resolve().parents[2]
+needs_cc = pytest.mark.skipif(build.find_compiler() is None, reason="no C compiler")
+
+
+@pytest.fixture
+def fresh_build(monkeypatch, tmp_path):
+    monkeypatch.setenv("KVROD_CACHE_DIR", str(tmp_path / "cache"))
+    build.clear_cache()
+    yield tmp_path / "cache"
+    monkeypatch.undo()
+    build.clear_cache()
+
+
+def _params(N=3):
+    return RodParameters(0.3, N, 1000.0, 1e6, 0.3, 0.04, 0.04, 0.01, 0.01)
+
+
+@needs_cc
+def test_compiles_into_content_keyed_cache(fresh_build):
+    m = RodModel(_params())
+    assert m.backend == "c"
+    libs = list(fresh_build.glob("kvrod_rod_*.so"))
+    assert len(libs) == 1
+    assert build.library_key(build.find_compiler())[:32] in libs[0].name
+    assert not list(fresh_build.glob("*.tmp"))
+
+
+@needs_cc
+def test_concurrent_first_use_does_not_corrupt_the_cache(tmp_path):
+    code = "\n".join([
+        f"import sys; sys.path.insert(0, {str(ROOT)!r})",
+        "import ctypes, pathlib",
+        "from runtime import build",
+        f"p = build.compile_library(build.find_compiler(), outdir=pathlib.Path({str(tmp_path)!r}))",
+        "ctypes.CDLL(str(p)).kvrod_n_state",
+    ])
+    procs = [subprocess.Popen([sys.executable, "-c", code]) for _ in range(3)]
+    assert all(p.wait(timeout=120) == 0 for p in procs)
+    assert len(list(tmp_path.glob("kvrod_rod_*.so"))) == 1
+    assert not list(tmp_path.glob("*.tmp"))
+
+
+def test_manifest_mismatch_tells_the_user_to_regenerate(tmp_path):
+    gdir = build.generated_dir()
+    for name in build.SOURCES + build.HEADERS:
+        shutil.copy(gdir / name, tmp_path / name)
+    good = {
+        name: build._manifest_hash((gdir / name).read_text())
+        for name in build.SOURCES + build.HEADERS
+    }
+    man = {"files": {k: {"sha256": v} for k, v in good.items()}}
+    (tmp_path / "MANIFEST.json").write_text(json.dumps(man))
+    build.verify_manifest(tmp_path)  # consistent: no error
+    with open(tmp_path / "rod_assembly.c", "a") as fh:
+        fh.write("/* hand edit */\n")
+    with pytest.raises(GeneratedCodeError, match="kvrod generate"):
+        build.verify_manifest(tmp_path)
+
+
+def test_fallback_without_compiler_warns_once_and_gives_same_numbers(fresh_build, monkeypatch):
+    ref = None
+    if build.find_compiler() is not None:
+        ref = RodModel(_params(), tip_force=(0.05, 0, 0))
+    monkeypatch.setenv("KVROD_NO_COMPILER", "1")
+    build.clear_cache()
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        m1 = RodModel(_params(), tip_force=(0.05, 0, 0))
+        RodModel(_params(4))
+    msgs = [w for w in rec if "in-process" in str(w.message)]
+    assert len(msgs) == 1
+    assert m1.backend == "casadi"
+    if ref is not None:
+        rng = np.random.default_rng(0)
+        y = ref.initial_state() + 0.03 * rng.standard_normal(ref.n)
+        yp = rng.standard_normal(ref.n)
+        r1, r2 = np.empty(ref.n), np.empty(ref.n)
+        ref.residual(0.0, y, yp, r1)
+        m1.residual(0.0, y, yp, r2)
+        assert np.abs(r1 - r2).max() <= 1e-12 * np.abs(r1).max()

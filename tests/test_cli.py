@@ -1,0 +1,48 @@
+"""CLI behaviour: listing, showing, one-line errors with non-zero exit codes."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+from kvrod.cli import main
+
+
+def run_cli(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "kvrod.cli", *args], capture_output=True,
+                          text=True, timeout=300)
+
+
+def test_derive_list_json(capsys):
+    assert main(["derive", "list", "--json"]) == 0
+    assert '"dissipation"' in capsys.readouterr().out
+
+
+def test_derive_show_latex(capsys):
+    assert main(["derive", "show", "naive_resultants", "--latex"]) == 0
+    out = capsys.readouterr().out
+    assert r"\begin{align}" in out and r"\eta" in out
+
+
+@pytest.mark.parametrize("argv", [
+    ["derive", "show", "no_such_step"],
+    ["derive", "--bogus"],
+    ["derive", "show"],
+    ["frobnicate"],
+    ["generate", "--chek"],
+])
+def test_bad_input_one_line_nonzero(argv):
+    r = run_cli(*argv)
+    assert r.returncode == 2
+    assert len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "Traceback" not in r.stderr
+
+
+def test_derive_notes(tmp_path):
+    out = tmp_path / "derivation.md"
+    assert main(["derive", "notes", "--out", str(out)]) == 0
+    text = out.read_text()
+    assert "eta_E" in text and "(\\eta_E - \\tilde\\eta_E)" in text
+    assert "**DIFFERS**" not in text

@@ -1,0 +1,43 @@
+"""Design section 1: derive -> generated -> runtime layering, checked by walking imports."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+FORBIDDEN = {
+    "generated": {"derive", "runtime", "kvrod", "sympy", "casadi", "jinja2", "scipy"},
+    "runtime": {"derive", "kvrod", "sympy", "jinja2"},
+    "derive": {"runtime", "kvrod"},
+}
+
+
+def imported_top_levels(path: Path) -> set[str]:
+    tree = ast.parse(path.read_text(), filename=str(path))
+    names: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names |= {a.name.split(".")[0] for a in node.names}
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            names.add(node.module.split(".")[0])
+    return names
+
+
+@pytest.mark.parametrize("package", sorted(FORBIDDEN))
+def test_layering(package):
+    files = sorted((ROOT / package).rglob("*.py"))
+    assert files, package
+    bad = {str(f.relative_to(ROOT)): sorted(imported_top_levels(f) & FORBIDDEN[package])
+           for f in files}
+    bad = {k: v for k, v in bad.items() if v}
+    assert not bad, f"layering violated: {bad}"
+
+
+def test_walker_detects_a_violation(tmp_path):
+    f = tmp_path / "x.py"
+    f.write_text("import sympy\nfrom derive.pipeline import run\n")
+    assert {"sympy", "derive"} <= imported_top_levels(f)
