@@ -132,6 +132,17 @@ def _cmd_generate(args) -> int:
     return 0
 
 
+def _cmd_bench(args) -> int:
+    try:
+        import bench
+    except ImportError as exc:
+        raise CliError(f"kvrod bench: the bench/ package is not available ({exc})") from exc
+    if not hasattr(bench, "run_all"):
+        raise CliError("kvrod bench: bench.run_all is not available in this checkout")
+    bench.run_all(quick=args.quick, out_dir=Path(args.out))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="kvrod", description=__doc__.splitlines()[0] if __doc__ else None)
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -158,11 +169,19 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--out", help="target folder (default: the generated/ package)")
     g.set_defaults(func=_cmd_generate)
 
-    try:
-        from kvrod import cli_runtime
-    except ImportError:  # pragma: no cover
-        return p
+    from kvrod import cli_runtime
+
     cli_runtime.add_commands(sub, _Parser)
+    try:  # modal analysis, calibration (issue 7)
+        from kvrod import cli_beyond
+    except ImportError:  # pragma: no cover - while it does not exist
+        cli_beyond = None
+    if cli_beyond is not None:
+        cli_beyond.add_commands(sub, _Parser)
+    b = sub.add_parser("bench", help="run the benchmarks in bench/ (JSON + Markdown)")
+    b.add_argument("--quick", action="store_true", help="small sizes only (< 1 min)")
+    b.add_argument("--out", default="bench/results", help="results folder")
+    b.set_defaults(func=_cmd_bench)
     return p
 
 

@@ -1,0 +1,121 @@
+"""`kvrod simulate` and `kvrod reproduce` (the runtime side of the CLI)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def _progress(t_end: float, desc: str):
+    """A tqdm bar over simulated time; returns (callback, close)."""
+    from tqdm import tqdm
+
+    bar = tqdm(total=round(t_end, 6), desc=desc, unit="s sim", leave=False,
+               bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.2f}/{total:.2f} s [{elapsed}]")
+
+    def update(t: float) -> None:
+        bar.n = round(min(t, t_end), 6)
+        bar.refresh() if bar.n >= t_end or int(t * 20) != int((t - 1e-9) * 20) else None
+
+    return update, bar.close
+
+
+def scenario_from_args(args):
+    from runtime.scenarios import CantileverScenario
+
+    kw = {}
+    if args.tau is not None:
+        kw.update(tau_S=args.tau, tau_B=args.tau)
+    for name in ("tau_S", "tau_B"):
+        if getattr(args, name) is not None:
+            kw[name] = getattr(args, name)
+    for name, attr in (("youngs_modulus", "E"), ("tip_force", "tip_force"),
+                       ("n_elements", "n_elements"), ("t_end", "t_end"), ("rtol", "rtol"),
+                       ("damping", "damping"), ("poisson_ratio", "nu")):
+        v = getattr(args, attr)
+        if v is not None:
+            kw[name] = v
+    return CantileverScenario(**kw)
+
+
+def run_and_write(scenario, out: Path, label: str, plots: bool = True) -> tuple:
+    from runtime import plots as P
+    from runtime.results import write_run
+    from runtime.scenarios import run_cantilever
+
+    cb, close = _progress(scenario.t_end, label)
+    try:
+        run = run_cantilever(scenario, progress=cb)
+    finally:
+        close()
+    summary = write_run(out, run)
+    if plots and run.t.size > 1:
+        P.plot_tip([run], [label], out / "tip.png")
+        P.plot_energy(run, out / "energy.png")
+        if run.peaks_x.size >= 2:
+            P.plot_damping_vs_amplitude([run], [label],
+                                        [scenario.linear_prediction()["zeta_1"]],
+                                        out / "damping_ratio.png")
+    return run, summary
+
+
+def _cmd_simulate(args) -> int:
+    from kvrod.cli import CliError
+
+    if args.scenario != "cantilever":
+        raise CliError(f"kvrod simulate: unknown scenario {args.scenario!r}; "
+                       "scenarios are: cantilever")
+    sc = scenario_from_args(args)
+    out = Path(args.out)
+    run, s = run_and_write(sc, out, "cantilever")
+    tip = s["static"]["tip"]
+    print(f"static tip [m]: {tip}  (Newton iterations: {s['static']['newton_iterations']})")
+    z = s["damping_ratios"]
+    print(f"maxima: {len(s['peaks'])}, damping ratios: {[round(v, 4) for v in z]}")
+    print(f"linear prediction zeta_1 = omega_1 tau/2 = {s['linear_prediction']['zeta_1']:.4f}")
+    print(f"energy balance max rel. error: {s['energy_balance_max_rel']:.2e}")
+    print(f"counters: {s['counters']}, wall time {s['wall_time_s']:.2f} s")
+    print(f"wrote {out}/summary.json, series.npz, *.png")
+    if run.status != "finished":
+        print(f"kvrod: run {run.status}: {run.message}")
+        return 1
+    return 0
+
+
+def _cmd_reproduce(args) -> int:
+    from kvrod.reproduce import reproduce
+
+    out = reproduce(Path(args.out), n_elements=args.n_elements, t_end=args.t_end,
+                    notes=Path(args.notes), rtol=args.rtol, derive=not args.skip_derive)
+    print(f"wrote {out}")
+    return 0
+
+
+def add_commands(sub, parser_class) -> None:
+    s = sub.add_parser("simulate", help="run a scenario (the paper's damped cantilever)")
+    s.add_argument("scenario", help="scenario name: cantilever")
+    s.add_argument("--tau", type=float, help="tau_S = tau_B = tau_E [s] (paper: 0.04)")
+    s.add_argument("--tau-S", dest="tau_S", type=float, help="shear retardation time [s]")
+    s.add_argument("--tau-B", dest="tau_B", type=float, help="bulk retardation time [s]")
+    s.add_argument("--E", type=float, help="Young's modulus [Pa] (paper: 1e6)")
+    s.add_argument("--nu", type=float, help="Poisson's ratio [-] (paper: 0.3)")
+    s.add_argument("--tip-force", dest="tip_force", type=float, help="dead tip force [N]")
+    s.add_argument("--n-elements", dest="n_elements", type=int, help="elements (default 50)")
+    s.add_argument("--t-end", dest="t_end", type=float, help="simulated time [s] (10)")
+    s.add_argument("--rtol", type=float, help="relative tolerance (1e-6)")
+    s.add_argument("--damping", choices=("consistent", "naive"),
+                   help="extensional viscosity eta_E (consistent) or eta~_E (naive)")
+    s.add_argument("--out", default="results/cantilever", help="results folder")
+    s.set_defaults(func=_cmd_simulate)
+
+    r = sub.add_parser("reproduce", help="reproduce the paper's Sect. 5 (figures + notes)")
+    r.add_argument("--out", default="results/reproduce", help="results folder")
+    r.add_argument("--notes", default="notes/reproduction.md", help="notes file to write")
+    r.add_argument("--n-elements", dest="n_elements", type=int, default=100)
+    r.add_argument("--t-end", dest="t_end", type=float, default=10.0)
+    r.add_argument("--rtol", type=float, default=1e-6)
+    r.add_argument("--skip-derive", action="store_true",
+                   help="do not regenerate notes/derivation.md")
+    r.set_defaults(func=_cmd_reproduce)
+    _ = argparse  # parser_class is used by the caller's subparsers
+    _ = parser_class

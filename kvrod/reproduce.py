@@ -1,0 +1,116 @@
+"""`kvrod reproduce`: the paper's Sect. 5 end to end, with figures and notes/reproduction.md."""
+
+from __future__ import annotations
+
+import platform
+import time
+from pathlib import Path
+
+import jinja2
+import numpy as np
+
+TEMPLATE_DIR = Path(__file__).parent / "templates"
+TAUS = (0.02, 0.04, 0.08)
+
+
+def _reissner_reference(sc) -> dict | None:
+    """Independent static reference (tests/reference, SciPy shooting), if importable."""
+    import sys
+
+    root = Path(__file__).resolve().parents[1]      # the checkout holding tests/reference
+    if (root / "tests" / "reference" / "reissner.py").exists() and str(root) not in sys.path:
+        sys.path.append(str(root))
+    try:
+        from tests.reference.reissner import elastica_tip, solve_reissner
+    except ImportError:
+        return None
+    from generated.constitutive import rectangle_section, shear_modulus
+
+    sec = rectangle_section(sc.width, sc.height, sc.poisson_ratio)
+    EI = sc.youngs_modulus * sec["I1"]
+    r = solve_reissner(sc.tip_force, L=sc.length, EA=sc.youngs_modulus * sec["A"],
+                       GA=shear_modulus(sc.youngs_modulus, sc.poisson_ratio) * sec["A"]
+                       * sec["kappa_1"], EI=EI)
+    e = elastica_tip(sc.tip_force, EI, sc.length)
+    return {"reissner": [float(r.tip[0]), float(r.tip[1])],
+            "elastica": [float(e.x), float(e.z)]}
+
+
+def _late_zeta(summary: dict, k: int = 2) -> float:
+    z = summary["damping_ratios"]
+    return float(np.mean(z[-k:])) if z else float("nan")
+
+
+def reproduce(out: Path, n_elements: int = 100, t_end: float = 10.0,
+              notes: Path = Path("notes/reproduction.md"), rtol: float = 1e-6,
+              derive: bool = True) -> Path:
+    """Run the three tau values, the E = 4 MPa comparison, write figures and notes."""
+    from kvrod.cli_runtime import run_and_write
+    from runtime import plots as P
+    from runtime.scenarios import CantileverScenario
+
+    wall0 = time.perf_counter()
+    out = Path(out)
+    if derive:
+        from derive.notes import write_derivation_notes
+
+        write_derivation_notes(notes.parent / "derivation.md")
+    runs, summaries = {}, {}
+    for tau in TAUS:
+        sc = CantileverScenario.with_tau(tau, n_elements=n_elements, t_end=t_end, rtol=rtol)
+        runs[tau], summaries[tau] = run_and_write(sc, out / f"tau_{tau:g}", f"tau_E = {tau:g} s")
+    # E = 4 MPa: tau halved; exact coincidence needs the tip force x 4 as well
+    stiff = {}
+    for label, force in (("E4_F0.2", 0.2), ("E4_F0.05", 0.05)):
+        sc = CantileverScenario.with_tau(0.02, youngs_modulus=4e6, tip_force=force,
+                                         n_elements=n_elements, t_end=t_end / 2, rtol=rtol)
+        stiff[label] = run_and_write(sc, out / label, f"E = 4 MPa, F = {force} N")
+    figs = out / "figures"
+    labels = [f"tau_E = {tau:g} s" for tau in TAUS]
+    P.plot_tip([runs[t] for t in TAUS], labels, figs / "fig3_tip.png")
+    P.plot_damping_vs_amplitude([runs[t] for t in TAUS], labels,
+                                [summaries[t]["linear_prediction"]["zeta_1"] for t in TAUS],
+                                figs / "damping_ratio_vs_amplitude.png")
+    ref, (r4, s4), (r4b, s4b) = runs[0.04], stiff["E4_F0.2"], stiff["E4_F0.05"]
+    P.plot_overlay(ref, "E = 1 MPa, tau_E = 0.04 s, F = 0.05 N", r4,
+                   "E = 4 MPa, tau_E = 0.02 s, F = 0.2 N", 2.0, figs / "fig4_overlay.png")
+    P.plot_overlay(ref, "E = 1 MPa, tau_E = 0.04 s, F = 0.05 N", r4b,
+                   "E = 4 MPa, tau_E = 0.02 s, F = 0.05 N", 2.0,
+                   figs / "fig4_overlay_same_force.png")
+    # coincidence of the stretched time axis: x_4MPa(t/2) against x_1MPa(t)
+    # both runs sample every output_step: x_4MPa(t_j) pairs with x_1MPa(2 t_j) = ref sample 2j
+    n = min(r4.t.size, (ref.t.size + 1) // 2)
+    dev = r4.tip[0][:n] - ref.tip[0][: 2 * n - 1 : 2]
+    dev_b = r4b.tip[0][:n] - ref.tip[0][: 2 * n - 1 : 2]
+    amp = float(np.max(np.abs(ref.tip[0])))
+    sc0 = CantileverScenario(n_elements=n_elements)
+    reference = _reissner_reference(sc0)
+    ctx = {
+        "n_elements": n_elements, "t_end": t_end, "rtol": rtol,
+        "taus": TAUS, "s": summaries, "late_zeta": {t: _late_zeta(summaries[t]) for t in TAUS},
+        "reference": reference,
+        "stretch_dev": float(np.max(np.abs(dev))),
+        "stretch_dev_rel": float(np.max(np.abs(dev))) / amp,
+        "stretch_dev_same_force_rel": float(np.max(np.abs(dev_b))) / amp,
+        "s4": s4, "s4b": s4b,
+        "wall": time.perf_counter() - wall0,
+        "machine": f"{platform.machine()}, Python {platform.python_version()}",
+        "out": out.as_posix(),
+    }
+    stat = summaries[0.04]["static"]["tip"]
+    if reference and reference.get("reissner"):
+        rx, rz = reference["reissner"]
+        ctx["static_err_rel"] = abs(stat[0] - rx) / abs(rx)
+    env = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATE_DIR),
+                             undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
+    text = env.get_template("reproduction.md.jinja").render(**ctx)
+    notes.parent.mkdir(parents=True, exist_ok=True)
+    tmp = notes.with_name(notes.name + ".tmp")
+    tmp.write_text(text)
+    tmp.replace(notes)
+    import shutil
+
+    (notes.parent / "figures").mkdir(exist_ok=True)
+    for f in figs.glob("*.png"):
+        shutil.copyfile(f, notes.parent / "figures" / f.name)
+    return notes

@@ -1,0 +1,97 @@
+"""Plots of cantilever runs (matplotlib, Agg backend; axes labelled with units)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from runtime.analysis import damping_ratios, exponential_envelope, log_decrements
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _save(fig, path: Path) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
+    fig.savefig(tmp, dpi=120, bbox_inches="tight")
+    tmp.replace(path)
+    _plt().close(fig)
+    return path
+
+
+def plot_tip(runs: Sequence, labels: Sequence[str], path: Path, envelopes: bool = True) -> Path:
+    """Tip x(t) like the paper's Fig. 3, with exponential envelopes fitted to the later
+    (linear) maxima."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    for run, label in zip(runs, labels, strict=True):
+        line, = ax.plot(run.t, run.tip[0], lw=1.0, label=label)
+        if envelopes and run.peaks_x.size >= 4:
+            fit = exponential_envelope(run.peaks_t, run.peaks_x, first=max(0, run.peaks_x.size - 4))
+            tt = np.linspace(0, run.t[-1], 200)
+            ax.plot(tt, fit(tt), "--", color=line.get_color(), lw=0.8)
+            ax.plot(tt, -fit(tt), "--", color=line.get_color(), lw=0.8)
+    ax.set_xlabel("time t after release [s]")
+    ax.set_ylabel("tip displacement x(t) = e1 . phi(L, t) [m]")
+    ax.axhline(0, color="0.7", lw=0.5)
+    ax.legend()
+    ax.set_title("Damped cantilever after release (dashed: envelope fitted to the last maxima)")
+    return _save(fig, path)
+
+
+def plot_damping_vs_amplitude(runs: Sequence, labels: Sequence[str], predictions: Sequence[float],
+                              path: Path) -> Path:
+    """Damping ratio per cycle zeta_k against the cycle's first amplitude x_k, with the
+    linear prediction omega_1 tau_E / 2."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for run, label, zlin in zip(runs, labels, predictions, strict=True):
+        if run.peaks_x.size < 2:
+            continue
+        z = damping_ratios(log_decrements(run.peaks_x))
+        line, = ax.plot(run.peaks_x[:-1], z, "o-", label=f"{label}")
+        ax.axhline(zlin, color=line.get_color(), ls=":", lw=1.0)
+    ax.set_xscale("log")
+    ax.set_xlabel("amplitude x_k at the start of the cycle [m]")
+    ax.set_ylabel("damping ratio zeta_k [-]")
+    ax.set_title("Damping ratio per cycle (dotted: linear omega_1 tau_E / 2)")
+    ax.legend()
+    return _save(fig, path)
+
+
+def plot_overlay(run_a, label_a: str, run_b, label_b: str, stretch: float, path: Path) -> Path:
+    """run_b on a time axis stretched by ``stretch`` over run_a (the paper's Fig. 4)."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    ax.plot(run_a.t, run_a.tip[0], lw=1.6, label=label_a)
+    ax.plot(stretch * run_b.t, run_b.tip[0], "--", lw=1.0, label=f"{label_b}, t x {stretch:g}")
+    ax.set_xlabel("time t [s]")
+    ax.set_ylabel("tip displacement x [m]")
+    ax.legend()
+    ax.set_title("Stiffness variation with a stretched time axis")
+    return _save(fig, path)
+
+
+def plot_energy(run, path: Path) -> Path:
+    """Kinetic, elastic, dissipated energy and the relative balance error."""
+    plt = _plt()
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    a1.plot(run.t, run.kinetic, label="kinetic T")
+    a1.plot(run.t, run.elastic, label="elastic W")
+    a1.plot(run.t, run.dissipated, label="dissipated int 2D dt")
+    a1.set_ylabel("energy [J]")
+    a1.legend()
+    a2.plot(run.t, run.energy_balance_rel)
+    a2.set_xlabel("time t [s]")
+    a2.set_ylabel("balance error [-]")
+    return _save(fig, path)

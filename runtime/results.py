@@ -1,0 +1,66 @@
+"""Results folders: atomic JSON/NPZ writes of a run (design section 4, I/O).
+
+Every file is written under a temporary name in the same folder and renamed, so a
+reader never sees half a file, and a run that dies leaves the previous complete file.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+
+def _jsonable(obj: Any) -> Any:
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _jsonable(obj.tolist())
+    if isinstance(obj, (np.floating, float)):
+        v = float(obj)
+        return v if math.isfinite(v) else str(v)
+    if isinstance(obj, np.integer):
+        return int(obj)
+    return obj
+
+
+def write_json(path: Path, data: dict) -> Path:
+    """Write ``data`` as indented JSON atomically (non-finite floats become strings)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(json.dumps(_jsonable(data), indent=2) + "\n")
+    tmp.replace(path)
+    return path
+
+
+def write_npz(path: Path, **arrays: np.ndarray) -> Path:
+    """Write arrays to a compressed NPZ atomically."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp.npz")
+    np.savez_compressed(tmp, **arrays)
+    tmp.replace(path)
+    return path
+
+
+def write_run(out_dir: Path, run, extra: dict | None = None) -> dict:
+    """summary.json and series.npz of a :class:`runtime.scenarios.CantileverRun`."""
+    out_dir = Path(out_dir)
+    summary = run.summary()
+    if extra:
+        summary.update(extra)
+    write_npz(out_dir / "series.npz", t=run.t, tip=run.tip, kinetic=run.kinetic,
+              elastic=run.elastic, dissipated=run.dissipated, external_work=run.external_work,
+              energy_balance_rel=run.energy_balance_rel, peaks_t=run.peaks_t,
+              peaks_x=run.peaks_x,
+              y_static=run.y_static if run.y_static is not None else np.zeros(0),
+              y_last=run.y_last if run.y_last is not None else np.zeros(0))
+    write_json(out_dir / "summary.json", summary)
+    return summary

@@ -1,0 +1,134 @@
+"""The paper's cantilever (Sect. 5) against independent references (coarse settings)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from generated.constitutive import ParameterError, rectangle_section, shear_modulus
+from runtime.results import write_run
+from runtime.scenarios import CantileverScenario, run_cantilever
+from tests.reference.beams import kelvin_voigt_damping_ratio, timoshenko_frequencies
+from tests.reference.reissner import solve_reissner
+
+PAPER = CantileverScenario()
+
+
+def reissner_tip(sc: CantileverScenario) -> tuple[float, float]:
+    sec = rectangle_section(sc.width, sc.height, sc.poisson_ratio)
+    r = solve_reissner(sc.tip_force, L=sc.length, EA=sc.youngs_modulus * sec["A"],
+                       GA=shear_modulus(sc.youngs_modulus, sc.poisson_ratio) * sec["A"]
+                       * sec["kappa_1"], EI=sc.youngs_modulus * sec["I1"])
+    return r.tip
+
+
+@pytest.fixture(scope="module")
+def paper_run():
+    return run_cantilever(CantileverScenario(n_elements=25, t_end=4.0))  # maxima at 0, T, 2T
+
+
+def test_static_tip_against_reissner_shooting():
+    sc = CantileverScenario(n_elements=100, t_end=0.01)
+    run = run_cantilever(sc)
+    rx, rz = reissner_tip(sc)
+    assert abs(run.static_tip[0] - rx) / rx < 1e-3
+    assert abs(run.static_tip[2] - rz) / rz < 1e-3
+    assert abs(run.static_tip[1]) < 1e-12
+    assert 0 < run.static_iterations < 120
+
+
+def test_static_tip_converges_at_second_order():
+    errs = []
+    rx, _ = reissner_tip(PAPER)
+    for N in (8, 16, 32):
+        run = run_cantilever(CantileverScenario(n_elements=N, t_end=0.001))
+        errs.append(abs(run.static_tip[0] - rx))
+    orders = np.log2(np.array(errs[:-1]) / np.array(errs[1:]))
+    assert np.all(orders > 1.7), orders
+
+
+@pytest.fixture(scope="module")
+def small_amplitude():
+    sc = CantileverScenario(n_elements=50, tip_force=5e-5, t_end=5.5, rtol=1e-8)
+    return sc, run_cantilever(sc)
+
+
+def test_small_amplitude_period_and_damping_ratio(small_amplitude):
+    sc, run = small_amplitude
+    sec = rectangle_section(sc.width, sc.height, sc.poisson_ratio)
+    kGA = shear_modulus(sc.youngs_modulus, sc.poisson_ratio) * sec["A"] * sec["kappa_1"]
+    omega = timoshenko_frequencies(1, E=sc.youngs_modulus, rho=sc.density, A=sec["A"],
+                                   I=sec["I1"], kGA=kGA, L=sc.length)[0]
+    zeta = kelvin_voigt_damping_ratio(omega, sc.tau_E)
+    T_damped = 2 * math.pi / (omega * math.sqrt(1 - zeta**2))
+    s = run.summary()
+    assert run.status == "finished"
+    assert len(s["periods"]) >= 2
+    assert abs(s["periods"][-1] - T_damped) / T_damped < 2e-3
+    assert abs(s["damping_ratios"][-1] - zeta) / zeta < 2e-2
+
+
+def test_large_amplitude_damping_is_weaker_and_approaches_linear(paper_run):
+    s = paper_run.summary()
+    z = np.array(s["damping_ratios"])
+    lin = s["linear_prediction"]["zeta_1"]
+    assert z.size >= 2 and np.all(np.diff(z) > 0) and np.all(z < lin)
+    assert z[-1] > 0.9 * lin
+
+
+def test_energy_audit(paper_run):
+    assert paper_run.status == "finished"
+    assert np.max(np.abs(paper_run.energy_balance_rel)) < 5e-5
+    assert paper_run.dissipated[-1] > 0.5 * paper_run.elastic[0]   # most energy is dissipated
+
+
+def test_time_step_convergence():
+    """Tip at t = 1 s against a tight run: the error falls with rtol."""
+    ref = run_cantilever(CantileverScenario(n_elements=10, t_end=1.0, rtol=1e-10))
+    errs = []
+    for rtol in (1e-4, 1e-6):
+        r = run_cantilever(CantileverScenario(n_elements=10, t_end=1.0, rtol=rtol))
+        errs.append(np.max(np.abs(r.tip[0] - ref.tip[0])))
+    assert errs[1] < errs[0] / 10 and errs[1] < 1e-5
+
+
+def test_stiffness_time_scaling_is_exact():
+    """E -> 4E, tau -> tau/2, F -> 4F: the same motion on a time axis halved."""
+    a = run_cantilever(CantileverScenario(n_elements=10, t_end=2.0, rtol=1e-9))
+    b = run_cantilever(CantileverScenario(n_elements=10, t_end=1.0, rtol=1e-9,
+                                          youngs_modulus=4e6, tau_S=0.02, tau_B=0.02,
+                                          tip_force=0.2))
+    n = b.t.size
+    assert np.allclose(a.t[: 2 * n - 1 : 2], 2 * b.t)            # matching output instants
+    assert np.max(np.abs(a.tip[0][: 2 * n - 1 : 2] - b.tip[0])) < 1e-6
+    assert np.allclose(a.static_tip, b.static_tip, atol=1e-10)
+
+
+def test_summary_keys_and_failed_run_keeps_results(tmp_path):
+    sc = CantileverScenario(n_elements=6, t_end=0.5)
+    run = run_cantilever(sc, max_steps=400)     # stops early: a failed run
+    assert run.status == "failed" and "max_steps" in run.message
+    s = write_run(tmp_path, run)
+    data = json.loads((tmp_path / "summary.json").read_text())
+    for key in ("parameters", "static", "peaks", "log_decrements", "damping_ratios", "periods",
+                "energy_balance_max_rel", "wall_time_s", "counters"):
+        assert key in data
+    assert data["status"] == "failed" and data["t_reached"] > 0
+    assert set(data["counters"]) >= {"nstep", "nfev", "njev", "nlu"}
+    assert np.load(tmp_path / "series.npz")["t"].size == run.t.size >= 1
+    assert s["static"]["tip"] is not None
+
+
+@pytest.mark.parametrize(("kw", "match"), [
+    ({"t_end": 0.0}, "t_end = 0.0"), ({"t_end": -1.0}, "t_end"), ({"rtol": 0.0}, "rtol"),
+    ({"rtol": float("nan")}, "rtol"), ({"n_elements": 0}, "n_elements"),
+    ({"youngs_modulus": -1.0}, "youngs_modulus|E"), ({"poisson_ratio": 0.7}, "nu|poisson"),
+    ({"tau_S": -0.1}, "tau_S"), ({"damping": "magic"}, "damping"),
+    ({"tip_force": float("inf")}, "tip_force"), ({"load_steps": 0}, "load_steps"),
+])
+def test_bad_scenario_parameters(kw, match):
+    with pytest.raises((ParameterError, ValueError), match=match):
+        CantileverScenario(**kw)
