@@ -206,4 +206,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    # run the imported module's main, so that its exception classes are the ones the
+    # command modules raise (``python -m kvrod.cli`` would otherwise have two copies)
+    from kvrod.cli import main as _main
+
+    sys.exit(_main())

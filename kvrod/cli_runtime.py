@@ -21,9 +21,18 @@ def _progress(t_end: float, desc: str):
 
 
 def scenario_from_args(args):
+    """Scenario from defaults <- config file (--config) <- command-line flags."""
+    from runtime.config import load_config
     from runtime.scenarios import CantileverScenario
 
-    kw = {}
+    kw: dict = {}
+    if getattr(args, "config", None):
+        name, kw = load_config(Path(args.config))
+        if args.scenario is not None and args.scenario != name:
+            from kvrod.cli import CliError
+
+            raise CliError(f"kvrod simulate: scenario {args.scenario!r} on the command line "
+                           f"but {name!r} in {args.config}")
     if args.tau is not None:
         kw.update(tau_S=args.tau, tau_B=args.tau)
     for name in ("tau_S", "tau_B"):
@@ -38,17 +47,45 @@ def scenario_from_args(args):
     return CantileverScenario(**kw)
 
 
-def run_and_write(scenario, out: Path, label: str, plots: bool = True) -> tuple:
+def run_and_write(scenario, out: Path, label: str, plots: bool = True, resume: bool = False,
+                  vtk_every: float | None = None, checkpoint_every: float = 1.0) -> tuple:
+    """Run with progress bar, checkpoints and a results folder that is never half-written:
+    summary.json says "running" (with t_reached) until the run ends; ``resume`` continues
+    from DIR/checkpoint.npz."""
+    from dataclasses import asdict
+
     from runtime import plots as P
-    from runtime.results import write_run
+    from runtime.results import (
+        CHECKPOINT,
+        load_checkpoint,
+        write_checkpoint,
+        write_run,
+        write_status,
+    )
     from runtime.scenarios import run_cantilever
+
+    params = {**asdict(scenario), "tau_E": scenario.tau_E}
+    state = load_checkpoint(out, params) if resume else None
+    write_status(out, params, "running", float(state["t"]) if state else 0.0)
+
+    def on_checkpoint(run, st):
+        write_checkpoint(out, params, st)
+        write_status(out, params, "running", st["t"])
 
     cb, close = _progress(scenario.t_end, label)
     try:
-        run = run_cantilever(scenario, progress=cb)
+        run = run_cantilever(scenario, progress=cb, checkpoint=on_checkpoint,
+                             checkpoint_every=checkpoint_every, resume=state,
+                             snapshot_every=vtk_every)
     finally:
         close()
-    summary = write_run(out, run)
+    summary = write_run(out, run, extra={"resumed_from_t": float(state["t"])} if state else None)
+    if run.status == "finished":
+        (out / CHECKPOINT).unlink(missing_ok=True)
+    if vtk_every is not None and run.snapshots:
+        from runtime.vtk import write_series
+
+        write_series(out / "vtk", run.model, run.snapshots)
     if plots and run.t.size > 1:
         P.plot_tip([run], [label], out / "tip.png")
         P.plot_energy(run, out / "energy.png")
@@ -62,20 +99,26 @@ def run_and_write(scenario, out: Path, label: str, plots: bool = True) -> tuple:
 def _cmd_simulate(args) -> int:
     from kvrod.cli import CliError
 
-    if args.scenario != "cantilever":
+    if args.scenario is not None and args.scenario != "cantilever":
         raise CliError(f"kvrod simulate: unknown scenario {args.scenario!r}; "
                        "scenarios are: cantilever")
+    if args.scenario is None and not args.config:
+        raise CliError("kvrod simulate: name a scenario (cantilever) or give --config FILE")
+    if args.vtk is not None and not args.vtk > 0:
+        raise CliError(f"kvrod simulate: --vtk = {args.vtk} must be > 0 (seconds between "
+                       "snapshots)")
     sc = scenario_from_args(args)
     out = Path(args.out)
-    run, s = run_and_write(sc, out, "cantilever")
+    run, s = run_and_write(sc, out, "cantilever", resume=args.resume, vtk_every=args.vtk)
     tip = s["static"]["tip"]
     print(f"static tip [m]: {tip}  (Newton iterations: {s['static']['newton_iterations']})")
     z = s["damping_ratios"]
     print(f"maxima: {len(s['peaks'])}, damping ratios: {[round(v, 4) for v in z]}")
     print(f"linear prediction zeta_1 = omega_1 tau/2 = {s['linear_prediction']['zeta_1']:.4f}")
-    print(f"energy balance max rel. error: {s['energy_balance_max_rel']:.2e}")
+    eb = s["energy_balance_max_rel"]
+    print(f"energy balance max rel. error: {eb:.2e}" if eb is not None else "no energy audit")
     print(f"counters: {s['counters']}, wall time {s['wall_time_s']:.2f} s")
-    print(f"wrote {out}/summary.json, series.npz, *.png")
+    print(f"wrote {out}/summary.json, series.npz, *.png" + (", vtk/rod.pvd" if args.vtk else ""))
     if run.status != "finished":
         print(f"kvrod: run {run.status}: {run.message}")
         return 1
@@ -93,7 +136,12 @@ def _cmd_reproduce(args) -> int:
 
 def add_commands(sub, parser_class) -> None:
     s = sub.add_parser("simulate", help="run a scenario (the paper's damped cantilever)")
-    s.add_argument("scenario", help="scenario name: cantilever")
+    s.add_argument("scenario", nargs="?", help="scenario name: cantilever")
+    s.add_argument("--config", help="TOML file with the scenario parameters (flags override)")
+    s.add_argument("--resume", action="store_true",
+                   help="continue from DIR/checkpoint.npz of an interrupted run")
+    s.add_argument("--vtk", type=float, metavar="DT",
+                   help="write ParaView VTK (.vtp + .pvd) every DT seconds")
     s.add_argument("--tau", type=float, help="tau_S = tau_B = tau_E [s] (paper: 0.04)")
     s.add_argument("--tau-S", dest="tau_S", type=float, help="shear retardation time [s]")
     s.add_argument("--tau-B", dest="tau_B", type=float, help="bulk retardation time [s]")

@@ -64,3 +64,40 @@ def write_run(out_dir: Path, run, extra: dict | None = None) -> dict:
               y_last=run.y_last if run.y_last is not None else np.zeros(0))
     write_json(out_dir / "summary.json", summary)
     return summary
+
+
+CHECKPOINT = "checkpoint.npz"
+
+
+def write_status(out_dir: Path, parameters: dict, status: str, t_reached: float = 0.0,
+                 message: str = "") -> Path:
+    """A minimal summary.json for a run in progress (status "running")."""
+    return write_json(Path(out_dir) / "summary.json",
+                      {"status": status, "message": message, "parameters": parameters,
+                       "t_reached": t_reached})
+
+
+def write_checkpoint(out_dir: Path, parameters: dict, state: dict) -> Path:
+    """Everything run_cantilever needs to continue (``resume=``), plus the parameters."""
+    arrays = {k: np.asarray(v) for k, v in state.items() if k != "counters"}
+    arrays["counters_json"] = np.array(json.dumps(state["counters"]))
+    arrays["parameters_json"] = np.array(json.dumps(_jsonable(parameters), sort_keys=True))
+    return write_npz(Path(out_dir) / CHECKPOINT, **arrays)
+
+
+def load_checkpoint(out_dir: Path, parameters: dict) -> dict:
+    """The state saved by :func:`write_checkpoint`; raises ValueError if there is none or
+    it was written for other parameters (names the first differing parameter)."""
+    path = Path(out_dir) / CHECKPOINT
+    if not path.exists():
+        raise ValueError(f"--resume: no checkpoint in {out_dir} (nothing to resume)")
+    with np.load(path) as f:
+        data = {k: f[k] for k in f.files}
+    saved = json.loads(str(data.pop("parameters_json")))
+    wanted = _jsonable(parameters)
+    for key in sorted(set(saved) | set(wanted)):
+        if saved.get(key) != wanted.get(key):
+            raise ValueError(f"--resume: checkpoint in {out_dir} was written with {key} = "
+                             f"{saved.get(key)!r}, this run has {wanted.get(key)!r}")
+    data["counters"] = json.loads(str(data.pop("counters_json")))
+    return data

@@ -61,7 +61,8 @@ class CantileverScenario:
     at release), n_elements, t_end (s, simulated time after release), rtol/atol
     (integrator tolerances; atol None -> 1e-4 rtol in the state's units), damping
     ("consistent" eta_E or "naive" eta~_E), load_steps (static continuation),
-    output_step (s, sampling of the stored series).
+    output_step (s, sampling of the stored series), min_step (s, smallest step the
+    integrator may take before it gives up; 0 = round-off limit).
     """
 
     length: float = 0.30
@@ -81,6 +82,7 @@ class CantileverScenario:
     shear_correction: bool = True
     load_steps: int = 10
     output_step: float = 0.005
+    min_step: float = 0.0
 
     def __post_init__(self) -> None:
         _in_range("t_end", self.t_end, 0.0)
@@ -88,6 +90,7 @@ class CantileverScenario:
         if self.atol is not None:
             _in_range("atol", self.atol, 0.0)
         _in_range("output_step", self.output_step, 0.0)
+        _in_range("min_step", self.min_step, 0.0, low_incl=True)
         _in_range("tip_force", self.tip_force, -math.inf)
         if not isinstance(self.load_steps, int) or self.load_steps < 1:
             raise ParameterError(f"load_steps = {self.load_steps!r} is outside the allowed "
@@ -154,6 +157,8 @@ class CantileverRun:
     static_wall_time_s: float = 0.0
     t_last: float = 0.0
     y_last: np.ndarray | None = None
+    snapshots: list = field(default_factory=list)     # (t, y) pairs for VTK output
+    model: object = None                             # the RodModel that ran
 
     @property
     def energy_balance_rel(self) -> np.ndarray:
@@ -200,14 +205,54 @@ def _tip_indices(N: int) -> tuple[np.ndarray, int]:
     return c + L.CELL_OFFSETS["phi"] + np.arange(3), c + L.CELL_OFFSETS["v"]
 
 
+def describe_dof(n_elements: int, index: int) -> str:
+    """Human-readable name of state/residual component ``index`` (layout of rod_layout)."""
+    if index < 0:
+        return "unknown component"
+    if index < L.CELL0_SIZE:
+        field_, off = ("phi", index) if index < 3 else ("v", index - 3)
+        return f"node 0 {field_}[{off}]"
+    cell, local = divmod(index - L.CELL0_SIZE, L.CELL_SIZE)
+    cell += 1
+    for name, start in sorted(L.CELL_OFFSETS.items(), key=lambda kv: -kv[1]):
+        if local >= start:
+            where = "segment" if name in ("p", "Omega") else "node"
+            return f"{where} {cell} {name}[{local - start}] (state index {index})"
+    return f"state index {index}"
+
+
+def _checkpoint_state(run: CantileverRun, solver: BDF, rec: dict, pk: tuple, diss: float,
+                      work: float, k_out: int, counters0: dict) -> dict:
+    counters = {k: counters0.get(k, 0) + v for k, v in solver.counters.items()}
+    return {"t": float(solver.t), "y": solver.y.copy(), "yp": solver.yp.copy(),
+            "k_out": k_out, "diss": diss, "work": work,
+            "rec_t": np.array(rec["t"]), "rec_tip": np.array(rec["tip"]),
+            "rec_T": np.array(rec["T"]), "rec_W": np.array(rec["W"]),
+            "rec_D": np.array(rec["D"]), "rec_P": np.array(rec["P"]),
+            "peaks_t": np.array(pk[0]), "peaks_x": np.array(pk[1]),
+            "y_static": run.y_static, "static_tip": run.static_tip,
+            "static_iterations": run.static_iterations,
+            "static_iterations_per_step": np.array(run.static_iterations_per_step),
+            "counters": counters}
+
+
 def run_cantilever(scenario: CantileverScenario,
                    progress: Callable[[float], object] | None = None,
-                   max_steps: int = 2_000_000) -> CantileverRun:
+                   max_steps: int = 2_000_000,
+                   checkpoint: Callable[[CantileverRun, dict], object] | None = None,
+                   checkpoint_every: float = 1.0,
+                   resume: dict | None = None,
+                   snapshot_every: float | None = None) -> CantileverRun:
     """Static deflection, release and damped free vibration of the cantilever.
 
     progress(t) is called after every accepted step (the CLI drives a progress bar).
+    checkpoint(run, state) is called every ``checkpoint_every`` simulated seconds with a
+    dict that :func:`run_cantilever` accepts back as ``resume`` to continue the run (the
+    multistep history restarts at order 1 there, so a resumed run agrees with an
+    uninterrupted one to the integrator tolerance, not bit for bit).
+    snapshot_every: also keep full states every so many seconds (``run.snapshots``) for VTK.
     Returns a :class:`CantileverRun`; never raises for solver failure (status "failed",
-    message and all results up to the failure are kept).
+    message and all results up to the last accepted step are kept).
     """
     sc = scenario
     run = CantileverRun(scenario=sc)
@@ -215,31 +260,13 @@ def run_cantilever(scenario: CantileverScenario,
     model = RodModel(sc.rod_parameters(), start="clamped", end="free",
                      tip_force=(sc.tip_force, 0.0, 0.0))
     i_tip, i_vx = _tip_indices(sc.n_elements)
-    # --- static equilibrium under the dead tip load ---------------------------------
-    try:
-        st = solve_static(model, model.initial_state(), load_steps=sc.load_steps)
-    except StaticSolveError as exc:
-        run.status, run.message = "failed", f"static solve failed: {exc}"
-        run.y_static = exc.y
-        run.static_tip = exc.y[i_tip].copy()
-        run.wall_time_s = time.perf_counter() - wall0
-        return run
-    run.static_wall_time_s = time.perf_counter() - wall0
-    run.y_static = st.y.copy()
-    run.static_tip = st.y[i_tip].copy()
-    run.static_iterations = st.total_iterations
-    run.static_iterations_per_step = list(st.iterations)
-    # --- release: the dead load is switched off, the rod starts at rest ---------------
-    model.load_scale = 0.0
-    atol = sc.atol if sc.atol is not None else 1e-4 * sc.rtol
-    y0, yp0 = consistent_initial(model, 0.0, st.y, np.zeros(model.n))
-    solver = BDF(model, 0.0, y0, yp0, sc.t_end, rtol=sc.rtol, atol=atol)
+    run.model = model
+    rec = {"t": [], "tip": [], "T": [], "W": [], "D": [], "P": []}
+    pk_t: list[float] = []
+    pk_x: list[float] = []
     t_out = np.arange(0.0, sc.t_end + 0.5 * sc.output_step, sc.output_step)
     t_out = t_out[t_out <= sc.t_end]
-    rec_t, rec_tip, rec_T, rec_W, rec_D, rec_P = [], [], [], [], [], []
-    pk_t, pk_x = [], []
-    diss = work = 0.0          # integrals up to the last accepted step
-    k_out = 0
+    counters0: dict[str, int] = {}
 
     def energies(y, yp):
         d = model.diagnostics(0.0, y, yp)
@@ -247,12 +274,12 @@ def run_cantilever(scenario: CantileverScenario,
 
     def record(tq, y, yp, diss_q, work_q):
         T, W, _, _ = energies(y, yp)
-        rec_t.append(tq)
-        rec_tip.append(y[i_tip].copy())
-        rec_T.append(T)
-        rec_W.append(W)
-        rec_D.append(diss_q)
-        rec_P.append(work_q)
+        rec["t"].append(tq)
+        rec["tip"].append(y[i_tip].copy())
+        rec["T"].append(T)
+        rec["W"].append(W)
+        rec["D"].append(diss_q)
+        rec["P"].append(work_q)
 
     def power_integrals(dense, a: float, b: float) -> tuple[float, float]:
         """int_a^b 2D dt and int_a^b P dt on the step interpolant (3-point Gauss)."""
@@ -266,11 +293,56 @@ def run_cantilever(scenario: CantileverScenario,
             wsum += _GL_W[j] * P
         return dsum * (b - a), wsum * (b - a)
 
-    record(0.0, y0, yp0, 0.0, 0.0)
-    k_out = 1
-    if y0[i_tip[0]] > 0:            # released from rest at a deflected state: a maximum
-        pk_t.append(0.0)
-        pk_x.append(float(y0[i_tip[0]]))
+    model.load_scale = 0.0 if resume is not None else 1.0
+    if resume is None:
+        # --- static equilibrium under the dead tip load -----------------------------
+        try:
+            st = solve_static(model, model.initial_state(), load_steps=sc.load_steps)
+        except StaticSolveError as exc:
+            run.status, run.message = "failed", f"static solve failed: {exc}"
+            run.y_static = exc.y
+            run.static_tip = exc.y[i_tip].copy()
+            run.wall_time_s = time.perf_counter() - wall0
+            return run
+        run.static_wall_time_s = time.perf_counter() - wall0
+        run.y_static = st.y.copy()
+        run.static_tip = st.y[i_tip].copy()
+        run.static_iterations = st.total_iterations
+        run.static_iterations_per_step = list(st.iterations)
+        # --- release: the dead load is switched off, the rod starts at rest -----------
+        model.load_scale = 0.0
+        t_start = 0.0
+        y0, yp0 = consistent_initial(model, 0.0, st.y, np.zeros(model.n))
+        diss = work = 0.0          # integrals up to the last accepted step
+        record(0.0, y0, yp0, 0.0, 0.0)
+        k_out = 1
+        if y0[i_tip[0]] > 0:       # released from rest at a deflected state: a maximum
+            pk_t.append(0.0)
+            pk_x.append(float(y0[i_tip[0]]))
+    else:
+        t_start, y0, yp0 = float(resume["t"]), np.array(resume["y"]), np.array(resume["yp"])
+        if y0.shape != (model.n,):
+            raise ValueError(f"resume state has {y0.shape} entries, the scenario needs "
+                             f"({model.n},): checkpoint of a different scenario")
+        diss, work, k_out = float(resume["diss"]), float(resume["work"]), int(resume["k_out"])
+        for key, src in (("t", "rec_t"), ("T", "rec_T"), ("W", "rec_W"), ("D", "rec_D"),
+                         ("P", "rec_P")):
+            rec[key] = [float(v) for v in resume[src]]
+        rec["tip"] = [np.array(v) for v in resume["rec_tip"]]
+        pk_t, pk_x = list(map(float, resume["peaks_t"])), list(map(float, resume["peaks_x"]))
+        run.y_static = np.array(resume["y_static"])
+        run.static_tip = np.array(resume["static_tip"])
+        run.static_iterations = int(resume["static_iterations"])
+        run.static_iterations_per_step = [int(v) for v in resume["static_iterations_per_step"]]
+        counters0 = {k: int(v) for k, v in dict(resume["counters"]).items()}
+    atol = sc.atol if sc.atol is not None else 1e-4 * sc.rtol
+    solver = BDF(model, t_start, y0, yp0, sc.t_end, rtol=sc.rtol, atol=atol,
+                 min_step=sc.min_step)
+    next_ckpt = t_start + checkpoint_every
+    next_snap = t_start
+    if snapshot_every is not None:
+        run.snapshots = [(t_start, y0.copy())]
+        next_snap = t_start + snapshot_every
     try:
         while solver.status == "running" and solver.nstep < max_steps:
             vx_old = solver.y[i_vx]
@@ -278,7 +350,11 @@ def run_cantilever(scenario: CantileverScenario,
             dense = solver.dense_output()
             t0, t1 = solver.t_old, solver.t
             h = t1 - t0
-
+            if not np.all(np.isfinite(solver.y)):
+                raise IntegrationError(f"non-finite state at t = {t1:g} s", t=t0,
+                                       y=dense(t0), yp=dense.derivative(t0), h=h,
+                                       residual_norm=math.inf,
+                                       worst_index=int(np.argmin(np.isfinite(solver.y))))
             while k_out < t_out.size and t_out[k_out] <= t1 + 1e-12 * max(1.0, t1):
                 tq = min(t_out[k_out], t1)
                 dd, ww = power_integrals(dense, t0, tq)
@@ -295,12 +371,16 @@ def run_cantilever(scenario: CantileverScenario,
                 if xk > 0:
                     pk_t.append(tk)
                     pk_x.append(xk)
-            if not np.all(np.isfinite(solver.y)):
-                raise IntegrationError(f"non-finite state at t = {t1:g} s", t=t0,
-                                       y=dense(t0), yp=dense.derivative(t0), h=h,
-                                       residual_norm=math.nan, worst_index=-1)
+            if snapshot_every is not None:
+                while next_snap <= t1:
+                    run.snapshots.append((next_snap, np.array(dense(next_snap))))
+                    next_snap += snapshot_every
             if progress is not None:
                 progress(t1)
+            if checkpoint is not None and t1 >= next_ckpt and solver.status == "running":
+                checkpoint(run, _checkpoint_state(run, solver, rec, (pk_t, pk_x), diss, work,
+                                                  k_out, counters0))
+                next_ckpt = t1 + checkpoint_every
         run.status = "finished" if solver.status == "finished" else "failed"
         if run.status == "failed":
             run.message = f"stopped after max_steps = {max_steps} steps at t = {solver.t:g} s"
@@ -309,13 +389,16 @@ def run_cantilever(scenario: CantileverScenario,
         run.t_last, run.y_last = solver.t, solver.y.copy()
     except IntegrationError as exc:
         run.status = "failed"
-        run.message = f"integration failed: {exc}"
+        run.message = (f"integration failed at t = {exc.t:.6g} s (last accepted step), "
+                       f"step size {exc.h:.3g} s, residual norm {exc.residual_norm:.3g}, "
+                       f"worst component: {describe_dof(sc.n_elements, exc.worst_index)}: "
+                       f"{exc}")
         run.t_last, run.y_last = float(exc.t), np.array(exc.y, copy=True)
-    run.counters = dict(solver.counters)
-    run.t = np.array(rec_t)
-    run.tip = np.array(rec_tip).T if rec_tip else np.zeros((3, 0))
-    run.kinetic, run.elastic = np.array(rec_T), np.array(rec_W)
-    run.dissipated, run.external_work = np.array(rec_D), np.array(rec_P)
+    run.counters = {k: counters0.get(k, 0) + v for k, v in solver.counters.items()}
+    run.t = np.array(rec["t"])
+    run.tip = np.array(rec["tip"]).T if rec["tip"] else np.zeros((3, 0))
+    run.kinetic, run.elastic = np.array(rec["T"]), np.array(rec["W"])
+    run.dissipated, run.external_work = np.array(rec["D"]), np.array(rec["P"])
     run.peaks_t, run.peaks_x = np.array(pk_t), np.array(pk_x)
     run.wall_time_s = time.perf_counter() - wall0
     return run

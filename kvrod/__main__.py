@@ -1,0 +1,7 @@
+"""`python -m kvrod`."""
+
+import sys
+
+from kvrod.cli import main
+
+sys.exit(main())

@@ -1,0 +1,95 @@
+"""Scenario configuration files (TOML) -> validated scenario parameters.
+
+Format (``kvrod simulate --config run.toml``)::
+
+    scenario = "cantilever"
+    [parameters]            # any CantileverScenario field, plus tau = tau_S = tau_B
+    tau = 0.04
+    youngs_modulus = 1.0e6
+    n_elements = 50
+
+Every problem (missing file, malformed TOML, unknown scenario or key, wrong type) raises
+:class:`ConfigError` (a ValueError) with one line naming the file and the key.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from runtime.scenarios import CantileverScenario
+
+SCENARIOS = {"cantilever": CantileverScenario}
+
+
+class ConfigError(ValueError):
+    """A configuration file that cannot be used (message names file and key)."""
+
+
+def scenario_fields(name: str = "cantilever") -> dict[str, type]:
+    cls = SCENARIOS[name]
+    return {f.name: f.type for f in dataclasses.fields(cls)}
+
+
+def _coerce(path: Path, key: str, value: Any, annotation: str) -> Any:
+    ann = str(annotation)
+    if ann in ("int",):
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ConfigError(f"{path}: {key} = {value!r} must be an integer")
+        return value
+    if ann in ("bool",):
+        if not isinstance(value, bool):
+            raise ConfigError(f"{path}: {key} = {value!r} must be true or false")
+        return value
+    if ann in ("str",):
+        if not isinstance(value, str):
+            raise ConfigError(f"{path}: {key} = {value!r} must be a string")
+        return value
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ConfigError(f"{path}: {key} = {value!r} must be a number")
+    return float(value)
+
+
+def parameters_from_mapping(path: Path, params: dict, scenario: str = "cantilever") -> dict:
+    """Validated keyword arguments for the scenario dataclass (``tau`` expanded)."""
+    fields = scenario_fields(scenario)
+    out: dict[str, Any] = {}
+    for key, value in params.items():
+        if key == "tau":
+            v = _coerce(path, key, value, "float")
+            out["tau_S"] = out["tau_B"] = v
+            continue
+        if key not in fields:
+            raise ConfigError(f"{path}: unknown parameter {key!r}; allowed: tau, "
+                              + ", ".join(sorted(fields)))
+        ann = fields[key]
+        out[key] = None if value is None else _coerce(
+            path, key, value, "float" if "float" in str(ann) else str(ann))
+    return out
+
+
+def load_config(path: Path) -> tuple[str, dict]:
+    """(scenario name, scenario keyword arguments) from a TOML file."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot read the config file ({exc.strerror})") from exc
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: malformed TOML: {exc}") from exc
+    name = doc.pop("scenario", "cantilever")
+    if name not in SCENARIOS:
+        raise ConfigError(f"{path}: unknown scenario {name!r}; scenarios are: "
+                          + ", ".join(SCENARIOS))
+    params = doc.pop("parameters", {})
+    if not isinstance(params, dict):
+        raise ConfigError(f"{path}: [parameters] must be a table")
+    flat = {k: v for k, v in doc.items() if not isinstance(v, dict)}
+    extra_tables = [k for k, v in doc.items() if isinstance(v, dict)]
+    if extra_tables:
+        raise ConfigError(f"{path}: unknown table(s) {extra_tables}; use [parameters]")
+    return name, parameters_from_mapping(path, {**flat, **params}, name)
