@@ -105,8 +105,11 @@ def compile_library(compiler: str, gdir: Path | None = None, outdir: Path | None
     outdir.mkdir(parents=True, exist_ok=True)
     suffix = ".dll" if sys.platform == "win32" else ".so"
     target = outdir / f"kvrod_rod_{library_key(compiler, gdir)[:32]}{suffix}"
-    if target.exists():
+    sidecar = target.with_name(target.name + ".sha256")
+    if target.exists() and sidecar.exists() and sidecar.read_text().strip() == _file_hash(target):
         return target
+    # missing, or a library whose bytes do not match the hash recorded when it was built
+    # (corrupted or replaced): rebuild, never load it
     fd, tmp = tempfile.mkstemp(prefix=target.name + ".", suffix=".tmp", dir=outdir)
     os.close(fd)
     try:
@@ -115,11 +118,18 @@ def compile_library(compiler: str, gdir: Path | None = None, outdir: Path | None
         proc = subprocess.run(cmd, capture_output=True, text=True)
         if proc.returncode != 0:
             raise RuntimeError(f"C compilation failed ({' '.join(cmd)}):\n{proc.stderr}")
+        side_tmp = Path(tmp + ".sha256")
+        side_tmp.write_text(_file_hash(Path(tmp)) + "\n")
+        os.replace(side_tmp, sidecar)
         os.replace(tmp, target)
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
     return target
+
+
+def _file_hash(path: Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
 def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:

@@ -97,3 +97,24 @@ def test_fallback_without_compiler_warns_once_and_gives_same_numbers(fresh_build
         ref.residual(0.0, y, yp, r1)
         m1.residual(0.0, y, yp, r2)
         assert np.abs(r1 - r2).max() <= 1e-12 * np.abs(r1).max()
+
+
+def test_tampered_library_is_rebuilt_not_loaded(tmp_path):
+    """A cached library whose bytes no longer match the hash recorded at build time is
+    compiled again (issue 6, item 4)."""
+    from runtime import build
+
+    compiler = build.find_compiler()
+    if compiler is None:
+        import pytest
+
+        pytest.skip("no C compiler")
+    lib = build.compile_library(compiler, outdir=tmp_path)
+    good = lib.read_bytes()
+    lib.write_bytes(good[:-64] + b"\0" * 64)           # corrupt it in place
+    again = build.compile_library(compiler, outdir=tmp_path)
+    assert again == lib and again.read_bytes() == good
+    (tmp_path / (lib.name + ".sha256")).unlink()       # no record of its hash: rebuilt too
+    mtime = lib.stat().st_mtime_ns
+    build.compile_library(compiler, outdir=tmp_path)
+    assert lib.stat().st_mtime_ns != mtime
