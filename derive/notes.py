@@ -15,8 +15,29 @@ TEMPLATE_DIR = Path(__file__).parent / "templates"
 MAX_LATEX = 1500
 
 
+def _latex_names() -> dict:
+    """Readable LaTeX for rate symbols (dV1 -> \\dot V_1 ...) and Greek names."""
+    from derive import symbols as S
+
+    names = {}
+    for base in ("V", "U", "H"):
+        for i in (1, 2, 3):
+            sym = getattr(S, f"d{base}{i}", None)
+            if sym is not None:
+                names[sym] = rf"\dot{{{base}}}_{{{i}}}"
+    return names
+
+
+LATEX_NAMES = _latex_names()
+
+
+def latex(value) -> str:
+    """sp.latex with the notes' symbol names."""
+    return sp.latex(value, symbol_names=LATEX_NAMES)
+
+
 def _tex(value) -> str:
-    tex = sp.latex(value)
+    tex = latex(value)
     if len(tex) > MAX_LATEX:
         return r"\text{(" + str(len(tex)) + r" characters of LaTeX; see kvrod derive show)}"
     return tex
@@ -37,18 +58,18 @@ def render_derivation_notes() -> str:
         })
     n_checks = sum(len(s.matches) for s in steps.values())
     n_match = sum(sum(s.matches.values()) for s in steps.values())
-    latex = {
-        "eta_E": sp.latex(f["eta_E"]), "tau_E": sp.latex(f["tau_E"]),
-        "eta_E_naive": sp.latex(f["eta_E_naive"]), "tau_E_naive": sp.latex(f["tau_E_naive"]),
-        "S_in_plane": sp.latex(naive["S_viscous_in_plane"]),
-        "in_plane": sp.latex(f["in_plane_dissipation"]),
-        "tau_diff": sp.latex(naive["tau_E_minus_naive"]),
+    tex = {
+        "eta_E": latex(f["eta_E"]), "tau_E": latex(f["tau_E"]),
+        "eta_E_naive": latex(f["eta_E_naive"]), "tau_E_naive": latex(f["tau_E_naive"]),
+        "S_in_plane": latex(naive["S_viscous_in_plane"]),
+        "in_plane": latex(f["in_plane_dissipation"]),
+        "tau_diff": latex(naive["tau_E_minus_naive"]),
     }
     env = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATE_DIR),
                              keep_trailing_newline=True, autoescape=False,
                              undefined=jinja2.StrictUndefined)
     return env.get_template("derivation.md.jinja").render(
-        steps=rows, n_steps=len(rows), n_checks=n_checks, n_match=n_match, latex=latex)
+        steps=rows, n_steps=len(rows), n_checks=n_checks, n_match=n_match, latex=tex)
 
 
 def write_derivation_notes(path: Path) -> Path:

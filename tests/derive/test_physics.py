@@ -102,3 +102,35 @@ def test_ellipse_kappa3_below_one_and_circle_one():
 def test_maxwell_limit():
     r = step("maxwell_limit").results
     assert r["error_order_omega"] == 2
+
+
+def test_biot_closed_form_eigenpairs_numerically():
+    """Appendix A1: lambda_k^2, N1, N2 (Jacobi angle) and N3 diagonalise C = I + 2E exactly;
+    U = sum lambda_k N_k (x) N_k is the polar stretch of F = I + H (x) e3 / J0."""
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        H = rng.normal(scale=0.3, size=3)
+        J0 = 1 + rng.uniform(-0.2, 0.2)
+        Ht = H / J0
+        e3 = np.array([0.0, 0.0, 1.0])
+        F = np.eye(3) + np.outer(H, e3) / J0
+        C = F.T @ F
+        q = Ht[2] + 0.5 * Ht @ Ht
+        p = np.hypot(Ht[0], Ht[1])
+        lam2 = [1 + q + np.sqrt(q**2 + p**2), 1 + q - np.sqrt(q**2 + p**2), 1.0]
+        # Jacobi angle: p cos(2 th) + q sin(2 th) = 0, and the in-plane unit vector
+        th = 0.5 * np.arctan2(-p, q)
+        m = np.array([Ht[0], Ht[1], 0.0]) / p
+        N1 = np.cos(th) * m + np.sin(th) * e3
+        N2 = -np.sin(th) * m + np.cos(th) * e3
+        N3 = np.cross(H, e3) / np.hypot(H[0], H[1])
+        pairs = [(lam2[0], N1), (lam2[1], N2), (lam2[2], N3)]
+        got = sorted((float(N @ C @ N), i) for i, (_, N) in enumerate(pairs))
+        for (_, N), (l2, _) in zip(pairs, pairs, strict=True):
+            assert np.allclose(C @ N, (N @ C @ N) * N, atol=1e-12)
+        assert np.allclose(sorted(lam2), [g for g, _ in got], atol=1e-12)
+        U = sum(np.sqrt(N @ C @ N) * np.outer(N, N) for _, N in pairs)
+        w, V = np.linalg.eigh(C)
+        assert np.allclose(U, V @ np.diag(np.sqrt(w)) @ V.T, atol=1e-12)
+        R = F @ np.linalg.inv(U)
+        assert np.allclose(R.T @ R, np.eye(3), atol=1e-12) and np.linalg.det(R) > 0
