@@ -126,7 +126,7 @@ def test_biot_closed_form_eigenpairs_numerically():
         N3 = np.cross(H, e3) / np.hypot(H[0], H[1])
         pairs = [(lam2[0], N1), (lam2[1], N2), (lam2[2], N3)]
         got = sorted((float(N @ C @ N), i) for i, (_, N) in enumerate(pairs))
-        for (_, N), (l2, _) in zip(pairs, pairs, strict=True):
+        for _, N in pairs:
             assert np.allclose(C @ N, (N @ C @ N) * N, atol=1e-12)
         assert np.allclose(sorted(lam2), [g for g, _ in got], atol=1e-12)
         U = sum(np.sqrt(N @ C @ N) * np.outer(N, N) for _, N in pairs)
