@@ -41,7 +41,7 @@ def test_readme_has_commands_for_the_three_uses():
 @pytest.mark.parametrize("cmd", readme_commands())
 def test_readme_command(cmd, tmp_path):
     argv = shlex.split(cmd)
-    assert argv[0] == ".venv/bin/kvrod", f"README command does not start with .venv/bin/kvrod: {cmd}"
+    assert argv[0] == ".venv/bin/kvrod", f"not a .venv/bin/kvrod command: {cmd}"
     r = subprocess.run([sys.executable, "-m", "kvrod", *argv[1:]], cwd=tmp_path,
                        capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, f"{cmd}\n{r.stdout[-2000:]}\n{r.stderr[-2000:]}"

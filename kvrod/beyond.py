@@ -1,0 +1,244 @@
+"""`kvrod notes-beyond`: the three issue-7 analyses with modest settings, and notes/beyond.md.
+
+1. eta_E against eta~_E in simulation (runtime/compare_damping.py) at N = 20;
+2. damped modal analysis of the paper's cantilever at N = 50 (runtime/modal.py), straight
+   and pre-deformed by the static tip load;
+3. calibration of tau from a synthetic tip signal with known tau plus noise
+   (runtime/calibration.py).
+
+Every result is written to a results folder in the same form as the command quoted next
+to it in the notes (``kvrod compare-damping``, ``kvrod modes``, ``kvrod calibrate``), so
+each number can be regenerated on its own. Runtime about 20-30 s.
+"""
+
+from __future__ import annotations
+
+import math
+import platform
+import shutil
+import time
+from dataclasses import asdict
+from pathlib import Path
+
+import jinja2
+import numpy as np
+
+TEMPLATE_DIR = Path(__file__).parent / "templates"
+
+#: settings of the notes (modest, < 2 min in total)
+COMPARE_N = 20
+MODES_N = 50
+MODES_COUNT = 12
+DISTINCT_MODES = 5
+CAL_TAU = 0.05          # s, the "unknown" of the synthetic data
+CAL_NOISE = 1e-3        # m, standard deviation of the added noise
+CAL_DATA_N = 32         # elements of the simulation that makes the data
+CAL_MODEL_N = 16        # elements of the calibration model (kvrod calibrate default)
+CAL_T_END = 4.0         # s of record
+CAL_DT = 0.01           # s sampling of the record
+CAL_SEED = 7
+
+
+def _rel(p: Path) -> str:
+    """POSIX form of a path for the commands quoted in the notes."""
+    return Path(p).as_posix()
+
+
+# --------------------------------------------------------------------------------------
+# 1. compare-damping
+# --------------------------------------------------------------------------------------
+
+
+def _compare(out: Path) -> dict:
+    from kvrod.cli_beyond import write_compare
+    from runtime import compare_damping as cd
+    from runtime.scenarios import CantileverScenario
+
+    res = cd.compare_damping(n_elements=COMPARE_N)
+    paths = write_compare(res, out)
+    cases = {}
+    for case, c in res["cases"].items():
+        routes = {}
+        for route, r in c["routes"].items():
+            routes[route] = {
+                "tau": r["tau_E"], "zeta": r["measured_zeta"],
+                "pred": r["predicted_zeta"], "pred_cont": r["predicted_zeta_continuum"],
+                "omega": r["omega"], "omega_cont": r["omega_continuum"],
+                "rel": r["measured_zeta"] / r["predicted_zeta"] - 1,
+                "cycles": len(r["measured_zeta_per_cycle"])}
+        cases[case] = {"routes": routes, "measured_ratio": c["measured_ratio"],
+                       "predicted_ratio": c["predicted_ratio"],
+                       "rel": c["measured_ratio"] / c["predicted_ratio"] - 1,
+                       "tau_S": c["tau_S"], "tau_B": c["tau_B"]}
+    sc = CantileverScenario()
+    strain = res["parameters"]["axial_force"] / (sc.youngs_modulus * sc.width * sc.height)
+    return {"parameters": res["parameters"], "cases": cases, "axial_strain": strain,
+            "figures": [p for p in paths if p.suffix == ".png"],
+            "command": f"kvrod compare-damping --n-elements {COMPARE_N} --out {_rel(out)}"}
+
+
+# --------------------------------------------------------------------------------------
+# 2. modes
+# --------------------------------------------------------------------------------------
+
+
+def _write_modes(res: dict, out: Path) -> list[Path]:
+    """modes.json and mode_shapes.png as `kvrod modes` writes them."""
+    from kvrod.cli_beyond import plot_mode_shapes
+    from runtime.results import write_json
+
+    sc, modes = res["scenario"], res["modes"]
+    js = write_json(out / "modes.json", {
+        "scenario": "cantilever", "parameters": {**asdict(sc), "tau_E": sc.tau_E},
+        "deformed": res["deformed"], "static_tip": res["static_tip"],
+        "modes": [m.to_dict() for m in modes]})
+    return [js, plot_mode_shapes(modes, sc.length, out / "mode_shapes.png")]
+
+
+def _distinct(modes: list, count: int, rtol: float = 1e-6) -> list[list]:
+    """The first ``count`` groups of modes with (numerically) equal frequencies."""
+    groups: list[list] = []
+    for m in modes:
+        if groups and abs(m.omega - groups[-1][0].omega) <= rtol * m.omega:
+            groups[-1].append(m)
+        else:
+            groups.append([m])
+    return groups[:count]
+
+
+def _modes(out: Path) -> dict:
+    from kvrod.cli_beyond import run_modes
+    from runtime.modal import family_retardation_time
+
+    straight = run_modes("cantilever", MODES_N, MODES_COUNT)
+    deformed = run_modes("cantilever", MODES_N, MODES_COUNT, deformed=True)
+    figs = _write_modes(straight, out / "modes")[1:]
+    figs += _write_modes(deformed, out / "modes-deformed")[1:]
+    sc, model = straight["scenario"], straight["model"]
+    groups = _distinct(straight["modes"], DISTINCT_MODES)
+    if len(groups) < DISTINCT_MODES:
+        raise RuntimeError(f"only {len(groups)} distinct modes among the {MODES_COUNT} "
+                           "computed; raise MODES_COUNT")
+    rows = []
+    for k, g in enumerate(groups, start=1):
+        m = g[0]
+        tau = family_retardation_time(model, m.family)
+        w_ref = m.analytic_omega
+        z_ref = None if w_ref is None else w_ref * tau / 2
+        rows.append({
+            "k": k, "families": " / ".join(sorted({x.family for x in g})),
+            "multiplicity": len(g), "f": m.frequency_hz, "omega": m.omega,
+            "zeta": m.zeta, "overdamped": m.zeta > 1, "tau": tau,
+            "analytic_omega": w_ref, "analytic_f": None if w_ref is None
+            else w_ref / (2 * math.pi),
+            "omega_rel": None if w_ref is None else m.omega / w_ref - 1,
+            "analytic_zeta": z_ref,
+            "zeta_rel": None if z_ref is None else m.zeta / z_ref - 1})
+    # frequency shift of the pre-deformed state: pair modes by (family, rank in family)
+    ref = {(m.family, m.family_index): m for m in straight["modes"]}
+    shift = []
+    for m in deformed["modes"][:6]:
+        s = ref.get((m.family, m.family_index))
+        shift.append({"family": m.family, "k": m.family_index, "omega_def": m.omega,
+                      "zeta_def": m.zeta, "omega_str": None if s is None else s.omega,
+                      "rel": None if s is None else m.omega / s.omega - 1})
+    cmd = f"kvrod modes cantilever --n-elements {MODES_N} --count {MODES_COUNT}"
+    return {"n": MODES_N, "count": MODES_COUNT, "tau_S": sc.tau_S, "tau_B": sc.tau_B,
+            "tau_E": sc.tau_E, "rows": rows, "shift": shift,
+            "static_tip": [float(v) for v in deformed["static_tip"]],
+            "tip_force": sc.tip_force, "figures": figs,
+            "command": f"{cmd} --out {_rel(out / 'modes')}",
+            "command_deformed": f"{cmd} --deformed --out {_rel(out / 'modes-deformed')}"}
+
+
+# --------------------------------------------------------------------------------------
+# 3. calibration
+# --------------------------------------------------------------------------------------
+
+
+def _calibration(out: Path) -> dict:
+    from runtime import calibration as cal
+    from runtime.results import write_json
+    from runtime.scenarios import CantileverScenario, run_cantilever
+
+    out.mkdir(parents=True, exist_ok=True)
+    sc = CantileverScenario.with_tau(CAL_TAU, n_elements=CAL_DATA_N, t_end=CAL_T_END,
+                                     output_step=CAL_DT)
+    run = run_cantilever(sc)
+    if run.status != "finished":
+        raise RuntimeError(f"synthetic data run failed: {run.message}")
+    rng = np.random.default_rng(CAL_SEED)
+    t, x = run.t, run.tip[0] + CAL_NOISE * rng.standard_normal(run.t.size)
+    data = out / "synthetic.csv"
+    tmp = data.with_name(f".{data.name}.tmp")
+    with tmp.open("w") as fh:
+        fh.write(f"# synthetic tip signal: kvrod cantilever (paper's, N = {CAL_DATA_N}), "
+                 f"tau_S = tau_B = {CAL_TAU} s, release from F = {sc.tip_force} N, "
+                 f"+ N(0, {CAL_NOISE} m) noise, seed {CAL_SEED}\n")
+        fh.write("t,x\n")
+        for a, b in zip(t, x, strict=True):
+            fh.write(f"{a:.6f},{b:.10e}\n")
+    tmp.replace(data)
+    # exactly what `kvrod calibrate --data synthetic.csv` does (default scenario, N = 16)
+    td, xd = cal.load_csv(data, ("t", "x"))
+    res = cal.calibrate_signal(td, xd, scenario=CantileverScenario(), n_elements=CAL_MODEL_N)
+    write_json(out / "calibration.json", {"data": str(data), **res.summary()})
+    fig = cal.plot_calibration(res, out / "calibration.png")
+    lo, hi = res.ci95
+    return {"tau_true": CAL_TAU, "noise": CAL_NOISE, "seed": CAL_SEED,
+            "data_n": CAL_DATA_N, "model_n": CAL_MODEL_N, "t_end": CAL_T_END, "dt": CAL_DT,
+            "samples": int(td.size), "tip_force": sc.tip_force, "tau": res.tau,
+            "se": res.std_error, "lo": lo, "hi": hi, "tau0": res.tau0,
+            "error": res.tau / CAL_TAU - 1, "inside": bool(lo < CAL_TAU < hi),
+            "rms": res.residual_rms, "nfev": res.nfev, "success": res.success,
+            "message": res.message, "figures": [fig],
+            "command": f"kvrod calibrate --data {_rel(data)} --out {_rel(out)}"}
+
+
+# --------------------------------------------------------------------------------------
+# notes
+# --------------------------------------------------------------------------------------
+
+
+def write_beyond_notes(path: Path = Path("notes/beyond.md"),
+                       out: Path = Path("results/beyond")) -> Path:
+    """Run the three analyses, write their results under ``out`` and render ``path``.
+
+    Figures are copied next to the notes into ``path.parent / "figures"`` with the prefix
+    ``beyond_``. Returns the notes path. Raises RuntimeError if a simulation fails.
+    """
+    path, out = Path(path), Path(out)
+    wall0 = time.perf_counter()
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    compare = _compare(out / "compare-damping")
+    timings["compare"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    modes = _modes(out)
+    timings["modes"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    calib = _calibration(out / "calibration")
+    timings["calibration"] = time.perf_counter() - t0
+    fig_dir = path.parent / "figures"
+    fig_dir.mkdir(parents=True, exist_ok=True)
+    links: dict[str, str] = {}
+    for key, src in (("compare_signals", compare["figures"][0]),
+                     ("compare_zeta", compare["figures"][1]),
+                     ("mode_shapes", modes["figures"][0]),
+                     ("mode_shapes_deformed", modes["figures"][1]),
+                     ("calibration", calib["figures"][0])):
+        dst = fig_dir / f"beyond_{key}.png"
+        shutil.copyfile(src, dst)
+        links[key] = f"figures/{dst.name}"
+    ctx = {"compare": compare, "modes": modes, "cal": calib, "fig": links,
+           "timings": timings, "wall": time.perf_counter() - wall0,
+           "machine": f"{platform.machine()}, Python {platform.python_version()}",
+           "out": _rel(out), "notes": _rel(path)}
+    env = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATE_DIR),
+                             undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
+    text = env.get_template("beyond.md.jinja").render(**ctx)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text(text)
+    tmp.replace(path)
+    return path

@@ -1,0 +1,339 @@
+"""`kvrod modes`, `calibrate`, `compare-damping`, `notes-beyond` (issue 7: beyond the paper).
+
+Wired into `kvrod/cli.py` by ``add_commands(subparsers, parser_class)``. Heavy imports
+happen inside the commands; library code never prints, these commands do.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+SCENARIOS = ("cantilever",)
+
+
+def _cli_error(message: str) -> Exception:
+    from kvrod.cli import CliError
+
+    return CliError(message)
+
+
+# --------------------------------------------------------------------------------------
+# kvrod modes
+# --------------------------------------------------------------------------------------
+
+
+def modes_table(modes) -> str:
+    """The table printed by `kvrod modes` (one line per mode)."""
+    head = (f"{'mode':>4}  {'family':<10} {'f [Hz]':>10} {'omega [rad/s]':>14} "
+            f"{'zeta [-]':>9} {'lambda [1/s]':>30} {'analytic omega':>15} {'diff':>8}")
+    lines = [head, "-" * len(head)]
+    for m in modes:
+        l1, l2 = m.eigenvalues
+        lam = (f"{l1.real:.4g} +- {abs(l1.imag):.4g}i" if l1.imag != 0
+               else f"{l1.real:.4g}, {l2.real:.4g}")
+        ref = f"{m.analytic_omega:15.5f}" if m.analytic_omega else f"{'-':>15}"
+        diff = (f"{(m.omega / m.analytic_omega - 1) * 100:+7.3f}%" if m.analytic_omega
+                else f"{'':>8}")
+        lines.append(f"{m.index:>4}  {m.family:<10} {m.frequency_hz:10.5f} {m.omega:14.5f} "
+                     f"{m.zeta:9.5f} {lam:>30} {ref} {diff}")
+    return "\n".join(lines)
+
+
+def plot_mode_shapes(modes, length: float, path: Path) -> Path:
+    """Mode shapes as PNG: displacements (solid) and rotations times L (dashed), scaled
+    together to max 1; components below 1e-6 of the largest are left out."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    n = len(modes)
+    cols = min(3, n)
+    rows = math.ceil(n / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 2.8 * rows), squeeze=False)
+    for ax, m in zip(axes.ravel(), modes, strict=False):
+        N = m.rotation.shape[1]
+        s_n = np.linspace(0.0, length, N + 1)
+        s_s = (s_n[:-1] + s_n[1:]) / 2
+        d, r = m.displacement, m.rotation * length  # rotations as theta L (m)
+        scale = max(np.abs(d).max(), np.abs(r).max()) or 1.0
+        for c, lab in enumerate(("x", "y", "z")):
+            if np.abs(d[c]).max() > 1e-6 * scale:
+                ax.plot(s_n, d[c] / scale, "-", color=f"C{c}", label=f"u_{lab}")
+            if np.abs(r[c]).max() > 1e-6 * scale:
+                ax.plot(s_s, r[c] / scale, "--", color=f"C{c}", label=f"theta_{c + 1} L")
+        ax.set_title(f"{m.index}: {m.family}, f = {m.frequency_hz:.4g} Hz, "
+                     f"zeta = {m.zeta:.3g}", fontsize=8)
+        ax.set_xlabel("s [m]", fontsize=8)
+        ax.tick_params(labelsize=7)
+        ax.legend(fontsize=6, loc="best")
+        ax.grid(alpha=0.3)
+    for ax in axes.ravel()[n:]:
+        ax.set_visible(False)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
+    fig.savefig(tmp, dpi=110)
+    plt.close(fig)
+    tmp.replace(path)
+    return path
+
+
+def run_modes(scenario: str = "cantilever", n_elements: int = 50, count: int = 10,
+              tau: float | None = None, deformed: bool = False,
+              damping: str = "consistent") -> dict:
+    """Modal analysis of a named scenario; returns {"modes", "model", "static_tip", ...}."""
+    import numpy as np
+
+    from runtime.modal import modal_analysis
+    from runtime.rod import RodModel
+    from runtime.scenarios import CantileverScenario
+    from runtime.statics import solve_static
+
+    if scenario not in SCENARIOS:
+        raise ValueError(f"unknown scenario {scenario!r}; scenarios are: {', '.join(SCENARIOS)}")
+    kw: dict = {"n_elements": n_elements, "damping": damping}
+    if tau is not None:
+        kw.update(tau_S=tau, tau_B=tau)
+    sc = CantileverScenario(**kw)
+    force = (sc.tip_force, 0.0, 0.0) if deformed else (0.0, 0.0, 0.0)
+    model = RodModel(sc.rod_parameters(), start="clamped", end="free", tip_force=force)
+    y_eq, tip = None, None
+    if deformed:
+        st = solve_static(model, model.initial_state(), load_steps=sc.load_steps)
+        y_eq, tip = st.y, model.tip_position(st.y)
+    modes = modal_analysis(model, y_eq, count=count)
+    return {"scenario": sc, "model": model, "modes": modes, "deformed": deformed,
+            "static_tip": None if tip is None else np.asarray(tip)}
+
+
+def _cmd_modes(args) -> int:
+    from runtime.results import write_json
+
+    if args.count < 1:
+        raise _cli_error(f"kvrod modes: --count must be >= 1, got {args.count}")
+    if args.n_elements < 1:
+        raise _cli_error(f"kvrod modes: --n-elements must be >= 1, got {args.n_elements}")
+    if args.scenario not in SCENARIOS:
+        raise _cli_error(f"kvrod modes: unknown scenario {args.scenario!r}; scenarios are: "
+                         f"{', '.join(SCENARIOS)}")
+    res = run_modes(args.scenario, args.n_elements, args.count, args.tau, args.deformed,
+                    args.damping)
+    sc, modes = res["scenario"], res["modes"]
+    state = "pre-deformed by the static tip load" if args.deformed else "straight"
+    print(f"{args.scenario}: N = {sc.n_elements}, tau_S = {sc.tau_S} s, tau_B = {sc.tau_B} s "
+          f"(tau_E = {sc.tau_E:.6g} s), {state}")
+    if res["static_tip"] is not None:
+        print(f"static tip [m]: {[round(float(v), 6) for v in res['static_tip']]}")
+    print(modes_table(modes))
+    out = Path(args.out) if args.out else Path("results") / (
+        f"modes-{args.scenario}" + ("-deformed" if args.deformed else ""))
+    from dataclasses import asdict
+
+    write_json(out / "modes.json", {
+        "scenario": args.scenario, "parameters": {**asdict(sc), "tau_E": sc.tau_E},
+        "deformed": args.deformed, "static_tip": res["static_tip"],
+        "modes": [m.to_dict() for m in modes]})
+    plot_mode_shapes(modes, sc.length, out / "mode_shapes.png")
+    print(f"wrote {out}/modes.json, mode_shapes.png")
+    return 0
+
+
+# --------------------------------------------------------------------------------------
+# kvrod calibrate
+# --------------------------------------------------------------------------------------
+
+
+def _cmd_calibrate(args) -> int:
+    from runtime import calibration as cal
+    from runtime.results import write_json
+    from runtime.scenarios import CantileverScenario
+
+    sc_kw: dict = {}
+    if args.tip_force is not None:
+        sc_kw["tip_force"] = args.tip_force
+    if args.n_elements is not None and args.n_elements < 1:
+        raise _cli_error(f"kvrod calibrate: --n-elements must be >= 1, got {args.n_elements}")
+    if args.mode == "signal":
+        t, x = cal.load_csv(args.data, ("t", "x"))
+        sc = CantileverScenario(**sc_kw)
+        res = cal.calibrate_signal(t, x, scenario=sc, tau0=args.tau0,
+                                   n_elements=args.n_elements or 16)
+    else:
+        (d,) = cal.load_csv(args.data, ("delta",))
+        sc = CantileverScenario(n_elements=args.n_elements or 16, **sc_kw)
+        res = cal.calibrate_decrements(d, scenario=sc, tau0=args.tau0)
+    out = Path(args.out)
+    write_json(out / "calibration.json", {"data": str(args.data), **res.summary()})
+    cal.plot_calibration(res, out / "calibration.png")
+    lo, hi = res.ci95
+    print(f"mode: {res.mode}, {res.n_data} data, start tau0 = {res.tau0 * 1e3:.4f} ms")
+    print(f"tau = {res.tau * 1e3:.4f} ms  (standard error {res.std_error * 1e3:.4f} ms; "
+          f"95 % CI [{lo * 1e3:.4f}, {hi * 1e3:.4f}] ms)")
+    print(f"residual RMS {res.residual_rms:.4g}{' m' if res.mode == 'signal' else ''}, "
+          f"{res.nfev} model evaluations; {res.message}")
+    print(f"wrote {out}/calibration.json, calibration.png")
+    return 0 if res.success else 1
+
+
+# --------------------------------------------------------------------------------------
+# kvrod compare-damping (computation: runtime/compare_damping.py)
+# --------------------------------------------------------------------------------------
+
+
+def compare_table(result) -> str:
+    """The table printed by `kvrod compare-damping` (plain text, one line per route)."""
+    head = (f"{'case':<8} {'route':<11} {'tau_E [s]':>11} {'zeta meas.':>11} "
+            f"{'w tau/2':>9} {'(contin.)':>9} {'modal':>9} {'meas/pred':>10}")
+    lines = [head, "-" * len(head)]
+    for case, res in result["cases"].items():
+        for route, r in res["routes"].items():
+            lines.append(f"{case:<8} {route:<11} {r['tau_E']:11.5g} {r['measured_zeta']:11.5f} "
+                         f"{r['predicted_zeta']:9.5f} {r['predicted_zeta_continuum']:9.5f} "
+                         f"{r['modal_zeta']:9.5f} "
+                         f"{r['measured_zeta'] / r['predicted_zeta']:10.4f}")
+        lines.append(f"{case:<8} ratio consistent/naive: measured {res['measured_ratio']:.4f}, "
+                     f"predicted tau_E/tau~_E = {res['predicted_ratio']:.4f}")
+    return "\n".join(lines)
+
+
+def compare_markdown(result) -> str:
+    """The same table as Markdown (written to compare_damping.md)."""
+    p = result["parameters"]
+    lines = [
+        "# eta_E (consistent) against eta~_E (naive): measured damping ratios",
+        "",
+        f"N = {p['n_elements']}, tau_S = {p['tau_S']:g} s, tau_B = {p['tau_B']:g} s, "
+        f"nu = {p['poisson_ratio']:g}; bending: release from F = {p['tip_force']:g} N; "
+        f"axial: release from F_z = {p['axial_force']:g} N with tau_S, tau_B scaled to "
+        f"{p['axial_tau_S']:.4g} s, {p['axial_tau_B']:.4g} s (naive zeta = "
+        f"{p['axial_zeta']:g}).",
+        "",
+        "| case | route | tau [s] | zeta measured | omega tau/2 (modal omega) | "
+        "omega tau/2 (continuum) | measured/predicted |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for case, res in result["cases"].items():
+        for route, r in res["routes"].items():
+            lines.append(f"| {case} | {route} | {r['tau_E']:.5g} | {r['measured_zeta']:.5f} | "
+                         f"{r['predicted_zeta']:.5f} | {r['predicted_zeta_continuum']:.5f} | "
+                         f"{r['measured_zeta'] / r['predicted_zeta']:.4f} |")
+    lines += ["", "| case | ratio consistent/naive measured | predicted tau_E/tau~_E | "
+              "difference |", "|---|---|---|---|"]
+    for case, res in result["cases"].items():
+        lines.append(f"| {case} | {res['measured_ratio']:.4f} | {res['predicted_ratio']:.4f} | "
+                     f"{(res['measured_ratio'] / res['predicted_ratio'] - 1) * 100:+.3f} % |")
+    return "\n".join(lines) + "\n"
+
+
+def write_compare(result, out: Path) -> list[Path]:
+    """compare_damping.json, compare_damping.md, compare_signals.png, compare_zeta.png."""
+    from runtime.compare_damping import plot_compare, summary
+    from runtime.results import write_json
+
+    out = Path(out)
+    paths = [write_json(out / "compare_damping.json", summary(result))]
+    md = out / "compare_damping.md"
+    tmp = md.with_name(f".{md.name}.tmp")
+    tmp.write_text(compare_markdown(result))
+    tmp.replace(md)
+    paths.append(md)
+    return paths + plot_compare(result, out)
+
+
+def _cmd_compare(args) -> int:
+    if args.n_elements < 2:
+        raise _cli_error(f"kvrod compare-damping: --n-elements must be >= 2, got "
+                         f"{args.n_elements}")
+    from runtime import compare_damping as cd
+
+    res = cd.compare_damping(n_elements=args.n_elements, tau_S=args.tau_S, tau_B=args.tau_B,
+                             poisson_ratio=args.nu, tip_force=args.tip_force,
+                             rtol=args.rtol)
+    print(compare_table(res))
+    paths = write_compare(res, Path(args.out))
+    print(f"wrote {Path(args.out)}/{', '.join(p.name for p in paths)}")
+    return 0
+
+
+# --------------------------------------------------------------------------------------
+# kvrod notes-beyond (kvrod/beyond.py)
+# --------------------------------------------------------------------------------------
+
+
+def _cmd_notes_beyond(args) -> int:
+    from kvrod.beyond import write_beyond_notes
+
+    path = write_beyond_notes(Path(args.out_notes), Path(args.out))
+    print(f"wrote {path} (results under {args.out}/)")
+    return 0
+
+
+# --------------------------------------------------------------------------------------
+# wiring
+# --------------------------------------------------------------------------------------
+
+
+def add_commands(sub, parser_class) -> None:
+    """Add `modes`, `calibrate`, `compare-damping` and `notes-beyond` to ``sub``.
+
+    parser_class is the one-line-error parser the caller created ``sub`` with (kept for
+    symmetry with the other command modules; argparse passes it on to the subparsers).
+    """
+    _ = parser_class
+    m = sub.add_parser("modes", help="damped modal analysis (frequencies, damping ratios, "
+                                     "mode shapes)")
+    m.add_argument("scenario", help="scenario name: cantilever")
+    m.add_argument("--n-elements", dest="n_elements", type=int, default=50,
+                   help="elements (default 50)")
+    m.add_argument("--count", type=int, default=10, help="number of modes (default 10)")
+    m.add_argument("--tau", type=float, help="tau_S = tau_B = tau [s] (paper: 0.04)")
+    m.add_argument("--damping", choices=("consistent", "naive"), default="consistent",
+                   help="extensional viscosity eta_E (consistent) or eta~_E (naive)")
+    m.add_argument("--deformed", action="store_true",
+                   help="linearise about the static state under the tip load (0.05 N)")
+    m.add_argument("--out", help="results folder (default results/modes-SCENARIO[-deformed])")
+    m.set_defaults(func=_cmd_modes)
+
+    c = sub.add_parser("calibrate", help="fit tau (= tau_S = tau_B) of the cantilever to "
+                                         "measured decay")
+    c.add_argument("--data", required=True,
+                   help="CSV: columns t, x (signal: time [s] since release, tip x [m]) "
+                        "or a column delta (log decrements)")
+    c.add_argument("--mode", choices=("signal", "decrements"), default="signal",
+                   help="signal: simulate the scenario; decrements: linear modal model")
+    c.add_argument("--n-elements", dest="n_elements", type=int,
+                   help="elements of the model (default 16)")
+    c.add_argument("--tip-force", dest="tip_force", type=float,
+                   help="static tip force before release [N] (paper: 0.05)")
+    c.add_argument("--tau0", type=float, help="starting value [s] (default: from the data)")
+    c.add_argument("--out", default="results/calibration", help="results folder")
+    c.set_defaults(func=_cmd_calibrate)
+
+    d = sub.add_parser("compare-damping", help="consistent eta_E vs naive eta~_E in "
+                                               "simulation (bending and axial decay)")
+    d.add_argument("--n-elements", dest="n_elements", type=int, default=20,
+                   help="elements (default 20)")
+    d.add_argument("--tau-S", dest="tau_S", type=float, default=0.04,
+                   help="shear retardation time [s] (default 0.04)")
+    d.add_argument("--tau-B", dest="tau_B", type=float, default=0.0,
+                   help="bulk retardation time [s] (default 0: no bulk viscosity)")
+    d.add_argument("--nu", type=float, default=0.3, help="Poisson's ratio (default 0.3)")
+    d.add_argument("--tip-force", dest="tip_force", type=float, default=0.001,
+                   help="static tip force of the bending release [N] (default 0.001: "
+                        "small amplitude, linear regime)")
+    d.add_argument("--rtol", type=float, default=1e-7, help="integrator tolerance")
+    d.add_argument("--out", default="results/compare-damping", help="results folder")
+    d.set_defaults(func=_cmd_compare)
+
+    n = sub.add_parser("notes-beyond", help="run compare-damping, modes and calibration "
+                                            "(modest settings) and write notes/beyond.md")
+    n.add_argument("--out-notes", dest="out_notes", default="notes/beyond.md",
+                   help="notes file (default notes/beyond.md; figures go to its "
+                        "figures/ folder)")
+    n.add_argument("--out", default="results/beyond",
+                   help="results folder of the three analyses (default results/beyond)")
+    n.set_defaults(func=_cmd_notes_beyond)

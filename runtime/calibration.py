@@ -1,0 +1,386 @@
+"""Calibration of the retardation time tau of the cantilever from measured decay.
+
+Paper convention tau_S = tau_B = tau, hence tau_E = tau (eq. (6)). Two kinds of data:
+
+* ``"signal"``: a measured tip signal ``x(t)`` (m) after release at ``t = 0`` of the
+  scenario's static tip load. Model: a simulation of the scenario
+  (:func:`runtime.scenarios.run_cantilever`, coarse ``n_elements`` and ``t_end`` = the end of
+  the data), its tip ``e1`` coordinate interpolated (cubic spline) at the data times.
+  Residuals ``r_i(tau) = x_model(t_i; tau) - x_i``.
+* ``"decrements"``: logarithmic decrements ``delta_k`` (-) of successive maxima. Model: the
+  linear (small-amplitude) prediction of damped modal analysis (:mod:`runtime.modal`),
+  ``delta(tau) = 2 pi zeta_1 / sqrt(1 - zeta_1^2)`` with ``zeta_1`` the damping ratio of the
+  first in-plane bending mode of the straight cantilever. Residuals ``delta(tau) -
+  delta_k``. Large-amplitude decrements (the paper's release from 0.22 m) lie below the
+  linear value, so this mode underestimates tau there; use the signal mode for them.
+
+The fit is nonlinear least squares (``scipy.optimize.least_squares``, trust region) in
+``tau`` with forward-difference sensitivities. With ``J = dr/dtau`` at the optimum, ``n``
+residuals and ``p = 1`` parameter, the residual variance is ``s^2 = |r|^2 / (n - p)``, the
+standard error ``SE = s / |J|`` and the 95 % confidence interval ``tau +- t_{0.975, n-p} SE``
+(Student t), valid for independent, equal-variance measurement errors.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+from scipy.optimize import least_squares
+from scipy.stats import t as student_t
+
+from runtime.analysis import damping_ratios, find_maxima, log_decrements
+
+__all__ = [
+    "CalibrationResult",
+    "calibrate_decrements",
+    "calibrate_signal",
+    "decrement_model",
+    "load_csv",
+    "plot_calibration",
+    "validate_decrements",
+    "validate_signal",
+]
+
+#: fewest samples of a signal accepted
+MIN_SAMPLES = 20
+
+
+@dataclass
+class CalibrationResult:
+    """Outcome of a calibration (SI units: tau in s, signal in m).
+
+    mode: "signal" or "decrements"; tau: estimate; std_error: standard error of tau;
+    ci95: 95 % confidence interval; tau0: starting value; residual_rms: RMS residual
+    (m or -); n_data: residual count; nfev: model evaluations (excluding the
+    sensitivity evaluations of ``least_squares``' own counter ``njev``); data_t/data_y:
+    the data (t in s, x in m; for decrements t = k); fit_t/fit_y: the fitted model
+    (dense for plotting); success/message: of least_squares.
+    """
+
+    mode: str
+    tau: float
+    std_error: float
+    ci95: tuple[float, float]
+    tau0: float
+    residual_rms: float
+    n_data: int
+    nfev: int
+    njev: int
+    success: bool
+    message: str
+    data_t: np.ndarray = field(repr=False)
+    data_y: np.ndarray = field(repr=False)
+    fit_t: np.ndarray = field(repr=False)
+    fit_y: np.ndarray = field(repr=False)
+
+    def summary(self) -> dict:
+        """JSON-ready summary without the arrays."""
+        return {"mode": self.mode, "tau": self.tau, "std_error": self.std_error,
+                "ci95": list(self.ci95), "tau0": self.tau0, "residual_rms": self.residual_rms,
+                "n_data": self.n_data, "nfev": self.nfev, "njev": self.njev,
+                "success": self.success, "message": self.message}
+
+
+# --------------------------------------------------------------------------------------
+# Data
+# --------------------------------------------------------------------------------------
+
+
+def load_csv(path: str | Path, columns: Sequence[str]) -> list[np.ndarray]:
+    """Read the named columns (case-insensitive header names) of a CSV file as floats.
+
+    Lines starting with '#' are comments. A file with one unnamed numeric column is
+    accepted when one column is asked for. Empty cells or text give NaN, which the
+    validators reject with the row number.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"data file {str(path)!r} does not exist")
+    with path.open(newline="") as fh:
+        rows = [r for r in csv.reader(line for line in fh if not line.lstrip().startswith("#"))
+                if any(c.strip() for c in r)]
+    if not rows:
+        raise ValueError(f"data file {str(path)!r} is empty")
+    header = [c.strip().lower() for c in rows[0]]
+    if all(_is_number(c) for c in header):
+        if len(columns) == 1:
+            header, body = [columns[0]], rows
+        else:
+            raise ValueError(f"data file {str(path)!r} has no header; expected columns "
+                             f"{', '.join(columns)}")
+    else:
+        body = rows[1:]
+    idx = []
+    for name in columns:
+        if name.lower() not in header:
+            raise ValueError(f"data file {str(path)!r} has no column {name!r} "
+                             f"(columns: {', '.join(header)})")
+        idx.append(header.index(name.lower()))
+    out = [np.full(len(body), np.nan) for _ in columns]
+    for i, r in enumerate(body):
+        for c, j in enumerate(idx):
+            if j < len(r) and _is_number(r[j]):
+                out[c][i] = float(r[j])
+    return out
+
+
+def _is_number(s: str) -> bool:
+    try:
+        float(s)
+    except ValueError:
+        return False
+    return True
+
+
+def _finite(name: str, a: np.ndarray) -> None:
+    bad = np.flatnonzero(~np.isfinite(a))
+    if bad.size:
+        raise ValueError(f"{name} contains NaN or inf (first at row {int(bad[0])}); "
+                         "remove or fill the missing values")
+
+
+def validate_signal(t: Sequence[float], x: Sequence[float],
+                    min_samples: int = MIN_SAMPLES) -> tuple[np.ndarray, np.ndarray]:
+    """Check a measured tip signal; returns float arrays (t, x) or raises ValueError.
+
+    Needs: equal lengths, at least ``min_samples`` samples, finite values, strictly
+    increasing time, t >= 0 (time since release), and at least two positive maxima
+    (:func:`signal_maxima`; the start counts when the signal starts at a maximum).
+    """
+    t, x = np.asarray(t, dtype=float).ravel(), np.asarray(x, dtype=float).ravel()
+    if t.size != x.size:
+        raise ValueError(f"t and x differ in length ({t.size} and {x.size})")
+    if t.size < min_samples:
+        raise ValueError(f"signal too short: {t.size} samples, at least {min_samples} needed")
+    _finite("t", t)
+    _finite("x", x)
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        i = int(np.flatnonzero(dt <= 0)[0])
+        raise ValueError(f"time is not strictly increasing (non-monotone): t[{i}] = {t[i]!r} "
+                         f">= t[{i + 1}] = {t[i + 1]!r}")
+    if t[0] < 0:
+        raise ValueError(f"t must start at the release, t >= 0; got t[0] = {t[0]!r}")
+    tk, _ = signal_maxima(t, x)
+    if tk.size == 0:
+        raise ValueError("no maxima in the signal: it must contain oscillation peaks x > 0")
+    if tk.size < 2:
+        raise ValueError(f"too few maxima in the signal ({tk.size}); at least 2 are needed "
+                         "(record longer, over two periods)")
+    return t, x
+
+
+def signal_maxima(t: np.ndarray, x: np.ndarray, prominence: float = 0.05,
+                  start_at_rest: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Positive maxima (t_k, x_k) of a noisy signal (t in s, x in m).
+
+    Peaks whose prominence exceeds ``prominence`` times the signal range
+    (``scipy.signal.find_peaks``; noise wiggles are not peaks), refined by the parabola
+    through the peak sample and its neighbours. start_at_rest: the record starts at the
+    release from rest, so ``x(-t) = x(t)`` near 0 and a start value above the following
+    samples counts as the first maximum.
+    """
+    from scipy.signal import find_peaks
+
+    n = x.size
+    xe = np.concatenate([x[:0:-1], x]) if start_at_rest else x  # even extension about t0
+    idx, _ = find_peaks(xe, prominence=prominence * float(np.ptp(x)))
+    if start_at_rest:
+        idx = np.unique(np.abs(idx - (n - 1)))
+    tk, xk = [], []
+    for i in idx:
+        if x[i] <= 0 or i == x.size - 1:
+            continue
+        if i == 0:
+            tk.append(float(t[0]))
+            xk.append(float(x[0]))
+            continue
+        a, b = find_maxima(t[i - 1:i + 2], x[i - 1:i + 2], positive_only=True)
+        if a.size:
+            tk.append(a[0])
+            xk.append(b[0])
+    return np.asarray(tk), np.asarray(xk)
+
+
+def validate_decrements(delta: Sequence[float]) -> np.ndarray:
+    """Check log decrements (finite, > 0, at least 2); returns a float array."""
+    d = np.asarray(delta, dtype=float).ravel()
+    if d.size < 2:
+        raise ValueError(f"too few decrements ({d.size}); at least 2 are needed for a "
+                         "confidence interval")
+    _finite("delta", d)
+    if np.any(d <= 0):
+        i = int(np.flatnonzero(d <= 0)[0])
+        raise ValueError(f"decrements must be > 0 (decaying maxima); delta[{i}] = {d[i]!r}")
+    return d
+
+
+# --------------------------------------------------------------------------------------
+# Models
+# --------------------------------------------------------------------------------------
+
+
+def _scenario(scenario=None, **kw):
+    from runtime.scenarios import CantileverScenario
+
+    sc = scenario if scenario is not None else CantileverScenario(n_elements=16)
+    return replace(sc, **kw) if kw else sc
+
+
+def decrement_model(scenario=None) -> Callable[[float], float]:
+    """delta(tau) (-) of the first in-plane bending mode from damped modal analysis.
+
+    The straight, unloaded cantilever of ``scenario`` (default: the paper's, N = 16) with
+    tau_S = tau_B = tau. Returns a function of tau (s).
+    """
+    from runtime.modal import modal_analysis
+    from runtime.rod import RodModel
+
+    sc = _scenario(scenario)
+
+    def delta(tau: float) -> float:
+        model = RodModel(replace(sc, tau_S=float(tau), tau_B=float(tau)).rod_parameters())
+        modes = modal_analysis(model, count=2, reference=False)
+        m = next((m for m in modes if m.family == "bending-2"), modes[0])
+        z = m.zeta
+        return 2 * math.pi * z / math.sqrt(1 - z * z) if z < 1 else math.inf
+
+    return delta
+
+
+def _simulate_tip(sc, tau: float, t_end: float) -> tuple[np.ndarray, np.ndarray]:
+    from runtime.scenarios import run_cantilever
+
+    run = run_cantilever(replace(sc, tau_S=float(tau), tau_B=float(tau), t_end=float(t_end)))
+    if run.status != "finished":
+        raise RuntimeError(f"simulation at tau = {tau!r} s failed: {run.message}")
+    return run.t, run.tip[0]
+
+
+def _ci(tau: float, J: np.ndarray, r: np.ndarray) -> tuple[float, tuple[float, float]]:
+    n = r.size
+    dof = n - 1
+    jtj = float(J.ravel() @ J.ravel())
+    if dof < 1 or jtj <= 0:
+        return math.nan, (math.nan, math.nan)
+    s2 = float(r @ r) / dof
+    se = math.sqrt(s2 / jtj)
+    q = float(student_t.ppf(0.975, dof))
+    return se, (tau - q * se, tau + q * se)
+
+
+def _fit(res: Callable[[float], np.ndarray], tau0: float, diff_step: float,
+         xtol: float = 1e-10, ftol: float = 1e-12):
+    nfev = [0]
+
+    def fun(p: np.ndarray) -> np.ndarray:
+        nfev[0] += 1
+        return res(float(p[0]))
+
+    sol = least_squares(fun, x0=[tau0], bounds=([1e-9], [np.inf]), method="trf",
+                        jac="2-point", diff_step=diff_step, x_scale=[tau0], xtol=xtol,
+                        ftol=ftol, gtol=1e-12, max_nfev=50)
+    return sol, nfev[0]
+
+
+def calibrate_decrements(delta: Sequence[float], scenario=None,
+                         tau0: float | None = None) -> CalibrationResult:
+    """Fit tau (s) to measured log decrements with the linear modal prediction.
+
+    delta: decrements (-), at least 2; scenario: the cantilever (geometry, material,
+    n_elements of the modal model; default the paper's at N = 16); tau0: start (default
+    from the mean decrement and the modal frequency).
+    """
+    d = validate_decrements(delta)
+    model = decrement_model(scenario)
+    if tau0 is None:
+        d1 = model(0.04)
+        z1 = float(damping_ratios([d1])[0])
+        zm = float(damping_ratios([float(np.mean(d))])[0])
+        tau0 = 0.04 * zm / z1
+    sol, nfev = _fit(lambda tau: np.full(d.size, model(tau)) - d, tau0, 1e-6)
+    tau = float(sol.x[0])
+    se, ci = _ci(tau, sol.jac, sol.fun)
+    k = np.arange(1, d.size + 1, dtype=float)
+    return CalibrationResult(mode="decrements", tau=tau, std_error=se, ci95=ci, tau0=tau0,
+                             residual_rms=float(np.sqrt(np.mean(sol.fun**2))), n_data=d.size,
+                             nfev=nfev, njev=int(sol.njev or 0), success=bool(sol.success),
+                             message=str(sol.message), data_t=k, data_y=d, fit_t=k,
+                             fit_y=np.full(d.size, model(tau)))
+
+
+def calibrate_signal(t: Sequence[float], x: Sequence[float], scenario=None,
+                     tau0: float | None = None, n_elements: int = 16,
+                     output_step: float = 0.002) -> CalibrationResult:
+    """Fit tau (s) to a measured tip signal x(t) (m) by simulations of the cantilever.
+
+    scenario: the cantilever that was released (geometry, material, tip force; default
+    the paper's); its n_elements is replaced by ``n_elements`` (coarse, for speed) and
+    t_end by the end of the data. tau0: start (default: from the first log decrement of
+    the data and the linear prediction of the scenario).
+    """
+    t, x = validate_signal(t, x)
+    sc = _scenario(scenario, n_elements=n_elements, output_step=output_step)
+    if tau0 is None:
+        _, xk = signal_maxima(t, x)
+        z = float(np.mean(damping_ratios(log_decrements(xk))))
+        lp = sc.linear_prediction()
+        tau0 = max(2 * z / lp["omega_1"], 1e-4)
+    t_end = float(t[-1]) + 2 * output_step
+
+    def model_at(tau: float, tq: np.ndarray) -> np.ndarray:
+        ts, xs = _simulate_tip(sc, tau, t_end)
+        return CubicSpline(ts, xs)(tq)
+
+    sol, nfev = _fit(lambda tau: model_at(tau, t) - x, tau0, 1e-4, xtol=1e-4,
+                     ftol=1e-6)
+    tau = float(sol.x[0])
+    se, ci = _ci(tau, sol.jac, sol.fun)
+    tf = np.linspace(float(t[0]), float(t[-1]), 2000)
+    return CalibrationResult(mode="signal", tau=tau, std_error=se, ci95=ci, tau0=tau0,
+                             residual_rms=float(np.sqrt(np.mean(sol.fun**2))), n_data=t.size,
+                             nfev=nfev, njev=int(sol.njev or 0), success=bool(sol.success),
+                             message=str(sol.message), data_t=t, data_y=x, fit_t=tf,
+                             fit_y=model_at(tau, tf))
+
+
+# --------------------------------------------------------------------------------------
+# Plot
+# --------------------------------------------------------------------------------------
+
+
+def plot_calibration(res: CalibrationResult, path: str | Path) -> Path:
+    """The fitted curve over the data (PNG, matplotlib Agg), written atomically."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    label = (f"fit: tau = {res.tau * 1e3:.3f} ms, 95 % CI [{res.ci95[0] * 1e3:.3f}, "
+             f"{res.ci95[1] * 1e3:.3f}] ms")
+    if res.mode == "signal":
+        ax.plot(res.data_t, res.data_y, ".", ms=2, color="0.5", label="data")
+        ax.plot(res.fit_t, res.fit_y, "-", color="C3", lw=1.2, label=label)
+        ax.set_xlabel("t [s]")
+        ax.set_ylabel("tip x [m]")
+    else:
+        ax.plot(res.data_t, res.data_y, "o", color="0.3", label="measured decrements")
+        ax.plot(res.fit_t, res.fit_y, "-", color="C3", label=label + " (linear modal)")
+        ax.set_xlabel("cycle k")
+        ax.set_ylabel("log decrement delta_k [-]")
+    ax.legend(loc="best", fontsize=8)
+    ax.grid(alpha=0.3)
+    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
+    fig.savefig(tmp, dpi=120, bbox_inches="tight")
+    plt.close(fig)
+    tmp.replace(path)
+    return path
