@@ -96,6 +96,24 @@ def run_and_write(scenario, out: Path, label: str, plots: bool = True, resume: b
     return run, summary
 
 
+def _already_finished(scenario, out: Path) -> bool:
+    """True when DIR holds a finished run of exactly these parameters (and no checkpoint)."""
+    import json
+    from dataclasses import asdict
+
+    from runtime.results import CHECKPOINT, jsonable
+
+    path = out / "summary.json"
+    if (out / CHECKPOINT).exists() or not path.exists():
+        return False
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return False
+    wanted = jsonable({**asdict(scenario), "tau_E": scenario.tau_E})
+    return data.get("status") == "finished" and data.get("parameters") == wanted
+
+
 def _cmd_simulate(args) -> int:
     from kvrod.cli import CliError
 
@@ -109,6 +127,9 @@ def _cmd_simulate(args) -> int:
                        "snapshots)")
     sc = scenario_from_args(args)
     out = Path(args.out)
+    if args.resume and _already_finished(sc, out):
+        print(f"{out}: this run has already finished (summary.json); nothing to resume")
+        return 0
     run, s = run_and_write(sc, out, "cantilever", resume=args.resume, vtk_every=args.vtk)
     tip = s["static"]["tip"]
     print(f"static tip [m]: {tip}  (Newton iterations: {s['static']['newton_iterations']})")

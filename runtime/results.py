@@ -15,13 +15,13 @@ from typing import Any
 import numpy as np
 
 
-def _jsonable(obj: Any) -> Any:
+def jsonable(obj: Any) -> Any:
     if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
+        return {str(k): jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
+        return [jsonable(v) for v in obj]
     if isinstance(obj, np.ndarray):
-        return _jsonable(obj.tolist())
+        return jsonable(obj.tolist())
     if isinstance(obj, (np.floating, float)):
         v = float(obj)
         return v if math.isfinite(v) else str(v)
@@ -35,7 +35,7 @@ def write_json(path: Path, data: dict) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(json.dumps(_jsonable(data), indent=2) + "\n")
+    tmp.write_text(json.dumps(jsonable(data), indent=2) + "\n")
     tmp.replace(path)
     return path
 
@@ -81,7 +81,7 @@ def write_checkpoint(out_dir: Path, parameters: dict, state: dict) -> Path:
     """Everything run_cantilever needs to continue (``resume=``), plus the parameters."""
     arrays = {k: np.asarray(v) for k, v in state.items() if k != "counters"}
     arrays["counters_json"] = np.array(json.dumps(state["counters"]))
-    arrays["parameters_json"] = np.array(json.dumps(_jsonable(parameters), sort_keys=True))
+    arrays["parameters_json"] = np.array(json.dumps(jsonable(parameters), sort_keys=True))
     return write_npz(Path(out_dir) / CHECKPOINT, **arrays)
 
 
@@ -94,7 +94,7 @@ def load_checkpoint(out_dir: Path, parameters: dict) -> dict:
     with np.load(path) as f:
         data = {k: f[k] for k in f.files}
     saved = json.loads(str(data.pop("parameters_json")))
-    wanted = _jsonable(parameters)
+    wanted = jsonable(parameters)
     for key in sorted(set(saved) | set(wanted)):
         if saved.get(key) != wanted.get(key):
             raise ValueError(f"--resume: checkpoint in {out_dir} was written with {key} = "

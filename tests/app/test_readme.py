@@ -19,16 +19,19 @@ import pytest
 README = Path(__file__).resolve().parents[2] / "README.md"
 
 
-def readme_commands() -> list[str]:
+def readme_blocks() -> list[list[str]]:
+    """The commands of each ```bash block after the set-up section (comments dropped)."""
     text = README.read_text()
     body = text.split("## The three uses", 1)[1]
-    cmds = []
+    blocks = []
     for block in re.findall(r"```bash\n(.*?)```", body, flags=re.S):
-        for line in block.splitlines():
-            line = line.split("#", 1)[0].strip()
-            if line:
-                cmds.append(line)
-    return cmds
+        cmds = [line.split("#", 1)[0].strip() for line in block.splitlines()]
+        blocks.append([c for c in cmds if c])
+    return blocks
+
+
+def readme_commands() -> list[str]:
+    return [c for b in readme_blocks() for c in b]
 
 
 def test_readme_has_commands_for_the_three_uses():
@@ -38,10 +41,12 @@ def test_readme_has_commands_for_the_three_uses():
     assert any(" simulate" in c for c in cmds)
 
 
-@pytest.mark.parametrize("cmd", readme_commands())
-def test_readme_command(cmd, tmp_path):
-    argv = shlex.split(cmd)
-    assert argv[0] == ".venv/bin/kvrod", f"not a .venv/bin/kvrod command: {cmd}"
-    r = subprocess.run([sys.executable, "-m", "kvrod", *argv[1:]], cwd=tmp_path,
-                       capture_output=True, text=True, timeout=600)
-    assert r.returncode == 0, f"{cmd}\n{r.stdout[-2000:]}\n{r.stderr[-2000:]}"
+@pytest.mark.parametrize("block", readme_blocks(), ids=lambda b: b[0][:60])
+def test_readme_block(block, tmp_path):
+    """The commands of one block run in order in one fresh working directory."""
+    for cmd in block:
+        argv = shlex.split(cmd)
+        assert argv[0] == ".venv/bin/kvrod", f"not a .venv/bin/kvrod command: {cmd}"
+        r = subprocess.run([sys.executable, "-m", "kvrod", *argv[1:]], cwd=tmp_path,
+                           capture_output=True, text=True, timeout=600)
+        assert r.returncode == 0, f"{cmd}\n{r.stdout[-2000:]}\n{r.stderr[-2000:]}"
