@@ -172,6 +172,9 @@ def build_parser() -> argparse.ArgumentParser:
     from kvrod import cli_runtime
 
     cli_runtime.add_commands(sub, _Parser)
+    from kvrod import cli_sweep
+
+    cli_sweep.add_commands(sub, _Parser)
     try:  # modal analysis, calibration (issue 7)
         from kvrod import cli_beyond
     except ImportError:  # pragma: no cover - while it does not exist

@@ -1,0 +1,101 @@
+"""`kvrod sweep STUDY.toml`: parameter studies on Dask (issue 8).
+
+By default the points run on a LocalCluster with one worker process per core; with
+``--scheduler tcp://host:8786`` they run on an existing Dask cluster::
+
+    dask scheduler                          # on the head node (port 8786)
+    dask worker tcp://host:8786             # on every compute node (kvrod installed)
+    kvrod sweep study.toml --scheduler tcp://host:8786 --out results/study
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def _progress_bar(total: int, skipped: int):
+    """A tqdm bar over the points to run; returns (callback, close)."""
+    from tqdm import tqdm
+
+    bar = tqdm(total=total - skipped, desc="points", unit="pt", dynamic_ncols=True)
+    bar.set_postfix_str(f"done 0, failed 0, skipped {skipped}")
+
+    def update(pr) -> None:
+        bar.n = pr.done + pr.failed
+        bar.set_postfix_str(f"done {pr.done}, failed {pr.failed}, running {pr.running}, "
+                            f"queued {pr.queued}, skipped {pr.skipped}", refresh=False)
+        bar.refresh()
+
+    return update, bar.close
+
+
+def _cmd_sweep(args) -> int:
+    from kvrod.cli import CliError
+
+    if args.workers is not None and args.workers < 1:
+        raise CliError(f"kvrod sweep: --workers {args.workers} must be >= 1")
+    if args.serial and args.scheduler:
+        raise CliError("kvrod sweep: --serial and --scheduler exclude each other")
+    from runtime.sweep import StudyError, load_study, points_to_run, run_study_serial
+
+    try:
+        study = load_study(args.study)
+    except StudyError as exc:
+        raise CliError(f"kvrod sweep: {exc}") from exc
+    safe = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in study.name)
+    out = Path(args.out) if args.out else Path("results") / f"sweep-{safe}"
+    n = len(study.points)
+    where = ("serial (this process)" if args.serial else
+             f"scheduler {args.scheduler}" if args.scheduler else
+             f"LocalCluster, {args.workers or 'one per core'} worker processes")
+    print(f"study {study.name!r}: {n} points of scenario {study.scenario!r} on {where}; "
+          f"results in {out}")
+    todo = points_to_run(study, out, rerun_failed=not args.keep_failed)
+    progress, close = _progress_bar(n, n - len(todo))
+    try:
+        if args.serial:
+            report = run_study_serial(study, out, progress=progress,
+                                      rerun_failed=not args.keep_failed)
+        else:
+            from runtime.sweep_dask import run_study_dask
+
+            try:
+                report = run_study_dask(study, out, scheduler=args.scheduler,
+                                        n_workers=args.workers, progress=progress,
+                                        rerun_failed=not args.keep_failed)
+            except (OSError, TimeoutError) as exc:      # unreachable scheduler, no workers
+                msg = " ".join(str(exc).split()) or type(exc).__name__
+                raise CliError(f"kvrod sweep: Dask: {msg}") from exc
+    finally:
+        close()
+    print(f"{len(report.computed)} points run ({len(report.failed)} failed), "
+          f"{len(report.skipped)} already finished, in {report.wall_time_s:.1f} s "
+          f"[{report.engine}]")
+    print(f"wrote {out}/study.csv, {out}/points/<id>/summary.json, series.npz"
+          + (f", {out}/summary.png" if (out / "summary.png").exists() else ""))
+    if report.failed:
+        print(f"kvrod sweep: {len(report.failed)} point(s) failed; see the 'message' column "
+              f"of {out}/study.csv (run again on restart unless --keep-failed)")
+        return 1
+    return 0
+
+
+def add_commands(sub, parser_class) -> None:
+    """Register `kvrod sweep` on the top-level subparsers."""
+    s = sub.add_parser("sweep", help="run a parameter study (TOML) on Dask, local or cluster",
+                       description=__doc__.splitlines()[0] if __doc__ else None)
+    s.add_argument("study", help="study file (TOML: scenario, [fixed], [grid] / [[points]])")
+    s.add_argument("--scheduler", metavar="ADDRESS",
+                   help="address of a running Dask scheduler, e.g. tcp://host:8786 "
+                        "(default: start a LocalCluster on this machine)")
+    s.add_argument("--workers", type=int, metavar="K",
+                   help="LocalCluster worker processes (default: one per core); with "
+                        "--scheduler: wait for K workers before starting")
+    s.add_argument("--out", metavar="DIR",
+                   help="study folder (default: results/sweep-<study name>)")
+    s.add_argument("--serial", action="store_true",
+                   help="run the points one after another in this process (no Dask)")
+    s.add_argument("--keep-failed", action="store_true",
+                   help="on restart, do not rerun points that failed before")
+    s.set_defaults(func=_cmd_sweep)
+    _ = parser_class

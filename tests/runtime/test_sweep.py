@@ -1,0 +1,304 @@
+"""Parameter studies on Dask (issue 8): study files, equality with serial runs, restart,
+failing points, interruption and a worker killed mid-study.
+
+Scenarios are tiny (a 0.1 m cantilever, 4-6 elements, 0.4 s after release: two tip
+maxima, about 0.1-0.3 s per point) so the file stays well under its time budget.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from runtime.sweep import (
+    FAILED,
+    FINISHED,
+    PENDING,
+    StudyError,
+    load_study,
+    point_dir,
+    read_table,
+    run_study_serial,
+    study_from_dict,
+)
+
+distributed = pytest.importorskip("distributed")
+
+from runtime.sweep_dask import run_study_dask  # noqa: E402
+
+TINY = {"length": 0.1, "t_end": 0.4, "rtol": 1e-4}
+STUDY = {"name": "tiny", "scenario": "cantilever", "fixed": {**TINY, "n_elements": 5},
+         "grid": {"tau": [0.01, 0.02, 0.03], "n_elements": [4, 6]},
+         "points": [{"tau": 0.02, "poisson_ratio": 0.7}]}       # invalid: nu <= 1/2
+BAD_ID_PART = "poisson_ratio=0.7"
+STUDY_TIMEOUT = 120.0
+
+
+def _table_ids(out: Path) -> list[str]:
+    return [r["point_id"] for r in read_table(out / "study.csv")]
+
+
+def _summary(out: Path, pid: str) -> dict:
+    return json.loads((point_dir(out, pid) / "summary.json").read_text())
+
+
+def _assert_table_complete(out: Path, study) -> dict[str, dict]:
+    """Every study point exactly once, in study order; returns rows by id."""
+    ids = _table_ids(out)
+    assert ids == [p.id for p in study.points]
+    assert len(set(ids)) == len(ids)
+    return {r["point_id"]: r for r in read_table(out / "study.csv")}
+
+
+@pytest.fixture(scope="module")
+def client():
+    cluster = distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1,
+                                       dashboard_address=":0", scheduler_port=0)
+    c = distributed.Client(cluster, timeout=60)
+    c.wait_for_workers(2, timeout=60)
+    yield c
+    c.close()
+    cluster.close()
+
+
+@pytest.fixture(scope="module")
+def study():
+    return study_from_dict(STUDY)
+
+
+@pytest.fixture(scope="module")
+def dask_run(client, study, tmp_path_factory):
+    out = tmp_path_factory.mktemp("dask")
+    report = run_study_dask(study, out, client=client, timeout=STUDY_TIMEOUT)
+    return out, report
+
+
+# ------------------------------------------------------------------ study definition
+
+
+def test_grid_product_ids_and_coercion(tmp_path):
+    s = study_from_dict(STUDY)
+    assert len(s.points) == 7
+    assert [(p.params["tau"], p.params["n_elements"]) for p in s.points[:6]] == [
+        (0.01, 4), (0.01, 6), (0.02, 4), (0.02, 6), (0.03, 4), (0.03, 6)]
+    assert s.points[6].params["n_elements"] == 5 and s.points[6].params["poisson_ratio"] == 0.7
+    assert s.varied == ("tau", "n_elements", "poisson_ratio")
+    # stable ids: same parameters (1e6 vs 1000000, order) -> same id; different -> different
+    a = study_from_dict({"points": [{"youngs_modulus": 1e6, "tau": 0.02}]}).points[0]
+    b = study_from_dict({"points": [{"tau": 0.02, "youngs_modulus": 1000000}]}).points[0]
+    c = study_from_dict({"points": [{"tau": 0.02, "youngs_modulus": 2e6}]}).points[0]
+    assert a.id == b.id != c.id
+    # a point listed twice runs once
+    assert len(study_from_dict({"points": [{"tau": 0.02}, {"tau": 0.02}]}).points) == 1
+    f = tmp_path / "s.toml"
+    f.write_text('scenario = "cantilever"\n[fixed]\nt_end = 0.4\n[grid]\ntau = [0.01, 0.02]\n')
+    assert [p.params for p in load_study(f).points] == [
+        {"t_end": 0.4, "tau": 0.01}, {"t_end": 0.4, "tau": 0.02}]
+
+
+def test_example_study_has_16_points():
+    s = load_study(Path(__file__).resolve().parents[2] / "examples" / "study_tau.toml")
+    assert len(s.points) == 16 and s.scenario == "cantilever"
+
+
+@pytest.mark.parametrize("data, words", [
+    ({"grid": {"bogus": [1]}}, ["bogus", "tau_S"]),
+    ({"points": [{"tau": 0.02, "tau_S": 0.01}]}, ["tau", "not both"]),
+    ({"scenario": "plate", "points": [{"tau": 0.02}]}, ["plate", "cantilever"]),
+    ({"grid": {"n_elements": [4.5]}}, ["n_elements", "int"]),
+    ({"grid": {"tau": []}}, ["tau", "non-empty"]),
+    ({"fixed": {"tau": 0.02}}, ["no points"]),
+    ({"gird": {"tau": [0.02]}}, ["gird", "grid"]),
+])
+def test_bad_study_is_a_one_line_error(data, words):
+    with pytest.raises(StudyError) as e:
+        study_from_dict(data)
+    msg = str(e.value)
+    assert "\n" not in msg and all(w in msg for w in words), msg
+
+
+# ------------------------------------------------------------------ engine
+
+
+def test_dask_results_equal_serial_runs(dask_run, study, tmp_path):
+    out, report = dask_run
+    assert report.total == 7 and not report.skipped
+    assert sorted(report.computed) == sorted(p.id for p in study.points)
+    serial = run_study_serial(study, tmp_path / "serial", plots=False)
+    assert sorted(serial.computed) == sorted(report.computed)
+    for p in study.points:
+        a, b = _summary(out, p.id), _summary(tmp_path / "serial", p.id)
+        assert a["status"] == b["status"]
+        if a["status"] != FINISHED:
+            continue
+        assert a["counters"] == b["counters"]
+        assert a["static"]["newton_iterations"] == b["static"]["newton_iterations"]
+        assert len(a["peaks"]) == len(b["peaks"]) >= 2
+        pairs = [(a["static"]["tip"], b["static"]["tip"]),
+                 ([q["x"] for q in a["peaks"]], [q["x"] for q in b["peaks"]]),
+                 ([q["t"] for q in a["peaks"]], [q["t"] for q in b["peaks"]]),
+                 (a["damping_ratios"], b["damping_ratios"]), (a["periods"], b["periods"]),
+                 ([a["energy_balance_max_rel"]], [b["energy_balance_max_rel"]])]
+        for xa, xb in pairs:
+            assert xa == pytest.approx(xb, rel=1e-10, abs=1e-12)
+        assert (point_dir(out, p.id) / "series.npz").exists()
+
+
+def test_table_plots_and_failing_point(dask_run, study):
+    out, report = dask_run
+    rows = _assert_table_complete(out, study)
+    bad = [pid for pid in rows if BAD_ID_PART in pid]
+    assert len(bad) == 1 and report.failed == bad
+    assert rows[bad[0]]["status"] == FAILED
+    assert "poisson_ratio" in rows[bad[0]]["message"] and "0.7" in rows[bad[0]]["message"]
+    assert _summary(out, bad[0])["status"] == FAILED
+    for pid, r in rows.items():
+        if pid in bad:
+            continue
+        assert r["status"] == FINISHED
+        assert 0.05 < float(r["zeta_first"]) < 0.6 and float(r["period_mean"]) > 0
+        assert float(r["static_tip_z"]) > 0.09 and float(r["wall_time_s"]) > 0
+    assert (out / "summary.png").stat().st_size > 1000
+    assert (out / "study.toml").exists() is False  # built from a dict: no source to copy
+
+
+def test_workers_load_the_kernels_once(dask_run, client):
+    def loads() -> int:
+        from runtime import build
+
+        return build._load_cached.cache_info().misses
+
+    # the worker plugin loaded the library once per worker process, before any point
+    assert set(client.run(loads).values()) == {1}
+    out, _ = dask_run
+    pids = {_summary(out, p)["point"]["pid"] for p in _table_ids(out)}
+    assert os.getpid() not in pids
+
+
+def test_restart_skips_finished_points(dask_run, study, client, tmp_path):
+    src, _ = dask_run
+    out = tmp_path / "restart"
+    shutil.copytree(src, out)
+    gone = study.points[2].id
+    shutil.rmtree(point_dir(out, gone))
+    before = {p.id: _summary(out, p.id)["point"]["computed_at"]
+              for p in study.points if p.id != gone}
+    rows = _assert_table_complete(out, study)
+    report = run_study_dask(study, out, client=client, rerun_failed=False,
+                            timeout=STUDY_TIMEOUT)
+    assert report.computed == [gone]
+    assert len(report.skipped) == 6
+    after = {pid: _summary(out, pid)["point"]["computed_at"] for pid in before}
+    assert after == before                       # nothing else was rerun or rewritten
+    rows = _assert_table_complete(out, study)
+    assert rows[gone]["status"] == FINISHED
+    # by default a failed point is tried again on restart, a finished one never
+    report = run_study_dask(study, out, client=client, timeout=STUDY_TIMEOUT)
+    assert len(report.computed) == 1 and BAD_ID_PART in report.computed[0]
+
+
+def test_interrupted_study_leaves_consistent_table_and_resumes(client, study, tmp_path):
+    out = tmp_path / "interrupted"
+    seen = []
+
+    def interrupt(pr) -> None:
+        assert pr.done + pr.failed == 1 and pr.running <= 2     # 2 single-thread workers
+        assert pr.running + pr.queued == len(study.points) - 1
+        seen.append(pr.last)
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_study_dask(study, out, client=client, progress=interrupt, timeout=STUDY_TIMEOUT)
+    assert len(seen) == 1
+    rows = _assert_table_complete(out, study)
+    assert rows[seen[0]]["status"] in (FINISHED, FAILED)
+    done = {pid for pid, r in rows.items() if r["status"] in (FINISHED, FAILED)}
+    assert all(r["status"] == PENDING for pid, r in rows.items() if pid not in done)
+    assert not list(out.rglob(".*.tmp"))            # no half-written files
+    report = run_study_dask(study, out, client=client, timeout=STUDY_TIMEOUT)
+    finished_before = {pid for pid in done if rows[pid]["status"] == FINISHED}
+    assert not finished_before & set(report.computed)
+    assert set(report.computed) | finished_before == {p.id for p in study.points}
+    rows = _assert_table_complete(out, study)
+    assert sum(r["status"] == FINISHED for r in rows.values()) == 6
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGKILL")
+def test_worker_killed_mid_study(tmp_path):
+    """One of two worker processes is SIGKILLed after the first result: its tasks are
+    rescheduled and the study completes, every point exactly once in the table."""
+    s = study_from_dict({"fixed": {**TINY, "t_end": 0.8},
+                         "grid": {"tau": [0.01, 0.015, 0.02, 0.025, 0.03],
+                                  "n_elements": [4, 6]}})
+    killed: list[int] = []
+    lost: list[str] = []          # task keys the killed worker was running or holding
+    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1,
+                                  dashboard_address=":0", scheduler_port=0) as cluster, \
+            distributed.Client(cluster, timeout=60) as c:
+        c.wait_for_workers(2, timeout=60)
+        pids = c.run(os.getpid)
+
+        def kill_one(pr) -> None:
+            if killed:
+                return
+            busy = [a for a, keys in c.processing().items() if keys and a in pids]
+            addr = busy[0] if busy else next(iter(pids))
+            os.kill(pids[addr], signal.SIGKILL)
+            killed.append(pids[addr])
+            lost.extend(c.processing().get(addr, ()))
+
+        t0 = time.monotonic()
+        report = run_study_dask(s, tmp_path, client=c, progress=kill_one,
+                                timeout=STUDY_TIMEOUT)
+        assert time.monotonic() - t0 < STUDY_TIMEOUT
+        assert killed and lost      # the killed worker held tasks, which were rescheduled
+        assert not set(c.run(os.getpid).values()) & set(killed)  # the dead one is gone
+    assert report.ok, report
+    assert sorted(report.computed) == sorted(p.id for p in s.points)  # each once
+    rows = _assert_table_complete(tmp_path, s)
+    assert all(r["status"] == FINISHED for r in rows.values())
+
+
+# ------------------------------------------------------------------ CLI
+
+
+def _cli(argv: list[str]) -> int:
+    """`kvrod sweep ...` through the CLI's parser class and error handling."""
+    from kvrod import cli, cli_sweep
+
+    p = cli._Parser(prog="kvrod")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=cli._Parser)
+    cli_sweep.add_commands(sub, cli._Parser)
+    try:
+        args = p.parse_args(argv)
+        return int(args.func(args) or 0)
+    except cli.CliError as exc:
+        print(str(exc), file=sys.stderr)
+        return 2
+
+
+def test_cli_serial_and_errors(tmp_path, capsys):
+    f = tmp_path / "study.toml"
+    f.write_text('name = "cli"\n[fixed]\nlength = 0.1\nt_end = 0.4\nrtol = 1e-4\n'
+                 "n_elements = 4\n[grid]\ntau = [0.01, 0.02]\n")
+    out = tmp_path / "out"
+    assert _cli(["sweep", str(f), "--serial", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "2 points run (0 failed)" in text and (out / "study.csv").exists()
+    assert (out / "study.toml").read_text() == f.read_text()
+    assert _cli(["sweep", str(f), "--serial", "--out", str(out)]) == 0
+    assert "0 points run (0 failed), 2 already finished" in capsys.readouterr().out
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[grid]\ntua = [0.01]\n")
+    assert _cli(["sweep", str(bad)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "tua" in err
+    assert _cli(["sweep", str(f), "--workers", "0"]) == 2
+    assert _cli(["sweep", str(tmp_path / "missing.toml")]) == 2
