@@ -20,6 +20,7 @@ import math
 import numpy as np
 from scipy.linalg.lapack import dgbtrf, dgbtrs
 
+from . import _bdf_c
 from .errors import ParameterError
 from .problem import ResidualProblem, band_storage
 
@@ -33,6 +34,7 @@ _XRATE = 0.25  # cj ratio band: re-factorise outside [(1-x)/(1+x), (1+x)/(1-x)]
 _CJ_LO = (1.0 - _XRATE) / (1.0 + _XRATE)
 _CJ_HI = 1.0 / _CJ_LO
 
+_EPS16 = 16.0 * float(np.finfo(float).eps)
 _OK = 0
 _CONV_FAIL = 1
 _ERR_FAIL = 2
@@ -79,6 +81,19 @@ def _interp_coefficients(
     ``t`` has shape (m,); returns ``c`` of shape (k+1, m) and ``d`` of shape (k+1, m)
     (``d[0] = 0``).
     """
+    if t.size == 1:  # the common case (one output time in a step): scalar arithmetic
+        delt = float(t[0]) - tn
+        cl, dl = [1.0], [0.0]
+        cs, ds = 1.0, 0.0
+        gs = delt / psi[0]
+        for j in range(1, k + 1):
+            ds = ds * gs + cs / psi[j - 1]
+            cs = cs * gs
+            if j < k:
+                gs = (delt + psi[j - 1]) / psi[j]
+            cl.append(cs)
+            dl.append(ds)
+        return np.array(cl).reshape(k + 1, 1), np.array(dl).reshape(k + 1, 1)
     delt = t - tn
     c = np.empty((k + 1, t.size))
     d = np.zeros((k + 1, t.size))
@@ -113,8 +128,17 @@ class BDFDenseOutput:
     def _eval(self, t: float | np.ndarray, deriv: bool) -> np.ndarray:
         ta = np.atleast_1d(np.asarray(t, dtype=float))
         c, d = _interp_coefficients(ta, self.t, self._psi, self._k)
-        out = self._phi.T @ (d if deriv else c)
+        out = ((d if deriv else c).T @ self._phi).T
         return out[:, 0] if np.ndim(t) == 0 else out
+
+    def values(self, t: np.ndarray, out_y: np.ndarray | None = None,
+               out_yp: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """``(y(t), y'(t))`` for times ``t`` of shape (m,), each of shape (m, n) (one row
+        per time; note the order), written into ``out_y``/``out_yp`` if given."""
+        ta = np.asarray(t, dtype=float)
+        c, d = _interp_coefficients(ta, self.t, self._psi, self._k)
+        phi = self._phi  # (k+1, n), C order: c.T @ phi runs over contiguous rows
+        return np.matmul(c.T, phi, out=out_y), np.matmul(d.T, phi, out=out_yp)
 
     def __call__(self, t: float | np.ndarray) -> np.ndarray:
         return self._eval(t, False)
@@ -226,8 +250,25 @@ class BDF:
         self._errmask = diff.astype(float) if self.suppress_alg else None
         self._ewt_err = np.empty(n) if self.suppress_alg else self._ewt
         self._ab = band_storage(n, self.kl, self.ku)
-        self._ipiv = np.zeros(n, dtype=np.int32)
+        self._ipiv = np.zeros(max(n, 1), dtype=np.int32)
         self._have_lu = False
+        # Compiled helpers (runtime/_bdf_c.py: flush-to-zero band solve, fused Newton
+        # update, LAPACK dgbtrf without f2py); None -> NumPy/f2py path. Data addresses
+        # are fetched once (ndarray.ctypes.data costs microseconds); the Newton iterate
+        # buffers swap with the accepted ones, so their addresses swap too.
+        self._c = _bdf_c.load() if n > 0 else None
+        if self._c is not None:
+            self._p_ab = self._ab.ctypes.data
+            self._p_ipiv = self._ipiv.ctypes.data
+            self._prof = np.zeros(2 * n, dtype=np.int32)  # factor profile (kv_gbtrf)
+            self._p_prof = self._prof.ctypes.data
+            self._p_res = self._res.ctypes.data
+            self._p_ewt = self._ewt.ctypes.data
+            self._p_ee = self._ee.ctypes.data
+            self._p_yy, self._p_ypw = self._yy.ctypes.data, self._ypw.ctypes.data
+            self._p_y, self._p_yp = self._y.ctypes.data, self._yp.ctypes.data
+            self._ptrs = {id(a): a.ctypes.data
+                          for a in (self._ee, self._res, self._ewt, self._ewt_err)}
 
         # IDA's scalar state; coefficient lists are Python floats (fast scalar loops).
         self._psi = [0.0] * (mo + 2)
@@ -350,6 +391,11 @@ class BDF:
 
     # ------------------------------------------------------------------ internals
     def _wrms(self, v: np.ndarray, w: np.ndarray) -> float:
+        if self._c is not None:  # flush-to-zero norm (see runtime/_bdf_c.py)
+            ptrs = self._ptrs
+            pv, pw = ptrs.get(id(v)), ptrs.get(id(w))
+            return self._c.kv_wrms(self.n, pv if pv is not None else v.ctypes.data, None,
+                                   pw if pw is not None else w.ctypes.data)
         tmp = self._tmp
         np.multiply(v, w, out=tmp)
         return math.sqrt(float(np.dot(tmp, tmp)) / self.n)
@@ -364,7 +410,7 @@ class BDF:
             np.multiply(ewt, self._errmask, out=self._ewt_err)
 
     def _hmin(self) -> float:
-        return max(self.min_step, 16.0 * np.finfo(float).eps * abs(self.t), 1e-300)
+        return max(self.min_step, _EPS16 * abs(self.t), 1e-300)
 
     def _set_coeffs(self) -> float:
         """IDASetCoeffs: BDF coefficients for the current h and order; phi -> phi*."""
@@ -431,10 +477,14 @@ class BDF:
         ab.fill(0.0)
         self.problem.jacobian_band(t, self._yy, self._ypw, self._cj, ab)
         self.njev += 1
-        self._ipiv = None  # free the old pivots first (dgbtrf allocates new ones)
-        _, ipiv, info = dgbtrf(ab, self.kl, self.ku, overwrite_ab=1)
+        if self._c is not None:
+            info = self._c.kv_gbtrf(_bdf_c.DGBTRF, self.n, self.kl, self.ku, self._p_ab,
+                                    ab.shape[0], self._p_ipiv, self._p_prof)
+        else:
+            self._ipiv = None  # free the old pivots first (dgbtrf allocates new ones)
+            _, ipiv, info = dgbtrf(ab, self.kl, self.ku, overwrite_ab=1)
+            self._ipiv = ipiv
         self.nlu += 1
-        self._ipiv = ipiv
         self._cjold = self._cj
         self._cjratio = 1.0
         self._ss = 20.0
@@ -460,6 +510,10 @@ class BDF:
         ewt, tmp = self._ewt, self._tmp
         inv_n = 1.0 / self.n
         maxcor = self.max_nonlinear_iter
+        clib, n = self._c, self.n
+        if clib is not None:
+            p_ab, ldab, p_ipiv, p_prof = self._p_ab, ab.shape[0], self._p_ipiv, self._p_prof
+            p_res, p_ewt, p_ee = self._p_res, self._p_ewt, self._p_ee
 
         first = True
         while True:
@@ -480,17 +534,22 @@ class BDF:
             ipiv = self._ipiv
             m = 0
             while True:
-                dgbtrs(ab, kl, ku, res, ipiv, overwrite_b=1)
-                if scale != 1.0:
-                    res *= scale
-                np.multiply(res, ewt, out=tmp)
-                delnrm = math.sqrt(float(np.dot(tmp, tmp)) * inv_n)
+                if clib is not None:
+                    delnrm = clib.kv_newton(n, kl, ku, p_ab, ldab, p_ipiv, p_prof, p_res,
+                                            scale, p_ewt, p_ee, self._p_yy, self._p_ypw, cj)
+                else:
+                    dgbtrs(ab, kl, ku, res, ipiv, overwrite_b=1)
+                    if scale != 1.0:
+                        res *= scale
+                    np.multiply(res, ewt, out=tmp)
+                    delnrm = math.sqrt(float(np.dot(tmp, tmp)) * inv_n)
                 if not math.isfinite(delnrm):
                     self._raise_nonfinite(tnew, yy, ypw, self._hh)
-                ee -= res
-                yy -= res
-                np.multiply(res, cj, out=tmp)
-                ypw -= tmp
+                if clib is None:
+                    ee -= res
+                    yy -= res
+                    np.multiply(res, cj, out=tmp)
+                    ypw -= tmp
                 self.nni += 1
                 if m == 0:
                     self._oldnrm = delnrm
@@ -700,6 +759,9 @@ class BDF:
         # Accept the Newton iterate by swapping buffers (no copies).
         self._y, self._yy = self._yy, self._y
         self._yp, self._ypw = self._ypw, self._yp
+        if self._c is not None:
+            self._p_y, self._p_yy = self._p_yy, self._p_y
+            self._p_yp, self._p_ypw = self._p_ypw, self._p_yp
         self._update_weights()
 
     # ------------------------------------------------------------------ failures

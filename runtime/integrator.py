@@ -180,14 +180,14 @@ def solve(
         if (direction > 0 and np.any(d <= 0)) or (direction < 0 and np.any(d >= 0)):
             raise ValueError("t_eval must be strictly monotonic in the direction of t_span")
         t_eval_i = 0
-        ts_out: list[float] = []
-        ys_out: list[np.ndarray] = []
-        yps_out: list[np.ndarray] = []
+        # Outputs go straight into preallocated (m, n) arrays (returned transposed):
+        # no per-output arrays, no final stacking copy.
+        y_rows = np.empty((t_eval.size, y0.size))
+        yp_rows = np.empty((t_eval.size, y0.size))
         # An output at t0 itself comes from the initial values.
         while t_eval_i < t_eval.size and t_eval[t_eval_i] == t0:
-            ts_out.append(t0)
-            ys_out.append(y0.copy())
-            yps_out.append(np.asarray(yp0, dtype=float).copy())
+            y_rows[t_eval_i] = y0
+            yp_rows[t_eval_i] = yp0
             t_eval_i += 1
     else:
         ts_out = [t0]
@@ -284,11 +284,8 @@ def solve(
             if t_eval_i > j0:
                 if interp is None:
                     interp = solver.dense_output()
-                tt = t_eval[j0:t_eval_i]
-                yy, yyp = interp(tt), interp.derivative(tt)
-                ts_out.extend(tt.tolist())
-                ys_out.extend(yy.T)
-                yps_out.extend(yyp.T)
+                interp.values(t_eval[j0:t_eval_i], y_rows[j0:t_eval_i],
+                              yp_rows[j0:t_eval_i])
 
         if progress is not None:
             progress(t_stop)
@@ -297,8 +294,12 @@ def solve(
             message = "The solver successfully reached the end of the integration interval."
 
     n = y0.size
-    y_arr = np.array(ys_out).T if ys_out else np.empty((n, 0))
-    yp_arr = np.array(yps_out).T if yps_out else np.empty((n, 0))
+    if t_eval is not None:
+        ts_out = t_eval[:t_eval_i].copy()
+        y_arr, yp_arr = y_rows[:t_eval_i].T, yp_rows[:t_eval_i].T
+    else:
+        y_arr = np.array(ys_out).T if ys_out else np.empty((n, 0))
+        yp_arr = np.array(yps_out).T if yps_out else np.empty((n, 0))
     sol = BDFSolution(ts_steps, interpolants) if dense_output and interpolants else None
     if t_events is not None:
         t_ev = [np.asarray(te) for te in t_events]

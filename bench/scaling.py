@@ -1,0 +1,109 @@
+"""Wall time per simulated second and peak memory of kvrod's integrator against N.
+
+Each N runs in a fresh subprocess (``python -m bench.scaling N T rtol``) so that the peak
+resident set size (``VmHWM`` of /proc/self/status) belongs to that run alone; the child
+also reports the peak of Python/NumPy allocations during the solve (``tracemalloc``,
+measured in a second, shorter solve so that tracing does not slow the timed one). A
+0.01 s solve first warms up the process (library loading, first touches of the arrays).
+The cantilever release of :mod:`bench.integrators`, ``rtol = atol`` fixed for all N (the
+matched rtol at N = 50), output every 0.1 s. The log-log slope of time against N is a
+least-squares fit.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import resource
+import subprocess
+import sys
+import time
+import tracemalloc
+from pathlib import Path
+
+import numpy as np
+
+SIZES = (25, 50, 100, 200, 500, 1000, 2000)
+QUICK_SIZES = (25, 50)
+
+
+def _peak_rss_kib() -> float:
+    """Peak resident set of this process image (VmHWM; ru_maxrss survives exec on Linux,
+    so a child would report its parent's peak)."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return float(line.split()[1])
+    except OSError:
+        pass
+    return float(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
+
+
+def one(N: int, T: float, rtol: float) -> dict:
+    """Run in this process: static solve, release, integrate T seconds; timings, memory."""
+    from bench.integrators import cantilever
+    from runtime.integrator import solve
+
+    c = cantilever(N)
+    grid = np.linspace(0.0, T, int(round(10 * T)) + 1)
+    # warm-up (first calls: library loading, page faults of the work arrays)
+    solve(c.model, (0.0, 0.01), c.y0, c.yp0, rtol=rtol, atol=rtol)
+    t0 = time.perf_counter()
+    s = solve(c.model, (0.0, T), c.y0, c.yp0, rtol=rtol, atol=rtol, t_eval=grid)
+    wall = time.perf_counter() - t0
+    rss_kib = _peak_rss_kib()
+    Tm = min(T, 0.2)
+    tracemalloc.start()
+    solve(c.model, (0.0, Tm), c.y0, c.yp0, rtol=rtol, atol=rtol,
+          t_eval=np.linspace(0.0, Tm, 3))
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    return {"N": N, "n": c.model.n, "T": T, "rtol": rtol, "ok": bool(s.success),
+            "wall": wall, "wall_per_simulated_second": wall / T,
+            "static_seconds": c.static_seconds, **s.counters,
+            "peak_rss_MiB": rss_kib / 1024.0, "solve_tracemalloc_peak_MiB": peak / 2**20}
+
+
+def run(sizes=SIZES, T: float = 10.0, rtol: float = 1e-7, timeout: float = 600.0,
+        log=print) -> dict:
+    rows = []
+    for N in sizes:
+        cmd = [sys.executable, "-m", "bench.scaling", str(N), repr(T), repr(rtol)]
+        try:
+            p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout,
+                               check=True)
+            row = json.loads(p.stdout.strip().splitlines()[-1])
+        except (subprocess.SubprocessError, json.JSONDecodeError, IndexError) as exc:
+            row = {"N": N, "ok": False, "message": str(exc)[-300:]}
+        rows.append(row)
+        if row.get("ok"):
+            log(f"  N={N}: {row['wall']:.2f} s for {T:g} s simulated, "
+                f"{row['nstep']} steps, peak RSS {row['peak_rss_MiB']:.0f} MiB")
+        else:
+            log(f"  N={N}: failed ({row.get('message', '')})")
+    good = [r for r in rows if r.get("ok")]
+    slope = None
+    if len(good) >= 2:
+        x = np.log([r["N"] for r in good])
+        y = np.log([r["wall_per_simulated_second"] for r in good])
+        slope = float(np.polyfit(x, y, 1)[0])
+    big = [r for r in good if r["N"] >= 200]
+    slope_large = None
+    if len(big) >= 2:
+        slope_large = float(np.polyfit(np.log([r["N"] for r in big]),
+                                       np.log([r["wall_per_simulated_second"] for r in big]),
+                                       1)[0])
+    return {"T": T, "rtol": rtol, "rows": rows, "loglog_slope": slope,
+            "loglog_slope_N_ge_200": slope_large,
+            "target": {"slope_max": 1.1, "N1000_10s_max_seconds": 5.0}}
+
+
+def main(argv: list[str]) -> None:
+    N, T, rtol = int(argv[0]), float(argv[1]), float(argv[2])
+    out = one(N, T, rtol)
+    print(json.dumps({k: (None if isinstance(v, float) and not math.isfinite(v) else v)
+                      for k, v in out.items()}))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
