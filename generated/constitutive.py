@@ -1,7 +1,7 @@
 # GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 # source: derive/templates/constitutive.py.jinja
 # derivation step: isotropic_moduli, stored_energy, dissipation, naive_resultants, cross_sections
-# inputs sha256: 880d47d3f0fd051f7420929eff6862450420038cd69c1e32b12c1b7f157b5633
+# inputs sha256: 2630428d9fb95f3eab057abca7c049e90e65b4c79337ad5d888f88161402b7ad
 # tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 """Rod stiffness and damping parameters of the Kelvin-Voigt Cosserat rod.
@@ -66,7 +66,8 @@ def _check(name: str, value, key: str | None = None) -> None:
         lo = "[" if low_incl else "("
         hi = "]" if high_incl else ")"
         rng = f"{lo}{low:g}, {high:g}{hi}" if math.isfinite(high) else f"{lo}{low:g}, inf)"
-        raise ParameterError(f"{name} = {bad!r} is outside the allowed range {rng} {unit}".rstrip())
+        raise ParameterError(f"parameter {name!r} = {bad!r} is outside the allowed range: "
+                             f"{rng} {unit}".rstrip())
 
 
 
@@ -289,4 +290,5 @@ def damping_matrices(E, nu, tau_S, tau_B, A, I1, I2, I3, kappa_1=1.0, kappa_2=1.
     if route == "naive":
         return (numpy.diag([(1/2)*A*E*kappa_1*tau_S/(nu + 1), (1/2)*A*E*kappa_2*tau_S/(nu + 1), (1/3)*A*E*(tau_B + 2*tau_S)]),
                 numpy.diag([(1/3)*E*I1*(tau_B + 2*tau_S), (1/3)*E*I2*(tau_B + 2*tau_S), (1/2)*E*I3*kappa_3*tau_S/(nu + 1)]))
-    raise ParameterError(f"route = {route!r} is not one of 'consistent', 'naive'")
+    raise ParameterError(f"parameter 'route' = {route!r} is outside the allowed range: "
+                         "'consistent' or 'naive'")

@@ -24,13 +24,14 @@ import numpy as np
 from scipy.optimize import brentq
 
 from generated import rod_layout as L
-from generated.constitutive import ParameterError, retardation_time_extension
+from generated.constitutive import retardation_time_extension
 from runtime.analysis import (
     damping_ratios,
     log_decrements,
     periods,
 )
 from runtime.bdf import BDF, IntegrationError
+from runtime.errors import ParameterError
 from runtime.integrator import consistent_initial
 from runtime.rod import RodModel, RodParameters
 from runtime.statics import StaticSolveError, solve_static
@@ -48,7 +49,7 @@ def _in_range(name: str, value: float, low: float, high: float = math.inf,
     if not ok:
         lo = "[" if low_incl else "("
         hi = f"{high:g})" if math.isfinite(high) else "inf)"
-        raise ParameterError(f"{name} = {value!r} is outside the allowed range {lo}{low:g}, {hi}")
+        raise ParameterError(name, value, f"{lo}{low:g}, {hi}")
 
 
 @dataclass(frozen=True)
@@ -93,8 +94,7 @@ class CantileverScenario:
         _in_range("min_step", self.min_step, 0.0, low_incl=True)
         _in_range("tip_force", self.tip_force, -math.inf)
         if not isinstance(self.load_steps, int) or self.load_steps < 1:
-            raise ParameterError(f"load_steps = {self.load_steps!r} is outside the allowed "
-                                 "range [1, inf) (an integer)")
+            raise ParameterError("load_steps", self.load_steps, "integer >= 1")
         self.rod_parameters()  # validates the rod data (E, nu, tau, sizes, N, damping)
 
     @classmethod

@@ -117,7 +117,7 @@ def test_api_bad_input(kw, needle):
 
 def test_nu_one_half_only_where_nothing_divides_by_1_minus_2nu():
     assert np.isfinite(gc.damping_matrices(1e6, 0.5, 0.04, 0.01, 1e-4, 1e-9, 1e-9, 2e-9)[0]).all()
-    with pytest.raises(gc.ParameterError, match=r"nu = 0.5 .*\(-1, 0.5\)"):
+    with pytest.raises(gc.ParameterError, match=r"'nu' = 0.5 .*\(-1, 0.5\)"):
         gc.bulk_modulus(1e6, 0.5)
 
 

@@ -82,15 +82,15 @@ def test_sections():
 
 
 @pytest.mark.parametrize(("call", "match"), [
-    (lambda: gc.shear_modulus(-1.0, 0.3), r"E = -1.0 is outside the allowed range \(0, inf\) Pa"),
-    (lambda: gc.shear_modulus(1.0, 0.6), r"nu = 0.6 .*\(-1, 0.5\]"),
-    (lambda: gc.bulk_modulus(1.0, 0.5), r"nu = 0.5 .*\(-1, 0.5\)"),
-    (lambda: gc.shear_modulus(float("nan"), 0.3), "E = nan"),
-    (lambda: gc.extensional_viscosity(-1.0, 1.0, 0.3), "zeta = -1.0"),
-    (lambda: gc.retardation_time_extension(0.1, -0.1, 0.3), "tau_S = -0.1"),
-    (lambda: gc.rectangle_section(0.0, 0.01, 0.3), "width = 0.0"),
-    (lambda: gc.ellipse_section(0.01, float("inf"), 0.3), "b = inf"),
-    (lambda: gc.stiffness_matrices(1.0, 0.3, 1.0, 1.0, 1.0, 2.0, 1.2, 1.0, 1.0), "kappa_1 = 1.2"),
+    (lambda: gc.shear_modulus(-1.0, 0.3), r"'E' = -1.0 is outside the allowed range: \(0, inf\) Pa"),
+    (lambda: gc.shear_modulus(1.0, 0.6), r"'nu' = 0.6 .*\(-1, 0.5\]"),
+    (lambda: gc.bulk_modulus(1.0, 0.5), r"'nu' = 0.5 .*\(-1, 0.5\)"),
+    (lambda: gc.shear_modulus(float("nan"), 0.3), "'E' = nan"),
+    (lambda: gc.extensional_viscosity(-1.0, 1.0, 0.3), "'zeta' = -1.0"),
+    (lambda: gc.retardation_time_extension(0.1, -0.1, 0.3), "'tau_S' = -0.1"),
+    (lambda: gc.rectangle_section(0.0, 0.01, 0.3), "'width' = 0.0"),
+    (lambda: gc.ellipse_section(0.01, float("inf"), 0.3), "'b' = inf"),
+    (lambda: gc.stiffness_matrices(1.0, 0.3, 1.0, 1.0, 1.0, 2.0, 1.2, 1.0, 1.0), "'kappa_1' = 1.2"),
     (lambda: gc.damping_matrices(1.0, 0.3, 0.1, 0.1, 1, 1, 1, 2, route="bogus"), "route"),
 ])
 def test_bad_parameters(call, match):
