@@ -27,7 +27,7 @@ def _reissner_reference(sc) -> dict | None:
     from generated.constitutive import rectangle_section, shear_modulus
 
     sec = rectangle_section(sc.width, sc.height, sc.poisson_ratio)
-    EI = sc.youngs_modulus * sec["I1"]
+    EI = sc.youngs_modulus * sec["I2"]         # bending about a^(2) (tip force along e1)
     r = solve_reissner(sc.tip_force, L=sc.length, EA=sc.youngs_modulus * sec["A"],
                        GA=shear_modulus(sc.youngs_modulus, sc.poisson_ratio) * sec["A"]
                        * sec["kappa_1"], EI=EI)

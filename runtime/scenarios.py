@@ -26,6 +26,7 @@ from scipy.optimize import brentq
 from generated import rod_layout as L
 from generated.constitutive import retardation_time_extension
 from runtime.analysis import (
+    BETA1_L,
     damping_ratios,
     log_decrements,
     periods,
@@ -39,8 +40,6 @@ from runtime.statics import StaticSolveError, solve_static
 #: Gauss-Legendre nodes/weights on [0, 1] for the per-step energy quadrature
 _GL_X = (np.polynomial.legendre.leggauss(3)[0] + 1.0) / 2.0
 _GL_W = np.polynomial.legendre.leggauss(3)[1] / 2.0
-#: beta_1 L of the clamped-free Euler-Bernoulli beam (first root of 1 + cos cosh = 0)
-BETA1_L = 1.8751040687119611
 
 
 def _in_range(name: str, value: float, low: float, high: float = math.inf,
@@ -122,8 +121,10 @@ class CantileverScenario:
         """
         from generated.constitutive import retardation_time_extension_naive
 
+        # the tip force along e1 = a^(1) bends the rod about a^(2): stiffness E I2,
+        # I2 = <xi1^2> = height width^3 / 12 (width along xi1)
         A = self.width * self.height
-        EI = self.youngs_modulus * self.height**3 * self.width / 12.0
+        EI = self.youngs_modulus * self.height * self.width**3 / 12.0
         omega = BETA1_L**2 * math.sqrt(EI / (self.density * A * self.length**4))
         tau = self.tau_E if self.damping == "consistent" else float(
             retardation_time_extension_naive(self.tau_B, self.tau_S))

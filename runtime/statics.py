@@ -219,9 +219,11 @@ def solve_static(
                 if left > 0 and math.isfinite(r_try):
                     y, r = y_try, r_try  # tentatively accept a non-monotone step
                     continue
-                # Watchdog expired: back to the reference point, damped from there.
+                # Watchdog expired: back to the reference point, damped from there
+                # (re-evaluating its residual: ``res`` holds the rejected trial's).
                 counts["watchdog"] += 1
-                y, r, damped = ref_y, ref_r, True
+                y, damped = ref_y, True
+                r = rnorm(y)
                 continue
             alpha = 1.0
             while True:
