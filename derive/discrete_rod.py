@@ -110,6 +110,14 @@ N_PARAMS = sum(s for _, s, *_ in PARAMS)
 #: reduced coordinates of the static problem: cell 0 = dphi_0, cell i = (dtheta_i, dphi_i)
 STATIC_CELL0_FIELDS: tuple[tuple[str, int], ...] = (("phi", 3),)
 STATIC_CELL_FIELDS: tuple[tuple[str, int], ...] = (("theta", 3), ("phi", 3))
+STATIC_CELL0_SIZE = sum(s for _, s in STATIC_CELL0_FIELDS)
+STATIC_CELL_SIZE = sum(s for _, s in STATIC_CELL_FIELDS)
+STATIC_CELL_OFFSETS = _offsets(STATIC_CELL_FIELDS)
+
+
+def static_cell_start(i: int) -> int:
+    """Index of the first static unknown of cell i (cell 0: node 0's phi)."""
+    return 0 if i == 0 else STATIC_CELL0_SIZE + STATIC_CELL_SIZE * (i - 1)
 
 #: diagnostics vector: scalars then per-element arrays (sizes in multiples of N or N+1)
 DIAG_SCALARS = ("kinetic", "elastic", "dissipation_rate", "external_power")
@@ -591,25 +599,32 @@ def static_bandwidths(n_elements: int) -> tuple[int, int]:
     sp = ca.jacobian(f(y, yp, f.sx_in(2)), y).sparsity()
     rows, cols = sp.get_triplet()
 
+    off, soff = CELL_OFFSETS, STATIC_CELL_OFFSETS
+    c0 = CELL0_OFFSETS
+
     def static_cols(k):
         """static columns a dynamic column k maps to (p -> the 3 dtheta of its segment)."""
         if k < CELL0_SIZE:
-            return [k] if k < 3 else []
+            return [k - c0["phi"]] if c0["phi"] <= k < c0["phi"] + 3 else []
         i, o = divmod(k - CELL0_SIZE, CELL_SIZE)
-        base = 3 + 6 * i
-        if o < 4:
-            return [base, base + 1, base + 2]
-        return [base + 3 + o - 7] if 7 <= o < 10 else []
+        base = static_cell_start(i + 1)
+        if off["p"] <= o < off["p"] + 4:
+            return [base + soff["theta"] + j for j in range(3)]
+        if off["phi"] <= o < off["phi"] + 3:
+            return [base + soff["phi"] + o - off["phi"]]
+        return []
 
     def static_row(k):
         """static row of a dynamic momentum row k (None for kinematic rows)."""
         if k < CELL0_SIZE:
-            return k - 3 if k >= 3 else None
+            return k - c0["v"] if c0["v"] <= k < c0["v"] + 3 else None
         i, o = divmod(k - CELL0_SIZE, CELL_SIZE)
-        base = 3 + 6 * i
-        if 4 <= o < 7:
-            return base + o - 4
-        return base + 3 + o - 10 if o >= 10 else None
+        base = static_cell_start(i + 1)
+        if off["Omega"] <= o < off["Omega"] + 3:
+            return base + soff["theta"] + o - off["Omega"]
+        if off["v"] <= o < off["v"] + 3:
+            return base + soff["phi"] + o - off["v"]
+        return None
 
     kl = ku = 0
     for r, c in zip(rows, cols, strict=True):

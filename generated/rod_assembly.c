@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_assembly.c.jinja
 // derivation step: discrete_rod
-// inputs sha256: 6c7a462f70d008bbbaba0115cf087e11ed066fa1e352600f3f731cc576b82584
+// inputs sha256: 44a96a6a26db567e3b5b609e2024bdf98ff089d81f1ddc7591dad2505db52b90
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*

@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_assembly.h.jinja
 // derivation step: discrete_rod
-// inputs sha256: 97964668e40e9da8a3af15f25b44b6e2481ccc0b2d7d4a3698257f667d5c92de
+// inputs sha256: 0642b256e9cead5361d59e1dd3ccbe3519a8fca84b3c47e84a376b9888571a18
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*

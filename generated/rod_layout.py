@@ -1,7 +1,7 @@
 # GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 # source: derive/templates/rod_layout.py.jinja
 # derivation step: discrete_rod
-# inputs sha256: c3f413f1167aaf801b9cb8422151a5996f46ede5b9bee1c4911a8c73c1963b88
+# inputs sha256: 2aa1d165372b5a8960abe44358dfcee6c105f4d2be5da8ccf84b091604dcbddd
 # tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 """State, parameter and diagnostics layout of the discrete rod (the one place that owns it).
@@ -49,6 +49,7 @@ _BANDWIDTHS_SMALL = {1: (18, 15)}
 
 STATIC_CELL0_SIZE = 3
 STATIC_CELL_SIZE = 6
+STATIC_CELL_OFFSETS = {'theta': 0, 'phi': 3}
 STATIC_KL = 8
 STATIC_KU = 8
 
@@ -98,6 +99,21 @@ def n_static(n_elements: int) -> int:
 def cell_start(i: int) -> int:
     """Index of the first unknown of cell i in y."""
     return 0 if i == 0 else CELL0_SIZE + CELL_SIZE * (i - 1)
+
+
+def static_cell_start(i: int) -> int:
+    """Index of the first static unknown of cell i (cell 0: node 0's phi)."""
+    return 0 if i == 0 else STATIC_CELL0_SIZE + STATIC_CELL_SIZE * (i - 1)
+
+
+def static_theta(i: int) -> int:
+    """Index of the rotation increment theta of segment i >= 1 in the static vector."""
+    return static_cell_start(i) + STATIC_CELL_OFFSETS["theta"]
+
+
+def static_phi(i: int) -> int:
+    """Index of node i's position in the static vector."""
+    return 0 if i == 0 else static_cell_start(i) + STATIC_CELL_OFFSETS["phi"]
 
 
 def bandwidths(n_elements: int) -> tuple[int, int]:

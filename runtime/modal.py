@@ -118,8 +118,7 @@ def _fixed_static_dofs(model: RodModel) -> list[int]:
     N = model.N
     fixed = [] if model.start == "free" else [0, 1, 2]
     if model.end != "free":
-        k = 3 + 6 * (N - 1) + 3
-        fixed += [k, k + 1, k + 2]
+        fixed += [int(k) for k in model.static_phi_cols[N]]
     return fixed
 
 
@@ -158,8 +157,8 @@ def linearize(model: RodModel, y_eq: np.ndarray | None = None,
         raise ValueError(f"y_eq must have shape ({model.n},), got {y0.shape}")
     if not np.all(np.isfinite(y0)):
         raise ValueError("y_eq contains non-finite values")
-    y0[model._vel_mask] = 0.0
-    p = model._p_idx  # (N, 4)
+    y0[model.velocity_mask] = 0.0
+    p = model.p_index  # (N, 4)
     pq = y0[p]
     y0[p] = pq / np.linalg.norm(pq, axis=1)[:, None]
     _check_equilibrium(model, y0, equilibrium_rtol)
@@ -167,16 +166,15 @@ def linearize(model: RodModel, y_eq: np.ndarray | None = None,
     Fy = model.dF_dy_sparse(0.0, y0, zero).tocsr()
     Fp = model.dF_dyp_sparse(0.0, y0, zero).tocsr()
     ns = model.n_static
-    T = model._static_tangent(y0).tocsc()  # positions/rotations -> dy
+    T = model.static_tangent(y0).tocsc()  # positions/rotations -> dy
     # velocities in the static layout: node 0 v, then per cell (Omega_i, v_i)
-    vel_rows = model._static_rows  # the same state indices (v and Omega entries)
+    vel_rows = model.static_rows  # the same state indices (v and Omega entries)
     S = sp.csc_matrix((np.ones(ns), (vel_rows, np.arange(ns))), shape=(model.n, ns))
     mom = vel_rows  # momentum rows: rows of v (linear) and Omega (angular momentum)
     # kinematic rows: phi rows as they are, quaternion rows projected with 4 G(p)^T
-    N = model.N
-    th_dofs = ((3 + 6 * np.arange(N))[:, None] + np.arange(3)).ravel()
-    ph_dofs = model._static_phi_cols.ravel()
-    Pphi = sp.csr_matrix((np.ones(ph_dofs.size), (ph_dofs, model._phi_idx.ravel())),
+    th_dofs = model.static_theta_cols.ravel()
+    ph_dofs = model.static_phi_cols.ravel()
+    Pphi = sp.csr_matrix((np.ones(ph_dofs.size), (ph_dofs, model.phi_index.ravel())),
                          shape=(ns, model.n))
     Rth = sp.csr_matrix((np.ones(th_dofs.size), (th_dofs, np.arange(th_dofs.size))),
                         shape=(ns, th_dofs.size))
@@ -274,8 +272,8 @@ def _strain_vectors(lin: Linearization, Q: np.ndarray) -> list[np.ndarray]:
     comps: list[list[np.ndarray]] = [[] for _ in range(6)]
     for k in range(Q.shape[1]):
         dx = lin.expand(Q[:, k])
-        th = dx[(3 + 6 * np.arange(N))[:, None] + np.arange(3)]
-        scale = max(float(np.max(np.abs(dx[model._static_phi_cols.ravel()]))) / L,
+        th = dx[model.static_theta_cols]
+        scale = max(float(np.max(np.abs(dx[model.static_phi_cols.ravel()]))) / L,
                     float(np.max(np.abs(th))), 1e-300)
         eps = 1e-6 / scale
         sp_ = model.diagnostics(0.0, model.static_retract(lin.y_eq, eps * dx))["strains"]
@@ -492,7 +490,6 @@ def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int =
                                                             "gravity"))
     analytic_ok = (reference and straight and not (loaded and model.load_scale != 0)
                    and model.start == "clamped" and model.end == "free")
-    N = model.N
     modes: list[Mode] = []
     family_count: dict[str, int] = {}
     Cd = lin.C
@@ -506,8 +503,8 @@ def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int =
         phi = Phi[:, k]
         zm = float(phi @ (Cd @ phi)) / (2 * omega[k]) if omega[k] > 0 else math.inf
         dx = lin.expand(phi)
-        disp = np.vstack([dx[0:3]] + [dx[3 + 6 * i + 3:3 + 6 * i + 6] for i in range(N)]).T
-        rot = np.vstack([dx[3 + 6 * i:3 + 6 * i + 3] for i in range(N)]).T
+        disp = dx[model.static_phi_cols].T
+        rot = dx[model.static_theta_cols].T
         modes.append(Mode(index=k + 1, family=fam, family_index=family_count[fam],
                           omega=float(omega[k]), eigenvalues=(l1, l2), zeta=float(zeta),
                           omega_damped=float(abs(l1.imag)), zeta_modal=zm,

@@ -468,8 +468,11 @@ class RodModel:
             + [np.r_[_i_om(i):_i_om(i) + 3, _i_v(i):_i_v(i) + 3] for i in range(1, N + 1)])
         self._phi_idx = _r3([_i_phi(i) for i in nodes])
         self._p_idx = _r4([_i_p(i) for i in range(1, N + 1)])
-        self._static_phi_cols = np.array([0] + [3 + 6 * (i - 1) + 3
-                                                for i in range(1, N + 1)])[:, None] + np.arange(3)
+        # static unknowns (reduced coordinates) from the layout module
+        self._static_phi_cols = np.array([L.static_phi(i) for i in nodes])[:, None] \
+            + np.arange(3)
+        self._static_theta_cols = np.array([L.static_theta(i) for i in range(1, N + 1)])[
+            :, None] + np.arange(3)
         fixed_cols = [] if start == "free" else [0, 1, 2]
         fixed_cols += [] if end == "free" else list(self._static_phi_cols[-1])
         self._static_fixed = sp.csr_matrix(
@@ -701,12 +704,46 @@ class RodModel:
         Lm[:, 1:, :] = p0[:, None, None] * np.eye(3) + qx
         Lm *= 0.5
         rows_p = np.broadcast_to(self._p_idx[:, :, None], (N, 4, 3))
-        cols_p = np.broadcast_to((3 + 6 * np.arange(N))[:, None, None] + np.arange(3),
-                                 (N, 4, 3))
+        cols_p = np.broadcast_to(self._static_theta_cols[:, None, :], (N, 4, 3))
         rows = np.concatenate([self._phi_idx.ravel(), rows_p.ravel()])
         cols = np.concatenate([self._static_phi_cols.ravel(), cols_p.ravel()])
         vals = np.concatenate([np.ones(self._phi_idx.size), Lm.ravel()])
         return sp.csc_matrix((vals, (rows, cols)), shape=(self.n, self.n_static))
+
+    # -- index maps for linearisations (modal analysis) ------------------------------
+    @property
+    def phi_index(self) -> np.ndarray:
+        """State indices of the node positions, shape (N+1, 3)."""
+        return self._phi_idx
+
+    @property
+    def p_index(self) -> np.ndarray:
+        """State indices of the segment quaternions, shape (N, 4)."""
+        return self._p_idx
+
+    @property
+    def velocity_mask(self) -> np.ndarray:
+        """Boolean mask of the velocity unknowns (v, Omega) in y."""
+        return self._vel_mask
+
+    @property
+    def static_rows(self) -> np.ndarray:
+        """State/residual indices of the momentum rows, in static-vector order."""
+        return self._static_rows
+
+    @property
+    def static_phi_cols(self) -> np.ndarray:
+        """Static-vector indices of the node positions, shape (N+1, 3)."""
+        return self._static_phi_cols
+
+    @property
+    def static_theta_cols(self) -> np.ndarray:
+        """Static-vector indices of the segment rotation increments, shape (N, 3)."""
+        return self._static_theta_cols
+
+    def static_tangent(self, y: np.ndarray) -> sp.csc_matrix:
+        """dy/d(dphi, dtheta) at y: the map from static increments to state changes."""
+        return self._static_tangent(y)
 
     def static_jacobian_sparse(self, y: np.ndarray) -> sp.csc_matrix:
         """d(static residual)/d(dphi, dtheta) at dx = 0 (CSC)."""
@@ -725,15 +762,11 @@ class RodModel:
 
     def static_retract(self, y: np.ndarray, dx: np.ndarray) -> np.ndarray:
         """New state: phi += dphi, p <- p*exp(dtheta/2) renormalised; velocities kept."""
-        N = self.N
         y1 = np.array(y, dtype=float)
-        dphi = np.empty((N + 1, 3))
-        dphi[0] = dx[0:3]
-        cells = dx[3:].reshape(N, 6)
-        dphi[1:] = cells[:, 3:]
-        y1[self._phi_idx] += dphi
+        dx = np.asarray(dx)
+        y1[self._phi_idx] += dx[self._static_phi_cols]
         p = y1[self._p_idx]
-        p = quat_mul(p, quat_exp(cells[:, :3]))
+        p = quat_mul(p, quat_exp(dx[self._static_theta_cols]))
         y1[self._p_idx] = p / np.linalg.norm(p, axis=1)[:, None]
         return y1
 
