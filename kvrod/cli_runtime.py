@@ -40,7 +40,8 @@ def scenario_from_args(args):
             kw[name] = getattr(args, name)
     for name, attr in (("youngs_modulus", "E"), ("tip_force", "tip_force"),
                        ("n_elements", "n_elements"), ("t_end", "t_end"), ("rtol", "rtol"),
-                       ("damping", "damping"), ("poisson_ratio", "nu")):
+                       ("damping", "damping"), ("poisson_ratio", "nu"),
+                       ("max_order", "max_order")):
         v = getattr(args, attr)
         if v is not None:
             kw[name] = v
@@ -172,6 +173,8 @@ def add_commands(sub, parser_class) -> None:
     s.add_argument("--n-elements", dest="n_elements", type=int, help="elements (default 50)")
     s.add_argument("--t-end", dest="t_end", type=float, help="simulated time [s] (10)")
     s.add_argument("--rtol", type=float, help="relative tolerance (1e-6)")
+    s.add_argument("--max-order", dest="max_order", type=int,
+                   help="highest BDF order 1-5 (default 5)")
     s.add_argument("--damping", choices=("consistent", "naive"),
                    help="extensional viscosity eta_E (consistent) or eta~_E (naive)")
     s.add_argument("--out", default="results/cantilever", help="results folder")
