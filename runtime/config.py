@@ -70,17 +70,25 @@ def parameters_from_mapping(path: Path, params: dict, scenario: str = "cantileve
     return out
 
 
-def load_config(path: Path) -> tuple[str, dict]:
-    """(scenario name, scenario keyword arguments) from a TOML file."""
+def read_toml(path: Path, error: type[ValueError] = ValueError,
+              what: str = "config file") -> tuple[dict, str]:
+    """(parsed document, text) of a TOML file; ``error`` (one line naming the file) when it
+    cannot be read or parsed."""
     path = Path(path)
     try:
         text = path.read_text()
     except OSError as exc:
-        raise ConfigError(f"{path}: cannot read the config file ({exc.strerror})") from exc
+        raise error(f"{path}: cannot read the {what} ({exc.strerror})") from exc
     try:
-        doc = tomllib.loads(text)
+        return tomllib.loads(text), text
     except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{path}: malformed TOML: {exc}") from exc
+        raise error(f"{path}: malformed TOML: {exc}") from exc
+
+
+def load_config(path: Path) -> tuple[str, dict]:
+    """(scenario name, scenario keyword arguments) from a TOML file."""
+    path = Path(path)
+    doc, _ = read_toml(path, ConfigError)
     name = doc.pop("scenario", "cantilever")
     if name not in SCENARIOS:
         raise ConfigError(f"{path}: unknown scenario {name!r}; scenarios are: "

@@ -55,7 +55,6 @@ import os
 import re
 import socket
 import time
-import tomllib
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -236,15 +235,10 @@ def study_from_dict(data: Mapping[str, Any], name: str = "study", source: str = 
 
 def load_study(path: str | os.PathLike) -> Study:
     """Read a study TOML file (StudyError for a malformed file or unknown parameter)."""
+    from runtime.config import read_toml
+
     path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise StudyError(f"cannot read the study file {str(path)!r}: {exc.strerror}") from exc
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise StudyError(f"{path}: invalid TOML: {exc}") from exc
+    data, text = read_toml(path, StudyError, "study file")
     return study_from_dict(data, name=path.stem, source=text)
 
 
