@@ -639,14 +639,7 @@ class RodModel:
         return self._sparse(t, y, yp, 0.0, 1.0)
 
     # -- diagnostics --------------------------------------------------------------------
-    def diagnostics(self, t: float, y: np.ndarray, yp: np.ndarray | None = None) -> dict:
-        """Energies and resultants of state y.
-
-        Returns kinetic T (J), elastic W (J), dissipation_rate 2D (W), external_power (W),
-        strains V (3, N) on segments and U (3, N+1) at joints (joint j at node j; the
-        clamp joints j = 0, N are zero when absent), material resultants F (3, N) (N) and
-        M (3, N+1) (N m), each elastic + viscous (eq. (1)).
-        """
+    def _eval_diagnostics(self, t: float, y: np.ndarray, yp: np.ndarray | None) -> np.ndarray:
         out = self._diag
         if self._lib is not None:
             n = self.n
@@ -657,6 +650,24 @@ class RodModel:
                 raise RuntimeError(f"kvrod_diagnostics failed ({rc})")
         else:
             self._casadi.diagnostics(self._par, y, out)
+        return out
+
+    def energy_scalars(self, t: float, y: np.ndarray,
+                       yp: np.ndarray | None = None) -> tuple[float, float, float, float]:
+        """(T, W, 2D, P_ext) of state y in J, J, W, W — the scalars of :meth:`diagnostics`
+        without building its per-element arrays (the energy audit calls this per step)."""
+        out = self._eval_diagnostics(t, y, yp)
+        return float(out[0]), float(out[1]), float(out[2]), float(out[3])
+
+    def diagnostics(self, t: float, y: np.ndarray, yp: np.ndarray | None = None) -> dict:
+        """Energies and resultants of state y.
+
+        Returns kinetic T (J), elastic W (J), dissipation_rate 2D (W), external_power (W),
+        strains V (3, N) on segments and U (3, N+1) at joints (joint j at node j; the
+        clamp joints j = 0, N are zero when absent), material resultants F (3, N) (N) and
+        M (3, N+1) (N m), each elastic + viscous (eq. (1)).
+        """
+        out = self._eval_diagnostics(t, y, yp)
         N, ns = self.N, len(L.DIAG_SCALARS)
         res = {name: float(out[k]) for k, name in enumerate(L.DIAG_SCALARS)}
         V = out[ns:ns + 3 * N].reshape(N, 3).T.copy()

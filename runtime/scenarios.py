@@ -275,8 +275,7 @@ def run_cantilever(scenario: CantileverScenario,
     counters0: dict[str, int] = {}
 
     def energies(y, yp):
-        d = model.diagnostics(0.0, y, yp)
-        return d["kinetic"], d["elastic"], d["dissipation_rate"], d["external_power"]
+        return model.energy_scalars(0.0, y, yp)
 
     def record(tq, y, yp, diss_q, work_q):
         T, W, _, _ = energies(y, yp)
