@@ -11,7 +11,6 @@ from __future__ import annotations
 import argparse
 import datetime
 import json
-import math
 import os
 import platform
 import sys
@@ -23,24 +22,14 @@ import numpy as np
 import scipy
 
 from bench import codegen_timing, integrators, peers, report, scaling
+from runtime.results import jsonable
 
 FULL_N = (25, 50, 200, 1000)
 QUICK_N = (25, 50)
 
 
 def _clean(obj):
-    if isinstance(obj, dict):
-        return {str(k): _clean(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_clean(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _clean(obj.tolist())
-    if isinstance(obj, (np.floating, float)):
-        v = float(obj)
-        return v if math.isfinite(v) else None
-    if isinstance(obj, np.integer):
-        return int(obj)
-    return obj
+    return jsonable(obj, nonfinite="null")
 
 
 def _write(path: Path, text: str) -> None:

@@ -15,16 +15,20 @@ from typing import Any
 import numpy as np
 
 
-def jsonable(obj: Any) -> Any:
+def jsonable(obj: Any, nonfinite: str = "string") -> Any:
+    """``obj`` with NumPy scalars/arrays as plain Python; non-finite floats as strings
+    (``nonfinite="string"``: "nan", "inf") or as None (``"null"``), since JSON has neither."""
     if isinstance(obj, dict):
-        return {str(k): jsonable(v) for k, v in obj.items()}
+        return {str(k): jsonable(v, nonfinite) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
-        return [jsonable(v) for v in obj]
+        return [jsonable(v, nonfinite) for v in obj]
     if isinstance(obj, np.ndarray):
-        return jsonable(obj.tolist())
+        return jsonable(obj.tolist(), nonfinite)
     if isinstance(obj, (np.floating, float)):
         v = float(obj)
-        return v if math.isfinite(v) else str(v)
+        if math.isfinite(v):
+            return v
+        return str(v) if nonfinite == "string" else None
     if isinstance(obj, np.integer):
         return int(obj)
     return obj
