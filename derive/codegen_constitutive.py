@@ -63,12 +63,36 @@ class _Printer(NumPyPrinter):
         super().__init__({"fully_qualified_modules": True, "strict": True})
 
 
+#: viscous parameters: a damping coefficient is linear in these, and is printed as a sum of
+#: one term per parameter with a factored coefficient
+_VISCOUS = ("tau_B", "tau_S", "zeta", "eta")
+
+
+def stable_form(expr: sp.Basic) -> sp.Basic:
+    """``expr`` regrouped for floating-point evaluation: one term per viscous parameter with a
+    factored material coefficient.
+
+    Why: SymPy's expanded forms write the bulk part as ``2 nu tau_B - tau_B``, which cancels
+    catastrophically as nu -> 1/2 (relative error O(1) at nu = 1/2 - 1 ulp), while
+    ``tau_B (1 - 2 nu)`` keeps full relative accuracy. The regrouping is an identity, checked.
+    """
+    names = {s.name: s for s in expr.free_symbols}
+    viscous = [names[n] for n in _VISCOUS if n in names]
+    if not viscous:
+        return expr
+    grouped = sp.collect(sp.expand(expr), viscous, sp.factor)
+    if sp.simplify(grouped - expr) != 0:
+        raise AssertionError(f"regrouping changed {expr} into {grouped}")
+    return grouped
+
+
 def code(expr: sp.Basic, allowed: set[sp.Symbol]) -> str:
-    """Python source of ``expr``; refuses expressions with symbols outside ``allowed``."""
+    """Python source of ``expr`` in its :func:`stable_form`; refuses expressions with symbols
+    outside ``allowed``."""
     extra = expr.free_symbols - allowed
     if extra:
         raise ValueError(f"expression {expr} has symbols {extra} outside {allowed}")
-    return _Printer().doprint(expr)
+    return _Printer().doprint(stable_form(expr))
 
 
 def _fn(name, args, doc, step, eqs, arg_docs, returns, expr, checks):

@@ -1,7 +1,7 @@
 # GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 # source: derive/templates/constitutive.py.jinja
 # derivation step: isotropic_moduli, stored_energy, dissipation, naive_resultants, cross_sections
-# inputs sha256: 2630428d9fb95f3eab057abca7c049e90e65b4c79337ad5d888f88161402b7ad
+# inputs sha256: 025cb86b3b72dad34cd0d331ecbb066e2ed78c15ab3100736c18e645a8c582b1
 # tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 """Rod stiffness and damping parameters of the Kelvin-Voigt Cosserat rod.
@@ -285,10 +285,10 @@ def damping_matrices(E, nu, tau_S, tau_B, A, I1, I2, I3, kappa_1=1.0, kappa_2=1.
     _check("tau_S", tau_S)
     _check("tau_B", tau_B)
     if route == "consistent":
-        return (numpy.diag([(1/2)*A*E*kappa_1*tau_S/(nu + 1), (1/2)*A*E*kappa_2*tau_S/(nu + 1), -1/3*A*E*(2*nu*tau_B - 2*nu*tau_S - tau_B - 2*tau_S)]),
-                numpy.diag([-1/3*E*I1*(2*nu*tau_B - 2*nu*tau_S - tau_B - 2*tau_S), -1/3*E*I2*(2*nu*tau_B - 2*nu*tau_S - tau_B - 2*tau_S), (1/2)*E*I3*kappa_3*tau_S/(nu + 1)]))
+        return (numpy.diag([(1/2)*A*E*kappa_1*tau_S/(nu + 1), (1/2)*A*E*kappa_2*tau_S/(nu + 1), -1/3*A*E*tau_B*(2*nu - 1) + (2/3)*A*E*tau_S*(nu + 1)]),
+                numpy.diag([-1/3*E*I1*tau_B*(2*nu - 1) + (2/3)*E*I1*tau_S*(nu + 1), -1/3*E*I2*tau_B*(2*nu - 1) + (2/3)*E*I2*tau_S*(nu + 1), (1/2)*E*I3*kappa_3*tau_S/(nu + 1)]))
     if route == "naive":
-        return (numpy.diag([(1/2)*A*E*kappa_1*tau_S/(nu + 1), (1/2)*A*E*kappa_2*tau_S/(nu + 1), (1/3)*A*E*(tau_B + 2*tau_S)]),
-                numpy.diag([(1/3)*E*I1*(tau_B + 2*tau_S), (1/3)*E*I2*(tau_B + 2*tau_S), (1/2)*E*I3*kappa_3*tau_S/(nu + 1)]))
+        return (numpy.diag([(1/2)*A*E*kappa_1*tau_S/(nu + 1), (1/2)*A*E*kappa_2*tau_S/(nu + 1), (1/3)*A*E*tau_B + (2/3)*A*E*tau_S]),
+                numpy.diag([(1/3)*E*I1*tau_B + (2/3)*E*I1*tau_S, (1/3)*E*I2*tau_B + (2/3)*E*I2*tau_S, (1/2)*E*I3*kappa_3*tau_S/(nu + 1)]))
     raise ParameterError(f"parameter 'route' = {route!r} is outside the allowed range: "
                          "'consistent' or 'naive'")
