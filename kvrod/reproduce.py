@@ -110,7 +110,9 @@ def reproduce(out: Path, n_elements: int = 100, t_end: float = 10.0,
     tmp.replace(notes)
     import shutil
 
-    (notes.parent / "figures").mkdir(exist_ok=True)
-    for f in figs.glob("*.png"):
-        shutil.copyfile(f, notes.parent / "figures" / f.name)
+    dest = notes.parent / "figures"
+    dest.mkdir(exist_ok=True)
+    if dest.resolve() != figs.resolve():  # notes written next to the run's own figures
+        for f in figs.glob("*.png"):
+            shutil.copyfile(f, dest / f.name)
     return notes

@@ -46,3 +46,16 @@ def test_derive_notes(tmp_path):
     text = out.read_text()
     assert "eta_E" in text and "(\\eta_E - \\tilde\\eta_E)" in text
     assert "**DIFFERS**" not in text
+
+
+def test_reproduce_coarse_notes_beside_the_runs(tmp_path):
+    """A coarse `kvrod reproduce` whose notes sit in its own results folder (the figures are
+    already there: nothing to copy) writes the report with the three tau rows."""
+    out = tmp_path / "rep"
+    r = run_cli("reproduce", "--n-elements", "8", "--t-end", "4", "--out", str(out),
+                "--notes", str(out / "reproduction.md"), "--skip-derive")
+    assert r.returncode == 0, r.stderr[-2000:]
+    text = (out / "reproduction.md").read_text()
+    for tau in ("0.02", "0.04", "0.08"):
+        assert f"\n| {tau} |" in text
+    assert (out / "figures" / "fig3_tip.png").stat().st_size > 0
