@@ -1,7 +1,9 @@
 """``python -m bench [--quick] [--out DIR]``: every benchmark, JSON + Markdown.
 
 Writes ``DIR/integrators.json``, ``scaling.json``, ``codegen.json``, ``peers.json``,
-``kernels.json`` (+ ``kernels.md``) and ``README.md`` (all tables). ``--quick``: N = 25, 50,
+``kernels.json`` (+ ``kernels.md``), ``energy_audit.json`` and ``README.md`` (all tables).
+``--only SECTION`` (repeatable) reruns just those sections and rebuilds the README from
+the JSON of the others. ``--quick``: N = 25, 50,
 2 s simulated, IDAS without jit, no SciPy Radau / codegen / PyElastica / kernel table
 (under a minute).
 """
@@ -21,7 +23,7 @@ import casadi
 import numpy as np
 import scipy
 
-from bench import codegen_timing, integrators, peers, report, scaling
+from bench import codegen_timing, energy_audit, integrators, peers, report, scaling
 from runtime.results import jsonable
 
 FULL_N = (25, 50, 200, 1000)
@@ -81,42 +83,73 @@ def run_integrators(quick: bool) -> dict:
     return doc
 
 
-def run_all(quick: bool = False, out_dir: Path = Path("bench/results")) -> dict:
-    """Run every benchmark and write the JSON documents and README.md into ``out_dir``."""
+SECTIONS = ("integrators", "scaling", "codegen", "peers", "kernels", "energy_audit")
+
+
+def _load(out_dir: Path, name: str) -> dict | None:
+    path = out_dir / f"{name}.json"
+    return json.loads(path.read_text()) if path.exists() else None
+
+
+def run_all(quick: bool = False, out_dir: Path = Path("bench/results"),
+            only: tuple[str, ...] | None = None) -> dict:
+    """Run the benchmarks and write the JSON documents and README.md into ``out_dir``.
+
+    only: run just these sections (names in SECTIONS); the README then takes the other
+    sections from the JSON documents already in ``out_dir`` (and says which were rerun).
+    """
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
+    bad = sorted(set(only or ()) - set(SECTIONS))
+    if bad:
+        raise ValueError(f"only = {bad} is outside the allowed range: {', '.join(SECTIONS)}")
+    chosen = tuple(only) if only else SECTIONS
     t0 = time.perf_counter()
     docs: dict = {}
-    _log("== integrators: kvrod vs IDAS vs SciPy at matched accuracy")
-    docs["integrators"] = run_integrators(quick)
-    _write(out_dir / "integrators.json", json.dumps(_clean(docs["integrators"]), indent=1))
-    rtol = 1e-7
-    for r in docs["integrators"]["runs"]:
-        if r["N"] == 50 and r["kvrod"]["matched"]:
-            rtol = r["kvrod"]["matched"]["rtol"]
-    _log("== scaling in N")
-    docs["scaling"] = scaling.run(scaling.QUICK_SIZES if quick else scaling.SIZES,
-                                  T=2.0 if quick else 10.0, rtol=rtol, log=_log)
-    _write(out_dir / "scaling.json", json.dumps(_clean(docs["scaling"]), indent=1))
-    if not quick:
-        _log("== derivation / generate / compile")
-        docs["codegen"] = codegen_timing.run(log=_log)
-        _write(out_dir / "codegen.json", json.dumps(_clean(docs["codegen"]), indent=1))
-        _log("== PyElastica")
-        docs["peers"] = peers.run(log=_log)
-        _write(out_dir / "peers.json", json.dumps(_clean(docs["peers"]), indent=1))
-        _log("== generated kernels")
-        from bench import kernels
 
-        docs["kernels"] = kernels.run()
-        _write(out_dir / "kernels.json", json.dumps(_clean(docs["kernels"]), indent=2) + "\n")
-        _write(out_dir / "kernels.md", kernels.markdown(docs["kernels"]))
+    def keep(name: str, doc: dict) -> None:
+        docs[name] = doc
+        _write(out_dir / f"{name}.json", json.dumps(_clean(doc), indent=1))
+
+    if "integrators" in chosen:
+        _log("== integrators: kvrod vs IDAS vs SciPy at matched accuracy")
+        keep("integrators", run_integrators(quick))
+    if "scaling" in chosen:
+        rtol = 1e-7
+        for r in (docs.get("integrators") or _load(out_dir, "integrators") or {}).get("runs", []):
+            if r["N"] == 50 and r["kvrod"]["matched"]:
+                rtol = r["kvrod"]["matched"]["rtol"]
+        _log("== scaling in N")
+        keep("scaling", scaling.run(scaling.QUICK_SIZES if quick else scaling.SIZES,
+                                    T=2.0 if quick else 10.0, rtol=rtol, log=_log))
+    if not quick:
+        if "codegen" in chosen:
+            _log("== derivation / generate / compile")
+            keep("codegen", codegen_timing.run(log=_log))
+        if "peers" in chosen:
+            _log("== PyElastica")
+            keep("peers", peers.run(log=_log))
+        if "kernels" in chosen:
+            _log("== generated kernels")
+            from bench import kernels
+
+            keep("kernels", kernels.run())
+            _write(out_dir / "kernels.md", kernels.markdown(docs["kernels"]))
+        if "energy_audit" in chosen:
+            _log("== energy audit: kvrod vs IDAS")
+            keep("energy_audit", energy_audit.run(log=_log))
+    for name in SECTIONS:
+        if name not in docs and only and not quick:
+            loaded = _load(out_dir, name)
+            if loaded is not None:
+                docs[name] = loaded
     docs["meta"] = {"quick": quick, "platform": platform.platform(), "cpus": os.cpu_count(),
                     "python": platform.python_version(), "numpy": np.__version__,
                     "scipy": scipy.__version__, "casadi": casadi.__version__,
                     "pyelastica": peers.available(),
                     "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
-                    "seconds": time.perf_counter() - t0}
+                    "seconds": time.perf_counter() - t0,
+                    "sections_run": [n for n in SECTIONS if n in chosen]}
     md = report.markdown(docs)
     _write(out_dir / "README.md", md)
     _log(md)
@@ -127,8 +160,12 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m bench", description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="N = 25, 50, 2 s; under a minute")
     ap.add_argument("--out", default="bench/results", help="results folder")
+    ap.add_argument("--only", action="append", choices=SECTIONS,
+                    help="run only this section (repeatable); the others are read back "
+                         "from the JSON in --out")
     args = ap.parse_args(argv)
-    run_all(quick=args.quick, out_dir=Path(args.out))
+    run_all(quick=args.quick, out_dir=Path(args.out),
+            only=tuple(args.only) if args.only else None)
     return 0
 
 

@@ -83,15 +83,17 @@ class Cantilever:
         return np.linspace(0.0, T, int(round(OUT_PER_SECOND * T)) + 1)
 
 
-_CACHE: dict[int, Cantilever] = {}
+_CACHE: dict[tuple[int, float | None], Cantilever] = {}
 _REFS: dict[tuple[int, float], np.ndarray] = {}  # reference tip x per (N, T)
 
 
-def cantilever(N: int) -> Cantilever:
-    """The paper's cantilever with N elements, statically deflected and released."""
-    if N in _CACHE:
-        return _CACHE[N]
-    model = RodModel(RodParameters(n_elements=N, **PAPER), tip_force=TIP_FORCE)
+def cantilever(N: int, tau: float | None = None) -> Cantilever:
+    """The paper's cantilever with N elements, statically deflected and released;
+    tau (s): tau_S = tau_B = tau instead of PAPER's 0.04 s."""
+    if (N, tau) in _CACHE:
+        return _CACHE[N, tau]
+    par = PAPER if tau is None else {**PAPER, "tau_S": tau, "tau_B": tau}
+    model = RodModel(RodParameters(n_elements=N, **par), tip_force=TIP_FORCE)
     t0 = time.perf_counter()
     st = solve_static(model, model.initial_state())
     ts = time.perf_counter() - t0
@@ -99,7 +101,7 @@ def cantilever(N: int) -> Cantilever:
     y0, yp0 = consistent_initial(model, 0.0, st.y, np.zeros(model.n))
     tip_x = int(model.tip_position(np.arange(model.n, dtype=float))[0])
     c = Cantilever(N, model, y0, yp0, tip_x, ts, model.tip_position(st.y))
-    _CACHE[N] = c
+    _CACHE[N, tau] = c
     return c
 
 

@@ -192,6 +192,9 @@ def markdown(docs: dict) -> str:
              f"{meta['cpus']} CPUs, Python {meta['python']}, NumPy {meta['numpy']}, SciPy "
              f"{meta['scipy']}, CasADi {meta['casadi']}; {meta['date']}; total "
              f"{meta['seconds']:.0f} s.", ""]
+    if meta.get("sections_run") and len(meta["sections_run"]) < 6 and not meta["quick"]:
+        lines += [f"This run: {', '.join(meta['sections_run'])}; the other sections are read "
+                  "back from their JSON in this folder (earlier runs, same machine).", ""]
     if meta["quick"]:
         lines += ["Quick mode: N = 25, 50 only, 2 s simulated, IDAS on the expanded (SX) "
                   "function (no jit compile), no SciPy Radau, no codegen timing, no "
@@ -206,4 +209,8 @@ def markdown(docs: dict) -> str:
         lines += peers_md(docs["peers"])
     if "kernels" in docs:
         lines += kernels_md(docs["kernels"])
+    if "energy_audit" in docs:
+        from bench.energy_audit import markdown as energy_md
+
+        lines += energy_md(docs["energy_audit"])
     return "\n".join(lines).rstrip() + "\n"

@@ -139,7 +139,11 @@ def _cmd_bench(args) -> int:
         raise CliError(f"kvrod bench: the bench/ package is not available ({exc})") from exc
     if not hasattr(bench, "run_all"):
         raise CliError("kvrod bench: bench.run_all is not available in this checkout")
-    bench.run_all(quick=args.quick, out_dir=Path(args.out))
+    try:
+        bench.run_all(quick=args.quick, out_dir=Path(args.out),
+                      only=tuple(args.only) if args.only else None)
+    except ValueError as exc:  # an unknown section name (the message lists the allowed ones)
+        raise CliError(f"kvrod bench: {exc}") from exc
     return 0
 
 
@@ -184,6 +188,9 @@ def build_parser() -> argparse.ArgumentParser:
     b = sub.add_parser("bench", help="run the benchmarks in bench/ (JSON + Markdown)")
     b.add_argument("--quick", action="store_true", help="small sizes only (< 1 min)")
     b.add_argument("--out", default="bench/results", help="results folder")
+    b.add_argument("--only", action="append", metavar="SECTION",
+                   help="run only this section (repeatable; the README reads the others "
+                        "back from their JSON)")
     b.set_defaults(func=_cmd_bench)
     return p
 
