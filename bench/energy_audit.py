@@ -5,7 +5,8 @@ rtol = 1e-6. kvrod's integrator follows IDA's error control (WRMS norm of the lo
 estimate against rtol |y_i| + atol), so this benchmark asks whether a shortfall is kvrod's
 or the error-control criterion's: both integrators run the paper's cantilever (N elements,
 tau_S = tau_B = tau, released from the static deflection under F = 0.05 N) at the same
-rtol and atol = 1e-4 rtol (the scenario default), and each trajectory is audited the same
+rtol and atol = 1e-4 rtol (one scalar: CasADi passes IDAS a scalar abstol; the scenarios
+scale atol per field instead), and each trajectory is audited the same
 way, independently of either integrator's interpolant:
 
 * states on an output grid of 1 ms spacing, graded geometrically from 1 ns over the first

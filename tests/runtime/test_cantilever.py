@@ -27,7 +27,10 @@ def reissner_tip(sc: CantileverScenario) -> tuple[float, float]:
 
 @pytest.fixture(scope="module")
 def paper_run():
-    return run_cantilever(CantileverScenario(n_elements=25, t_end=4.0))  # maxima at 0, T, 2T
+    # maxima at 0, T, 2T. rtol = 1e-7: the energy audit is the integrator's global error,
+    # below 1e-5 from rtol = 1e-7 on (at 1e-6 it is 1.9e-5 here; SUNDIALS IDAS on the same
+    # residual misses 1e-5 at 1e-6 as well: `kvrod bench --only energy_audit`)
+    return run_cantilever(CantileverScenario(n_elements=25, t_end=4.0, rtol=1e-7))
 
 
 def test_static_tip_against_reissner_shooting():

@@ -52,17 +52,20 @@ def test_axial_case_is_underdamped_at_the_requested_zeta(no_bulk):
 
 
 def test_routes_coincide_when_tau_B_equals_tau_S():
+    """tau_B = tau_S: both routes give the same damping matrices (to round-off: the
+    consistent one is printed as tau_B (1 - 2 nu)/3 + 2 tau_S (1 + nu)/3), hence the same
+    motion to the integrator's tolerance (an ulp in a parameter changes the adaptive steps)."""
     res = compare_damping(n_elements=8, tau_S=0.04, tau_B=0.04, bending_cycles=3,
                           axial_cycles=4)
     for case, c in res["cases"].items():
         con, nai = c["routes"]["consistent"], c["routes"]["naive"]
         assert c["predicted_ratio"] == pytest.approx(1.0, rel=1e-12)
         assert con["tau_E"] == pytest.approx(nai["tau_E"], rel=1e-12)
-        assert con["measured_zeta"] == pytest.approx(nai["measured_zeta"], rel=1e-9), case
-        assert c["measured_ratio"] == pytest.approx(1.0, rel=1e-9)
+        assert con["measured_zeta"] == pytest.approx(nai["measured_zeta"], rel=1e-5), case
+        assert c["measured_ratio"] == pytest.approx(1.0, rel=1e-5)
         t1, x1 = res["series"][(case, "consistent")]
         t2, x2 = res["series"][(case, "naive")]
-        np.testing.assert_allclose(x1, x2, rtol=0, atol=1e-12 * np.abs(x1).max())
+        np.testing.assert_allclose(x1, x2, rtol=0, atol=1e-5 * np.abs(x1).max())
 
 
 @pytest.mark.parametrize("tau_B, tau_S, nu", [(0.0, 0.04, 0.3), (0.02, 0.04, 0.25),
