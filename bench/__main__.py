@@ -83,7 +83,7 @@ def run_integrators(quick: bool) -> dict:
     return doc
 
 
-SECTIONS = ("integrators", "scaling", "codegen", "peers", "kernels", "energy_audit")
+SECTIONS = tuple(report.SECTION_MD)
 
 
 def _load(out_dir: Path, name: str) -> dict | None:

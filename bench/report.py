@@ -5,6 +5,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from bench.energy_audit import markdown as energy_audit_md
+
 
 def _f(v: Any, fmt: str = ".3f") -> str:
     if v is None or (isinstance(v, float) and not math.isfinite(v)):
@@ -185,6 +187,11 @@ def kernels_md(doc: dict) -> list[str]:
     return out + [""]
 
 
+#: the README's sections, in order: document name -> Markdown lines
+SECTION_MD = {"integrators": integrators_md, "scaling": scaling_md, "codegen": codegen_md,
+              "peers": peers_md, "kernels": kernels_md, "energy_audit": energy_audit_md}
+
+
 def markdown(docs: dict) -> str:
     meta = docs["meta"]
     lines = ["# kvrod benchmarks", "",
@@ -192,25 +199,15 @@ def markdown(docs: dict) -> str:
              f"{meta['cpus']} CPUs, Python {meta['python']}, NumPy {meta['numpy']}, SciPy "
              f"{meta['scipy']}, CasADi {meta['casadi']}; {meta['date']}; total "
              f"{meta['seconds']:.0f} s.", ""]
-    if meta.get("sections_run") and len(meta["sections_run"]) < 6 and not meta["quick"]:
+    if meta.get("sections_run") and set(meta["sections_run"]) != set(SECTION_MD) \
+            and not meta["quick"]:
         lines += [f"This run: {', '.join(meta['sections_run'])}; the other sections are read "
                   "back from their JSON in this folder (earlier runs, same machine).", ""]
     if meta["quick"]:
         lines += ["Quick mode: N = 25, 50 only, 2 s simulated, IDAS on the expanded (SX) "
                   "function (no jit compile), no SciPy Radau, no codegen timing, no "
                   "PyElastica, no kernel table. Use the full run for the quoted figures.", ""]
-    if "integrators" in docs:
-        lines += integrators_md(docs["integrators"])
-    if "scaling" in docs:
-        lines += scaling_md(docs["scaling"])
-    if "codegen" in docs:
-        lines += codegen_md(docs["codegen"])
-    if "peers" in docs:
-        lines += peers_md(docs["peers"])
-    if "kernels" in docs:
-        lines += kernels_md(docs["kernels"])
-    if "energy_audit" in docs:
-        from bench.energy_audit import markdown as energy_md
-
-        lines += energy_md(docs["energy_audit"])
+    for name, section_md in SECTION_MD.items():
+        if name in docs:
+            lines += section_md(docs[name])
     return "\n".join(lines).rstrip() + "\n"
