@@ -12,7 +12,7 @@ Protocol per N (25, 50, 100):
 1. static: the tip force (0.05 N along e1) on, PyElastica's ``AnalyticalLinearDamper``
    with ``uniform_damping_constant`` 7 1/s (about critical for the first mode) for 6 s;
    static tip error against the Simo-Reissner shooting solution
-   (``tests/reference/reissner.py``) with the same stiffnesses; kvrod's ``solve_static``
+   (``references/reissner.py``) with the same stiffnesses; kvrod's ``solve_static``
    error beside it.
 2. largest stable step: position Verlet on the release (force off) at
    dt = dt0 * 1.25^k for growing k, each for 2 s; the last dt that stays finite and bounded
@@ -61,7 +61,7 @@ def _dist_version() -> str:
 
 def reissner_tip(N: int = 50) -> tuple[float, float]:
     """(x, z) of the Simo-Reissner tip under the paper's load (same stiffnesses as kvrod)."""
-    from tests.reference.reissner import solve_reissner
+    from references.reissner import solve_reissner
 
     mats = RodParameters(n_elements=N, **PAPER).matrices()
     sol = solve_reissner(TIP_FORCE[0], L=PAPER["length"], EA=float(mats["C_F"][2]),

@@ -14,17 +14,9 @@ TAUS = (0.02, 0.04, 0.08)
 
 
 def _reissner_reference(sc) -> dict | None:
-    """Independent static reference (tests/reference, SciPy shooting), if importable."""
-    import sys
-
-    root = Path(__file__).resolve().parents[1]      # the checkout holding tests/reference
-    if (root / "tests" / "reference" / "reissner.py").exists() and str(root) not in sys.path:
-        sys.path.append(str(root))
-    try:
-        from tests.reference.reissner import elastica_tip, solve_reissner
-    except ImportError:
-        return None
+    """Independent static reference (the references package, SciPy shooting)."""
     from generated.constitutive import rectangle_section, shear_modulus
+    from references.reissner import elastica_tip, solve_reissner
 
     sec = rectangle_section(sc.width, sc.height, sc.poisson_ratio)
     EI = sc.youngs_modulus * sec["I2"]         # bending about a^(2) (tip force along e1)

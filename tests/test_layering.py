@@ -11,8 +11,13 @@ ROOT = Path(__file__).resolve().parents[1]
 
 FORBIDDEN = {
     "generated": {"derive", "runtime", "kvrod", "sympy", "casadi", "jinja2", "scipy"},
-    "runtime": {"derive", "kvrod", "sympy", "jinja2"},
-    "derive": {"runtime", "kvrod"},
+    "runtime": {"derive", "kvrod", "sympy", "jinja2", "references", "tests", "bench"},
+    "derive": {"runtime", "kvrod", "references", "tests"},
+    # independent references share no code with the simulator (they validate it)
+    "references": {"derive", "generated", "runtime", "kvrod", "bench", "tests", "sympy",
+                   "casadi", "jinja2"},
+    "kvrod": {"tests"},
+    "bench": {"tests"},
 }
 
 

@@ -81,7 +81,7 @@ def test_moment_rules_agree_with_explicit_integration():
 
 def test_square_torsion_constant_against_reference_table():
     """J_T of a square = 0.1406 a^4 (Timoshenko & Goodier's table value beta = 0.141)."""
-    from tests.reference.beams import rectangle_torsion_constant
+    from references.beams import rectangle_torsion_constant
 
     r = step("cross_sections").results
     b, d, m = sp.symbols("b d", positive=True) + (sp.Symbol("m", nonnegative=True, integer=True),)

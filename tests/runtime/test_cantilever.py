@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from generated.constitutive import ParameterError, rectangle_section, shear_modulus
+from references.beams import kelvin_voigt_damping_ratio, timoshenko_frequencies
+from references.reissner import solve_reissner
 from runtime.results import write_run
 from runtime.scenarios import CantileverScenario, run_cantilever
-from tests.reference.beams import kelvin_voigt_damping_ratio, timoshenko_frequencies
-from tests.reference.reissner import solve_reissner
 
 PAPER = CantileverScenario()
 

@@ -1,6 +1,6 @@
 """Damped modal analysis (issue 7 item 2) against independent continuum references.
 
-References: tests/reference/beams.py (Timoshenko/Euler-Bernoulli bending, axial bar,
+References: references/beams.py (Timoshenko/Euler-Bernoulli bending, axial bar,
 torsion; Kelvin-Voigt modal damping omega tau / 2), and a time integration of the
 pre-deformed cantilever for the frequency of the linearisation about a loaded state.
 """
@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from generated.constitutive import rectangle_section, retardation_time_extension
+from references import beams
 from runtime.analysis import find_maxima
 from runtime.integrator import solve
 from runtime.modal import (
@@ -24,7 +25,6 @@ from runtime.modal import (
 )
 from runtime.rod import RodModel, RodParameters
 from runtime.statics import solve_static
-from tests.reference import beams
 
 PAPER = dict(length=0.3, density=1000.0, youngs_modulus=1e6, poisson_ratio=0.3,
              width=0.01, height=0.01)

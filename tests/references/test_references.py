@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from .beams import (
+from references.beams import (
     axial_frequencies,
     damped_frequency,
     euler_bernoulli_frequencies,
@@ -19,7 +19,7 @@ from .beams import (
     timoshenko_frequencies,
     torsional_frequencies,
 )
-from .reissner import (
+from references.reissner import (
     cowper_rectangle,
     elastica_tip,
     paper_cantilever,

@@ -35,7 +35,7 @@ with ``1 + sin theta = 2 k^2 sin^2 phi``, ``phi_0 = arcsin(1/(sqrt(2) k))``::
     x_tip             = L - 2 sqrt(EI/F) (E(k) - E(phi_0, k))
     z_tip             = sqrt(2 EI sin(theta_L) / F),   sin(theta_L) = 2 k^2 - 1
 
-Run ``python -m tests.reference.reissner`` to print the numbers for the paper's data.
+Run ``python -m references.reissner`` to print the numbers for the paper's data.
 SI units throughout.
 """
 
