@@ -24,7 +24,7 @@ import numpy as np
 import scipy
 
 from bench import codegen_timing, energy_audit, integrators, peers, report, scaling
-from runtime.results import jsonable
+from runtime.io.results import jsonable
 
 FULL_N = (25, 50, 200, 1000)
 QUICK_N = (25, 50)

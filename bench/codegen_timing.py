@@ -7,7 +7,7 @@ and imports:
 - derivation: ``derive.pipeline.run()`` (all SymPy steps);
 - generate: ``derive.artifacts.write_tree(tmp)`` (derivation, templates, CasADi kernels and
   C code into an empty temporary folder, as ``kvrod generate --out tmp``);
-- compile: ``runtime.build.load_library()`` with ``KVROD_CACHE_DIR`` set to an empty
+- compile: ``runtime.model.build.load_library()`` with ``KVROD_CACHE_DIR`` set to an empty
   temporary folder (gcc on the generated C, then loading it).
 """
 
@@ -31,7 +31,7 @@ _CHILD = {
         "t2 = time.perf_counter(); print(t1 - t0, t2 - t1, sum(p.stat().st_size "
         "for p in paths))"),
     "compile": (
-        "import time; t0 = time.perf_counter(); from runtime import build; "
+        "import time; t0 = time.perf_counter(); from runtime.model import build; "
         "t1 = time.perf_counter(); lib = build.load_library(); t2 = time.perf_counter(); "
         "assert lib is not None, 'no library'; print(t1 - t0, t2 - t1)"),
 }

@@ -37,8 +37,8 @@ import numpy as np
 from scipy.integrate import cumulative_simpson
 
 from bench import integrators as bi
-from runtime.integrator import solve
-from runtime.results import jsonable
+from runtime.io.results import jsonable
+from runtime.solvers.integrator import solve
 
 TAUS = (0.02, 0.04, 0.08)
 RTOLS = (1e-6, 3e-7, 1e-7)

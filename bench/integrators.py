@@ -15,7 +15,7 @@ How each integrator sees the rod (the residual is linear in y' with a constant d
 ``D = dF/dy'``: F = D y' + g(t, y); only the clamped node's velocity is algebraic):
 
 - kvrod: ``F(t, y, y') = 0`` and its banded iteration matrix from the compiled kernels
-  (ctypes), LAPACK band LU (``runtime.bdf.BDF``).
+  (ctypes), LAPACK band LU (``runtime.solvers.bdf.BDF``).
 - IDAS: CasADi's semi-explicit DAE ``x' = -g_x(t, x, z) / D_x``, ``0 = g_z(t, x, z)``
   (x: differential components in cell-by-cell order, z: the 3 algebraic ones), i.e. the
   same residual with the differential rows divided by the constant ``D``. The DAE function
@@ -48,10 +48,10 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.integrate import solve_ivp
 
-from runtime import build
-from runtime.integrator import consistent_initial, solve
-from runtime.rod import RodModel, RodParameters
-from runtime.statics import solve_static
+from runtime.model import build
+from runtime.model.rod import RodModel, RodParameters
+from runtime.solvers.integrator import consistent_initial, solve
+from runtime.solvers.statics import solve_static
 
 PAPER = {"length": 0.3, "density": 1000.0, "youngs_modulus": 1e6, "poisson_ratio": 0.3,
          "tau_S": 0.04, "tau_B": 0.04, "width": 0.01, "height": 0.01}
@@ -498,7 +498,7 @@ def breakdown(N: int, T: float, rtol: float) -> dict:
     """Split kvrod's wall time into residual, Jacobian, LU, Newton solves (band solve and
     updates, in C), norms and the rest (the integrator's Python: coefficients,
     predictor, error test, history update). Output handling is left out (no t_eval)."""
-    from runtime.bdf import BDF
+    from runtime.solvers.bdf import BDF
 
     c = cantilever(N)
     timer = _Timer()

@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from runtime import build
-from runtime.rod import RodModel, RodParameters
+from runtime.model import build
+from runtime.model.rod import RodModel, RodParameters
 
 SIZES = (25, 50, 200, 1000)
 RESULTS = Path(__file__).resolve().parent / "results"

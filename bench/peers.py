@@ -39,7 +39,7 @@ import time
 import numpy as np
 
 from bench.integrators import PAPER, TIP_FORCE, cantilever
-from runtime.rod import RodModel, RodParameters
+from runtime.model.rod import RodModel, RodParameters
 
 SIZES = (25, 50, 100)
 
@@ -159,7 +159,7 @@ def period(ts: np.ndarray, xs: np.ndarray) -> float | None:
 
 
 def kvrod_period(N: int, T: float = 10.0) -> float | None:
-    from runtime.integrator import solve
+    from runtime.solvers.integrator import solve
 
     c = cantilever(N)
     grid = np.linspace(0.0, T, 2001)

@@ -134,7 +134,7 @@ def codegen_md(doc: dict) -> list[str]:
            "| stage | seconds | imports s | process s |", "|:--|---:|---:|---:|"]
     names = {"derivation": "derivation (`derive.pipeline.run()`)",
              "generate": "`kvrod generate` (`write_tree` into a temp dir)",
-             "compile": "compile (`runtime.build.load_library()`, empty cache)"}
+             "compile": "compile (`runtime.model.build.load_library()`, empty cache)"}
     for r in doc["rows"]:
         if not r.get("ok"):
             out.append(_row([names[r["stage"]], "failed", "-", "-"]))

@@ -42,7 +42,7 @@ def _peak_rss_kib() -> float:
 def one(N: int, T: float, rtol: float) -> dict:
     """Run in this process: static solve, release, integrate T seconds; timings, memory."""
     from bench.integrators import cantilever
-    from runtime.integrator import solve
+    from runtime.solvers.integrator import solve
 
     c = cantilever(N)
     grid = np.linspace(0.0, T, int(round(10 * T)) + 1)

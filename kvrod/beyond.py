@@ -1,10 +1,10 @@
 """`kvrod notes-beyond`: the three issue-7 analyses with modest settings, and notes/beyond.md.
 
-1. eta_E against eta~_E in simulation (runtime/compare_damping.py) at N = 20;
-2. damped modal analysis of the paper's cantilever at N = 50 (runtime/modal.py), straight
+1. eta_E against eta~_E in simulation (runtime/analysis/compare_damping.py) at N = 20;
+2. damped modal analysis of the paper's cantilever at N = 50 (runtime/analysis/modal.py), straight
    and pre-deformed by the static tip load;
 3. calibration of tau from a synthetic tip signal with known tau plus noise
-   (runtime/calibration.py).
+   (runtime/analysis/calibration.py).
 
 Every result is written to a results folder in the same form as the command quoted next
 to it in the notes (``kvrod compare-damping``, ``kvrod modes``, ``kvrod calibrate``), so
@@ -51,7 +51,7 @@ def _rel(p: Path) -> str:
 
 def _compare(out: Path) -> dict:
     from kvrod.cli_beyond import write_compare
-    from runtime import compare_damping as cd
+    from runtime.analysis import compare_damping as cd
     from runtime.scenarios import CantileverScenario
 
     res = cd.compare_damping(n_elements=COMPARE_N)
@@ -85,7 +85,7 @@ def _compare(out: Path) -> dict:
 def _write_modes(res: dict, out: Path) -> list[Path]:
     """modes.json and mode_shapes.png as `kvrod modes` writes them."""
     from kvrod.cli_beyond import plot_mode_shapes
-    from runtime.results import write_json
+    from runtime.io.results import write_json
 
     sc, modes = res["scenario"], res["modes"]
     js = write_json(out / "modes.json", {
@@ -108,7 +108,7 @@ def _distinct(modes: list, count: int, rtol: float = 1e-6) -> list[list]:
 
 def _modes(out: Path) -> dict:
     from kvrod.cli_beyond import run_modes
-    from runtime.modal import family_retardation_time
+    from runtime.analysis.modal import family_retardation_time
 
     straight = run_modes("cantilever", MODES_N, MODES_COUNT)
     deformed = run_modes("cantilever", MODES_N, MODES_COUNT, deformed=True)
@@ -157,8 +157,8 @@ def _modes(out: Path) -> dict:
 
 
 def _calibration(out: Path) -> dict:
-    from runtime import calibration as cal
-    from runtime.results import write_json
+    from runtime.analysis import calibration as cal
+    from runtime.io.results import write_json
     from runtime.scenarios import CantileverScenario, run_cantilever
 
     out.mkdir(parents=True, exist_ok=True)

@@ -88,10 +88,10 @@ def run_modes(scenario: str = "cantilever", n_elements: int = 50, count: int = 1
     """Modal analysis of a named scenario; returns {"modes", "model", "static_tip", ...}."""
     import numpy as np
 
-    from runtime.modal import modal_analysis
-    from runtime.rod import RodModel
+    from runtime.analysis.modal import modal_analysis
+    from runtime.model.rod import RodModel
     from runtime.scenarios import CantileverScenario
-    from runtime.statics import solve_static
+    from runtime.solvers.statics import solve_static
 
     if scenario not in SCENARIOS:
         raise ValueError(f"unknown scenario {scenario!r}; scenarios are: {', '.join(SCENARIOS)}")
@@ -111,7 +111,7 @@ def run_modes(scenario: str = "cantilever", n_elements: int = 50, count: int = 1
 
 
 def _cmd_modes(args) -> int:
-    from runtime.results import write_json
+    from runtime.io.results import write_json
 
     if args.count < 1:
         raise _cli_error(f"kvrod modes: --count must be >= 1, got {args.count}")
@@ -148,8 +148,8 @@ def _cmd_modes(args) -> int:
 
 
 def _cmd_calibrate(args) -> int:
-    from runtime import calibration as cal
-    from runtime.results import write_json
+    from runtime.analysis import calibration as cal
+    from runtime.io.results import write_json
     from runtime.scenarios import CantileverScenario
 
     sc_kw: dict = {}
@@ -180,7 +180,7 @@ def _cmd_calibrate(args) -> int:
 
 
 # --------------------------------------------------------------------------------------
-# kvrod compare-damping (computation: runtime/compare_damping.py)
+# kvrod compare-damping (computation: runtime/analysis/compare_damping.py)
 # --------------------------------------------------------------------------------------
 
 
@@ -231,8 +231,8 @@ def compare_markdown(result) -> str:
 
 def write_compare(result, out: Path) -> list[Path]:
     """compare_damping.json, compare_damping.md, compare_signals.png, compare_zeta.png."""
-    from runtime.compare_damping import plot_compare, summary
-    from runtime.results import write_json
+    from runtime.analysis.compare_damping import plot_compare, summary
+    from runtime.io.results import write_json
 
     out = Path(out)
     paths = [write_json(out / "compare_damping.json", summary(result))]
@@ -248,7 +248,7 @@ def _cmd_compare(args) -> int:
     if args.n_elements < 2:
         raise _cli_error(f"kvrod compare-damping: --n-elements must be >= 2, got "
                          f"{args.n_elements}")
-    from runtime import compare_damping as cd
+    from runtime.analysis import compare_damping as cd
 
     res = cd.compare_damping(n_elements=args.n_elements, tau_S=args.tau_S, tau_B=args.tau_B,
                              poisson_ratio=args.nu, tip_force=args.tip_force,

@@ -55,8 +55,8 @@ def run_and_write(scenario, out: Path, label: str, plots: bool = True, resume: b
     from DIR/checkpoint.npz."""
     from dataclasses import asdict
 
-    from runtime import plots as P
-    from runtime.results import (
+    from runtime.io import plots as P
+    from runtime.io.results import (
         CHECKPOINT,
         load_checkpoint,
         write_checkpoint,
@@ -84,7 +84,7 @@ def run_and_write(scenario, out: Path, label: str, plots: bool = True, resume: b
     if run.status == "finished":
         (out / CHECKPOINT).unlink(missing_ok=True)
     if vtk_every is not None and run.snapshots:
-        from runtime.vtk import write_series
+        from runtime.io.vtk import write_series
 
         write_series(out / "vtk", run.model, run.snapshots)
     if plots and run.t.size > 1:
@@ -102,7 +102,7 @@ def _already_finished(scenario, out: Path) -> bool:
     import json
     from dataclasses import asdict
 
-    from runtime.results import CHECKPOINT, jsonable
+    from runtime.io.results import CHECKPOINT, jsonable
 
     path = out / "summary.json"
     if (out / CHECKPOINT).exists() or not path.exists():

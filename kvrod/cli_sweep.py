@@ -36,7 +36,7 @@ def _cmd_sweep(args) -> int:
         raise CliError(f"kvrod sweep: --workers {args.workers} must be >= 1")
     if args.serial and args.scheduler:
         raise CliError("kvrod sweep: --serial and --scheduler exclude each other")
-    from runtime.sweep import StudyError, load_study, points_to_run, run_study_serial
+    from runtime.study.sweep import StudyError, load_study, points_to_run, run_study_serial
 
     try:
         study = load_study(args.study)
@@ -57,7 +57,7 @@ def _cmd_sweep(args) -> int:
             report = run_study_serial(study, out, progress=progress,
                                       rerun_failed=not args.keep_failed)
         else:
-            from runtime.sweep_dask import run_study_dask
+            from runtime.study.sweep_dask import run_study_dask
 
             try:
                 report = run_study_dask(study, out, scheduler=args.scheduler,

@@ -53,7 +53,7 @@ def reproduce(out: Path, n_elements: int = 100, t_end: float = 10.0,
               derive: bool = True) -> Path:
     """Run the three tau values, the E = 4 MPa comparison, write figures and notes."""
     from kvrod.cli_runtime import run_and_write
-    from runtime import plots as P
+    from runtime.io import plots as P
     from runtime.scenarios import CantileverScenario
 
     wall0 = time.perf_counter()

@@ -3,7 +3,7 @@
 A scenario is data (:class:`CantileverScenario`); :func:`run_cantilever` runs it:
 static equilibrium under the dead tip force F e1 by Newton with load stepping, release at
 t = 0 (the force is switched off, the rod starts at rest), free Kelvin-Voigt-damped
-vibration integrated by the variable-order BDF of :mod:`runtime.bdf`. Along the way it
+vibration integrated by the variable-order BDF of :mod:`runtime.solvers.bdf`. Along the way it
 locates the tip maxima on the step interpolants, integrates the dissipated power 2 D and
 the external power by 3-point Gauss-Legendre on every step (energy audit), and samples the
 tip and the energies on a uniform output grid.
@@ -25,17 +25,17 @@ from scipy.optimize import brentq
 
 from generated import rod_layout as L
 from generated.constitutive import retardation_time_extension
-from runtime.analysis import (
+from runtime.analysis.decay import (
     BETA1_L,
     damping_ratios,
     log_decrements,
     periods,
 )
-from runtime.bdf import BDF, IntegrationError
 from runtime.errors import ParameterError
-from runtime.integrator import consistent_initial
-from runtime.rod import RodModel, RodParameters
-from runtime.statics import StaticSolveError, solve_static
+from runtime.model.rod import RodModel, RodParameters
+from runtime.solvers.bdf import BDF, IntegrationError
+from runtime.solvers.integrator import consistent_initial
+from runtime.solvers.statics import StaticSolveError, solve_static
 
 #: default absolute tolerance per field, relative to rtol x the field's scale
 #: (see CantileverScenario.default_atol)

@@ -34,6 +34,22 @@ def readme_commands() -> list[str]:
     return [c for b in readme_blocks() for c in b]
 
 
+def redirect_into(argv: list[str], tmp_path: Path) -> list[str]:
+    """``kvrod generate`` (which rewrites the checkout's generated/) writes into the temporary
+    directory instead, so the suite never touches tracked files and the staleness tests keep
+    seeing the committed tree. Every other command already writes relative to the cwd."""
+    if argv[1:2] == ["generate"] and "--out" not in argv and "--check" not in argv:
+        return [*argv, "--out", str(tmp_path / "regenerated")]
+    return argv
+
+
+def test_generate_is_redirected(tmp_path):
+    assert redirect_into([".venv/bin/kvrod", "generate"], tmp_path)[-1] == str(
+        tmp_path / "regenerated")
+    # --check only reads the checkout
+    assert redirect_into([".venv/bin/kvrod", "generate", "--check"], tmp_path)[-1] == "--check"
+
+
 def test_readme_has_commands_for_the_three_uses():
     cmds = readme_commands()
     assert any(" generate" in c for c in cmds)
@@ -51,6 +67,7 @@ def test_readme_block(block, tmp_path):
         # other path stays relative to the temporary working directory
         repo = README.parent
         argv = [str(repo / a) if a.startswith("examples/") else a for a in argv]
+        argv = redirect_into(argv, tmp_path)
         r = subprocess.run([sys.executable, "-m", "kvrod", *argv[1:]], cwd=tmp_path,
                            capture_output=True, text=True, timeout=600)
         assert r.returncode == 0, f"{cmd}\n{r.stdout[-2000:]}\n{r.stderr[-2000:]}"

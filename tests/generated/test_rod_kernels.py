@@ -12,7 +12,7 @@ from derive import codegen_rod
 from derive import discrete_rod as dr
 from derive.artifacts import generated_dir, render
 from generated import rod_layout as L
-from runtime.rod import CasadiBackend, RodModel, RodParameters, load_kernels
+from runtime.model.rod import CasadiBackend, RodModel, RodParameters, load_kernels
 
 BCS = [("clamped", "free"), ("pinned", "pinned"), ("clamped", "clamped"), ("free", "pinned")]
 

@@ -6,7 +6,7 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse
 
-from runtime.problem import DenseProblem, dense_to_band
+from runtime.solvers.protocols import DenseProblem, dense_to_band
 
 
 class KVChain:

@@ -1,4 +1,4 @@
-"""Tests of runtime.analysis on synthetic signals with exactly known answers."""
+"""Tests of runtime.analysis.decay on synthetic signals with exactly known answers."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import brentq
 
-from runtime.analysis import (
+from runtime.analysis.decay import (
     BETA1_L,
     cumulative_integral,
     damping_ratios,

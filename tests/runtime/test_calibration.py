@@ -9,8 +9,8 @@ import pytest
 
 from kvrod import cli_beyond
 from kvrod.cli import CliError, _Parser
-from runtime import calibration as cal
-from runtime.analysis import damping_ratios
+from runtime.analysis import calibration as cal
+from runtime.analysis.decay import damping_ratios
 from runtime.scenarios import CantileverScenario, run_cantilever
 
 

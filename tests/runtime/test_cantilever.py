@@ -11,7 +11,7 @@ import pytest
 from generated.constitutive import ParameterError, rectangle_section, shear_modulus
 from references.beams import kelvin_voigt_damping_ratio, timoshenko_frequencies
 from references.reissner import solve_reissner
-from runtime.results import write_run
+from runtime.io.results import write_run
 from runtime.scenarios import CantileverScenario, run_cantilever
 
 PAPER = CantileverScenario()
@@ -140,7 +140,7 @@ def test_bad_scenario_parameters(kw, match):
 def test_linear_prediction_uses_the_bending_axis_of_the_tip_force():
     """Rectangular (not square) section: the e1 tip motion is bending about a^(2), E I2.
     Checked against the modal analysis of the discrete rod (undamped, straight)."""
-    from runtime.modal import modal_analysis
+    from runtime.analysis.modal import modal_analysis
 
     sc = CantileverScenario(width=0.02, height=0.01, tau_S=0.0, tau_B=0.0, n_elements=40)
     model = run_cantilever(CantileverScenario(width=0.02, height=0.01, tau_S=0.0, tau_B=0.0,
@@ -156,8 +156,8 @@ def test_linear_prediction_uses_the_bending_axis_of_the_tip_force():
 def test_time_step_order_of_fixed_step_bdf2_on_the_rod():
     """Fixed steps h, h/2, h/4 with BDF order <= 2 after release: the tip error against a
     tight adaptive run falls at second order."""
-    from runtime.bdf import BDF
-    from runtime.integrator import consistent_initial
+    from runtime.solvers.bdf import BDF
+    from runtime.solvers.integrator import consistent_initial
 
     base = run_cantilever(CantileverScenario(n_elements=8, t_end=1e-3))
     model = base.model

@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from runtime.integrator import (
+from runtime.solvers.integrator import (
     BDF,
     IntegrationError,
     consistent_initial,
     solve,
 )
-from runtime.problem import (
+from runtime.solvers.protocols import (
     DenseProblem,
     ResidualProblem,
     StaticProblem,

@@ -1,4 +1,4 @@
-"""Build and load of the generated C (runtime/build.py): cache, concurrency, manifest check,
+"""Build and load of the generated C (runtime/model/build.py): cache, concurrency, manifest check,
 fallback to in-process CasADi with one warning."""
 
 from __future__ import annotations
@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from runtime import build
 from runtime.errors import GeneratedCodeError
-from runtime.rod import RodModel, RodParameters
+from runtime.model import build
+from runtime.model.rod import RodModel, RodParameters
 
 ROOT = Path(__file__).resolve().parents[2]
 needs_cc = pytest.mark.skipif(build.find_compiler() is None, reason="no C compiler")
@@ -49,7 +49,7 @@ def test_concurrent_first_use_does_not_corrupt_the_cache(tmp_path):
     code = "\n".join([
         f"import sys; sys.path.insert(0, {str(ROOT)!r})",
         "import ctypes, pathlib",
-        "from runtime import build",
+        "from runtime.model import build",
         f"p = build.compile_library(build.find_compiler(), outdir=pathlib.Path({str(tmp_path)!r}))",
         "ctypes.CDLL(str(p)).kvrod_n_state",
     ])
@@ -102,7 +102,7 @@ def test_fallback_without_compiler_warns_once_and_gives_same_numbers(fresh_build
 def test_tampered_library_is_rebuilt_not_loaded(tmp_path):
     """A cached library whose bytes no longer match the hash recorded at build time is
     compiled again (issue 6, item 4)."""
-    from runtime import build
+    from runtime.model import build
 
     compiler = build.find_compiler()
     if compiler is None:

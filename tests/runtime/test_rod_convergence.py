@@ -7,7 +7,7 @@ import numpy as np
 import scipy.linalg as sl
 import scipy.sparse.linalg as spl
 
-from runtime.rod import RodModel, RodParameters, _constitutive
+from runtime.model.rod import RodModel, RodParameters, _constitutive
 
 E, NU, RHO, LEN, W, H = 1e6, 0.3, 1000.0, 0.3, 0.01, 0.01
 

@@ -9,7 +9,7 @@ import pytest
 
 from generated import rod_layout as L
 from runtime.errors import ParameterError
-from runtime.rod import RodModel, RodParameters, quat_exp, quat_mul
+from runtime.model.rod import RodModel, RodParameters, quat_exp, quat_mul
 
 BCS = [
     ("clamped", "free"),
@@ -164,7 +164,7 @@ def rigid_state(m, rng, R_q, c, v0, w):
 
 
 def _rot(q):
-    from runtime.rod import quat_rotation
+    from runtime.model.rod import quat_rotation
 
     return quat_rotation(q)
 
@@ -355,7 +355,7 @@ def test_sparse_jacobian_has_a_fixed_pattern_inside_the_band(start, end):
     y, yp = random_state(m, rng), rng.standard_normal(m.n)
     J = m.jacobian_sparse(0.0, y, yp, 5.0)
     assert np.array_equal(J.indptr, pat.indptr) and np.array_equal(J.indices, pat.indices)
-    from runtime.problem import band_to_dense
+    from runtime.solvers.protocols import band_to_dense
 
     ab = np.zeros((m.ldab, m.n), order="F")
     m.jacobian_band(0.0, y, yp, 5.0, ab)

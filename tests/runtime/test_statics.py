@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_bvp
 
-from runtime.statics import StaticSolveError, solve_static
+from runtime.solvers.statics import StaticSolveError, solve_static
 from tests.runtime.problems import AtanStatic, FoldStatic, PlanarElastica, SpringChainStatic
 
 

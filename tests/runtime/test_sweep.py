@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from runtime.sweep import (
+from runtime.study.sweep import (
     FAILED,
     FINISHED,
     PENDING,
@@ -31,7 +31,7 @@ from runtime.sweep import (
 
 distributed = pytest.importorskip("distributed")
 
-from runtime.sweep_dask import run_study_dask  # noqa: E402
+from runtime.study.sweep_dask import run_study_dask  # noqa: E402
 
 TINY = {"length": 0.1, "t_end": 0.4, "rtol": 1e-4}
 STUDY = {"name": "tiny", "scenario": "cantilever", "fixed": {**TINY, "n_elements": 5},
@@ -171,7 +171,7 @@ def test_table_plots_and_failing_point(dask_run, study):
 
 def test_workers_load_the_kernels_once(dask_run, client):
     def loads() -> int:
-        from runtime import build
+        from runtime.model import build
 
         return build._load_cached.cache_info().misses
 

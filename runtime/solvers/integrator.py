@@ -1,9 +1,9 @@
 """Driver for the BDF solver: ``solve`` (outputs, dense solution, events) and
 ``consistent_initial`` (IDA's ``IDA_YA_YDP_INIT``).
 
-The stepping itself lives in :mod:`runtime.bdf`; this module re-exports its public names.
+The stepping itself lives in :mod:`runtime.solvers.bdf`; this module re-exports its public names.
 
-Example (``rod`` implements :class:`~runtime.problem.ResidualProblem`)::
+Example (``rod`` implements :class:`~runtime.solvers.protocols.ResidualProblem`)::
 
     y0, yp0 = consistent_initial(rod, 0.0, y_static, np.zeros(rod.n))
     def tip_vx(t, y, yp):  # maxima of the tip x: its velocity crosses zero downwards
@@ -25,8 +25,9 @@ import numpy as np
 from scipy.linalg.lapack import dgbtrf, dgbtrs
 from scipy.optimize import brentq
 
+from runtime.solvers.protocols import ResidualProblem, band_storage
+
 from .bdf import BDF, BDFDenseOutput, IntegrationError
-from .problem import ResidualProblem, band_storage
 
 __all__ = [
     "BDF",

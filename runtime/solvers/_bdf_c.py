@@ -1,4 +1,4 @@
-"""Optional C helpers for :mod:`runtime.bdf` (compiled on first use, cached; else None).
+"""Optional C helpers for :mod:`runtime.solvers.bdf` (compiled on first use, cached; else None).
 
 Why C here (measured on the 10 s cantilever release, ``bench/integrators.py``):
 
@@ -77,7 +77,7 @@ def load() -> ctypes.CDLL | None:
     if _tried:
         return _lib
     _tried = True
-    from . import build
+    from runtime.model import build
 
     cc = build.find_compiler()
     if cc is None:

@@ -8,7 +8,7 @@ Paper convention tau_S = tau_B = tau, hence tau_E = tau (eq. (6)). Two kinds of 
   the data), its tip ``e1`` coordinate interpolated (cubic spline) at the data times.
   Residuals ``r_i(tau) = x_model(t_i; tau) - x_i``.
 * ``"decrements"``: logarithmic decrements ``delta_k`` (-) of successive maxima. Model: the
-  linear (small-amplitude) prediction of damped modal analysis (:mod:`runtime.modal`),
+  linear (small-amplitude) prediction of damped modal analysis (:mod:`runtime.analysis.modal`),
   ``delta(tau) = 2 pi zeta_1 / sqrt(1 - zeta_1^2)`` with ``zeta_1`` the damping ratio of the
   first in-plane bending mode of the straight cantilever. Residuals ``delta(tau) -
   delta_k``. Large-amplitude decrements (the paper's release from 0.22 m) lie below the
@@ -34,7 +34,7 @@ from scipy.interpolate import CubicSpline
 from scipy.optimize import least_squares
 from scipy.stats import t as student_t
 
-from runtime.analysis import damping_ratios, find_maxima, log_decrements
+from runtime.analysis.decay import damping_ratios, find_maxima, log_decrements
 
 __all__ = [
     "CalibrationResult",
@@ -239,8 +239,8 @@ def decrement_model(scenario=None) -> Callable[[float], float]:
     The straight, unloaded cantilever of ``scenario`` (default: the paper's, N = 16) with
     tau_S = tau_B = tau. Returns a function of tau (s).
     """
-    from runtime.modal import modal_analysis
-    from runtime.rod import RodModel
+    from runtime.analysis.modal import modal_analysis
+    from runtime.model.rod import RodModel
 
     sc = _scenario(scenario)
 

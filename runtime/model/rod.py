@@ -4,7 +4,7 @@
 (``derive/discrete_rod.py``; layout in ``generated/rod_layout.py``), its banded iteration
 matrix ``dF/dy + cj dF/dy'`` in LAPACK band storage, diagnostics (energies, dissipation
 rate 2D, external power, strains and stress resultants) and the static problem in reduced
-coordinates. Hot paths call the compiled C API through ctypes (``runtime/build.py``); if
+coordinates. Hot paths call the compiled C API through ctypes (``runtime/model/build.py``); if
 no compiler is available the same per-element CasADi kernels are evaluated in-process
 (vectorised with ``Function.map``) with identical numbers up to rounding.
 """
@@ -20,8 +20,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from generated import rod_layout as L
-from runtime import build
 from runtime.errors import ParameterError
+from runtime.model import build
 
 BOUNDARY_CONDITIONS = ("clamped", "pinned", "free")
 DAMPING_ROUTES = ("consistent", "naive")

@@ -33,7 +33,7 @@ Damping ratios are measured from the log decrements of successive maxima,
 ``zeta_k = delta_k / sqrt(4 pi^2 + delta_k^2)``, averaged over the later half of the cycles
 (the first cycles still carry the faster-decaying higher modes of the release).
 Predictions use ``omega`` of the same discrete rod from damped modal analysis
-(:mod:`runtime.modal`) and, for reference, the continuum formulas (Euler-Bernoulli
+(:mod:`runtime.analysis.modal`) and, for reference, the continuum formulas (Euler-Bernoulli
 ``omega_1 = 1.8751^2 sqrt(E I/(rho A L^4))``, bar ``omega = pi/(2L) sqrt(E/rho)``).
 
 Library code: nothing here prints; the CLI ``kvrod compare-damping`` formats the result.
@@ -53,12 +53,12 @@ from generated.constitutive import (
     retardation_time_extension,
     retardation_time_extension_naive,
 )
-from runtime.analysis import damping_ratios, find_maxima, log_decrements
-from runtime.integrator import solve
-from runtime.modal import modal_analysis
-from runtime.rod import RodModel, RodParameters
+from runtime.analysis.decay import damping_ratios, find_maxima, log_decrements
+from runtime.analysis.modal import modal_analysis
+from runtime.model.rod import RodModel, RodParameters
 from runtime.scenarios import CantileverScenario, run_cantilever
-from runtime.statics import solve_static
+from runtime.solvers.integrator import solve
+from runtime.solvers.statics import solve_static
 
 __all__ = [
     "CASES",
@@ -163,7 +163,7 @@ def axial_release(params: RodParameters, force: float, t_end: float,
 
     The static stretch is solved under ``force`` along ``e3``; the load is then switched
     off and the free vibration integrated over ``[0, t_end]`` (s) with the BDF of
-    :mod:`runtime.integrator`. Returns the tip axial displacement ``u = z_tip - L`` (m) on
+    :mod:`runtime.solvers.integrator`. Returns the tip axial displacement ``u = z_tip - L`` (m) on
     ``samples`` uniform times and its maxima refined on the dense output (the start, at
     rest, counts as the first). Raises RuntimeError if the integration fails.
     """

@@ -36,7 +36,7 @@ the point's parameters, so the same point gets the same folder on every run, and
 finished point (summary.json with status "finished" and the same parameters) is not run
 again. Every file is written atomically (temporary name, then rename).
 
-This module holds everything except the distributed engine (``runtime.sweep_dask``): the
+This module holds everything except the distributed engine (``runtime.study.sweep_dask``): the
 study, the task function :func:`run_point` that workers execute (it takes a plain
 parameter dict and returns a picklable :class:`PointOutcome`), writing a point's folder,
 the table, the plots and a serial engine (:func:`run_study_serial`). It does not import
@@ -60,7 +60,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from runtime.results import write_json, write_run
+from runtime.io.results import write_json, write_run
 
 #: scenarios a study can name
 SCENARIOS = ("cantilever",)
@@ -261,7 +261,7 @@ class PointOutcome:
     """What :func:`run_point` returns: plain, picklable data.
 
     ``files`` maps file names of the point's folder (summary.json, series.npz) to their
-    bytes, written by :func:`runtime.results.write_run` on the worker; the client stores
+    bytes, written by :func:`runtime.io.results.write_run` on the worker; the client stores
     them unchanged (so workers need no file system shared with the client).
     """
 
@@ -277,7 +277,7 @@ class PointOutcome:
 
 
 def _library_loads() -> int:
-    from runtime import build
+    from runtime.model import build
 
     return build._load_cached.cache_info().misses
 
@@ -504,7 +504,7 @@ def write_plots(out: Path, study: Study, rows: Mapping[str, Mapping[str, Any]]) 
         groups.setdefault(key, []).append((float(p.params[x]), row))
     if not groups:
         return None
-    from runtime.plots import _plt, _save
+    from runtime.io.plots import _plt, _save
 
     plt = _plt()
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.5))

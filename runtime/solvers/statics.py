@@ -18,8 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg.lapack import dgbtrf, dgbtrs
 
-from .errors import ParameterError
-from .problem import StaticProblem, band_storage
+from runtime.errors import ParameterError
+from runtime.solvers.protocols import StaticProblem, band_storage
 
 __all__ = ["StaticResult", "StaticSolveError", "solve_static"]
 
@@ -106,7 +106,7 @@ def solve_static(
 
     Parameters
     ----------
-    problem : a :class:`~runtime.problem.StaticProblem`; its ``load_scale`` is left at 1
+    problem : a :class:`~runtime.solvers.protocols.StaticProblem`; its ``load_scale`` is left at 1
         on success and at the last converged value on failure.
     y0 : full initial state (e.g. the unloaded configuration).
     load_steps : initial number of equal load increments.

@@ -8,7 +8,8 @@ per core is started (nothing to set up); with ``scheduler="tcp://host:8786"`` a
 Compiled code never travels: :class:`KvrodWorkerSetup`, a worker plugin, loads (and on
 first use compiles) the generated kernels into each worker process's cache once, when the
 worker starts (also on workers that join or are restarted later). Tasks ship a parameter
-dict to :func:`runtime.sweep.run_point` and get back a :class:`runtime.sweep.PointOutcome`;
+dict to :func:`runtime.study.sweep.run_point` and get back a
+:class:`runtime.study.sweep.PointOutcome`;
 the client writes the point folders, so workers need no shared file system.
 
 A worker that dies mid-task loses nothing: the scheduler reschedules its tasks on the
@@ -29,7 +30,7 @@ from pathlib import Path
 
 from distributed import Client, LocalCluster, WorkerPlugin, as_completed
 
-from runtime.sweep import (
+from runtime.study.sweep import (
     PointOutcome,
     Study,
     StudyRecorder,
@@ -47,11 +48,11 @@ def warm_up() -> dict:
     CasADi fallback is used (no C compiler).
     """
     import runtime.scenarios  # noqa: F401 - pay the import once, not in the first task
-    from runtime import build
+    from runtime.model import build
 
     lib = build.load_library()
     try:  # compiled BDF helpers, when this checkout has them
-        from runtime import _bdf_c
+        from runtime.solvers import _bdf_c
 
         _bdf_c.load()
     except (ImportError, AttributeError):
@@ -103,7 +104,7 @@ def run_study_dask(study: Study, out: Path, *, client: Client | None = None,
                    plot_interval: float = 10.0, connect_timeout: float = 30.0,
                    wait_timeout: float = 300.0,
                    timeout: float | None = None) -> StudyReport:
-    """Run a study on Dask; returns the :class:`runtime.sweep.StudyReport`.
+    """Run a study on Dask; returns the :class:`runtime.study.sweep.StudyReport`.
 
     client: an existing Client (tests); else scheduler: address of an existing scheduler
     (n_workers, if given, is the number of workers to wait for); else a LocalCluster with

@@ -22,7 +22,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from generated import rod_layout as L
-from runtime.rod import RodModel, quat_rotation
+from runtime.model.rod import RodModel, quat_rotation
 
 
 def _array_xml(name: str, data: np.ndarray) -> str:

@@ -20,9 +20,10 @@ import math
 import numpy as np
 from scipy.linalg.lapack import dgbtrf, dgbtrs
 
+from runtime.errors import ParameterError
+from runtime.solvers.protocols import ResidualProblem, band_storage
+
 from . import _bdf_c
-from .errors import ParameterError
-from .problem import ResidualProblem, band_storage
 
 __all__ = ["BDF", "BDFDenseOutput", "IntegrationError"]
 
@@ -156,7 +157,7 @@ class BDF:
 
     Parameters
     ----------
-    problem : a :class:`~runtime.problem.ResidualProblem`.
+    problem : a :class:`~runtime.solvers.protocols.ResidualProblem`.
     t0, y0, yp0 : consistent initial values (see ``consistent_initial``).
     t_bound : end of the integration; the last step lands on it exactly.
     rtol, atol : tolerances; weights ``1/(rtol |y_i| + atol_i)``, ``atol`` scalar or (n,).
@@ -252,7 +253,7 @@ class BDF:
         self._ab = band_storage(n, self.kl, self.ku)
         self._ipiv = np.zeros(max(n, 1), dtype=np.int32)
         self._have_lu = False
-        # Compiled helpers (runtime/_bdf_c.py: flush-to-zero band solve, fused Newton
+        # Compiled helpers (runtime/solvers/_bdf_c.py: flush-to-zero band solve, fused Newton
         # update, LAPACK dgbtrf without f2py); None -> NumPy/f2py path. Data addresses
         # are fetched once (ndarray.ctypes.data costs microseconds); the Newton iterate
         # buffers swap with the accepted ones, so their addresses swap too.
@@ -391,7 +392,7 @@ class BDF:
 
     # ------------------------------------------------------------------ internals
     def _wrms(self, v: np.ndarray, w: np.ndarray) -> float:
-        if self._c is not None:  # flush-to-zero norm (see runtime/_bdf_c.py)
+        if self._c is not None:  # flush-to-zero norm (see runtime/solvers/_bdf_c.py)
             ptrs = self._ptrs
             pv, pw = ptrs.get(id(v)), ptrs.get(id(w))
             return self._c.kv_wrms(self.n, pv if pv is not None else v.ctypes.data, None,

@@ -2,9 +2,9 @@
 
 Linearisation
 -------------
-The rod's IDA residual ``F(t, y, y') = 0`` (``runtime/rod.py``) is linearised at an
+The rod's IDA residual ``F(t, y, y') = 0`` (``runtime/model/rod.py``) is linearised at an
 equilibrium ``y_eq`` at rest (the straight reference or a pre-deformed static state from
-:func:`runtime.statics.solve_static`, loads kept on). The quaternions carry one redundant
+:func:`runtime.solvers.statics.solve_static`, loads kept on). The quaternions carry one redundant
 coordinate each (their norm, which the strains ignore), so the linearisation is written in
 reduced coordinates, in the layout of the static problem (``generated/rod_layout.py``):
 
@@ -59,7 +59,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.optimize import brentq
 
-from runtime.rod import RodModel
+from runtime.model.rod import RodModel
 
 __all__ = [
     "FAMILIES",
@@ -316,6 +316,8 @@ def _separate_degenerate(lin: Linearization, omega: np.ndarray, Phi: np.ndarray,
         if g.size < 2:
             continue
         X = Phi[:, g]
+        G = X.T @ (Mmat @ X)  # M-orthonormal basis of the cluster first
+        X = np.linalg.solve(np.linalg.cholesky(0.5 * (G + G.T)), X.T).T
         comps = _strain_vectors(lin, X)
         mats = [c @ c.T for c in comps]  # (s, s) each
         total = sum(mats)
@@ -419,11 +421,60 @@ def _upper_half(lam: np.ndarray, X: np.ndarray, rtol: float = 1e-7):
     return lam[keep], X[:, keep]
 
 
+def _start_vector(n: int, dtype=float) -> np.ndarray:
+    """A fixed start vector for ARPACK (its default is random: results would vary by run)."""
+    v = np.random.default_rng(20131105).standard_normal(n)
+    return v.astype(dtype)
+
+
+def _is_symmetric(K: sp.spmatrix) -> bool:
+    d = abs(K - K.T)
+    return d.nnz == 0 or d.max() <= 1e-12 * abs(K).max()
+
+
+def _span_clusters(lin: Linearization, omega: np.ndarray, Phi: np.ndarray) -> np.ndarray:
+    """Make every cluster of repeated frequencies span its whole eigenspace.
+
+    Non-symmetric ARPACK (``eigs``, needed for the geometric stiffness of a loaded state)
+    does not orthogonalise eigenvectors of a repeated eigenvalue: for the degenerate
+    bending pairs of a square section it may return two nearly parallel vectors, even the
+    same one twice, depending on its random start vector (``kvrod modes --n-elements 80``
+    then failed one run in three in the energy-metric Cholesky). Such a cluster is
+    recomputed by shift-invert subspace iteration at its frequency, from the vectors found
+    plus fixed random ones, and a Rayleigh-Ritz step.
+    """
+    Phi = Phi.copy()
+    for g in _clusters(omega):
+        if g.size < 2:
+            continue
+        X = Phi[:, g]
+        G = X.T @ (lin.M @ X)
+        if la.eigvalsh(0.5 * (G + G.T))[0] > 1e-6 * np.trace(G) / g.size:
+            continue
+        sigma = omega[g[0]] ** 2 * (1 - 1e-6)
+        lu = spla.splu((lin.K - sigma * lin.M).tocsc())
+        rng = np.random.default_rng(7)
+        Z = np.column_stack([X, rng.standard_normal((X.shape[0], 2))])
+        for _ in range(6):
+            Z = lu.solve(np.asarray(lin.M @ Z))
+            Z, _ = np.linalg.qr(Z)
+        Kr, Mr = Z.T @ (lin.K @ Z), Z.T @ (lin.M @ Z)
+        w2, C = la.eig(Kr, Mr)
+        pick = np.argsort(np.abs(w2.real - omega[g[0]] ** 2))[: g.size]
+        Phi[:, g] = (Z @ C[:, pick]).real
+    return Phi
+
+
 def _sparse_modes(lin: Linearization, count: int):
     m = min(count + 6, lin.nq - 2)
-    w2, Phi = spla.eigs(lin.K, k=m, M=lin.M, sigma=0.0, which="LM")
+    v0 = _start_vector(lin.nq)
+    if _is_symmetric(lin.K):  # Lanczos: M-orthogonal eigenvectors, repeated ones included
+        w2, Phi = spla.eigsh(lin.K, k=m, M=lin.M, sigma=0.0, which="LM", v0=v0)
+    else:
+        w2, Phi = spla.eigs(lin.K, k=m, M=lin.M, sigma=0.0, which="LM", v0=v0)
     order = np.argsort(w2.real)
     w2, Phi = w2.real[order], Phi[:, order].real
+    Phi = _span_clusters(lin, np.sqrt(np.maximum(w2, 0.0)), Phi)
     Phi /= np.sqrt(np.einsum("ik,ik->k", Phi, lin.M @ Phi))[None, :]
     # prediction of the damped eigenvalues from the modal projection, then refinement
     Mr, Cr, Kr = (Phi.T @ (X @ Phi) for X in (lin.M, lin.C, lin.K))
@@ -445,7 +496,8 @@ def _sparse_modes(lin: Linearization, count: int):
         lu = spla.splu((-A - sigma * E).tocsc())
         op = spla.LinearOperator(A.shape, matvec=lambda x, lu=lu: lu.solve(E @ x),
                                  dtype=complex)
-        mu, V = spla.eigs(op, k=grp.size, which="LM", tol=1e-12)
+        mu, V = spla.eigs(op, k=grp.size, which="LM", tol=1e-12,
+                          v0=_start_vector(A.shape[0], complex))
         for lam, v in zip(sigma + 1.0 / mu, V.T, strict=True):
             if abs(lam.imag) <= 1e-7 * abs(lam):
                 lam = complex(lam.real, 0.0)

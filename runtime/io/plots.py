@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from runtime.analysis import damping_ratios, exponential_envelope, log_decrements
+from runtime.analysis.decay import damping_ratios, exponential_envelope, log_decrements
 
 
 def _plt():
