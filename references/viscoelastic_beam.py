@@ -392,12 +392,12 @@ def paper_base_excitation(tau: float, X: float = 1e-3) -> dict[str, dict[str, fl
             def T(w, E=E, G=G):
                 return timoshenko_transmissibility(w, kappa=p["kappa"], E=E, G=G, **geo)
 
-        wd = lam.imag
+        wd = float(lam.imag)
         pk = resonance(T, 0.5 * wd, 1.5 * wd)
         amps = X * np.abs(T(np.array([0.9 * wd, wd, 1.1 * wd])))
         out[name] = {
-            "lambda_re": lam.real,
-            "lambda_im": lam.imag,
+            "lambda_re": float(lam.real),
+            "lambda_im": float(lam.imag),
             "zeta": float(damping_ratio(lam)),
             "omega_d": wd,
             "omega_peak": pk.omega,
