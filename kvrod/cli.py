@@ -195,24 +195,91 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _on_sigterm(signum, frame):  # pragma: no cover - exercised through subprocesses
+    from runtime.errors import Terminated
+
+    raise Terminated()
+
+
+def _command_name(argv: Sequence[str] | None) -> str:
+    args = list(sys.argv[1:] if argv is None else argv)
+    words = [a for a in args[:2] if not a.startswith("-")]
+    return " ".join(["kvrod", *words[:1]])
+
+
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+def _error_line(prefix: str, exc: BaseException) -> tuple[str, int]:
+    """(message, exit code) for an exception that reached the command line."""
+    from runtime.errors import GeneratedCodeError
+
+    if isinstance(exc, CliError):
+        return str(exc), 2
+    if isinstance(exc, MemoryError):
+        return (f"{prefix}: out of memory: the problem is too large for this machine "
+                "(reduce n_elements, t_end or the output density)"), 2
+    if isinstance(exc, GeneratedCodeError):
+        return f"{prefix}: generated code: {_one_line(exc)}", 2
+    if isinstance(exc, OSError):
+        where = exc.filename if exc.filename is not None else ""
+        what = exc.strerror or type(exc).__name__
+        from runtime.io.folder import is_disk_full
+
+        hint = " (disk full: free space and run again)" if is_disk_full(exc) else ""
+        return (f"{prefix}: cannot access {str(where)!r}: {what}{hint}" if where
+                else f"{prefix}: {what}: {_one_line(exc)}{hint}"), 2
+    if isinstance(exc, ValueError):  # parameter, config, folder, checkpoint errors
+        msg = _one_line(exc)
+        return (msg if msg.startswith("kvrod") else f"{prefix}: error: {msg}"), 2
+    return (f"{prefix}: internal error: {type(exc).__name__}: {_one_line(exc)} (this is a "
+            "bug in kvrod; KVROD_DEBUG=1 shows the traceback)"), 3
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the `kvrod` console script."""
-    parser = build_parser()
+    """Entry point of the `kvrod` console script: the one error boundary of the CLI.
+
+    Every error becomes one line on stderr naming the parameter, flag or file: exit 2 for
+    bad input, I/O and integrity errors, 130 for Ctrl-C, 143 for SIGTERM, 3 for a bug
+    (an unexpected exception; ``KVROD_DEBUG=1`` re-raises it with its traceback).
+    """
+    import os
+    import signal
+
+    prefix = _command_name(argv)
     try:
+        previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    except ValueError:  # not the main thread (e.g. called from a test runner thread)
+        previous = None
+    try:
+        parser = build_parser()
         args = parser.parse_args(argv)
         return int(args.func(args) or 0)
-    except CliError as exc:
-        print(str(exc), file=sys.stderr)
-        return 2
     except BrokenPipeError:  # e.g. `kvrod derive show X | head`
         sys.stderr.close()
         return 0
     except KeyboardInterrupt:
         print("kvrod: interrupted", file=sys.stderr)
         return 130
-    except ValueError as exc:  # parameter errors from the layers: one line
-        print(f"kvrod: error: {exc}", file=sys.stderr)
-        return 2
+    except SystemExit:
+        raise
+    except BaseException as exc:
+        from runtime.errors import Terminated
+
+        if isinstance(exc, Terminated):
+            print("kvrod: terminated", file=sys.stderr)
+            return 143
+        if not isinstance(exc, Exception):
+            raise
+        if os.environ.get("KVROD_DEBUG", "") not in ("", "0"):
+            raise
+        message, code = _error_line(prefix, exc)
+        print(message, file=sys.stderr)
+        return code
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":

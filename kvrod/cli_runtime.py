@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import math
+import sys
 from pathlib import Path
 
 
@@ -49,13 +51,21 @@ def scenario_from_args(args):
 
 
 def run_and_write(scenario, out: Path, label: str, plots: bool = True, resume: bool = False,
-                  vtk_every: float | None = None, checkpoint_every: float = 1.0) -> tuple:
-    """Run with progress bar, checkpoints and a results folder that is never half-written:
-    summary.json says "running" (with t_reached) until the run ends; ``resume`` continues
-    from DIR/checkpoint.npz."""
+                  vtk_every: float | None = None, checkpoint_every: float = 1.0,
+                  overwrite: bool = False, progress: bool = True) -> tuple:
+    """Run one scenario into results folder ``out`` and write its results.
+
+    Everything that can be checked is checked before anything is written (parameters, the
+    folder, an existing result, the checkpoint to resume, the generated code). Then the
+    folder is locked (``.kvrod.lock``), ``summary.json`` says "running" (with t_reached)
+    while the run goes and a checkpoint is written every simulated second; when the run
+    stops, ``summary.json`` says "finished", "failed" or "interrupted" (never "running",
+    except after SIGKILL). ``resume`` continues from DIR/checkpoint.npz (VTK frames before
+    the checkpoint are kept); ``overwrite`` replaces a finished result.
+    """
     from dataclasses import asdict
 
-    from runtime.io import plots as P
+    from runtime.io import folder as F
     from runtime.io.results import (
         CHECKPOINT,
         load_checkpoint,
@@ -63,37 +73,61 @@ def run_and_write(scenario, out: Path, label: str, plots: bool = True, resume: b
         write_run,
         write_status,
     )
+    from runtime.model import build
     from runtime.scenarios import run_cantilever
 
+    out = Path(out)
     params = {**asdict(scenario), "tau_E": scenario.tau_E}
+    F.check_output_path(out)
+    if not resume:
+        F.refuse_existing(out, "simulate", overwrite=overwrite, resumable=True)
     state = load_checkpoint(out, params) if resume else None
-    write_status(out, params, "running", float(state["t"]) if state else 0.0)
+    build.require_generated()
+    with F.claim(out, "simulate", overwrite=overwrite and not resume) as claimed:
+        t_start = float(state["t"]) if state else 0.0
+        write_status(out, params, "running", t_start)
+        claimed.keep()
 
-    def on_checkpoint(run, st):
-        write_checkpoint(out, params, st)
-        write_status(out, params, "running", st["t"])
+        def on_checkpoint(run, st):
+            write_checkpoint(out, params, st)
+            write_status(out, params, "running", st["t"])
 
-    cb, close = _progress(scenario.t_end, label)
-    try:
-        run = run_cantilever(scenario, progress=cb, checkpoint=on_checkpoint,
-                             checkpoint_every=checkpoint_every, resume=state,
-                             snapshot_every=vtk_every)
-    finally:
-        close()
-    summary = write_run(out, run, extra={"resumed_from_t": float(state["t"])} if state else None)
-    if run.status == "finished":
-        (out / CHECKPOINT).unlink(missing_ok=True)
-    if vtk_every is not None and run.snapshots:
-        from runtime.io.vtk import write_series
+        series = None
+        if vtk_every is not None:
+            from runtime.io.vtk import VtkSeries
+            from runtime.model.rod import RodModel
 
-        write_series(out / "vtk", run.model, run.snapshots)
-    if plots and run.t.size > 1:
-        P.plot_tip([run], [label], out / "tip.png")
-        P.plot_energy(run, out / "energy.png")
-        if run.peaks_x.size >= 2:
-            P.plot_damping_vs_amplitude([run], [label],
-                                        [scenario.linear_prediction()["zeta_1"]],
-                                        out / "damping_ratio.png")
+            series = VtkSeries(out / "vtk", RodModel(scenario.rod_parameters(),
+                                                     tip_force=(scenario.tip_force, 0, 0)),
+                               resume_from=t_start if state else None)
+        cb, close = _progress(scenario.t_end, label) if progress else (None, lambda: None)
+        try:
+            run = run_cantilever(scenario, progress=cb, checkpoint=on_checkpoint,
+                                 checkpoint_every=checkpoint_every, resume=state,
+                                 snapshot_every=vtk_every,
+                                 snapshot_sink=series.add if series else None)
+        except BaseException as exc:   # a bug or resource error: say so, keep the checkpoint
+            write_status(out, params, "failed", t_start, f"{type(exc).__name__}: {exc}")
+            raise
+        finally:
+            close()
+            if series is not None:
+                series.close()
+        extra = {"resumed_from_t": t_start} if state else None
+        summary = write_run(out, run, extra=extra)
+        if run.status == "finished":
+            (out / CHECKPOINT).unlink(missing_ok=True)
+        if run.interrupt is not None:
+            raise run.interrupt
+        if plots and run.t.size > 1:
+            from runtime.io import plots as P
+
+            P.plot_tip([run], [label], out / "tip.png")
+            P.plot_energy(run, out / "energy.png")
+            if run.peaks_x.size >= 2:
+                P.plot_damping_vs_amplitude([run], [label],
+                                            [scenario.linear_prediction()["zeta_1"]],
+                                            out / "damping_ratio.png")
     return run, summary
 
 
@@ -123,26 +157,35 @@ def _cmd_simulate(args) -> int:
                        "scenarios are: cantilever")
     if args.scenario is None and not args.config:
         raise CliError("kvrod simulate: name a scenario (cantilever) or give --config FILE")
-    if args.vtk is not None and not args.vtk > 0:
+    if args.vtk is not None and not (math.isfinite(args.vtk) and args.vtk > 0):
         raise CliError(f"kvrod simulate: --vtk = {args.vtk} must be > 0 (seconds between "
                        "snapshots)")
+    if args.resume and args.overwrite:
+        raise CliError("kvrod simulate: --resume and --overwrite exclude each other")
     sc = scenario_from_args(args)
+    if args.vtk is not None and sc.t_end / args.vtk > 100_000:
+        raise CliError(f"kvrod simulate: --vtk = {args.vtk} would write "
+                       f"{sc.t_end / args.vtk:.3g} frames (at most 100000; t_end/--vtk)")
     out = Path(args.out)
     if args.resume and _already_finished(sc, out):
         print(f"{out}: this run has already finished (summary.json); nothing to resume")
         return 0
-    run, s = run_and_write(sc, out, "cantilever", resume=args.resume, vtk_every=args.vtk)
+    run, s = run_and_write(sc, out, "cantilever", resume=args.resume, vtk_every=args.vtk,
+                           overwrite=args.overwrite)
     tip = s["static"]["tip"]
     print(f"static tip [m]: {tip}  (Newton iterations: {s['static']['newton_iterations']})")
     z = s["damping_ratios"]
     print(f"maxima: {len(s['peaks'])}, damping ratios: {[round(v, 4) for v in z]}")
     print(f"linear prediction zeta_1 = omega_1 tau/2 = {s['linear_prediction']['zeta_1']:.4f}")
     eb = s["energy_balance_max_rel"]
-    print(f"energy balance max rel. error: {eb:.2e}" if eb is not None else "no energy audit")
+    print(f"energy balance max rel. error: {eb:.2e}" if eb is not None
+          else "energy balance: not applicable (no energy in the run)")
     print(f"counters: {s['counters']}, wall time {s['wall_time_s']:.2f} s")
     print(f"wrote {out}/summary.json, series.npz, *.png" + (", vtk/rod.pvd" if args.vtk else ""))
+    for w in s.get("warnings", []):
+        print(f"kvrod: warning: {w}", file=sys.stderr)
     if run.status != "finished":
-        print(f"kvrod: run {run.status}: {run.message}")
+        print(f"kvrod simulate: run {run.status}: {run.message}", file=sys.stderr)
         return 1
     return 0
 
@@ -178,6 +221,8 @@ def add_commands(sub, parser_class) -> None:
     s.add_argument("--damping", choices=("consistent", "naive"),
                    help="extensional viscosity eta_E (consistent) or eta~_E (naive)")
     s.add_argument("--out", default="results/cantilever", help="results folder")
+    s.add_argument("--overwrite", action="store_true",
+                   help="replace a finished result in --out (default: refuse)")
     s.set_defaults(func=_cmd_simulate)
 
     r = sub.add_parser("reproduce", help="reproduce the paper's Sect. 5 (figures + notes)")

@@ -20,3 +20,12 @@ class ParameterError(constitutive.ParameterError):
 
 class GeneratedCodeError(RuntimeError):
     """generated/ is inconsistent with its manifest (regenerate with `kvrod generate`)."""
+
+
+class Terminated(BaseException):
+    """SIGTERM turned into an exception (by the command line), so that a run can record
+    where it stopped, like Ctrl-C (KeyboardInterrupt)."""
+
+
+#: exceptions that interrupt a run: it records "interrupted" and re-raises them
+INTERRUPTS: tuple[type[BaseException], ...] = (KeyboardInterrupt, Terminated)

@@ -6,9 +6,12 @@ reader never sees half a file, and a run that dies leaves the previous complete 
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
+import zipfile
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -34,13 +37,27 @@ def jsonable(obj: Any, nonfinite: str = "string") -> Any:
     return obj
 
 
+@contextlib.contextmanager
+def _removed_on_failure(tmp: Path) -> Iterator[None]:
+    """Remove the temporary file ``tmp`` if writing it fails (disk full, Ctrl-C, ...), so a
+    failed write leaves neither a partial file nor a stray temporary one."""
+    try:
+        yield
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
+
+
 def write_json(path: Path, data: dict) -> Path:
     """Write ``data`` as indented JSON atomically (non-finite floats become strings)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    text = json.dumps(jsonable(data), indent=2) + "\n"
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(json.dumps(jsonable(data), indent=2) + "\n")
-    tmp.replace(path)
+    with _removed_on_failure(tmp):
+        tmp.write_text(text)
+        tmp.replace(path)
     return path
 
 
@@ -49,8 +66,9 @@ def write_npz(path: Path, **arrays: np.ndarray) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp.npz")
-    np.savez_compressed(tmp, **arrays)
-    tmp.replace(path)
+    with _removed_on_failure(tmp):
+        np.savez_compressed(tmp, **arrays)
+        tmp.replace(path)
     return path
 
 
@@ -89,19 +107,41 @@ def write_checkpoint(out_dir: Path, parameters: dict, state: dict) -> Path:
     return write_npz(Path(out_dir) / CHECKPOINT, **arrays)
 
 
-def load_checkpoint(out_dir: Path, parameters: dict) -> dict:
-    """The state saved by :func:`write_checkpoint`; raises ValueError if there is none or
-    it was written for other parameters (names the first differing parameter)."""
+class CheckpointError(ValueError):
+    """A checkpoint that cannot be used for --resume (message names the file)."""
+
+
+def load_checkpoint(out_dir: Path, parameters: dict,
+                    required: tuple[str, ...] = ("t", "y", "yp")) -> dict:
+    """The state saved by :func:`write_checkpoint`.
+
+    Raises :class:`CheckpointError` if there is none, it is unreadable (truncated,
+    corrupted, not an NPZ archive), lacks a ``required`` entry, or was written for other
+    parameters (names the first differing parameter).
+    """
     path = Path(out_dir) / CHECKPOINT
     if not path.exists():
-        raise ValueError(f"--resume: no checkpoint in {out_dir} (nothing to resume)")
-    with np.load(path) as f:
-        data = {k: f[k] for k in f.files}
-    saved = json.loads(str(data.pop("parameters_json")))
+        raise CheckpointError(f"--resume: no checkpoint in {str(out_dir)!r} (nothing to "
+                              "resume)")
+    try:
+        with np.load(path, allow_pickle=False) as f:
+            data = {k: f[k] for k in f.files}
+        saved = json.loads(str(data.pop("parameters_json")))
+        counters = json.loads(str(data.pop("counters_json")))
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
+        raise CheckpointError(f"--resume: checkpoint {str(path)!r} is unreadable or "
+                              f"truncated ({type(exc).__name__}); start again with "
+                              "--overwrite") from exc
+    missing = [k for k in required if k not in data]
+    if missing or not isinstance(saved, dict) or not isinstance(counters, dict):
+        raise CheckpointError(f"--resume: checkpoint {str(path)!r} is incomplete (missing "
+                              f"{', '.join(missing) or 'metadata'}); start again with "
+                              "--overwrite")
     wanted = jsonable(parameters)
     for key in sorted(set(saved) | set(wanted)):
         if saved.get(key) != wanted.get(key):
-            raise ValueError(f"--resume: checkpoint in {out_dir} was written with {key} = "
-                             f"{saved.get(key)!r}, this run has {wanted.get(key)!r}")
-    data["counters"] = json.loads(str(data.pop("counters_json")))
+            raise CheckpointError(f"--resume: checkpoint in {str(out_dir)!r} was written with "
+                                  f"{key} = {saved.get(key)!r}, this run has "
+                                  f"{wanted.get(key)!r}")
+    data["counters"] = counters
     return data

@@ -94,22 +94,76 @@ def write_vtp(path: Path, points: np.ndarray, cell_data: dict, point_data: dict)
     return path
 
 
+def _pvd_text(entries: list[tuple[float, str]]) -> str:
+    rows = [f'<DataSet timestep="{t:.9g}" group="" part="0" file="{name}"/>'
+            for t, name in entries]
+    pvd = ['<?xml version="1.0"?>',
+           '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
+           "<Collection>", *rows, "</Collection>", "</VTKFile>"]
+    return "\n".join(pvd) + "\n"
+
+
+def read_pvd(path: Path) -> list[tuple[float, str]]:
+    """(time, file) entries of a .pvd collection written by :class:`VtkSeries`."""
+    entries = []
+    for line in Path(path).read_text().splitlines():
+        if "<DataSet" in line and 'timestep="' in line and 'file="' in line:
+            t = float(line.split('timestep="', 1)[1].split('"', 1)[0])
+            entries.append((t, line.split('file="', 1)[1].split('"', 1)[0]))
+    return entries
+
+
+class VtkSeries:
+    """A ParaView time series written frame by frame (``stem_00000.vtp`` ... + ``stem.pvd``).
+
+    Each frame is written when it is added and the collection file is rewritten atomically
+    (every ``pvd_every`` frames and on :meth:`close`), so a run that stops keeps the frames
+    it produced. ``resume_from=t``: continue an earlier series in ``folder``: its frames
+    before ``t`` are kept (the resumed run adds the frame at ``t`` and those after it).
+    """
+
+    def __init__(self, folder: Path, model: RodModel, stem: str = "rod",
+                 resume_from: float | None = None, pvd_every: int = 20) -> None:
+        self.folder, self.model, self.stem = Path(folder), model, stem
+        self.path = self.folder / f"{stem}.pvd"
+        self.entries: list[tuple[float, str]] = []
+        if resume_from is not None and self.path.exists():
+            tol = 1e-9 * max(1.0, abs(resume_from))
+            self.entries = [(t, f) for t, f in read_pvd(self.path)
+                            if t < resume_from - tol and (self.folder / f).exists()]
+            keep = {f for _, f in self.entries}
+            for stale in self.folder.glob(f"{stem}_*.vtp"):  # frames after the checkpoint
+                if stale.name not in keep:
+                    stale.unlink()
+        self._k = len(self.entries)
+        self.pvd_every = max(1, int(pvd_every))
+
+    def add(self, t: float, y: np.ndarray) -> None:
+        """Write the frame of state ``y`` at time ``t``."""
+        cell, point = element_fields(self.model, np.ascontiguousarray(y))
+        pos = point.pop("position")
+        name = f"{self.stem}_{self._k:05d}.vtp"
+        write_vtp(self.folder / name, pos, cell, point)
+        self._k += 1
+        self.entries.append((float(t), name))
+        if len(self.entries) % self.pvd_every == 0:
+            self.write_collection()
+
+    def write_collection(self) -> Path:
+        """(Re)write ``stem.pvd`` with the frames so far (atomically)."""
+        self.folder.mkdir(parents=True, exist_ok=True)
+        tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
+        tmp.write_text(_pvd_text(self.entries))
+        tmp.replace(self.path)
+        return self.path
+
+    close = write_collection
+
+
 def write_series(folder: Path, model: RodModel, snapshots: Iterable[tuple[float, np.ndarray]],
                  stem: str = "rod") -> Path:
     """Write ``stem_0000.vtp ...`` and ``stem.pvd`` (the time collection) into ``folder``."""
-    folder = Path(folder)
-    entries = []
-    for k, (t, y) in enumerate(snapshots):
-        cell, point = element_fields(model, np.ascontiguousarray(y))
-        pos = point.pop("position")
-        name = f"{stem}_{k:05d}.vtp"
-        write_vtp(folder / name, pos, cell, point)
-        entries.append(f'<DataSet timestep="{t:.9g}" group="" part="0" file="{name}"/>')
-    pvd = ['<?xml version="1.0"?>',
-           '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
-           "<Collection>", *entries, "</Collection>", "</VTKFile>"]
-    path = folder / f"{stem}.pvd"
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text("\n".join(pvd) + "\n")
-    tmp.replace(path)
-    return path
+    series = VtkSeries(folder, model, stem)
+    for t, y in snapshots:
+        series.add(t, y)
+    return series.close()

@@ -68,24 +68,49 @@ def _manifest_hash(text: str) -> str:
     return hashlib.sha256(text.encode() + b"\0").hexdigest()
 
 
-def verify_manifest(gdir: Path | None = None) -> None:
-    """Check the C files against generated/MANIFEST.json (entries that exist only).
+def verify_manifest(gdir: Path | None = None, names: tuple[str, ...] | None = None) -> None:
+    """Check generated files against generated/MANIFEST.json before anything uses them.
 
-    Raises GeneratedCodeError naming the file and telling the user to regenerate.
+    ``names``: the files to check (default: the C sources and headers and, when present in
+    the manifest, the serialised CasADi kernels). Raises :class:`GeneratedCodeError`
+    naming the file when the manifest is missing, unreadable or truncated, lacks an entry,
+    or a file is missing or does not match its recorded hash.
     """
     gdir = gdir or generated_dir()
     mpath = gdir / "MANIFEST.json"
-    if not mpath.exists():
-        return
-    files = json.loads(mpath.read_text()).get("files", {})
-    for name in SOURCES + HEADERS:
+    regen = "run `kvrod generate` to regenerate generated/"
+    try:
+        manifest = json.loads(mpath.read_text())
+        files = manifest["files"]
+        if not isinstance(files, dict):
+            raise TypeError("'files' is not a table")
+    except FileNotFoundError:
+        raise GeneratedCodeError(f"{mpath} is missing: the generated code cannot be checked; "
+                                 f"{regen}") from None
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise GeneratedCodeError(f"{mpath} is unreadable or truncated ({type(exc).__name__}); "
+                                 f"{regen}") from None
+    if names is None:
+        names = SOURCES + HEADERS + tuple(sorted(n for n in files if n.endswith(".casadi")))
+    for name in names:
         entry = files.get(name)
-        if entry is None:
-            continue
-        if _manifest_hash((gdir / name).read_text()) != entry.get("sha256"):
+        if not isinstance(entry, dict) or "sha256" not in entry:
+            raise GeneratedCodeError(f"generated/{name} has no entry in {mpath.name}; {regen}")
+        try:
+            text = (gdir / name).read_text()
+        except OSError:
+            raise GeneratedCodeError(f"generated/{name} is missing or unreadable; "
+                                     f"{regen}") from None
+        if _manifest_hash(text) != entry.get("sha256"):
             raise GeneratedCodeError(
                 f"generated/{name} does not match generated/MANIFEST.json (edited by hand or "
-                "stale); run `kvrod generate` to regenerate it")
+                f"stale); {regen}")
+
+
+@lru_cache(maxsize=1)
+def require_generated() -> None:
+    """Verify the generated tree once per process (see :func:`verify_manifest`)."""
+    verify_manifest()
 
 
 def library_key(compiler: str, gdir: Path | None = None) -> str:
@@ -175,4 +200,5 @@ def clear_cache() -> None:
     """Forget the loaded library (tests switch KVROD_NO_COMPILER / KVROD_CACHE_DIR)."""
     global _warned
     _load_cached.cache_clear()
+    require_generated.cache_clear()
     _warned = False

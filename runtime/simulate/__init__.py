@@ -1,0 +1,1 @@
+"""The one run loop (:mod:`.loop`) and its observers (:mod:`.observers`)."""

@@ -1,0 +1,135 @@
+"""The one run loop: the integrator's ``step()`` with observers, checkpoints and resume.
+
+:func:`run_loop` integrates a model (any :class:`~runtime.solvers.protocols.ResidualProblem`)
+from consistent initial values with the variable-order BDF of :mod:`runtime.solvers.bdf`,
+calls its observers (:mod:`runtime.simulate.observers`) after every accepted step, hands
+a checkpoint (the solver's state plus every observer's :meth:`state`) to ``checkpoint``
+every ``checkpoint_every`` simulated seconds, and continues from such a checkpoint when
+given ``resume``. It never raises for a solver failure or an interruption: the returned
+:class:`LoopResult` says ``finished``, ``failed`` or ``interrupted``, why, and keeps the
+last accepted state; the observers keep everything up to it.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from runtime.errors import INTERRUPTS
+from runtime.solvers.bdf import BDF, IntegrationError
+
+
+@dataclass
+class RunState:
+    """What observers see of the run in progress: last accepted t, y, y' and the solver."""
+
+    t: float
+    y: np.ndarray
+    yp: np.ndarray
+    solver: BDF | None = None
+
+
+@dataclass
+class LoopResult:
+    """Outcome of :func:`run_loop`.
+
+    status: "finished", "failed" or "interrupted"; message: why; t_last, y_last: the last
+    accepted point; counters: solver counters (including those before a resume);
+    wall_time_s: time spent in the loop; interrupt: the exception that interrupted the run
+    (re-raised by the caller after saving the results).
+    """
+
+    status: str
+    message: str
+    t_last: float
+    y_last: np.ndarray
+    yp_last: np.ndarray
+    counters: dict[str, int] = field(default_factory=dict)
+    wall_time_s: float = 0.0
+    interrupt: BaseException | None = None
+
+
+def describe_failure(exc: IntegrationError, describe_dof: Callable[[int], str]) -> str:
+    """One message naming time, step size, residual norm and the worst component."""
+    return (f"integration failed at t = {exc.t:.6g} s (last accepted step), step size "
+            f"{exc.h:.3g} s, residual norm {exc.residual_norm:.3g}, worst component: "
+            f"{describe_dof(exc.worst_index)}: {exc}")
+
+
+def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
+             rtol: float, atol: float | np.ndarray, observers: Sequence[Any] = (),
+             min_step: float = 0.0, max_order: int = 5, max_steps: int = 2_000_000,
+             checkpoint: Callable[[dict[str, Any]], object] | None = None,
+             checkpoint_every: float = 1.0, counters0: dict[str, int] | None = None,
+             describe_dof: Callable[[int], str] = lambda i: f"state index {i}",
+             restored: bool = False) -> LoopResult:
+    """Integrate ``model`` from ``(t0, y0, yp0)`` to ``t_end`` with observers.
+
+    ``restored``: the observers were restored from a checkpoint at ``t0`` (their ``begin``
+    must not record the start again; they are called with it anyway so that they can pick
+    up the state). ``counters0``: counters of the run before the resume. See the module
+    docstring for checkpoints and failures.
+    """
+    wall0 = time.perf_counter()
+    counters0 = dict(counters0 or {})
+    solver = BDF(model, t0, y0, yp0, t_end, rtol=rtol, atol=atol, min_step=min_step,
+                 max_order=max_order)
+    run = RunState(t=t0, y=np.array(y0, dtype=float), yp=np.array(yp0, dtype=float),
+                   solver=solver)
+    hooks = {name: [getattr(o, name) for o in observers if hasattr(o, name)]
+             for name in ("begin", "step", "end")}
+    for f in hooks["begin"]:
+        f(run)
+    next_ckpt = t0 + checkpoint_every
+
+    def total_counters() -> dict[str, int]:
+        return {k: counters0.get(k, 0) + v for k, v in solver.counters.items()}
+
+    def result(status: str, message: str, interrupt: BaseException | None = None
+               ) -> LoopResult:
+        for f in hooks["end"]:
+            f(run)
+        return LoopResult(status=status, message=message, t_last=float(run.t),
+                          y_last=np.array(run.y, copy=True), yp_last=np.array(run.yp),
+                          counters=total_counters(), wall_time_s=time.perf_counter() - wall0,
+                          interrupt=interrupt)
+
+    try:
+        while solver.status == "running" and solver.nstep < max_steps:
+            solver.step()
+            t_old, t1 = solver.t_old, solver.t
+            if not np.all(np.isfinite(solver.y)):
+                dense = solver.dense_output()
+                raise IntegrationError(f"non-finite state at t = {t1:g} s", t=t_old,
+                                       y=dense(t_old), yp=dense.derivative(t_old),
+                                       h=t1 - t_old, residual_norm=math.inf,
+                                       worst_index=int(np.argmin(np.isfinite(solver.y))))
+            dense = solver.dense_output()
+            run.t, run.y, run.yp = t1, solver.y, solver.yp
+            for f in hooks["step"]:
+                f(run, dense, t_old, t1)
+            if checkpoint is not None and t1 >= next_ckpt and solver.status == "running":
+                state: dict[str, Any] = {"t": float(t1), "y": solver.y.copy(),
+                                         "yp": solver.yp.copy(),
+                                         "counters": total_counters()}
+                for o in observers:
+                    if hasattr(o, "state"):
+                        state.update(o.state())
+                checkpoint(state)
+                next_ckpt = t1 + checkpoint_every
+    except IntegrationError as exc:
+        run.t, run.y, run.yp = float(exc.t), np.array(exc.y), np.array(exc.yp)
+        return result("failed", describe_failure(exc, describe_dof))
+    except INTERRUPTS as exc:
+        return result("interrupted", f"interrupted at t = {run.t:.6g} s "
+                      f"({type(exc).__name__}); --resume continues from the last checkpoint",
+                      interrupt=exc)
+    if solver.status == "finished":
+        return result("finished", "ok")
+    return result("failed", f"stopped after max_steps = {max_steps} steps at "
+                            f"t = {solver.t:g} s")
