@@ -47,11 +47,12 @@ which makes the differences smooth (internal numerical differentiation); a colum
 response is lost in round-off gets a larger step. The unloaded reference configuration is
 copy 0 of the same batch, and the integrator carries the other copies as *differences*
 from it, with the error control applied to the differences: displacements ``r - r_ref``
-are then accurate relative to their own size (about 1e-12 at rtol 1e-12), which the
-small-load linear checks need. Loads (and prescribed end motion) are applied by
-continuation from zero with a secant predictor, so the solution branch connected to the
-unloaded state is followed. A straight rod clamped at both ends with ``EA = inf`` has an
-indeterminate axial force and is rejected (singular Jacobian).
+are then accurate relative to their own size (about 1e-12 at rtol 1e-12, down to a
+round-off floor of about 1e-15 L), which the small-load linear checks need. Loads (and
+prescribed end motion) are applied by continuation from zero with a secant predictor, so
+the solution branch connected to the unloaded state is followed. A straight rod clamped
+at both ends with ``EA = inf`` has an indeterminate axial force and is rejected (singular
+Jacobian).
 
 Also accumulated along ``s``: the elastic energy ``W = 1/2 int (N . C_F^-1 N + M . C_M^-1 M)``
 and, for dead forces only, the total potential ``W - (F . u(L) + int f . u + sum P_k . u(s_k))``
@@ -274,13 +275,10 @@ class _Shooter:
         scales[_M] = F_s * L
         scales[_W] = F_s * L
         scales[_PHI] = max(float(np.linalg.norm(f)), 1e-300) * L * L
-        self.atol_unit = 1e-3 * rtol * scales
-        # differences of the kinematic states scale with the load: rotations are of order
-        # F_s L^2 / EI (bounded by 1)
-        eps = min(1.0, F_s * L * L / min(stiffness.EI1, stiffness.EI2, stiffness.GJ))
-        self.diff_scale = np.ones(_D)
-        self.diff_scale[_R] = self.diff_scale[_Q] = eps
-        self.diff_scale[_W] = self.diff_scale[_PHI] = eps
+        # absolute tolerances: 1e-3 rtol of the scales, but not below the round-off of the
+        # differences f(y_0 + d) - f(y_0) (about 1e-16 of the scales), which would make the
+        # error estimate noise and the steps collapse
+        self.atol = max(1e-3 * rtol, 1e-15) * scales
 
     def rhs(self, s: float, zflat: np.ndarray, lam: np.ndarray) -> np.ndarray:
         """Right-hand side in difference form: copy 0 and the differences of the others."""
@@ -327,15 +325,14 @@ class _Shooter:
 
         Copy 0 must be the unloaded reference (``x = 0``, ``lam = 0``). The integrator
         carries copy 0 and the *differences* of the other copies from it, with the
-        tolerances applied to the differences (absolute floor scaled by the load), so
-        displacements are accurate relative to their own size, also for tiny loads.
+        tolerances applied to the differences, so displacements are accurate relative to
+        their own size down to the round-off floor (about 1e-15 L).
         """
         Y = self.initial(x)
         k = Y.shape[1]
         Z = Y.copy()
         Z[:, 1:] -= Z[:, :1]
-        atol = np.column_stack([self.atol_unit] + [self.atol_unit * self.diff_scale] * (k - 1))
-        atol = atol.reshape(-1)
+        atol = np.repeat(self.atol, k)
         stations = [s for s, _ in self.point_forces] + [self.L]
         samples = None if s_eval is None else np.empty((_D, k, len(s_eval)))
         at_forces = []

@@ -84,11 +84,11 @@ def test_central_point_load_other_plane():
 def test_small_load_error_is_quadratic():
     """Relative error vs the linear formula grows like the load squared (membrane tension)."""
     errs = []
-    for q in (1e-2 * EI1 / L**3, 2e-2 * EI1 / L**3):
+    for q in (3e-2 * EI1 / L**3, 6e-2 * EI1 / L**3):
         s = solve_rod(L, ST, end="clamped", distributed_force=(0.0, -q, 0.0), load_steps=1,
                       n_points=3)
         lin = clamped_uniform_load_deflection(q, L=L, EI=EI1, kGA=GA2)
         errs.append(-s.displacement[1, 1] / lin - 1)
     assert errs[0] < 0  # tension stiffens
-    assert 1e-8 < -errs[0] < 1e-7
-    assert errs[1] / errs[0] == pytest.approx(4.0, rel=1e-3)
+    assert 1e-7 < -errs[0] < 1e-6
+    assert errs[1] / errs[0] == pytest.approx(4.0, rel=2e-3)
