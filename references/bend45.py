@@ -41,12 +41,18 @@ list the components in the order (y, x, z) of this placement, e.g. (15.79, 47.23
 
 Converged values in the later literature are reported near (47.1, 15.7, 53.5) for
 P = 600 with refined meshes; I could not verify exact published digits for this data set
-here, so the reference is the shooting number above. (A data point that is *not* the
-same problem: the Kynema code's regression test uses shear factor 5/6, rounded stiffnesses
-8.333e5 and a spline reference axis through three points of the arc, and reports the tip
-displacement (-23.6460, -13.7208, 53.5776) at P = 600; the exact arc with shear factor 5/6
-gives (-23.5606, -13.6046, 53.4755) here, so their geometry or data differ at the
-0.2 % level.)
+here, so the reference is the shooting number above.
+
+A third-party converged number for a *variant* that cross-checks the 3-D solver: the
+Kynema code's regression test (Static_CurvedCompositeBeamBending, a 15-node spectral
+element) uses shear factor 5/6, stiffnesses rounded to 8.333e5, and a reference axis that
+is the parabola ``y(x)`` through three points of the arc (tip curving to ``-y``, length
+78.566 instead of 78.540, tangent not along ``x`` at the root), and reports the tip
+displacement (-23.6459716009047, 13.7208006040058, 53.5776450626987) at P = 600. Given
+that parabola, the shooting solver reproduces all these digits to about 1e-12
+(``tests/references/test_bend45.py``); for the true circular arc with shear factor 5/6 it
+gives (-23.5606, -13.6046, 53.4755). So Kynema's number is not the Bathe-Bolourchi bend,
+but it validates the solver.
 """
 
 from __future__ import annotations
