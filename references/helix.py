@@ -65,10 +65,13 @@ and ``T = cos(alpha) e_phi + sin(alpha) e3``. The force part is the same for bot
     which grows like ``l``, exactly as ``delta_axis`` does: the difference does **not**
     vanish relative to ``delta_axis`` for many turns. It is the bending of the coil as a
     whole by the eccentric load (constant moment ``F R``; the end section rotates and the
-    end point, at radius ``R``, moves axially with it); for ``alpha -> 0`` the ratio is
-    ``delta_end / delta_axis -> 3/2 + GJ / (2 EI)`` (1.885 for a round wire with
-    ``nu = 0.3``). Only the part oscillating with the fractional turn is bounded and
-    vanishes relatively as ``n`` grows.
+    end point, at radius ``R``, moves axially with it); for ``alpha -> 0`` and without the
+    extension and shear terms the ratio is ``delta_end / delta_axis = 3/2 + GJ / (2 EI)``
+    (1.885 for a round wire with ``nu = 0.3``; 1.880 in stiffness for the example
+    ``R = 1 cm``, ``P = 5 mm``, 5 turns, ``d = 2 mm``, ``E = 1 GPa``). Only the part
+    oscillating with the fractional turn is bounded and vanishes relatively as ``n`` grows.
+    (A load on the end point with the end *guided*, i.e. kept from rotating, is a third
+    case, not treated here.)
 
 The shooting check (:func:`spring_stiffness_shooting`) solves the full nonlinear
 Simo-Reissner problem with :func:`references.cosserat_bvp.solve_rod` at loads ``+-F`` with
