@@ -12,6 +12,14 @@
   shear) in the time domain and by inverse Laplace transform; exact uniaxial response and
   complex modulus of the 3-D Kelvin-Voigt solid.
 - :mod:`.pendulum`: rigid compound pendulum released from rest (Jacobi elliptic functions).
+- :mod:`.sections`: section constants (rectangle, circle, ellipse, tube) with Saint-Venant
+  torsion constants and Cowper's shear factors.
+- :mod:`.cosserat_bvp`: general static 3-D Simo-Reissner rod (intrinsic curvature/twist,
+  dead end and distributed loads, free or clamped far end) by shooting.
+- :mod:`.bend45`: the Bathe-Bolourchi 45-degree bend, converged tip positions.
+- :mod:`.rollup`: roll-up of a straight cantilever by an end moment (closed form).
+- :mod:`.helix`: axial stiffness of a helical spring (classical and end-point loads).
+- :mod:`.clamped`: rod clamped at both ends, linear Timoshenko deflections.
 
 Only NumPy and SciPy are used, so the references share no code with the simulator.
 """

@@ -17,7 +17,8 @@ Independent of kvrod (NumPy/SciPy only). SI units; angular frequencies in rad/s.
 - Axial clamped-free bar: ``omega_k = (2k-1) pi / (2L) sqrt(E / rho)``.
 - Torsion clamped-free: ``omega_k = (2k-1) pi / (2L) sqrt(G J_T / (rho I_3))`` with the
   Saint-Venant torsion constant ``J_T`` (series for a rectangle) and the polar moment
-  ``I_3 = I_1 + I_2`` (rotary inertia of the section about its normal, paper Sect. 2.2).
+  ``I_3 = I_1 + I_2`` (rotary inertia of the section about its normal, paper Sect. 2.2);
+  ``rectangle_torsion_constant`` lives in :mod:`.sections` and is re-exported here.
 - Small-deflection static tip under a tip force: ``F L^3 / (3 E I) + F L / (kappa G A)``.
 - Linear Kelvin-Voigt damping ``V = tau C`` (paper Eq. (9) with ``tau_B = tau_S = tau_E``) is
   stiffness proportional, so each undamped mode ``omega_k`` gets the damping ratio
@@ -31,6 +32,8 @@ import math
 import numpy as np
 from scipy.linalg import expm
 from scipy.optimize import brentq
+
+from .sections import cowper_rectangle, rectangle_torsion_constant
 
 __all__ = [
     "axial_frequencies",
@@ -153,20 +156,6 @@ def axial_frequencies(n: int, *, L: float, rho: float, E: float) -> np.ndarray:
     return (2 * k - 1) * math.pi / (2 * L) * math.sqrt(E / rho)
 
 
-def rectangle_torsion_constant(a: float, b: float, terms: int = 50) -> float:
-    """Saint-Venant torsion constant of an ``a x b`` rectangle (m^4), series solution.
-
-    ``J_T = a^3 b / 3 [1 - (192 a)/(pi^5 b) sum_{n odd} tanh(n pi b / (2a)) / n^5]`` with
-    ``a <= b`` (Timoshenko and Goodier, Sect. 109). For a square ``J_T = 0.1405770 a^4``.
-    """
-    if a <= 0 or b <= 0:
-        raise ValueError(f"sides must be positive, got a={a!r}, b={b!r}")
-    a, b = min(a, b), max(a, b)
-    n = np.arange(1, 2 * terms, 2, dtype=float)
-    s = float(np.sum(np.tanh(n * math.pi * b / (2 * a)) / n**5))
-    return a**3 * b / 3.0 * (1.0 - 192.0 * a / (math.pi**5 * b) * s)
-
-
 def torsional_frequencies(
     n: int, *, L: float, rho: float, G: float, J_T: float, I3: float
 ) -> np.ndarray:
@@ -199,7 +188,7 @@ def paper_frequencies(n: int = 3) -> dict[str, np.ndarray | float]:
     L, a, rho, E, nu = 0.3, 0.01, 1000.0, 1.0e6, 0.3
     A, I = a * a, a**4 / 12
     G = E / (2 * (1 + nu))
-    kappa = 10 * (1 + nu) / (12 + 11 * nu)
+    kappa = cowper_rectangle(nu)
     J_T = rectangle_torsion_constant(a, a)
     return {
         "euler_bernoulli": euler_bernoulli_frequencies(n, L=L, rho=rho, A=A, E=E, I=I),

@@ -49,6 +49,8 @@ from scipy.integrate import solve_bvp, solve_ivp
 from scipy.optimize import brentq, root_scalar
 from scipy.special import ellipeinc, ellipk, ellipkinc
 
+from .sections import cowper_rectangle  # re-exported (moved to .sections)
+
 __all__ = [
     "ElasticaTip",
     "ReissnerSolution",
@@ -58,11 +60,6 @@ __all__ = [
     "solve_reissner",
     "solve_reissner_bvp",
 ]
-
-
-def cowper_rectangle(nu: float) -> float:
-    """Cowper's (1966) shear correction factor of a rectangle, ``10(1+nu)/(12+11nu)``."""
-    return 10.0 * (1.0 + nu) / (12.0 + 11.0 * nu)
 
 
 @dataclass(frozen=True)
