@@ -7,6 +7,7 @@ happen inside the commands; library code never prints, these commands do.
 from __future__ import annotations
 
 import math
+import sys
 from pathlib import Path
 
 SCENARIOS = ("cantilever",)
@@ -111,7 +112,6 @@ def run_modes(scenario: str = "cantilever", n_elements: int = 50, count: int = 1
 
 
 def _cmd_modes(args) -> int:
-    from runtime.io.results import write_json
 
     if args.count < 1:
         raise _cli_error(f"kvrod modes: --count must be >= 1, got {args.count}")
@@ -120,6 +120,18 @@ def _cmd_modes(args) -> int:
     if args.scenario not in SCENARIOS:
         raise _cli_error(f"kvrod modes: unknown scenario {args.scenario!r}; scenarios are: "
                          f"{', '.join(SCENARIOS)}")
+    out = Path(args.out) if args.out else Path("results") / (
+        f"modes-{args.scenario}" + ("-deformed" if args.deformed else ""))
+    from kvrod.outputs import results_folder
+
+    with results_folder(out, "modes", markers=("modes.json",), overwrite=args.overwrite,
+                        names=("modes.json", "mode_shapes.png")):
+        return _modes_into(args, out)
+
+
+def _modes_into(args, out: Path) -> int:
+    from runtime.io.results import write_json
+
     res = run_modes(args.scenario, args.n_elements, args.count, args.tau, args.deformed,
                     args.damping)
     sc, modes = res["scenario"], res["modes"]
@@ -129,8 +141,6 @@ def _cmd_modes(args) -> int:
     if res["static_tip"] is not None:
         print(f"static tip [m]: {[round(float(v), 6) for v in res['static_tip']]}")
     print(modes_table(modes))
-    out = Path(args.out) if args.out else Path("results") / (
-        f"modes-{args.scenario}" + ("-deformed" if args.deformed else ""))
     from dataclasses import asdict
 
     write_json(out / "modes.json", {
@@ -148,6 +158,15 @@ def _cmd_modes(args) -> int:
 
 
 def _cmd_calibrate(args) -> int:
+    from kvrod.outputs import results_folder
+
+    with results_folder(Path(args.out), "calibrate", markers=("calibration.json",),
+                        overwrite=args.overwrite,
+                        names=("calibration.json", "calibration.png")):
+        return _calibrate_into(args, Path(args.out))
+
+
+def _calibrate_into(args, out: Path) -> int:
     from runtime.analysis import calibration as cal
     from runtime.io.results import write_json
     from runtime.scenarios import CantileverScenario
@@ -166,7 +185,6 @@ def _cmd_calibrate(args) -> int:
         (d,) = cal.load_csv(args.data, ("delta",))
         sc = CantileverScenario(n_elements=args.n_elements or 16, **sc_kw)
         res = cal.calibrate_decrements(d, scenario=sc, tau0=args.tau0)
-    out = Path(args.out)
     write_json(out / "calibration.json", {"data": str(args.data), **res.summary()})
     cal.plot_calibration(res, out / "calibration.png")
     lo, hi = res.ci95
@@ -176,7 +194,11 @@ def _cmd_calibrate(args) -> int:
     print(f"residual RMS {res.residual_rms:.4g}{' m' if res.mode == 'signal' else ''}, "
           f"{res.nfev} model evaluations; {res.message}")
     print(f"wrote {out}/calibration.json, calibration.png")
-    return 0 if res.success else 1
+    if not res.accepted:
+        why = "; ".join(res.doubts) or f"the fit did not converge: {res.message}"
+        print(f"kvrod calibrate: fit rejected: {why}", file=sys.stderr)
+        return 1
+    return 0
 
 
 # --------------------------------------------------------------------------------------
@@ -248,13 +270,19 @@ def _cmd_compare(args) -> int:
     if args.n_elements < 2:
         raise _cli_error(f"kvrod compare-damping: --n-elements must be >= 2, got "
                          f"{args.n_elements}")
+    from kvrod.outputs import results_folder
     from runtime.analysis import compare_damping as cd
 
-    res = cd.compare_damping(n_elements=args.n_elements, tau_S=args.tau_S, tau_B=args.tau_B,
-                             poisson_ratio=args.nu, tip_force=args.tip_force,
-                             rtol=args.rtol)
-    print(compare_table(res))
-    paths = write_compare(res, Path(args.out))
+    cd.check_inputs(args.n_elements, args.tau_S, args.tau_B, args.nu, args.tip_force,
+                    args.rtol)
+    with results_folder(Path(args.out), "compare-damping", markers=("compare_damping.json",),
+                        overwrite=args.overwrite,
+                        names=("compare_damping.json", "compare_damping.md")):
+        res = cd.compare_damping(n_elements=args.n_elements, tau_S=args.tau_S,
+                                 tau_B=args.tau_B, poisson_ratio=args.nu,
+                                 tip_force=args.tip_force, rtol=args.rtol)
+        print(compare_table(res))
+        paths = write_compare(res, Path(args.out))
     print(f"wrote {Path(args.out)}/{', '.join(p.name for p in paths)}")
     return 0
 
@@ -266,8 +294,15 @@ def _cmd_compare(args) -> int:
 
 def _cmd_notes_beyond(args) -> int:
     from kvrod.beyond import write_beyond_notes
+    from kvrod.outputs import check_file_argument, results_folder
 
-    path = write_beyond_notes(Path(args.out_notes), Path(args.out))
+    check_file_argument(Path(args.out_notes), "--out-notes")
+    with results_folder(Path(args.out), "notes-beyond",
+                        markers=("compare-damping/compare_damping.json", "modes/modes.json",
+                                 "calibration/calibration.json"),
+                        overwrite=args.overwrite,
+                        names=("compare-damping", "calibration", "modes", "modes-deformed")):
+        path = write_beyond_notes(Path(args.out_notes), Path(args.out))
     print(f"wrote {path} (results under {args.out}/)")
     return 0
 
@@ -296,6 +331,8 @@ def add_commands(sub, parser_class) -> None:
     m.add_argument("--deformed", action="store_true",
                    help="linearise about the static state under the tip load (0.05 N)")
     m.add_argument("--out", help="results folder (default results/modes-SCENARIO[-deformed])")
+    m.add_argument("--overwrite", action="store_true",
+                   help="replace a result already in --out (default: refuse)")
     m.set_defaults(func=_cmd_modes)
 
     c = sub.add_parser("calibrate", help="fit tau (= tau_S = tau_B) of the cantilever to "
@@ -311,6 +348,8 @@ def add_commands(sub, parser_class) -> None:
                    help="static tip force before release [N] (paper: 0.05)")
     c.add_argument("--tau0", type=float, help="starting value [s] (default: from the data)")
     c.add_argument("--out", default="results/calibration", help="results folder")
+    c.add_argument("--overwrite", action="store_true",
+                   help="replace a result already in --out (default: refuse)")
     c.set_defaults(func=_cmd_calibrate)
 
     d = sub.add_parser("compare-damping", help="consistent eta_E vs naive eta~_E in "
@@ -327,6 +366,8 @@ def add_commands(sub, parser_class) -> None:
                         "small amplitude, linear regime)")
     d.add_argument("--rtol", type=float, default=1e-7, help="integrator tolerance")
     d.add_argument("--out", default="results/compare-damping", help="results folder")
+    d.add_argument("--overwrite", action="store_true",
+                   help="replace a result already in --out (default: refuse)")
     d.set_defaults(func=_cmd_compare)
 
     n = sub.add_parser("notes-beyond", help="run compare-damping, modes and calibration "
@@ -336,4 +377,6 @@ def add_commands(sub, parser_class) -> None:
                         "figures/ folder)")
     n.add_argument("--out", default="results/beyond",
                    help="results folder of the three analyses (default results/beyond)")
+    n.add_argument("--overwrite", action="store_true",
+                   help="replace the results of an earlier run in --out")
     n.set_defaults(func=_cmd_notes_beyond)

@@ -194,7 +194,8 @@ def _cmd_reproduce(args) -> int:
     from kvrod.reproduce import reproduce
 
     out = reproduce(Path(args.out), n_elements=args.n_elements, t_end=args.t_end,
-                    notes=Path(args.notes), rtol=args.rtol, derive=not args.skip_derive)
+                    notes=Path(args.notes), rtol=args.rtol, derive=not args.skip_derive,
+                    overwrite=args.overwrite)
     print(f"wrote {out}")
     return 0
 
@@ -232,6 +233,8 @@ def add_commands(sub, parser_class) -> None:
     r.add_argument("--t-end", dest="t_end", type=float, default=10.0)
     r.add_argument("--rtol", type=float, default=1e-7,
                    help="relative tolerance (1e-7: energy audits below 1e-5; see the note)")
+    r.add_argument("--overwrite", action="store_true",
+                   help="replace the results of an earlier reproduction in --out")
     r.add_argument("--skip-derive", action="store_true",
                    help="do not regenerate notes/derivation.md")
     r.set_defaults(func=_cmd_reproduce)

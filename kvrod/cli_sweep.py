@@ -36,14 +36,36 @@ def _cmd_sweep(args) -> int:
         raise CliError(f"kvrod sweep: --workers {args.workers} must be >= 1")
     if args.serial and args.scheduler:
         raise CliError("kvrod sweep: --serial and --scheduler exclude each other")
+    import math
+
+    from runtime.io import folder as F
     from runtime.study.sweep import StudyError, load_study, points_to_run, run_study_serial
 
     try:
-        study = load_study(args.study)
+        study = load_study(args.study, max_points=math.inf if args.yes else None)
     except StudyError as exc:
         raise CliError(f"kvrod sweep: {exc}") from exc
     safe = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in study.name)
     out = Path(args.out) if args.out else Path("results") / f"sweep-{safe}"
+    F.check_output_path(out)
+    saved = out / "study.toml"
+    if saved.exists() and not args.overwrite:
+        try:
+            same = saved.read_text() == study.source
+        except OSError:
+            same = False
+        if not same:
+            raise CliError(f"kvrod sweep: {str(out)!r} holds a different study (study.toml); "
+                           "use --overwrite to replace it or choose another --out")
+    with F.claim(out, "sweep", overwrite=args.overwrite,
+                 names=("study.toml", "study.csv", "summary.png", "points")) as claimed:
+        claimed.keep()
+        return _run_sweep(args, study, out, points_to_run, run_study_serial)
+
+
+def _run_sweep(args, study, out, points_to_run, run_study_serial) -> int:
+    from kvrod.cli import CliError
+
     n = len(study.points)
     where = ("serial (this process)" if args.serial else
              f"scheduler {args.scheduler}" if args.scheduler else
@@ -97,5 +119,9 @@ def add_commands(sub, parser_class) -> None:
                    help="run the points one after another in this process (no Dask)")
     s.add_argument("--keep-failed", action="store_true",
                    help="on restart, do not rerun points that failed before")
+    s.add_argument("--yes", action="store_true",
+                   help="run a study above 10000 points (refused otherwise)")
+    s.add_argument("--overwrite", action="store_true",
+                   help="replace a different study's results in --out (default: refuse)")
     s.set_defaults(func=_cmd_sweep)
     _ = parser_class

@@ -50,14 +50,25 @@ def _bench_energy_audit() -> dict | None:
 
 def reproduce(out: Path, n_elements: int = 100, t_end: float = 10.0,
               notes: Path = Path("notes/reproduction.md"), rtol: float = 1e-7,
-              derive: bool = True) -> Path:
-    """Run the three tau values, the E = 4 MPa comparison, write figures and notes."""
+              derive: bool = True, overwrite: bool = False) -> Path:
+    """Run the three tau values, the E = 4 MPa comparison, write figures and notes.
+
+    Every run folder under ``out`` is checked before the first run starts: one that holds
+    a result is refused unless ``overwrite``.
+    """
     from kvrod.cli_runtime import run_and_write
+    from kvrod.outputs import check_file_argument
+    from runtime.io import folder as F
     from runtime.io import plots as P
     from runtime.scenarios import CantileverScenario
 
     wall0 = time.perf_counter()
     out = Path(out)
+    F.check_output_path(out)
+    check_file_argument(notes, "--notes")
+    labels_dirs = [f"tau_{tau:g}" for tau in TAUS] + ["E4_F0.2", "E4_F0.05"]
+    for d in labels_dirs:
+        F.refuse_existing(out / d, "reproduce", overwrite=overwrite)
     if derive:
         from derive.notes import write_derivation_notes
 
@@ -65,13 +76,15 @@ def reproduce(out: Path, n_elements: int = 100, t_end: float = 10.0,
     runs, summaries = {}, {}
     for tau in TAUS:
         sc = CantileverScenario.with_tau(tau, n_elements=n_elements, t_end=t_end, rtol=rtol)
-        runs[tau], summaries[tau] = run_and_write(sc, out / f"tau_{tau:g}", f"tau_E = {tau:g} s")
+        runs[tau], summaries[tau] = run_and_write(sc, out / f"tau_{tau:g}", f"tau_E = {tau:g} s",
+                                                  overwrite=overwrite)
     # E = 4 MPa: tau halved; exact coincidence needs the tip force x 4 as well
     stiff = {}
     for label, force in (("E4_F0.2", 0.2), ("E4_F0.05", 0.05)):
         sc = CantileverScenario.with_tau(0.02, youngs_modulus=4e6, tip_force=force,
                                          n_elements=n_elements, t_end=t_end / 2, rtol=rtol)
-        stiff[label] = run_and_write(sc, out / label, f"E = 4 MPa, F = {force} N")
+        stiff[label] = run_and_write(sc, out / label, f"E = 4 MPa, F = {force} N",
+                                     overwrite=overwrite)
     figs = out / "figures"
     labels = [f"tau_E = {tau:g} s" for tau in TAUS]
     P.plot_tip([runs[t] for t in TAUS], labels, figs / "fig3_tip.png")

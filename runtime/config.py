@@ -55,6 +55,10 @@ def _coerce(path: Path, key: str, value: Any, annotation: str) -> Any:
 def parameters_from_mapping(path: Path, params: dict, scenario: str = "cantilever") -> dict:
     """Validated keyword arguments for the scenario dataclass (``tau`` expanded)."""
     fields = scenario_fields(scenario)
+    both = [k for k in ("tau_S", "tau_B") if k in params]
+    if "tau" in params and both:
+        raise ConfigError(f"{path}: tau and {' and '.join(both)} are both given; tau sets "
+                          "tau_S = tau_B, so give either tau or tau_S/tau_B")
     out: dict[str, Any] = {}
     for key, value in params.items():
         if key == "tau":
@@ -90,6 +94,9 @@ def load_config(path: Path) -> tuple[str, dict]:
     path = Path(path)
     doc, _ = read_toml(path, ConfigError)
     name = doc.pop("scenario", "cantilever")
+    if not isinstance(name, str):
+        raise ConfigError(f"{path}: scenario = {name!r} must be a string, one of: "
+                          + ", ".join(SCENARIOS))
     if name not in SCENARIOS:
         raise ConfigError(f"{path}: unknown scenario {name!r}; scenarios are: "
                           + ", ".join(SCENARIOS))
@@ -100,4 +107,8 @@ def load_config(path: Path) -> tuple[str, dict]:
     extra_tables = [k for k, v in doc.items() if isinstance(v, dict)]
     if extra_tables:
         raise ConfigError(f"{path}: unknown table(s) {extra_tables}; use [parameters]")
+    twice = sorted(set(flat) & set(params))
+    if twice:
+        raise ConfigError(f"{path}: {', '.join(twice)} given both at the top level and in "
+                          "[parameters]; give each once")
     return name, parameters_from_mapping(path, {**flat, **params}, name)

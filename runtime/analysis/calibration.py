@@ -49,6 +49,8 @@ __all__ = [
 
 #: fewest samples of a signal accepted
 MIN_SAMPLES = 20
+#: lower bound of the fitted tau (s)
+TAU_MIN = 1e-9
 
 
 @dataclass
@@ -78,13 +80,20 @@ class CalibrationResult:
     data_y: np.ndarray = field(repr=False)
     fit_t: np.ndarray = field(repr=False)
     fit_y: np.ndarray = field(repr=False)
+    doubts: list[str] = field(default_factory=list)
+
+    @property
+    def accepted(self) -> bool:
+        """The fit converged and passed its self-checks (:func:`fit_doubts`)."""
+        return self.success and not self.doubts
 
     def summary(self) -> dict:
         """JSON-ready summary without the arrays."""
-        return {"mode": self.mode, "tau": self.tau, "std_error": self.std_error,
+        return {"status": "ok" if self.accepted else "rejected", "mode": self.mode,
+                "tau": self.tau, "std_error": self.std_error,
                 "ci95": list(self.ci95), "tau0": self.tau0, "residual_rms": self.residual_rms,
                 "n_data": self.n_data, "nfev": self.nfev, "njev": self.njev,
-                "success": self.success, "message": self.message}
+                "success": self.success, "message": self.message, "doubts": list(self.doubts)}
 
 
 # --------------------------------------------------------------------------------------
@@ -208,6 +217,71 @@ def signal_maxima(t: np.ndarray, x: np.ndarray, prominence: float = 0.05,
     return np.asarray(tk), np.asarray(xk)
 
 
+#: a record whose scale differs from the model's by more than this factor is rejected
+SCALE_FACTOR = 3.0
+#: longest record accepted, in first-mode periods of the model
+MAX_RECORD_PERIODS = 200.0
+#: a fit whose residual RMS exceeds this fraction of the signal's RMS is rejected
+MAX_RESIDUAL_FRACTION = 0.3
+
+
+def check_signal_against_model(t: np.ndarray, x: np.ndarray, release_x: float,
+                               period: float) -> None:
+    """Reject a record that cannot come from the model before fitting (ValueError).
+
+    ``release_x`` (m): the model's tip x at release (its first maximum); ``period`` (s):
+    its first bending period. Checked: the sign of the first maximum (a flipped record),
+    its size against ``release_x`` (units: mm instead of m), the period of the record's
+    maxima against ``period`` (units: ms instead of s) and the record's length (at most
+    ``MAX_RECORD_PERIODS`` periods).
+    """
+    i0 = int(np.argmax(np.abs(x[: max(3, x.size // 10)])))
+    first = float(x[i0])
+    if first < 0 < release_x or first > 0 > release_x:
+        raise ValueError(f"the record starts at x = {first:.4g} m but the model is released "
+                         f"from x = {release_x:.4g} m: is the sign of the record flipped?")
+    ratio = abs(first) / abs(release_x) if release_x else math.inf
+    if not 1 / SCALE_FACTOR <= ratio <= SCALE_FACTOR:
+        unit = (" (is the record in mm? x must be in m)" if 300 < ratio < 3000 else
+                " (is the record in cm? x must be in m)" if 30 < ratio < 300 else
+                " (check the units and the scenario's tip force)")
+        raise ValueError(f"the record's first maximum {first:.4g} m is {ratio:.3g} times the "
+                         f"model's release deflection {release_x:.4g} m{unit}")
+    tk, _ = signal_maxima(t, x)
+    if tk.size >= 2:
+        T = float(np.median(np.diff(tk)))
+        r = T / period
+        if not 1 / SCALE_FACTOR <= r <= SCALE_FACTOR:
+            unit = (" (is time in ms? t must be in s)" if 300 < r < 3000 else
+                    " (check the units of t and the scenario's geometry and material)")
+            raise ValueError(f"the record's period {T:.4g} s is {r:.3g} times the model's "
+                             f"first period {period:.4g} s{unit}")
+    span = float(t[-1] - t[0])
+    if span > MAX_RECORD_PERIODS * period:
+        raise ValueError(f"the record spans {span:.4g} s = {span / period:.3g} periods of the "
+                         f"model (at most {MAX_RECORD_PERIODS:g}); cut it to the decay")
+
+
+def fit_doubts(tau: float, ci: tuple[float, float], residual_rms: float,
+               signal_rms: float, lower_bound: float) -> list[str]:
+    """Why a converged fit is still not believable (empty when it is)."""
+    doubts = []
+    lo, hi = ci
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        doubts.append("no confidence interval (too few data or a flat residual)")
+    elif lo <= 0.0:
+        doubts.append(f"the 95 % confidence interval [{lo:.4g}, {hi:.4g}] s contains zero: "
+                      "the data do not determine tau")
+    if tau <= 1.01 * lower_bound:
+        doubts.append(f"tau = {tau:.3g} s sits at its lower bound: the model cannot match "
+                      "the data (units? sign?)")
+    if signal_rms > 0 and residual_rms > MAX_RESIDUAL_FRACTION * signal_rms:
+        doubts.append(f"the residual RMS {residual_rms:.4g} is {residual_rms / signal_rms:.2f} "
+                      f"of the signal's RMS {signal_rms:.4g}: the model does not fit the "
+                      "data (units, sign, scenario?)")
+    return doubts
+
+
 def validate_decrements(delta: Sequence[float]) -> np.ndarray:
     """Check log decrements (finite, > 0, at least 2); returns a float array."""
     d = np.asarray(delta, dtype=float).ravel()
@@ -283,7 +357,7 @@ def _fit(res: Callable[[float], np.ndarray], tau0: float, diff_step: float,
         nfev[0] += 1
         return res(float(p[0]))
 
-    sol = least_squares(fun, x0=[tau0], bounds=([1e-9], [np.inf]), method="trf",
+    sol = least_squares(fun, x0=[tau0], bounds=([TAU_MIN], [np.inf]), method="trf",
                         jac="2-point", diff_step=diff_step, x_scale=[tau0], xtol=xtol,
                         ftol=ftol, gtol=1e-12, max_nfev=50)
     return sol, nfev[0]
@@ -308,11 +382,14 @@ def calibrate_decrements(delta: Sequence[float], scenario=None,
     tau = float(sol.x[0])
     se, ci = _ci(tau, sol.jac, sol.fun)
     k = np.arange(1, d.size + 1, dtype=float)
+    rms = float(np.sqrt(np.mean(sol.fun**2)))
     return CalibrationResult(mode="decrements", tau=tau, std_error=se, ci95=ci, tau0=tau0,
-                             residual_rms=float(np.sqrt(np.mean(sol.fun**2))), n_data=d.size,
+                             residual_rms=rms, n_data=d.size,
                              nfev=nfev, njev=int(sol.njev or 0), success=bool(sol.success),
                              message=str(sol.message), data_t=k, data_y=d, fit_t=k,
-                             fit_y=np.full(d.size, model(tau)))
+                             fit_y=np.full(d.size, model(tau)),
+                             doubts=fit_doubts(tau, ci, rms, float(np.sqrt(np.mean(d**2))),
+                                               TAU_MIN))
 
 
 def calibrate_signal(t: Sequence[float], x: Sequence[float], scenario=None,
@@ -327,6 +404,7 @@ def calibrate_signal(t: Sequence[float], x: Sequence[float], scenario=None,
     """
     t, x = validate_signal(t, x)
     sc = _scenario(scenario, n_elements=n_elements, output_step=output_step)
+    check_signal_against_model(t, x, _release_x(sc), sc.linear_prediction()["period_1"])
     if tau0 is None:
         _, xk = signal_maxima(t, x)
         z = float(np.mean(damping_ratios(log_decrements(xk))))
@@ -343,11 +421,24 @@ def calibrate_signal(t: Sequence[float], x: Sequence[float], scenario=None,
     tau = float(sol.x[0])
     se, ci = _ci(tau, sol.jac, sol.fun)
     tf = np.linspace(float(t[0]), float(t[-1]), 2000)
+    rms = float(np.sqrt(np.mean(sol.fun**2)))
     return CalibrationResult(mode="signal", tau=tau, std_error=se, ci95=ci, tau0=tau0,
-                             residual_rms=float(np.sqrt(np.mean(sol.fun**2))), n_data=t.size,
+                             residual_rms=rms, n_data=t.size,
                              nfev=nfev, njev=int(sol.njev or 0), success=bool(sol.success),
                              message=str(sol.message), data_t=t, data_y=x, fit_t=tf,
-                             fit_y=model_at(tau, tf))
+                             fit_y=model_at(tau, tf),
+                             doubts=fit_doubts(tau, ci, rms, float(np.sqrt(np.mean(x**2))),
+                                               TAU_MIN))
+
+
+def _release_x(sc) -> float:
+    """The scenario's static tip x (m) under its tip load: the release deflection."""
+    from runtime.model.rod import RodModel
+    from runtime.solvers.statics import solve_static
+
+    model = RodModel(sc.rod_parameters(), tip_force=(sc.tip_force, 0.0, 0.0))
+    st = solve_static(model, model.initial_state(), load_steps=sc.load_steps)
+    return float(model.tip_position(st.y)[0])
 
 
 # --------------------------------------------------------------------------------------

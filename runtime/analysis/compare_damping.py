@@ -202,6 +202,16 @@ def _check_inputs(n_elements: int, tau_S: float, tau_B: float, cases: tuple[str,
         raise ValueError(f"axial_zeta = {axial_zeta!r} must be in (0, 1) (underdamped)")
 
 
+def check_inputs(n_elements: int = 20, tau_S: float = 0.04, tau_B: float = 0.0,
+                 poisson_ratio: float = 0.3, tip_force: float = 0.001,
+                 rtol: float = 1e-7) -> None:
+    """Validate the parameters of :func:`compare_damping` (ValueError naming the first bad
+    one) without running anything."""
+    _check_inputs(n_elements, tau_S, tau_B, CASES, 5.0, 6.0, 0.05)
+    CantileverScenario(n_elements=n_elements, tau_S=tau_S, tau_B=tau_B,
+                       poisson_ratio=poisson_ratio, tip_force=tip_force, rtol=rtol)
+
+
 def compare_damping(n_elements: int = 20, tau_S: float = 0.04, tau_B: float = 0.0,
                     poisson_ratio: float = 0.3, tip_force: float = 0.001,
                     bending_cycles: float = 5.0, axial_force: float = 0.1,

@@ -51,6 +51,7 @@ import hashlib
 import io
 import itertools
 import json
+import math
 import os
 import re
 import socket
@@ -66,6 +67,9 @@ from runtime.io.results import write_json, write_run
 SCENARIOS = ("cantilever",)
 #: top-level keys of a study file
 STUDY_KEYS = ("name", "scenario", "fixed", "grid", "points")
+#: largest study run without confirmation, and the command-line flag that confirms
+MAX_POINTS = 10_000
+CONFIRM_FLAG = "--yes"
 #: status of a point that has no finished/failed summary yet
 PENDING, RUNNING, FINISHED, FAILED = "pending", "running", "finished", "failed"
 
@@ -118,6 +122,8 @@ def _coerce(name: str, value: Any, where: str) -> Any:
         return None
     if not isinstance(value, (int, float)):
         raise bad
+    if not math.isfinite(value):
+        raise StudyError(f"{where}: {name} = {value!r} is not a finite number")
     return float(value)
 
 
@@ -185,8 +191,14 @@ class Study:
         return tuple(cols)
 
 
-def study_from_dict(data: Mapping[str, Any], name: str = "study", source: str = "") -> Study:
-    """Build a :class:`Study` from the parsed TOML (see the module docstring)."""
+def study_from_dict(data: Mapping[str, Any], name: str = "study", source: str = "",
+                    max_points: int | float | None = None) -> Study:
+    """Build a :class:`Study` from the parsed TOML (see the module docstring).
+
+    ``max_points``: largest study accepted (default :data:`MAX_POINTS`; pass ``math.inf``
+    once the user confirmed a larger one).
+    """
+    max_points = MAX_POINTS if max_points is None else max_points
     unknown = sorted(set(data) - set(STUDY_KEYS))
     if unknown:
         raise StudyError(f"unknown key(s) {', '.join(map(repr, unknown))} in the study; "
@@ -205,6 +217,11 @@ def study_from_dict(data: Mapping[str, Any], name: str = "study", source: str = 
     for k, vals in grid.items():
         if not isinstance(vals, list) or not vals:
             raise StudyError(f"[grid]: {k} must be a non-empty list of values, got {vals!r}")
+    n_points = math.prod(len(v) for v in grid.values()) + len(listed)
+    if n_points > max_points:
+        raise StudyError(f"the study has {n_points} points, more than {max_points} (the "
+                         f"grid {' x '.join(str(len(v)) for v in grid.values())}); confirm "
+                         f"with {CONFIRM_FLAG} to run it anyway")
     grid_c = {k: [_check_params({k: v}, "[grid]")[k] for v in vals] for k, vals in grid.items()}
     _check_params({k: v[0] for k, v in grid_c.items()}, "[grid]")  # unknown names, tau clash
     raw_points: list[dict[str, Any]] = []
@@ -233,13 +250,13 @@ def study_from_dict(data: Mapping[str, Any], name: str = "study", source: str = 
                  points=tuple(points.values()), source=source)
 
 
-def load_study(path: str | os.PathLike) -> Study:
+def load_study(path: str | os.PathLike, max_points: int | float | None = None) -> Study:
     """Read a study TOML file (StudyError for a malformed file or unknown parameter)."""
     from runtime.config import read_toml
 
     path = Path(path)
     data, text = read_toml(path, StudyError, "study file")
-    return study_from_dict(data, name=path.stem, source=text)
+    return study_from_dict(data, name=path.stem, source=text, max_points=max_points)
 
 
 # --------------------------------------------------------------------------------------
@@ -452,6 +469,28 @@ def write_table(out: Path, study: Study, rows: Mapping[str, Mapping[str, Any]]) 
     return _atomic_text(Path(out) / "study.csv", buf.getvalue())
 
 
+class TableAppender:
+    """``study.csv`` written incrementally while a study runs: the header, then one row per
+    point as it returns (appended and flushed: O(1) per point, not a rewrite of the table).
+    A crash leaves a valid CSV of the points returned so far."""
+
+    def __init__(self, path: Path, study: Study) -> None:
+        self.cols = ["point_id", *study.param_columns, *FIGURE_COLUMNS]
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self._f = open(path, "w", newline="")
+        self._w = csv.DictWriter(self._f, fieldnames=self.cols, lineterminator="\n")
+        self._w.writeheader()
+        self._f.flush()
+
+    def append(self, row: Mapping[str, Any]) -> None:
+        self._w.writerow({c: (repr(v) if isinstance(v, float) else v) for c, v in row.items()})
+        self._f.flush()
+
+    def close(self) -> None:
+        if not self._f.closed:
+            self._f.close()
+
+
 def read_table(path: Path) -> list[dict[str, str]]:
     """The rows of a study.csv (strings, as written)."""
     with open(path, newline="") as f:
@@ -600,14 +639,18 @@ class StudyRecorder:
         self.progress = SweepProgress(total=len(study.points), skipped=len(self.report.skipped))
         #: worker threads executing points (None: unknown, all in-flight count as running)
         self.slots: int | None = None
-        write_table(self.out, study, self.rows)
+        # study.csv grows by one row per returned point (rows of earlier runs first); the
+        # final table in study order is written by close()
+        self._table = TableAppender(self.out / "study.csv", study)
+        for p in study.points:
+            if p.id in self.report.skipped:
+                self._table.append(self.rows[p.id])
 
     def mark_running(self, ids: Iterable[str]) -> None:
-        """Show submitted points as running in the table."""
+        """Count submitted points as running (the table shows them at the end)."""
         for pid in ids:
             self.rows[pid]["status"] = RUNNING
         self._count_in_flight()
-        write_table(self.out, self.study, self.rows)
 
     def _count_in_flight(self) -> None:
         inflight = sum(r["status"] == RUNNING for r in self.rows.values())
@@ -620,7 +663,7 @@ class StudyRecorder:
         point = next(p for p in self.study.points if p.id == outcome.point_id)
         summary = write_point(self.out, outcome)
         self.rows[point.id] = table_row(self.study, point, summary)
-        write_table(self.out, self.study, self.rows)
+        self._table.append(self.rows[point.id])
         self.report.computed.append(point.id)
         pr = self.progress
         if summary["status"] == FINISHED:
@@ -637,7 +680,8 @@ class StudyRecorder:
         return pr
 
     def close(self) -> StudyReport:
-        """Final table (rebuilt from the summaries on disk) and plots."""
+        """Final table (rebuilt from the summaries on disk, in study order) and plots."""
+        self._table.close()
         self.rows = rebuild_table(self.out, self.study)
         if self.plots:
             write_plots(self.out, self.study, self.rows)

@@ -22,10 +22,14 @@ per-point summaries at the end, so it holds every point exactly once.
 from __future__ import annotations
 
 import asyncio
+import contextlib
+import logging
 import os
+import signal
+import threading
 import time
 import uuid
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 from distributed import Client, LocalCluster, WorkerPlugin, as_completed
@@ -90,11 +94,42 @@ def default_workers() -> int:
     return max(1, os.cpu_count() or 1)
 
 
+@contextlib.contextmanager
+def _children_ignore_sigint() -> Iterator[None]:
+    """Start child processes with SIGINT ignored (an ignored disposition survives exec,
+    and Python then installs no KeyboardInterrupt handler): Ctrl-C in the terminal reaches
+    the whole process group, and the workers would each print a traceback. Only this
+    process handles it, cancels the tasks and closes the cluster."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
 def start_local_cluster(n_workers: int | None = None) -> LocalCluster:
     """A LocalCluster of single-threaded worker processes (scheduler and dashboard on free
-    ports)."""
-    return LocalCluster(n_workers=n_workers or default_workers(), threads_per_worker=1,
-                        processes=True, dashboard_address=":0", scheduler_port=0)
+    ports) that leave Ctrl-C to this process."""
+    with _children_ignore_sigint():
+        return LocalCluster(n_workers=n_workers or default_workers(), threads_per_worker=1,
+                            processes=True, dashboard_address=":0", scheduler_port=0)
+
+
+@contextlib.contextmanager
+def _quiet_distributed() -> Iterator[None]:
+    """Silence distributed's loggers while a cluster is torn down after an interrupt."""
+    loggers = [logging.getLogger(n) for n in ("distributed", "tornado", "asyncio")]
+    levels = [lg.level for lg in loggers]
+    for lg in loggers:
+        lg.setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        for lg, lv in zip(loggers, levels, strict=True):
+            lg.setLevel(lv)
 
 
 def run_study_dask(study: Study, out: Path, *, client: Client | None = None,
@@ -123,6 +158,7 @@ def run_study_dask(study: Study, out: Path, *, client: Client | None = None,
     own_cluster = own_client = None
     engine = "dask (no points to run)"
     futures = []
+    interrupted = False
     try:
         if rec.todo:
             if client is None:
@@ -154,16 +190,19 @@ def run_study_dask(study: Study, out: Path, *, client: Client | None = None,
                 if progress is not None:
                     progress(pr)
     except BaseException:
-        for f in futures:
-            if not f.done():
-                f.cancel()
+        interrupted = True
+        with _quiet_distributed():
+            for f in futures:
+                if not f.done():
+                    f.cancel()
         raise
     finally:
         report = rec.close()
-        if own_client is not None:
-            own_client.close()
-        if own_cluster is not None:
-            own_cluster.close()
+        with _quiet_distributed() if interrupted else contextlib.nullcontext():
+            if own_client is not None:
+                own_client.close()
+            if own_cluster is not None:
+                own_cluster.close()
     report.wall_time_s = time.perf_counter() - t0
     report.engine = engine
     return report

@@ -112,7 +112,7 @@ def test_stiffness_time_scaling_is_exact():
 
 def test_summary_keys_and_failed_run_keeps_results(tmp_path):
     sc = CantileverScenario(n_elements=6, t_end=0.5)
-    run = run_cantilever(sc, max_steps=400)     # stops early: a failed run
+    run = run_cantilever(sc, max_steps=60)      # stops early: a failed run
     assert run.status == "failed" and "max_steps" in run.message
     s = write_run(tmp_path, run)
     data = json.loads((tmp_path / "summary.json").read_text())
