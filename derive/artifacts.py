@@ -149,7 +149,22 @@ def write_tree(outdir: Path | None = None, artifacts: list[Artifact] | None = No
         tmp.write_text(text)
         tmp.replace(dest)
         written.append(dest)
+    for stale in stale_files(outdir, contents):  # outputs of an earlier generator version
+        stale.unlink()
     return written
+
+
+#: files of generated/ that are not generator outputs
+KEPT = ("__init__.py",)
+#: endings of generator outputs (anything else in the folder is left alone)
+OUTPUT_SUFFIXES = (".py", ".c", ".h", ".casadi", ".json")
+
+
+def stale_files(outdir: Path, contents) -> list[Path]:
+    """Generator-output files in ``outdir`` that a fresh generation does not write."""
+    return sorted(p for p in Path(outdir).iterdir()
+                  if p.is_file() and p.suffix in OUTPUT_SUFFIXES and p.name not in KEPT
+                  and p.name not in contents)
 
 
 def check_tree(outdir: Path | None = None) -> list[str]:
@@ -162,6 +177,9 @@ def check_tree(outdir: Path | None = None) -> list[str]:
     problems: list[str] = []
     with tempfile.TemporaryDirectory() as tmp:
         fresh = write_tree(Path(tmp))
+        for stale in stale_files(outdir, {p.name for p in fresh}):
+            problems.append(f"{stale.name}: not written by a fresh generation (stale; run "
+                            "`kvrod generate`)")
         for path in fresh:
             committed = outdir / path.name
             if not committed.exists():

@@ -50,7 +50,14 @@ formula above is valid for any ``|p|``, and the static solver renormalises after
 update. No square root appears anywhere.
 
 Everything the runtime needs about the state and parameter vectors is defined here once
-(:data:`CELL_FIELDS`, :data:`PARAMS`) and rendered into ``generated/rod_layout.py``.
+(:data:`CELL_FIELDS`, :data:`PARAMS`, :data:`SEGMENT_PARAMS`, :data:`JOINT_PARAMS`,
+:data:`NODE_LOADS`, :data:`SEGMENT_LOADS`) and rendered into ``generated/rod_layout.py``.
+
+**Per-element parameters.** Stiffness, damping, reference strains (V0, U0: a precurved or
+pretwisted rod), lengths and inertia are per segment and per joint, so sections and
+materials may vary along the rod; loads are per node and per segment; the global vector
+holds gravity, the distributed load, the load factor and the ends (held or free,
+clamped or not, their prescribed position, velocity, frame and angular velocity).
 """
 
 from __future__ import annotations
@@ -68,26 +75,50 @@ CELL0_FIELDS: tuple[tuple[str, int], ...] = (("phi", 3), ("v", 3))
 #: fields of cell i = 1..N (segment i and node i), in order, with sizes
 CELL_FIELDS: tuple[tuple[str, int], ...] = (("p", 4), ("Omega", 3), ("phi", 3), ("v", 3))
 
-#: the global parameter vector passed to every kernel: (name, size, unit, meaning)
-PARAMS: tuple[tuple[str, int, str, str], ...] = (
-    ("h", 1, "m", "element length L/N"),
+#: parameters of one segment i = 1..N (between nodes i-1 and i): (name, size, unit, meaning)
+SEGMENT_PARAMS: tuple[tuple[str, int, str, str], ...] = (
+    ("h", 1, "m", "segment length (reference arc length)"),
     ("C_F", 3, "N", "diagonal of C_F = diag(GA_1, GA_2, EA), eq. (7)"),
-    ("C_M", 3, "N m^2", "diagonal of C_M = diag(EI_1, EI_2, GJ_T), eq. (7)"),
     ("V_F", 3, "N s", "diagonal of V_F, eq. (9)"),
-    ("V_M", 3, "N m^2 s", "diagonal of V_M, eq. (9)"),
-    ("U0", 3, "1/m", "reference curvature (material)"),
+    ("V0", 3, "1", "reference shear/extension strain of the segment (material)"),
     ("rhoA", 1, "kg/m", "mass per length rho A"),
     ("rhoI", 3, "kg m", "rotary inertia per length rho diag(I1, I2, I3)"),
-    ("gravity", 3, "m/s^2", "gravitational acceleration (spatial)"),
-    ("tip_force", 3, "N", "dead force at node N (spatial)"),
-    ("tip_moment", 3, "N m", "dead moment on segment N (spatial)"),
+)
+#: parameters of one joint j = 0..N (at node j; j = 0, N only between a clamp frame and
+#: the end segment)
+JOINT_PARAMS: tuple[tuple[str, int, str, str], ...] = (
+    ("h", 1, "m", "joint length: (h_j + h_j+1)/2 inside, h/2 at a clamp"),
+    ("C_M", 3, "N m^2", "diagonal of C_M = diag(EI_1, EI_2, GJ_T), eq. (7)"),
+    ("V_M", 3, "N m^2 s", "diagonal of V_M, eq. (9)"),
+    ("U0", 3, "1/m", "reference curvature and twist (material)"),
+)
+#: external loads on one node i = 0..N (current values, scaled by load_scale)
+NODE_LOADS: tuple[tuple[str, int, str, str], ...] = (
+    ("f_dead", 3, "N", "dead point force (spatial)"),
+    ("f_follower", 3, "N", "follower point force (material frame of the node's segment)"),
+)
+#: external loads on one segment i = 1..N (current values, scaled by load_scale)
+SEGMENT_LOADS: tuple[tuple[str, int, str, str], ...] = (
+    ("m_dead", 3, "N m", "dead point moment (spatial)"),
+    ("m_follower", 3, "N m", "follower point moment (material)"),
+)
+#: global parameters passed to the assembly: (name, size, unit, meaning)
+PARAMS: tuple[tuple[str, int, str, str], ...] = (
     ("load_scale", 1, "1", "factor on all external loads (load stepping)"),
-    ("p_start", 4, "1", "clamp frame quaternion at s = 0 (scalar first)"),
-    ("p_end", 4, "1", "clamp frame quaternion at s = L (scalar first)"),
-    ("fix_start", 1, "1", "1: node 0 position fixed (clamped or pinned), else 0"),
+    ("gravity", 3, "m/s^2", "gravitational acceleration (spatial)"),
+    ("f_dist", 3, "N/m", "dead distributed force per length (spatial)"),
+    ("fix_start", 1, "1", "1: node 0 held (clamped or pinned, position prescribed), else 0"),
     ("clamp_start", 1, "1", "1: frame clamped at s = 0 (half-length joint), else 0"),
-    ("fix_end", 1, "1", "1: node N position fixed, else 0"),
+    ("fix_end", 1, "1", "1: node N held, else 0"),
     ("clamp_end", 1, "1", "1: frame clamped at s = L, else 0"),
+    ("r_start", 3, "m", "prescribed position of node 0"),
+    ("v_start", 3, "m/s", "prescribed velocity of node 0"),
+    ("p_start", 4, "1", "clamp frame quaternion at s = 0 (scalar first)"),
+    ("Omega_start", 3, "rad/s", "material angular velocity of the clamp frame at s = 0"),
+    ("r_end", 3, "m", "prescribed position of node N"),
+    ("v_end", 3, "m/s", "prescribed velocity of node N"),
+    ("p_end", 4, "1", "clamp frame quaternion at s = L (scalar first)"),
+    ("Omega_end", 3, "rad/s", "material angular velocity of the clamp frame at s = L"),
 )
 
 
@@ -99,19 +130,27 @@ def _offsets(fields) -> dict[str, int]:
     return out
 
 
-CELL0_SIZE = sum(s for _, s in CELL0_FIELDS)
-CELL_SIZE = sum(s for _, s in CELL_FIELDS)
+def _size(fields) -> int:
+    return sum(f[1] for f in fields)
+
+
+CELL0_SIZE = _size(CELL0_FIELDS)
+CELL_SIZE = _size(CELL_FIELDS)
 CELL0_OFFSETS = _offsets(CELL0_FIELDS)
 CELL_OFFSETS = _offsets(CELL_FIELDS)
 PARAM_OFFSETS = _offsets(PARAMS)
 PARAM_SIZES = {name: size for name, size, *_ in PARAMS}
-N_PARAMS = sum(s for _, s, *_ in PARAMS)
+N_PARAMS = _size(PARAMS)
+SEGMENT_OFFSETS, N_SEGMENT = _offsets(SEGMENT_PARAMS), _size(SEGMENT_PARAMS)
+JOINT_OFFSETS, N_JOINT = _offsets(JOINT_PARAMS), _size(JOINT_PARAMS)
+NODE_LOAD_OFFSETS, N_NODE_LOAD = _offsets(NODE_LOADS), _size(NODE_LOADS)
+SEGMENT_LOAD_OFFSETS, N_SEGMENT_LOAD = _offsets(SEGMENT_LOADS), _size(SEGMENT_LOADS)
 
 #: reduced coordinates of the static problem: cell 0 = dphi_0, cell i = (dtheta_i, dphi_i)
 STATIC_CELL0_FIELDS: tuple[tuple[str, int], ...] = (("phi", 3),)
 STATIC_CELL_FIELDS: tuple[tuple[str, int], ...] = (("theta", 3), ("phi", 3))
-STATIC_CELL0_SIZE = sum(s for _, s in STATIC_CELL0_FIELDS)
-STATIC_CELL_SIZE = sum(s for _, s in STATIC_CELL_FIELDS)
+STATIC_CELL0_SIZE = _size(STATIC_CELL0_FIELDS)
+STATIC_CELL_SIZE = _size(STATIC_CELL_FIELDS)
 STATIC_CELL_OFFSETS = _offsets(STATIC_CELL_FIELDS)
 
 
@@ -119,8 +158,10 @@ def static_cell_start(i: int) -> int:
     """Index of the first static unknown of cell i (cell 0: node 0's phi)."""
     return 0 if i == 0 else STATIC_CELL0_SIZE + STATIC_CELL_SIZE * (i - 1)
 
+
 #: diagnostics vector: scalars then per-element arrays (sizes in multiples of N or N+1)
-DIAG_SCALARS = ("kinetic", "elastic", "dissipation_rate", "external_power")
+DIAG_SCALARS = ("kinetic", "elastic", "dissipation_rate", "external_power",
+                "boundary_power")
 
 # --------------------------------------------------------------------------------------
 # Quaternion algebra (scalar part first), CasADi SX
@@ -172,9 +213,19 @@ def torque_from_gradient(p, dWdp):
     return -0.5 * (left_matrix(p).T @ dWdp)[1:4]
 
 
-def _par(par, name):
-    k, s = PARAM_OFFSETS[name], PARAM_SIZES[name]
-    return par[k] if s == 1 else par[k : k + s]
+def _field(vec, offsets: dict[str, int], fields, name: str):
+    k, size = offsets[name], dict((f[0], f[1]) for f in fields)[name]
+    return vec[k] if size == 1 else vec[k : k + size]
+
+
+def _seg(sp, name):
+    """A named entry of the segment parameter vector (:data:`SEGMENT_PARAMS`)."""
+    return _field(sp, SEGMENT_OFFSETS, SEGMENT_PARAMS, name)
+
+
+def _jnt(jp, name):
+    """A named entry of the joint parameter vector (:data:`JOINT_PARAMS`)."""
+    return _field(jp, JOINT_OFFSETS, JOINT_PARAMS, name)
 
 
 def _quad(diag, x):
@@ -207,14 +258,15 @@ class _Sym:
     omega: ca.SX
     p_b: ca.SX
     omega_b: ca.SX
-    hj: ca.SX
-    par: ca.SX
+    sp: ca.SX      # segment parameters (SEGMENT_PARAMS)
+    jp: ca.SX      # joint parameters (JOINT_PARAMS)
 
 
 def _symbols() -> _Sym:
     S = ca.SX.sym
     return _Sym(S("phi_a", 3), S("phi_b", 3), S("p", 4), S("v_a", 3), S("v_b", 3),
-                S("Omega", 3), S("p_b", 4), S("Omega_b", 3), S("h_j", 1), S("par", N_PARAMS))
+                S("Omega", 3), S("p_b", 4), S("Omega_b", 3), S("seg", N_SEGMENT),
+                S("jnt", N_JOINT))
 
 
 def rotate_transposed(p, x):
@@ -240,23 +292,24 @@ def segment_functionals(s: _Sym) -> dict[str, ca.SX]:
     ``W = h/2 dV^T C_F dV`` (10), ``D = h/2 Vdot^T V_F Vdot`` (11). The rate is the
     forward-AD derivative of V along ``phi' = v``, ``p' = 1/2 p*(0, Omega)``.
     """
-    h = _par(s.par, "h")
+    h = _seg(s.sp, "h")
     V = shear_strain(s.phi_a, s.phi_b, s.p, h)
     Vdot = ca.jtimes(V, ca.vertcat(s.phi_a, s.phi_b, s.p),
                      ca.vertcat(s.v_a, s.v_b, qdot(s.p, s.omega)))
-    dV = V - ca.DM([0, 0, 1])
-    return {"V": V, "Vdot": Vdot, "W": h / 2 * _quad(_par(s.par, "C_F"), dV),
-            "D": h / 2 * _quad(_par(s.par, "V_F"), Vdot)}
+    dV = V - _seg(s.sp, "V0")
+    return {"V": V, "Vdot": Vdot, "W": h / 2 * _quad(_seg(s.sp, "C_F"), dV),
+            "D": h / 2 * _quad(_seg(s.sp, "V_F"), Vdot)}
 
 
 def joint_functionals(s: _Sym) -> dict[str, ca.SX]:
     """U, its exact rate Udot, W and D of a joint of length h_j (Cayley curvature)."""
-    U = curvature(s.p, s.p_b, s.hj)
+    hj = _jnt(s.jp, "h")
+    U = curvature(s.p, s.p_b, hj)
     Udot = ca.jtimes(U, ca.vertcat(s.p, s.p_b),
                      ca.vertcat(qdot(s.p, s.omega), qdot(s.p_b, s.omega_b)))
-    dU = U - _par(s.par, "U0")
-    return {"U": U, "Udot": Udot, "W": s.hj / 2 * _quad(_par(s.par, "C_M"), dU),
-            "D": s.hj / 2 * _quad(_par(s.par, "V_M"), Udot)}
+    dU = U - _jnt(s.jp, "U0")
+    return {"U": U, "Udot": Udot, "W": hj / 2 * _quad(_jnt(s.jp, "C_M"), dU),
+            "D": hj / 2 * _quad(_jnt(s.jp, "V_M"), Udot)}
 
 
 def segment_forces_ad(s: _Sym) -> ca.SX:
@@ -292,11 +345,11 @@ def segment_quantities(s: _Sym) -> dict[str, ca.SX]:
     (:func:`segment_forces_ad`, :func:`segment_functionals`; equality is tested to
     rounding) but cost about a third to evaluate and to differentiate again.
     """
-    h = _par(s.par, "h")
+    h = _seg(s.sp, "h")
     V = rotate_transposed(s.p, s.phi_b - s.phi_a) / h
-    dV = V - ca.DM([0, 0, 1])
+    dV = V - _seg(s.sp, "V0")
     Vdot = rotate_transposed(s.p, s.v_b - s.v_a) / h + ca.cross(V, s.omega)
-    C_F, V_F = _par(s.par, "C_F"), _par(s.par, "V_F")
+    C_F, V_F = _seg(s.sp, "C_F"), _seg(s.sp, "V_F")
     n = C_F * dV + V_F * Vdot
     Rn = rotate(s.p, n)
     Q = ca.vertcat(Rn, -Rn, h * ca.cross(V, n))
@@ -315,17 +368,18 @@ def joint_quantities(s: _Sym) -> dict[str, ca.SX]:
     (:func:`joint_torques_ad`; tested).
     """
     r = qmul(qconj(s.p), s.p_b)
-    return _joint_of_r(r, s.omega, s.omega_b, s.hj, s.par)
+    return _joint_of_r(r, s.omega, s.omega_b, s.jp)
 
 
-def _joint_of_r(r, oa, ob, hj, par) -> dict[str, ca.SX]:
+def _joint_of_r(r, oa, ob, jp) -> dict[str, ca.SX]:
+    hj = _jnt(jp, "h")
     u = r[1:4] / r[0]
     U = 2.0 / hj * u
     w = ob - rotate_transposed(r, oa)
     Aw = w + ca.cross(u, w) + u * ca.dot(u, w)
     Udot = Aw / hj
-    dU = U - _par(par, "U0")
-    C_M, V_M = _par(par, "C_M"), _par(par, "V_M")
+    dU = U - _jnt(jp, "U0")
+    C_M, V_M = _jnt(jp, "C_M"), _jnt(jp, "V_M")
     m = C_M * dU + V_M * Udot
     Atm = m - ca.cross(u, m) + u * ca.dot(u, m)
     T = ca.vertcat(rotate(r, Atm), -Atm)
@@ -333,8 +387,8 @@ def _joint_of_r(r, oa, ob, hj, par) -> dict[str, ca.SX]:
             "T": T, "M": m}
 
 
-def _joint_torques_of_r(r, oa, ob, hj, par) -> ca.SX:
-    return _joint_of_r(r, oa, ob, hj, par)["T"]
+def _joint_torques_of_r(r, oa, ob, jp) -> ca.SX:
+    return _joint_of_r(r, oa, ob, jp)["T"]
 
 
 def _increment_projection(p):
@@ -362,13 +416,13 @@ def segment_jacobian(s: _Sym) -> ca.SX:
     (exact because f_b and T are homogeneous of degree 0 in p). Equal to CasADi AD of
     :func:`segment_forces_ad` to rounding (tested); about 3x cheaper.
     """
-    h = _par(s.par, "h")
+    h = _seg(s.sp, "h")
     R = rotation(s.p)
     RT = R.T
     V = RT @ (s.phi_b - s.phi_a) / h
     g = RT @ (s.v_b - s.v_a) / h
-    C, Vf = ca.diag(_par(s.par, "C_F")), ca.diag(_par(s.par, "V_F"))
-    n = C @ (V - ca.DM([0, 0, 1])) + Vf @ (g + ca.cross(V, s.omega))
+    C, Vf = ca.diag(_seg(s.sp, "C_F")), ca.diag(_seg(s.sp, "V_F"))
+    n = C @ (V - _seg(s.sp, "V0")) + Vf @ (g + ca.cross(V, s.omega))
     Vx, nx, Ox = skew(V), skew(n), skew(s.omega)
     NV = C - Vf @ Ox
     Nth = C @ Vx + Vf @ (skew(g) - Ox @ Vx)
@@ -389,7 +443,8 @@ def joint_jacobian(s: _Sym) -> ca.SX:
     ``theta = -R(r)^T theta_a``, so d/dp_b = J_theta P(p_b) and
     d/dp_a = -J_theta R(r)^T P(p_a) (:func:`_increment_projection`).
     """
-    pa, pb, oa, ob, hj, par = s.p, s.p_b, s.omega, s.omega_b, s.hj, s.par
+    pa, pb, oa, ob, jp = s.p, s.p_b, s.omega, s.omega_b, s.jp
+    hj = _jnt(jp, "h")
     r = qmul(qconj(pa), pb)
     u0 = r[1:4] / r[0]
     a0 = rotate_transposed(r, oa)
@@ -397,14 +452,14 @@ def joint_jacobian(s: _Sym) -> ca.SX:
     u = u0 + 0.5 * (th + ca.cross(u0, th) + u0 * ca.dot(u0, th))
     w = ob - (a0 + ca.cross(a0, th))
     Aw = w + ca.cross(u, w) + u * ca.dot(u, w)
-    m = _par(par, "C_M") * (2.0 / hj * u - _par(par, "U0")) + _par(par, "V_M") * Aw / hj
+    m = _jnt(jp, "C_M") * (2.0 / hj * u - _jnt(jp, "U0")) + _jnt(jp, "V_M") * Aw / hj
     Atm = m - ca.cross(u, m) + u * ca.dot(u, m)
     T = ca.vertcat(rotate(r, Atm + ca.cross(th, Atm)), -Atm)
     J_th = ca.substitute(ca.jacobian(T, th), th, ca.DM.zeros(3))
     # T is affine in w = Omega_b - R^T Omega_a: dT_b/dw = -A^T V_M A / h_j, dT_a/dw = -R dT_b/dw
     R = rotation(r)
     A = ca.SX.eye(3) + skew(u0) + u0 @ u0.T
-    K = A.T @ (ca.diag(_par(par, "V_M")) @ A) / hj
+    K = A.T @ (ca.diag(_jnt(jp, "V_M")) @ A) / hj
     J_w = ca.vertcat(R @ K, -K)
     return ca.horzcat(-J_th @ R.T @ _increment_projection(pa),
                       J_th @ _increment_projection(pb), -J_w @ R.T, J_w)
@@ -425,51 +480,49 @@ def _fn(name, ins: dict, outs: dict) -> ca.Function:
 def kernels() -> list[ca.Function]:
     """All per-element CasADi kernels, in a fixed order (see their docstrings in layout).
 
-    Segment stencil inputs: phi_a, phi_b (3), p (4), v_a, v_b (3), Omega (3), par.
-    Joint stencil inputs: p_a, p_b (4), Omega_a, Omega_b (3), h_j (1), par.
-    Jacobian kernels return dense blocks (column-major in C). The segment Jacobian is
-    reduced: rows (force on node b, torque), columns (phi_b, p, v_b, Omega); since the
-    segment depends on phi_b - phi_a and v_b - v_a only and its forces balance
-    (f_a = -f_b), d/dphi_a = -d/dphi_b, d/dv_a = -d/dv_b and df_a = -df_b.
+    Segment stencil inputs: phi_a, phi_b (3), p (4), v_a, v_b (3), Omega (3), seg
+    (:data:`SEGMENT_PARAMS`). Joint stencil inputs: p_a, p_b (4), Omega_a, Omega_b (3), jnt
+    (:data:`JOINT_PARAMS`). Jacobian kernels return dense blocks (column-major in C). The
+    segment Jacobian is reduced: rows (force on node b, torque), columns (phi_b, p, v_b,
+    Omega); since the segment depends on phi_b - phi_a and v_b - v_a only and its forces
+    balance (f_a = -f_b), d/dphi_a = -d/dphi_b, d/dv_a = -d/dv_b and df_a = -df_b.
+    The external loads enter through :func:`rotate` (follower forces, material -> spatial)
+    and :func:`rotate_transposed` (dead moments, spatial -> material).
     """
     s = _symbols()
     S = ca.SX.sym
     seg_in = {"phi_a": s.phi_a, "phi_b": s.phi_b, "p": s.p, "v_a": s.v_a, "v_b": s.v_b,
-              "Omega": s.omega, "par": s.par}
+              "Omega": s.omega, "seg": s.sp}
     seg = segment_quantities(s)
     jnt_in = {"p_a": s.p, "p_b": s.p_b, "Omega_a": s.omega, "Omega_b": s.omega_b,
-              "h_j": s.hj, "par": s.par}
+              "jnt": s.jp}
     jnt = joint_quantities(s)
 
     # segment inertia and kinematics rows: [p' - 1/2 p*(0,Omega); J Omega' + Omega x J Omega]
     p, om = s.p, s.omega
     pd, omd = S("p_dot", 4), S("Omega_dot", 3)
-    tip, fixed, m = S("tip"), S("fixed"), S("m")
     cy, cj = S("c_y"), S("c_j")
-    h = _par(s.par, "h")
-    Jd = h * _par(s.par, "rhoI")
-    ls = _par(s.par, "load_scale")
+    Jd = _seg(s.sp, "h") * _seg(s.sp, "rhoI")
     r_seg = ca.vertcat(pd - qdot(p, om), Jd * omd + ca.cross(om, Jd * om))
     xs, xds = ca.vertcat(p, om), ca.vertcat(pd, omd)
     J_seg = cy * ca.jacobian(r_seg, xs) + cj * ca.jacobian(r_seg, xds)
-    seg_in_in = {"p": p, "Omega": om, "p_dot": pd, "Omega_dot": omd, "par": s.par}
-    # dead tip moment (spatial) as a material torque on the last segment
-    T_tip = ls * rotate_transposed(p, _par(s.par, "tip_moment"))
-    kin_seg = 0.5 * ca.dot(om, Jd * om)
-    pow_seg = tip * ca.dot(T_tip, om)
+    seg_in_in = {"p": p, "Omega": om, "p_dot": pd, "Omega_dot": omd, "seg": s.sp}
 
-    # node rows: [phi' - v; (1-fixed) (m v' - load_scale (m g + tip F)) + fixed v]
+    # node rows: [phi' - v; m v' - f] for a free node, [phi' - v; v - v_held] for a held
+    # one (its velocity prescribed, its position the integral of it from the prescribed
+    # initial position: an index-1 DAE whose position error is error-controlled like any
+    # other); f is the total external force
     phi, v = s.phi_a, s.v_a
     phid, vd = S("phi_dot", 3), S("v_dot", 3)
-    f_ext = ls * (m * _par(s.par, "gravity") + tip * _par(s.par, "tip_force"))
-    r_node = ca.vertcat(phid - v, (1 - fixed) * (m * vd - f_ext) + fixed * v)
+    m, f, held = S("m"), S("f", 3), S("held")
+    vr = S("v_held", 3)
+    r_node = ca.vertcat(phid - v, (1 - held) * (m * vd - f) + held * (v - vr))
     xn, xdn = ca.vertcat(phi, v), ca.vertcat(phid, vd)
     J_node = cy * ca.jacobian(r_node, xn) + cj * ca.jacobian(r_node, xdn)
-    node_in = {"phi": phi, "v": v, "phi_dot": phid, "v_dot": vd, "m": m, "tip": tip,
-               "fixed": fixed, "par": s.par}
-    kin_node = 0.5 * m * ca.dot(v, v)
-    pow_node = ca.dot(f_ext, v)
+    node_in = {"phi": phi, "v": v, "phi_dot": phid, "v_dot": vd, "m": m, "f": f,
+               "held": held, "v_held": vr}
 
+    x = S("x", 3)
     return [
         _fn("rod_segment_forces", seg_in, {"Q": seg["Q"]}),
         _fn("rod_segment_forces_jac", seg_in, {"dQb_dxb": ca.densify(segment_jacobian(s))}),
@@ -478,24 +531,26 @@ def kernels() -> list[ca.Function]:
         _fn("rod_segment_inertia", seg_in_in, {"r": r_seg}),
         _fn("rod_segment_inertia_jac", {**seg_in_in, "c_y": cy, "c_j": cj},
             {"J": ca.densify(J_seg)}),
-        _fn("rod_tip_moment", {"p": p, "par": s.par}, {"T": T_tip}),
-        _fn("rod_tip_moment_jac", {"p": p, "par": s.par},
-            {"dT_dp": ca.densify(ca.jacobian(T_tip, p))}),
         _fn("rod_node_inertia", node_in, {"r": r_node}),
         _fn("rod_node_inertia_jac", {**node_in, "c_y": cy, "c_j": cj}, {"J": ca.densify(J_node)}),
+        _fn("rod_rotate", {"p": p, "x": x}, {"Rx": rotate(p, x)}),
+        _fn("rod_rotate_jac", {"p": p, "x": x}, {"dRx_dp": ca.densify(
+            ca.jacobian(rotate(p, x), p))}),
+        _fn("rod_rotate_transposed", {"p": p, "x": x}, {"RTx": rotate_transposed(p, x)}),
+        _fn("rod_rotate_transposed_jac", {"p": p, "x": x}, {"dRTx_dp": ca.densify(
+            ca.jacobian(rotate_transposed(p, x), p))}),
         _fn("rod_segment_diagnostics", seg_in,
             {"W": seg["W"], "D": seg["D"], "V": seg["V"], "F": seg["F"]}),
         _fn("rod_joint_diagnostics", jnt_in,
             {"W": jnt["W"], "D": jnt["D"], "U": jnt["U"], "M": jnt["M"]}),
-        _fn("rod_segment_kinetic", {"p": p, "Omega": om, "tip": tip, "par": s.par},
-            {"T": kin_seg, "P_ext": pow_seg}),
-        _fn("rod_node_kinetic", {"v": v, "m": m, "tip": tip, "par": s.par},
-            {"T": kin_node, "P_ext": pow_node}),
+        _fn("rod_segment_kinetic", {"Omega": om, "seg": s.sp},
+            {"T": 0.5 * ca.dot(om, Jd * om)}),
+        _fn("rod_node_kinetic", {"v": v, "m": m}, {"T": 0.5 * m * ca.dot(v, v)}),
     ]
 
 
 # --------------------------------------------------------------------------------------
-# Whole-rod structure (for exact band widths; symbolic, small N only)
+# Structure of the assembled Jacobian (band widths) from the element stencils
 # --------------------------------------------------------------------------------------
 
 
@@ -504,87 +559,49 @@ def cell_start(i: int) -> int:
     return 0 if i == 0 else CELL0_SIZE + CELL_SIZE * (i - 1)
 
 
-def whole_rod_residual(n_elements: int, start_clamped: bool = True,
-                       end_clamped: bool = True) -> ca.Function:
-    """F(y, yp, par) for a whole rod built from the kernels (symbolic; for structure/tests)."""
+def _node(i: int, name: str) -> range:
+    off = CELL0_OFFSETS if i == 0 else CELL_OFFSETS
+    return range(cell_start(i) + off[name], cell_start(i) + off[name] + 3)
+
+
+def _segment(i: int, name: str) -> range:
+    k = cell_start(i) + CELL_OFFSETS[name]
+    return range(k, k + (4 if name == "p" else 3))
+
+
+def element_stencils(n_elements: int) -> list[tuple[list[int], list[int]]]:
+    """(rows, columns) of every element's block in dF/dy + c dF/dy' (all ends clamped,
+    every load present: the widest pattern). A declarative table of which unknowns each
+    element couples, from which the band widths follow; the assembled C Jacobian is
+    tested to have exactly this pattern."""
     N = n_elements
-    ks = {f.name(): f for f in kernels()}
-    n = CELL0_SIZE + CELL_SIZE * N
-    y, yp, par = ca.SX.sym("y", n), ca.SX.sym("yp", n), ca.SX.sym("par", N_PARAMS)
-    co = CELL_OFFSETS
-
-    def fld(vec, i, name):
-        if i == 0:
-            k = CELL0_OFFSETS[name]
-            return vec[k : k + 3]
-        k = cell_start(i) + co[name]
-        return vec[k : k + (4 if name == "p" else 3)]
-
-    res = [None] * n
-    h = par[PARAM_OFFSETS["h"]]
-    rhoA = par[PARAM_OFFSETS["rhoA"]]
-    parts = []
+    nd = lambda i: [*_node(i, "phi"), *_node(i, "v")]  # noqa: E731
+    sg = lambda i: [*_segment(i, "p"), *_segment(i, "Omega")]  # noqa: E731
+    out = []
     for i in range(N + 1):
-        m = rhoA * h * (0.5 if i in (0, N) else 1.0)
-        fixed = par[PARAM_OFFSETS["fix_start"]] if i == 0 else (
-            par[PARAM_OFFSETS["fix_end"]] if i == N else 0)
-        r = ks["rod_node_inertia"](fld(y, i, "phi"), fld(y, i, "v"), fld(yp, i, "phi"),
-                                   fld(yp, i, "v"), m, float(i == N), fixed, par)
-        parts.append((cell_start(i) + (CELL0_OFFSETS["phi"] if i == 0 else co["phi"]), r))
+        out.append((nd(i), nd(i)))                                   # node inertia
+        out.append((list(_node(i, "v")), list(_segment(max(i, 1), "p"))))  # follower force
     for i in range(1, N + 1):
-        r = ks["rod_segment_inertia"](fld(y, i, "p"), fld(y, i, "Omega"), fld(yp, i, "p"),
-                                      fld(yp, i, "Omega"), par)
-        if i == N:
-            r = r - ca.vertcat(ca.DM.zeros(4), ks["rod_tip_moment"](fld(y, i, "p"), par))
-        parts.append((cell_start(i) + co["p"], r))
-    for k, r in parts:
-        for j in range(r.shape[0]):
-            res[k + j] = r[j]
-
-    def vidx(i):
-        return (CELL0_OFFSETS["v"] if i == 0 else cell_start(i) + co["v"])
-
-    def oidx(i):
-        return cell_start(i) + co["Omega"]
-
-    def sub(k, val, mask=1):
-        for j in range(3):
-            res[k + j] = res[k + j] - mask * val[j]
-
-    fs, fe = par[PARAM_OFFSETS["fix_start"]], par[PARAM_OFFSETS["fix_end"]]
-    for i in range(1, N + 1):
-        Q = ks["rod_segment_forces"](fld(y, i - 1, "phi"), fld(y, i, "phi"), fld(y, i, "p"),
-                                     fld(y, i - 1, "v"), fld(y, i, "v"), fld(y, i, "Omega"), par)
-        sub(vidx(i - 1), Q[0:3], (1 - fs) if i - 1 == 0 else 1)
-        sub(vidx(i), Q[3:6], (1 - fe) if i == N else 1)
-        sub(oidx(i), Q[6:9])
-    for i in range(1, N):
-        T = ks["rod_joint_torques"](fld(y, i, "p"), fld(y, i + 1, "p"), fld(y, i, "Omega"),
-                                    fld(y, i + 1, "Omega"), h, par)
-        sub(oidx(i), T[0:3])
-        sub(oidx(i + 1), T[3:6])
-    zero = ca.DM.zeros(3)
-    if start_clamped:
-        ps = par[PARAM_OFFSETS["p_start"] : PARAM_OFFSETS["p_start"] + 4]
-        T = ks["rod_joint_torques"](ps, fld(y, 1, "p"), zero, fld(y, 1, "Omega"), h / 2, par)
-        sub(oidx(1), T[3:6])
-    if end_clamped:
-        pe = par[PARAM_OFFSETS["p_end"] : PARAM_OFFSETS["p_end"] + 4]
-        T = ks["rod_joint_torques"](fld(y, N, "p"), pe, fld(y, N, "Omega"), zero, h / 2, par)
-        sub(oidx(N), T[0:3])
-    return ca.Function("rod_residual", [y, yp, par], [ca.vertcat(*res)], ["y", "yp", "par"],
-                       ["F"])
+        out.append((sg(i), sg(i)))                                   # segment inertia
+        out.append((list(_segment(i, "Omega")), list(_segment(i, "p"))))   # dead moment
+        rows = [*_node(i - 1, "v"), *_node(i, "v"), *_segment(i, "Omega")]
+        out.append((rows, [*nd(i - 1), *nd(i), *sg(i)]))             # segment forces
+    for j in range(1, N):
+        rows = [*_segment(j, "Omega"), *_segment(j + 1, "Omega")]
+        out.append((rows, [*sg(j), *sg(j + 1)]))                     # interior joints
+    out.append((list(_segment(1, "Omega")), sg(1)))                 # clamp joint at s = 0
+    out.append((list(_segment(N, "Omega")), sg(N)))                 # clamp joint at s = L
+    return out
 
 
 def bandwidths(n_elements: int) -> tuple[int, int]:
-    """Exact (kl, ku) of dF/dy + c dF/dy' (both ends clamped: the widest pattern)."""
-    f = whole_rod_residual(n_elements)
-    y, yp = f.sx_in(0), f.sx_in(1)
-    F = f(y, yp, f.sx_in(2))
-    sp = ca.jacobian(F, ca.vertcat(y)).sparsity() + ca.jacobian(F, yp).sparsity()
-    rows, cols = sp.get_triplet()
-    return max(r - c for r, c in zip(rows, cols, strict=True)), max(
-        c - r for r, c in zip(rows, cols, strict=True))
+    """Exact (kl, ku) of dF/dy + c dF/dy' from :func:`element_stencils`."""
+    kl = ku = 0
+    for rows, cols in element_stencils(n_elements):
+        for r in rows:
+            for c in cols:
+                kl, ku = max(kl, r - c), max(ku, c - r)
+    return kl, ku
 
 
 def static_bandwidths(n_elements: int) -> tuple[int, int]:
@@ -594,43 +611,25 @@ def static_bandwidths(n_elements: int) -> tuple[int, int]:
     are dphi for nodes and dtheta for segments (dtheta couples exactly like p).
     """
     N = n_elements
-    f = whole_rod_residual(N)
-    y, yp = f.sx_in(0), f.sx_in(1)
-    sp = ca.jacobian(f(y, yp, f.sx_in(2)), y).sparsity()
-    rows, cols = sp.get_triplet()
 
-    off, soff = CELL_OFFSETS, STATIC_CELL_OFFSETS
-    c0 = CELL0_OFFSETS
-
-    def static_cols(k):
-        """static columns a dynamic column k maps to (p -> the 3 dtheta of its segment)."""
-        if k < CELL0_SIZE:
-            return [k - c0["phi"]] if c0["phi"] <= k < c0["phi"] + 3 else []
-        i, o = divmod(k - CELL0_SIZE, CELL_SIZE)
-        base = static_cell_start(i + 1)
-        if off["p"] <= o < off["p"] + 4:
-            return [base + soff["theta"] + j for j in range(3)]
-        if off["phi"] <= o < off["phi"] + 3:
-            return [base + soff["phi"] + o - off["phi"]]
+    def static_index(k: int, as_row: bool) -> list[int]:
+        for i in range(N + 1):
+            if k in _node(i, "v" if as_row else "phi"):
+                base = 0 if i == 0 else static_cell_start(i) + STATIC_CELL_OFFSETS["phi"]
+                return [base + k - _node(i, "v" if as_row else "phi")[0]]
+        for i in range(1, N + 1):
+            th = static_cell_start(i) + STATIC_CELL_OFFSETS["theta"]
+            if as_row and k in _segment(i, "Omega"):
+                return [th + k - _segment(i, "Omega")[0]]
+            if not as_row and k in _segment(i, "p"):
+                return [th, th + 1, th + 2]
         return []
 
-    def static_row(k):
-        """static row of a dynamic momentum row k (None for kinematic rows)."""
-        if k < CELL0_SIZE:
-            return k - c0["v"] if c0["v"] <= k < c0["v"] + 3 else None
-        i, o = divmod(k - CELL0_SIZE, CELL_SIZE)
-        base = static_cell_start(i + 1)
-        if off["Omega"] <= o < off["Omega"] + 3:
-            return base + soff["theta"] + o - off["Omega"]
-        if off["v"] <= o < off["v"] + 3:
-            return base + soff["phi"] + o - off["v"]
-        return None
-
     kl = ku = 0
-    for r, c in zip(rows, cols, strict=True):
-        rs = static_row(r)
-        if rs is None:
-            continue
-        for cc in static_cols(c):
-            kl, ku = max(kl, rs - cc), max(ku, cc - rs)
+    for rows, cols in element_stencils(N):
+        for r in rows:
+            for rs in static_index(r, True):
+                for c in cols:
+                    for cs in static_index(c, False):
+                        kl, ku = max(kl, rs - cs), max(ku, cs - rs)
     return kl, ku

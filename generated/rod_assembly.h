@@ -1,16 +1,19 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_assembly.h.jinja
 // derivation step: discrete_rod
-// inputs sha256: 0642b256e9cead5361d59e1dd3ccbe3519a8fca84b3c47e84a376b9888571a18
+// inputs sha256: 5eb4624893bbddc81cbe78ad775337c1fd835888a85063dfea0fa6d3bc88240e
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*
  * C API of the discrete rod (layout: generated/rod_layout.py).
  *
- * N: number of elements; par: parameter vector (rod_layout.PARAMS); y, yp: state and its
- * time derivative (length kvrod_n_state(N)); res: residual F(t, y, y') (same length).
- * Band storage is LAPACK dgbtrf's: ab has ldab >= 2*KL+KU+1 rows and n columns (Fortran
- * order), element (i, j) of the matrix at ab[KL + KU + i - j + j*ldab].
+ * A rod is described by kvrod_rod: N elements, the global parameter vector (PARAMS), the
+ * per-segment parameters (N rows of SEGMENT_PARAMS), the per-joint parameters (N+1 rows of
+ * JOINT_PARAMS, joint j at node j), the node loads (N+1 rows of NODE_LOADS) and the
+ * segment loads (N rows of SEGMENT_LOADS), all row-major.
+ * y, yp: state and its time derivative (length kvrod_n_state(N)); res: the residual
+ * F(t, y, y') (same length). Band storage is LAPACK dgbtrf's: ab has ldab >= 2*KL+KU+1
+ * rows and n columns (Fortran order), element (i, j) at ab[KL + KU + i - j + j*ldab].
  * Return value 0 on success, negative on error.
  */
 #ifndef KVROD_ROD_ASSEMBLY_H
@@ -19,26 +22,37 @@
 extern "C" {
 #endif
 
+typedef struct {
+  int N;                  /* number of elements (segments) */
+  const double* par;      /* global parameters: 37 values */
+  const double* seg;      /* N x 14 segment parameters */
+  const double* jnt;      /* (N+1) x 10 joint parameters */
+  const double* nload;    /* (N+1) x 6 node loads */
+  const double* sload;    /* N x 6 segment loads */
+} kvrod_rod;
+
 int kvrod_n_state(int N);
 int kvrod_kl(void);
 int kvrod_ku(void);
 int kvrod_n_params(void);
 
 /* F(t, y, y') = 0 in IDA form */
-int kvrod_residual(int N, const double* par, double t, const double* y, const double* yp,
+int kvrod_residual(const kvrod_rod* rod, double t, const double* y, const double* yp,
                    double* res);
 
-/* ab <- dF/dy + cj dF/dy' */
-int kvrod_jacobian_band(int N, const double* par, double t, const double* y,
-                        const double* yp, double cj, int ldab, double* ab);
-
 /* ab <- cy dF/dy + cj dF/dy' */
-int kvrod_jacobian_band2(int N, const double* par, double t, const double* y,
-                         const double* yp, double cy, double cj, int ldab, double* ab);
+int kvrod_jacobian_band(const kvrod_rod* rod, double t, const double* y, const double* yp,
+                        double cy, double cj, int ldab, double* ab);
 
-/* out <- [kinetic, elastic, 2D, external power, V (3N), F (3N), U (3(N+1)), M (3(N+1))] */
-int kvrod_diagnostics(int N, const double* par, double t, const double* y, const double* yp,
+/* out <- [kinetic, elastic, 2D, external power, boundary power, V (3N), F (3N),
+ *         U (3(N+1)), M (3(N+1))] */
+int kvrod_diagnostics(const kvrod_rod* rod, double t, const double* y, const double* yp,
                       double* out);
+
+/* out[k] <- [kinetic, elastic, 2D, external power, boundary power] of the m states
+ * ys[k*n .. (k+1)*n), yps[...] (the energy quadrature of a step in one call) */
+int kvrod_energies(const kvrod_rod* rod, int m, const double* ts, const double* ys,
+                   const double* yps, double* out);
 
 #ifdef __cplusplus
 }

@@ -1,7 +1,7 @@
 # GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 # source: derive/templates/rod_layout.py.jinja
 # derivation step: discrete_rod
-# inputs sha256: 2aa1d165372b5a8960abe44358dfcee6c105f4d2be5da8ccf84b091604dcbddd
+# inputs sha256: 0f62e261d72d6dd5acec7a27442619f4bb1270ae4bb46366fd2d724fa3ea5ce2
 # tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 """State, parameter and diagnostics layout of the discrete rod (the one place that owns it).
@@ -19,7 +19,12 @@ State vector y (and y'), cell by cell, n = CELL0_SIZE + CELL_SIZE * N:
 phi: node position (m), v: node velocity (m/s), p: segment quaternion, Omega: material
 angular velocity of the segment (rad/s). Residual rows use the same layout: the rows of a
 field hold its equation (p: kinematics p' - 1/2 p*(0,Omega); Omega: angular momentum
-balance; phi: phi' - v; v: linear momentum balance, or v = 0 for a fixed node).
+balance; phi: phi' - v; v: linear momentum balance, or v - r'(t) for a held node, whose
+position starts at r(0)).
+
+Per-element data (row-major arrays, one row per element): SEGMENT_PARAMS for segments
+1..N, JOINT_PARAMS for joints 0..N (joint j at node j), NODE_LOADS for nodes 0..N,
+SEGMENT_LOADS for segments 1..N; global PARAMS.
 
 The Jacobian dF/dy + c dF/dy' is banded with KL sub- and KU super-diagonals for
 N >= 2 (see :func:`bandwidths` for N = 1); LAPACK band storage (dgbtrf) has 2*KL+KU+1
@@ -29,7 +34,8 @@ Static problem (reduced coordinates, rows = force/torque balance):
 cell 0: phi(3); cell i: theta(3) phi(3)
 (theta: rotation increment, p <- p*exp(theta/2)); bandwidths STATIC_KL, STATIC_KU.
 
-C API (generated/rod_assembly.h): kvrod_residual, kvrod_jacobian_band(2), kvrod_diagnostics;
+C API (generated/rod_assembly.h): kvrod_residual, kvrod_jacobian_band, kvrod_diagnostics,
+kvrod_energies, each on a kvrod_rod struct (N and pointers to the arrays above);
 per-element CasADi kernels in generated/rod_kernels.c and generated/rod_<kernel>.casadi.
 """
 
@@ -55,35 +61,68 @@ STATIC_KU = 8
 
 #: parameter vector: (name, size, unit, meaning), in order
 PARAMS = (
-    ("h", 1, "m", "element length L/N"),
+    ("load_scale", 1, "1", "factor on all external loads (load stepping)"),
+    ("gravity", 3, "m/s^2", "gravitational acceleration (spatial)"),
+    ("f_dist", 3, "N/m", "dead distributed force per length (spatial)"),
+    ("fix_start", 1, "1", "1: node 0 held (clamped or pinned, position prescribed), else 0"),
+    ("clamp_start", 1, "1", "1: frame clamped at s = 0 (half-length joint), else 0"),
+    ("fix_end", 1, "1", "1: node N held, else 0"),
+    ("clamp_end", 1, "1", "1: frame clamped at s = L, else 0"),
+    ("r_start", 3, "m", "prescribed position of node 0"),
+    ("v_start", 3, "m/s", "prescribed velocity of node 0"),
+    ("p_start", 4, "1", "clamp frame quaternion at s = 0 (scalar first)"),
+    ("Omega_start", 3, "rad/s", "material angular velocity of the clamp frame at s = 0"),
+    ("r_end", 3, "m", "prescribed position of node N"),
+    ("v_end", 3, "m/s", "prescribed velocity of node N"),
+    ("p_end", 4, "1", "clamp frame quaternion at s = L (scalar first)"),
+    ("Omega_end", 3, "rad/s", "material angular velocity of the clamp frame at s = L"),
+)
+N_PARAMS = 37
+PARAM_OFFSETS = {'load_scale': 0, 'gravity': 1, 'f_dist': 4, 'fix_start': 7, 'clamp_start': 8, 'fix_end': 9, 'clamp_end': 10, 'r_start': 11, 'v_start': 14, 'p_start': 17, 'Omega_start': 21, 'r_end': 24, 'v_end': 27, 'p_end': 30, 'Omega_end': 34}
+PARAM_SIZES = {'load_scale': 1, 'gravity': 3, 'f_dist': 3, 'fix_start': 1, 'clamp_start': 1, 'fix_end': 1, 'clamp_end': 1, 'r_start': 3, 'v_start': 3, 'p_start': 4, 'Omega_start': 3, 'r_end': 3, 'v_end': 3, 'p_end': 4, 'Omega_end': 3}
+
+#: per-segment parameters (segment i = 1..N): (name, size, unit, meaning), in order
+SEGMENT_PARAMS = (
+    ("h", 1, "m", "segment length (reference arc length)"),
     ("C_F", 3, "N", "diagonal of C_F = diag(GA_1, GA_2, EA), eq. (7)"),
-    ("C_M", 3, "N m^2", "diagonal of C_M = diag(EI_1, EI_2, GJ_T), eq. (7)"),
     ("V_F", 3, "N s", "diagonal of V_F, eq. (9)"),
-    ("V_M", 3, "N m^2 s", "diagonal of V_M, eq. (9)"),
-    ("U0", 3, "1/m", "reference curvature (material)"),
+    ("V0", 3, "1", "reference shear/extension strain of the segment (material)"),
     ("rhoA", 1, "kg/m", "mass per length rho A"),
     ("rhoI", 3, "kg m", "rotary inertia per length rho diag(I1, I2, I3)"),
-    ("gravity", 3, "m/s^2", "gravitational acceleration (spatial)"),
-    ("tip_force", 3, "N", "dead force at node N (spatial)"),
-    ("tip_moment", 3, "N m", "dead moment on segment N (spatial)"),
-    ("load_scale", 1, "1", "factor on all external loads (load stepping)"),
-    ("p_start", 4, "1", "clamp frame quaternion at s = 0 (scalar first)"),
-    ("p_end", 4, "1", "clamp frame quaternion at s = L (scalar first)"),
-    ("fix_start", 1, "1", "1: node 0 position fixed (clamped or pinned), else 0"),
-    ("clamp_start", 1, "1", "1: frame clamped at s = 0 (half-length joint), else 0"),
-    ("fix_end", 1, "1", "1: node N position fixed, else 0"),
-    ("clamp_end", 1, "1", "1: frame clamped at s = L, else 0"),
 )
-N_PARAMS = 42
-PARAM_OFFSETS = {'h': 0, 'C_F': 1, 'C_M': 4, 'V_F': 7, 'V_M': 10, 'U0': 13, 'rhoA': 16, 'rhoI': 17, 'gravity': 20, 'tip_force': 23, 'tip_moment': 26, 'load_scale': 29, 'p_start': 30, 'p_end': 34, 'fix_start': 38, 'clamp_start': 39, 'fix_end': 40, 'clamp_end': 41}
-PARAM_SIZES = {'h': 1, 'C_F': 3, 'C_M': 3, 'V_F': 3, 'V_M': 3, 'U0': 3, 'rhoA': 1, 'rhoI': 3, 'gravity': 3, 'tip_force': 3, 'tip_moment': 3, 'load_scale': 1, 'p_start': 4, 'p_end': 4, 'fix_start': 1, 'clamp_start': 1, 'fix_end': 1, 'clamp_end': 1}
+N_SEGMENT = 14
+SEGMENT_OFFSETS = {'h': 0, 'C_F': 1, 'V_F': 4, 'V0': 7, 'rhoA': 10, 'rhoI': 11}
+
+#: per-joint parameters (joint j = 0..N at node j)
+JOINT_PARAMS = (
+    ("h", 1, "m", "joint length: (h_j + h_j+1)/2 inside, h/2 at a clamp"),
+    ("C_M", 3, "N m^2", "diagonal of C_M = diag(EI_1, EI_2, GJ_T), eq. (7)"),
+    ("V_M", 3, "N m^2 s", "diagonal of V_M, eq. (9)"),
+    ("U0", 3, "1/m", "reference curvature and twist (material)"),
+)
+N_JOINT = 10
+JOINT_OFFSETS = {'h': 0, 'C_M': 1, 'V_M': 4, 'U0': 7}
+
+#: loads per node (0..N) and per segment (1..N), current values
+NODE_LOADS = (
+    ("f_dead", 3, "N", "dead point force (spatial)"),
+    ("f_follower", 3, "N", "follower point force (material frame of the node\u0027s segment)"),
+)
+N_NODE_LOAD = 6
+NODE_LOAD_OFFSETS = {'f_dead': 0, 'f_follower': 3}
+SEGMENT_LOADS = (
+    ("m_dead", 3, "N m", "dead point moment (spatial)"),
+    ("m_follower", 3, "N m", "follower point moment (material)"),
+)
+N_SEGMENT_LOAD = 6
+SEGMENT_LOAD_OFFSETS = {'m_dead': 0, 'm_follower': 3}
 
 #: diagnostics vector: these scalars, then V (3N), F (3N), U (3(N+1)), M (3(N+1));
 #: joint j = 0..N sits at node j (j = 0 and j = N are the clamp joints, zero if absent)
-DIAG_SCALARS = ('kinetic', 'elastic', 'dissipation_rate', 'external_power')
+DIAG_SCALARS = ('kinetic', 'elastic', 'dissipation_rate', 'external_power', 'boundary_power')
 
 #: per-element CasADi kernels (names, inputs, outputs)
-KERNELS = {'rod_segment_forces': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'par': [42, 1]}, 'outputs': {'Q': [9, 1]}}, 'rod_segment_forces_jac': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'par': [42, 1]}, 'outputs': {'dQb_dxb': [6, 13]}}, 'rod_joint_torques': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'h_j': [1, 1], 'par': [42, 1]}, 'outputs': {'T': [6, 1]}}, 'rod_joint_torques_jac': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'h_j': [1, 1], 'par': [42, 1]}, 'outputs': {'dT_dx': [6, 14]}}, 'rod_segment_inertia': {'inputs': {'p': [4, 1], 'Omega': [3, 1], 'p_dot': [4, 1], 'Omega_dot': [3, 1], 'par': [42, 1]}, 'outputs': {'r': [7, 1]}}, 'rod_segment_inertia_jac': {'inputs': {'p': [4, 1], 'Omega': [3, 1], 'p_dot': [4, 1], 'Omega_dot': [3, 1], 'par': [42, 1], 'c_y': [1, 1], 'c_j': [1, 1]}, 'outputs': {'J': [7, 7]}}, 'rod_tip_moment': {'inputs': {'p': [4, 1], 'par': [42, 1]}, 'outputs': {'T': [3, 1]}}, 'rod_tip_moment_jac': {'inputs': {'p': [4, 1], 'par': [42, 1]}, 'outputs': {'dT_dp': [3, 4]}}, 'rod_node_inertia': {'inputs': {'phi': [3, 1], 'v': [3, 1], 'phi_dot': [3, 1], 'v_dot': [3, 1], 'm': [1, 1], 'tip': [1, 1], 'fixed': [1, 1], 'par': [42, 1]}, 'outputs': {'r': [6, 1]}}, 'rod_node_inertia_jac': {'inputs': {'phi': [3, 1], 'v': [3, 1], 'phi_dot': [3, 1], 'v_dot': [3, 1], 'm': [1, 1], 'tip': [1, 1], 'fixed': [1, 1], 'par': [42, 1], 'c_y': [1, 1], 'c_j': [1, 1]}, 'outputs': {'J': [6, 6]}}, 'rod_segment_diagnostics': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'par': [42, 1]}, 'outputs': {'W': [1, 1], 'D': [1, 1], 'V': [3, 1], 'F': [3, 1]}}, 'rod_joint_diagnostics': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'h_j': [1, 1], 'par': [42, 1]}, 'outputs': {'W': [1, 1], 'D': [1, 1], 'U': [3, 1], 'M': [3, 1]}}, 'rod_segment_kinetic': {'inputs': {'p': [4, 1], 'Omega': [3, 1], 'tip': [1, 1], 'par': [42, 1]}, 'outputs': {'T': [1, 1], 'P_ext': [1, 1]}}, 'rod_node_kinetic': {'inputs': {'v': [3, 1], 'm': [1, 1], 'tip': [1, 1], 'par': [42, 1]}, 'outputs': {'T': [1, 1], 'P_ext': [1, 1]}}}
+KERNELS = {'rod_segment_forces': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'seg': [14, 1]}, 'outputs': {'Q': [9, 1]}}, 'rod_segment_forces_jac': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'seg': [14, 1]}, 'outputs': {'dQb_dxb': [6, 13]}}, 'rod_joint_torques': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1]}, 'outputs': {'T': [6, 1]}}, 'rod_joint_torques_jac': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1]}, 'outputs': {'dT_dx': [6, 14]}}, 'rod_segment_inertia': {'inputs': {'p': [4, 1], 'Omega': [3, 1], 'p_dot': [4, 1], 'Omega_dot': [3, 1], 'seg': [14, 1]}, 'outputs': {'r': [7, 1]}}, 'rod_segment_inertia_jac': {'inputs': {'p': [4, 1], 'Omega': [3, 1], 'p_dot': [4, 1], 'Omega_dot': [3, 1], 'seg': [14, 1], 'c_y': [1, 1], 'c_j': [1, 1]}, 'outputs': {'J': [7, 7]}}, 'rod_node_inertia': {'inputs': {'phi': [3, 1], 'v': [3, 1], 'phi_dot': [3, 1], 'v_dot': [3, 1], 'm': [1, 1], 'f': [3, 1], 'held': [1, 1], 'v_held': [3, 1]}, 'outputs': {'r': [6, 1]}}, 'rod_node_inertia_jac': {'inputs': {'phi': [3, 1], 'v': [3, 1], 'phi_dot': [3, 1], 'v_dot': [3, 1], 'm': [1, 1], 'f': [3, 1], 'held': [1, 1], 'v_held': [3, 1], 'c_y': [1, 1], 'c_j': [1, 1]}, 'outputs': {'J': [6, 6]}}, 'rod_rotate': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'Rx': [3, 1]}}, 'rod_rotate_jac': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'dRx_dp': [3, 4]}}, 'rod_rotate_transposed': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'RTx': [3, 1]}}, 'rod_rotate_transposed_jac': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'dRTx_dp': [3, 4]}}, 'rod_segment_diagnostics': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'seg': [14, 1]}, 'outputs': {'W': [1, 1], 'D': [1, 1], 'V': [3, 1], 'F': [3, 1]}}, 'rod_joint_diagnostics': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1]}, 'outputs': {'W': [1, 1], 'D': [1, 1], 'U': [3, 1], 'M': [3, 1]}}, 'rod_segment_kinetic': {'inputs': {'Omega': [3, 1], 'seg': [14, 1]}, 'outputs': {'T': [1, 1]}}, 'rod_node_kinetic': {'inputs': {'v': [3, 1], 'm': [1, 1]}, 'outputs': {'T': [1, 1]}}}
 
 
 def n_state(n_elements: int) -> int:
@@ -99,6 +138,43 @@ def n_static(n_elements: int) -> int:
 def cell_start(i: int) -> int:
     """Index of the first unknown of cell i in y."""
     return 0 if i == 0 else CELL0_SIZE + CELL_SIZE * (i - 1)
+
+
+def node_phi(i: int) -> int:
+    """Index of node i's position phi (3) in y."""
+    return CELL0_OFFSETS["phi"] if i == 0 else cell_start(i) + CELL_OFFSETS["phi"]
+
+
+def node_v(i: int) -> int:
+    """Index of node i's velocity v (3) in y."""
+    return CELL0_OFFSETS["v"] if i == 0 else cell_start(i) + CELL_OFFSETS["v"]
+
+
+def segment_p(i: int) -> int:
+    """Index of segment i's quaternion p (4) in y (i = 1..N)."""
+    return cell_start(i) + CELL_OFFSETS["p"]
+
+
+def segment_omega(i: int) -> int:
+    """Index of segment i's angular velocity Omega (3) in y (i = 1..N)."""
+    return cell_start(i) + CELL_OFFSETS["Omega"]
+
+
+def describe_index(n_elements: int, index: int) -> str:
+    """Human-readable name of state/residual component ``index`` (e.g. for failures)."""
+    if index < 0 or index >= n_state(n_elements):
+        return f"state index {index}"
+    if index < CELL0_SIZE:
+        for name, start in sorted(CELL0_OFFSETS.items(), key=lambda kv: -kv[1]):
+            if index >= start:
+                return f"node 0 {name}[{index - start}] (state index {index})"
+    cell, local = divmod(index - CELL0_SIZE, CELL_SIZE)
+    cell += 1
+    for name, start in sorted(CELL_OFFSETS.items(), key=lambda kv: -kv[1]):
+        if local >= start:
+            where = "segment" if name in ("p", "Omega") else "node"
+            return f"{where} {cell} {name}[{local - start}] (state index {index})"
+    return f"state index {index}"
 
 
 def static_cell_start(i: int) -> int:

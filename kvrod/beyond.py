@@ -17,7 +17,6 @@ import math
 import platform
 import shutil
 import time
-from dataclasses import asdict
 from pathlib import Path
 
 import jinja2
@@ -52,7 +51,7 @@ def _rel(p: Path) -> str:
 def _compare(out: Path) -> dict:
     from kvrod.cli_beyond import write_compare
     from runtime.analysis import compare_damping as cd
-    from runtime.scenarios import CantileverScenario
+    from runtime.problem.registry import load_problem
 
     res = cd.compare_damping(n_elements=COMPARE_N)
     paths = write_compare(res, out)
@@ -70,8 +69,9 @@ def _compare(out: Path) -> dict:
                        "predicted_ratio": c["predicted_ratio"],
                        "rel": c["measured_ratio"] / c["predicted_ratio"] - 1,
                        "tau_S": c["tau_S"], "tau_B": c["tau_B"]}
-    sc = CantileverScenario()
-    strain = res["parameters"]["axial_force"] / (sc.youngs_modulus * sc.width * sc.height)
+    sc = load_problem("cantilever")
+    area = dict(sc.section.dims)["width"] * dict(sc.section.dims)["height"]
+    strain = res["parameters"]["axial_force"] / (sc.material.youngs_modulus * area)
     return {"parameters": res["parameters"], "cases": cases, "axial_strain": strain,
             "figures": [p for p in paths if p.suffix == ".png"],
             "command": f"kvrod compare-damping --n-elements {COMPARE_N} --out {_rel(out)}"}
@@ -87,12 +87,12 @@ def _write_modes(res: dict, out: Path) -> list[Path]:
     from kvrod.cli_beyond import plot_mode_shapes
     from runtime.io.results import write_json
 
-    sc, modes = res["scenario"], res["modes"]
+    sc, modes = res["problem"], res["modes"]
     js = write_json(out / "modes.json", {
-        "scenario": "cantilever", "parameters": {**asdict(sc), "tau_E": sc.tau_E},
+        "problem": sc.name, "parameters": sc.to_mapping(), "tau_E": sc.material.tau_E,
         "deformed": res["deformed"], "static_tip": res["static_tip"],
         "modes": [m.to_dict() for m in modes]})
-    return [js, plot_mode_shapes(modes, sc.length, out / "mode_shapes.png")]
+    return [js, plot_mode_shapes(modes, sc.rod.length, out / "mode_shapes.png")]
 
 
 def _distinct(modes: list, count: int, rtol: float = 1e-6) -> list[list]:
@@ -109,12 +109,14 @@ def _distinct(modes: list, count: int, rtol: float = 1e-6) -> list[list]:
 def _modes(out: Path) -> dict:
     from kvrod.cli_beyond import run_modes
     from runtime.analysis.modal import family_retardation_time
+    from runtime.problem.registry import load_problem
 
-    straight = run_modes("cantilever", MODES_N, MODES_COUNT)
-    deformed = run_modes("cantilever", MODES_N, MODES_COUNT, deformed=True)
+    problem = load_problem("cantilever", {"n_elements": MODES_N})
+    straight = run_modes(problem, MODES_COUNT)
+    deformed = run_modes(problem, MODES_COUNT, deformed=True)
     figs = _write_modes(straight, out / "modes")[1:]
     figs += _write_modes(deformed, out / "modes-deformed")[1:]
-    sc, model = straight["scenario"], straight["model"]
+    sc, model = straight["problem"], straight["model"]
     groups = _distinct(straight["modes"], DISTINCT_MODES)
     if len(groups) < DISTINCT_MODES:
         raise RuntimeError(f"only {len(groups)} distinct modes among the {MODES_COUNT} "
@@ -143,10 +145,11 @@ def _modes(out: Path) -> dict:
                       "zeta_def": m.zeta, "omega_str": None if s is None else s.omega,
                       "rel": None if s is None else m.omega / s.omega - 1})
     cmd = f"kvrod modes cantilever --n-elements {MODES_N} --count {MODES_COUNT}"
-    return {"n": MODES_N, "count": MODES_COUNT, "tau_S": sc.tau_S, "tau_B": sc.tau_B,
-            "tau_E": sc.tau_E, "rows": rows, "shift": shift,
+    mat = sc.material
+    return {"n": MODES_N, "count": MODES_COUNT, "tau_S": mat.tau_S, "tau_B": mat.tau_B,
+            "tau_E": mat.tau_E, "rows": rows, "shift": shift,
             "static_tip": [float(v) for v in deformed["static_tip"]],
-            "tip_force": sc.tip_force, "figures": figs,
+            "tip_force": float(np.linalg.norm(sc.loads[0].vector)), "figures": figs,
             "command": f"{cmd} --out {_rel(out / 'modes')}",
             "command_deformed": f"{cmd} --deformed --out {_rel(out / 'modes-deformed')}"}
 
@@ -159,12 +162,13 @@ def _modes(out: Path) -> dict:
 def _calibration(out: Path) -> dict:
     from runtime.analysis import calibration as cal
     from runtime.io.results import write_json
-    from runtime.scenarios import CantileverScenario, run_cantilever
+    from runtime.problem.registry import load_problem
+    from runtime.simulate.simulate import simulate
 
     out.mkdir(parents=True, exist_ok=True)
-    sc = CantileverScenario.with_tau(CAL_TAU, n_elements=CAL_DATA_N, t_end=CAL_T_END,
-                                     output_step=CAL_DT)
-    run = run_cantilever(sc)
+    sc = load_problem("cantilever", {"tau": CAL_TAU, "n_elements": CAL_DATA_N,
+                                     "t_end": CAL_T_END, "output_step": CAL_DT})
+    run = simulate(sc)
     if run.status != "finished":
         raise RuntimeError(f"synthetic data run failed: {run.message}")
     rng = np.random.default_rng(CAL_SEED)
@@ -173,21 +177,24 @@ def _calibration(out: Path) -> dict:
     tmp = data.with_name(f".{data.name}.tmp")
     with tmp.open("w") as fh:
         fh.write(f"# synthetic tip signal: kvrod cantilever (paper's, N = {CAL_DATA_N}), "
-                 f"tau_S = tau_B = {CAL_TAU} s, release from F = {sc.tip_force} N, "
+                 f"tau_S = tau_B = {CAL_TAU} s, release from F = "
+                 f"{float(np.linalg.norm(sc.loads[0].vector))} N, "
                  f"+ N(0, {CAL_NOISE} m) noise, seed {CAL_SEED}\n")
         fh.write("t,x\n")
         for a, b in zip(t, x, strict=True):
             fh.write(f"{a:.6f},{b:.10e}\n")
     tmp.replace(data)
-    # exactly what `kvrod calibrate --data synthetic.csv` does (default scenario, N = 16)
+    # exactly what `kvrod calibrate --data synthetic.csv` does (the cantilever, N = 16)
     td, xd = cal.load_csv(data, ("t", "x"))
-    res = cal.calibrate_signal(td, xd, scenario=CantileverScenario(), n_elements=CAL_MODEL_N)
+    res = cal.calibrate_signal(td, xd, problem=load_problem("cantilever"),
+                               n_elements=CAL_MODEL_N)
     write_json(out / "calibration.json", {"data": str(data), **res.summary()})
     fig = cal.plot_calibration(res, out / "calibration.png")
     lo, hi = res.ci95
     return {"tau_true": CAL_TAU, "noise": CAL_NOISE, "seed": CAL_SEED,
             "data_n": CAL_DATA_N, "model_n": CAL_MODEL_N, "t_end": CAL_T_END, "dt": CAL_DT,
-            "samples": int(td.size), "tip_force": sc.tip_force, "tau": res.tau,
+            "samples": int(td.size), "tip_force": float(np.linalg.norm(sc.loads[0].vector)),
+            "tau": res.tau,
             "se": res.std_error, "lo": lo, "hi": hi, "tau0": res.tau0,
             "error": res.tau / CAL_TAU - 1, "inside": bool(lo < CAL_TAU < hi),
             "rms": res.residual_rms, "nfev": res.nfev, "success": res.success,

@@ -10,8 +10,6 @@ import math
 import sys
 from pathlib import Path
 
-SCENARIOS = ("cantilever",)
-
 
 def _cli_error(message: str) -> Exception:
     from kvrod.cli import CliError
@@ -83,71 +81,69 @@ def plot_mode_shapes(modes, length: float, path: Path) -> Path:
     return path
 
 
-def run_modes(scenario: str = "cantilever", n_elements: int = 50, count: int = 10,
-              tau: float | None = None, deformed: bool = False,
-              damping: str = "consistent") -> dict:
-    """Modal analysis of a named scenario; returns {"modes", "model", "static_tip", ...}."""
-    import numpy as np
+def run_modes(problem, count: int = 10, deformed: bool = False) -> dict:
+    """Modal analysis of a problem; returns {"modes", "model", "static_tip", ...}.
 
+    Straight (default): about the stress-free reference without loads; deformed: about
+    the static equilibrium under the problem's loads at t = 0-. Continuum reference
+    frequencies (the independent ``references`` package) are attached where they apply.
+    """
+    from dataclasses import replace
+
+    from kvrod import continuum
     from runtime.analysis.modal import modal_analysis
-    from runtime.model.rod import RodModel
-    from runtime.scenarios import CantileverScenario
-    from runtime.solvers.statics import solve_static
+    from runtime.problem.assemble import build_model
+    from runtime.simulate.simulate import static_equilibrium
 
-    if scenario not in SCENARIOS:
-        raise ValueError(f"unknown scenario {scenario!r}; scenarios are: {', '.join(SCENARIOS)}")
-    kw: dict = {"n_elements": n_elements, "damping": damping}
-    if tau is not None:
-        kw.update(tau_S=tau, tau_B=tau)
-    sc = CantileverScenario(**kw)
-    force = (sc.tip_force, 0.0, 0.0) if deformed else (0.0, 0.0, 0.0)
-    model = RodModel(sc.rod_parameters(), start="clamped", end="free", tip_force=force)
+    p = problem if deformed else replace(problem, loads=())
+    model = build_model(p)
     y_eq, tip = None, None
     if deformed:
-        st = solve_static(model, model.initial_state(), load_steps=sc.load_steps)
-        y_eq, tip = st.y, model.tip_position(st.y)
+        st = static_equilibrium(p, model)
+        y_eq, tip = st.y, st.tip
     modes = modal_analysis(model, y_eq, count=count)
-    return {"scenario": sc, "model": model, "modes": modes, "deformed": deformed,
-            "static_tip": None if tip is None else np.asarray(tip)}
+    if not deformed:
+        continuum.attach(problem, modes)
+    return {"problem": problem, "model": model, "modes": modes, "deformed": deformed,
+            "static_tip": tip}
 
 
 def _cmd_modes(args) -> int:
+    from kvrod.problem_args import problem_from_args
 
     if args.count < 1:
         raise _cli_error(f"kvrod modes: --count must be >= 1, got {args.count}")
-    if args.n_elements < 1:
-        raise _cli_error(f"kvrod modes: --n-elements must be >= 1, got {args.n_elements}")
-    if args.scenario not in SCENARIOS:
-        raise _cli_error(f"kvrod modes: unknown scenario {args.scenario!r}; scenarios are: "
-                         f"{', '.join(SCENARIOS)}")
+    problem = problem_from_args(args, "modes")
+    nq = 6 * problem.rod.elements
+    if args.count > nq:
+        raise _cli_error(f"kvrod modes: --count {args.count} exceeds the {nq} degrees of "
+                         f"freedom of {problem.rod.elements} elements")
     out = Path(args.out) if args.out else Path("results") / (
-        f"modes-{args.scenario}" + ("-deformed" if args.deformed else ""))
+        f"modes-{problem.name}" + ("-deformed" if args.deformed else ""))
     from kvrod.outputs import results_folder
 
     with results_folder(out, "modes", markers=("modes.json",), overwrite=args.overwrite,
                         names=("modes.json", "mode_shapes.png")):
-        return _modes_into(args, out)
+        return _modes_into(args, problem, out)
 
 
-def _modes_into(args, out: Path) -> int:
+def _modes_into(args, problem, out: Path) -> int:
     from runtime.io.results import write_json
 
-    res = run_modes(args.scenario, args.n_elements, args.count, args.tau, args.deformed,
-                    args.damping)
-    sc, modes = res["scenario"], res["modes"]
-    state = "pre-deformed by the static tip load" if args.deformed else "straight"
-    print(f"{args.scenario}: N = {sc.n_elements}, tau_S = {sc.tau_S} s, tau_B = {sc.tau_B} s "
-          f"(tau_E = {sc.tau_E:.6g} s), {state}")
+    res = run_modes(problem, args.count, args.deformed)
+    modes = res["modes"]
+    m = problem.material
+    state = "pre-deformed by its static loads" if args.deformed else "straight, unloaded"
+    print(f"{problem.name}: N = {problem.rod.elements}, tau_S = {m.tau_S} s, tau_B = "
+          f"{m.tau_B} s (tau_E = {m.tau_E:.6g} s), {state}")
     if res["static_tip"] is not None:
         print(f"static tip [m]: {[round(float(v), 6) for v in res['static_tip']]}")
     print(modes_table(modes))
-    from dataclasses import asdict
-
     write_json(out / "modes.json", {
-        "scenario": args.scenario, "parameters": {**asdict(sc), "tau_E": sc.tau_E},
+        "problem": problem.name, "parameters": problem.to_mapping(), "tau_E": m.tau_E,
         "deformed": args.deformed, "static_tip": res["static_tip"],
-        "modes": [m.to_dict() for m in modes]})
-    plot_mode_shapes(modes, sc.length, out / "mode_shapes.png")
+        "modes": [md.to_dict() for md in modes]})
+    plot_mode_shapes(modes, problem.rod.length, out / "mode_shapes.png")
     print(f"wrote {out}/modes.json, mode_shapes.png")
     return 0
 
@@ -169,22 +165,22 @@ def _cmd_calibrate(args) -> int:
 def _calibrate_into(args, out: Path) -> int:
     from runtime.analysis import calibration as cal
     from runtime.io.results import write_json
-    from runtime.scenarios import CantileverScenario
+    from runtime.problem.registry import load_problem
 
-    sc_kw: dict = {}
+    kw: dict = {}
     if args.tip_force is not None:
-        sc_kw["tip_force"] = args.tip_force
+        kw["tip_force"] = args.tip_force
     if args.n_elements is not None and args.n_elements < 1:
         raise _cli_error(f"kvrod calibrate: --n-elements must be >= 1, got {args.n_elements}")
     if args.mode == "signal":
         t, x = cal.load_csv(args.data, ("t", "x"))
-        sc = CantileverScenario(**sc_kw)
-        res = cal.calibrate_signal(t, x, scenario=sc, tau0=args.tau0,
+        problem = load_problem(args.problem, kw)
+        res = cal.calibrate_signal(t, x, problem=problem, tau0=args.tau0,
                                    n_elements=args.n_elements or 16)
     else:
         (d,) = cal.load_csv(args.data, ("delta",))
-        sc = CantileverScenario(n_elements=args.n_elements or 16, **sc_kw)
-        res = cal.calibrate_decrements(d, scenario=sc, tau0=args.tau0)
+        problem = load_problem(args.problem, {"n_elements": args.n_elements or 16, **kw})
+        res = cal.calibrate_decrements(d, problem=problem, tau0=args.tau0)
     write_json(out / "calibration.json", {"data": str(args.data), **res.summary()})
     cal.plot_calibration(res, out / "calibration.png")
     lo, hi = res.ci95
@@ -321,15 +317,12 @@ def add_commands(sub, parser_class) -> None:
     _ = parser_class
     m = sub.add_parser("modes", help="damped modal analysis (frequencies, damping ratios, "
                                      "mode shapes)")
-    m.add_argument("scenario", help="scenario name: cantilever")
-    m.add_argument("--n-elements", dest="n_elements", type=int, default=50,
-                   help="elements (default 50)")
+    from kvrod.problem_args import add_problem_arguments
+
+    add_problem_arguments(m)
     m.add_argument("--count", type=int, default=10, help="number of modes (default 10)")
-    m.add_argument("--tau", type=float, help="tau_S = tau_B = tau [s] (paper: 0.04)")
-    m.add_argument("--damping", choices=("consistent", "naive"), default="consistent",
-                   help="extensional viscosity eta_E (consistent) or eta~_E (naive)")
     m.add_argument("--deformed", action="store_true",
-                   help="linearise about the static state under the tip load (0.05 N)")
+                   help="linearise about the static state under the problem's loads")
     m.add_argument("--out", help="results folder (default results/modes-SCENARIO[-deformed])")
     m.add_argument("--overwrite", action="store_true",
                    help="replace a result already in --out (default: refuse)")
@@ -341,7 +334,9 @@ def add_commands(sub, parser_class) -> None:
                    help="CSV: columns t, x (signal: time [s] since release, tip x [m]) "
                         "or a column delta (log decrements)")
     c.add_argument("--mode", choices=("signal", "decrements"), default="signal",
-                   help="signal: simulate the scenario; decrements: linear modal model")
+                   help="signal: simulate the problem; decrements: linear modal model")
+    c.add_argument("--problem", default="cantilever",
+                   help="the rod that was measured (problem file or built-in name)")
     c.add_argument("--n-elements", dest="n_elements", type=int,
                    help="elements of the model (default 16)")
     c.add_argument("--tip-force", dest="tip_force", type=float,

@@ -60,7 +60,7 @@ def reproduce(out: Path, n_elements: int = 100, t_end: float = 10.0,
     from kvrod.outputs import check_file_argument
     from runtime.io import folder as F
     from runtime.io import plots as P
-    from runtime.scenarios import CantileverScenario
+    from runtime.problem.registry import load_problem
 
     wall0 = time.perf_counter()
     out = Path(out)
@@ -75,14 +75,16 @@ def reproduce(out: Path, n_elements: int = 100, t_end: float = 10.0,
         write_derivation_notes(notes.parent / "derivation.md")
     runs, summaries = {}, {}
     for tau in TAUS:
-        sc = CantileverScenario.with_tau(tau, n_elements=n_elements, t_end=t_end, rtol=rtol)
+        sc = load_problem("cantilever", {"tau": tau, "n_elements": n_elements,
+                                         "t_end": t_end, "rtol": rtol})
         runs[tau], summaries[tau] = run_and_write(sc, out / f"tau_{tau:g}", f"tau_E = {tau:g} s",
                                                   overwrite=overwrite)
     # E = 4 MPa: tau halved; exact coincidence needs the tip force x 4 as well
     stiff = {}
     for label, force in (("E4_F0.2", 0.2), ("E4_F0.05", 0.05)):
-        sc = CantileverScenario.with_tau(0.02, youngs_modulus=4e6, tip_force=force,
-                                         n_elements=n_elements, t_end=t_end / 2, rtol=rtol)
+        sc = load_problem("cantilever", {"tau": 0.02, "youngs_modulus": 4e6,
+                                         "tip_force": force, "n_elements": n_elements,
+                                         "t_end": t_end / 2, "rtol": rtol})
         stiff[label] = run_and_write(sc, out / label, f"E = 4 MPa, F = {force} N",
                                      overwrite=overwrite)
     figs = out / "figures"
@@ -103,7 +105,7 @@ def reproduce(out: Path, n_elements: int = 100, t_end: float = 10.0,
     dev = r4.tip[0][:n] - ref.tip[0][: 2 * n - 1 : 2]
     dev_b = r4b.tip[0][:n] - ref.tip[0][: 2 * n - 1 : 2]
     amp = float(np.max(np.abs(ref.tip[0])))
-    sc0 = CantileverScenario(n_elements=n_elements)
+    sc0 = load_problem("cantilever", {"n_elements": n_elements})
     reference = _reissner_reference(sc0)
     ctx = {
         "n_elements": n_elements, "t_end": t_end, "rtol": rtol,

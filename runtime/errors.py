@@ -12,10 +12,12 @@ class ParameterError(constitutive.ParameterError):
     ``except ParameterError`` catches bad input from every layer.
     """
 
-    def __init__(self, name: str, value: object, allowed: str) -> None:
-        self.name, self.value, self.allowed = name, value, allowed
-        super().__init__(f"parameter {name!r} = {value!r} is outside the allowed range: "
-                         f"{allowed}")
+    def __init__(self, name: str, value: object, allowed: str, where: str = "") -> None:
+        self.name, self.value, self.allowed, self.where = name, value, allowed, where
+        shown = value if not isinstance(value, str) or len(value) < 80 else value[:77] + "..."
+        prefix = f"{where}: " if where else ""
+        super().__init__(f"{prefix}parameter {name!r} = {shown!r} is outside the allowed "
+                         f"range: {allowed}")
 
 
 class GeneratedCodeError(RuntimeError):

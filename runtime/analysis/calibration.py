@@ -3,9 +3,10 @@
 Paper convention tau_S = tau_B = tau, hence tau_E = tau (eq. (6)). Two kinds of data:
 
 * ``"signal"``: a measured tip signal ``x(t)`` (m) after release at ``t = 0`` of the
-  scenario's static tip load. Model: a simulation of the scenario
-  (:func:`runtime.scenarios.run_cantilever`, coarse ``n_elements`` and ``t_end`` = the end of
-  the data), its tip ``e1`` coordinate interpolated (cubic spline) at the data times.
+  problem's static tip load. Model: a simulation of the problem
+  (:func:`runtime.simulate.simulate.simulate`, coarse ``n_elements`` and ``t_end`` = the end
+  of the data), the displacement of its ``analysis.maxima`` coordinate (the cantilever: the
+  tip's x) interpolated (cubic spline) at the data times.
   Residuals ``r_i(tau) = x_model(t_i; tau) - x_i``.
 * ``"decrements"``: logarithmic decrements ``delta_k`` (-) of successive maxima. Model: the
   linear (small-amplitude) prediction of damped modal analysis (:mod:`runtime.analysis.modal`),
@@ -26,7 +27,7 @@ from __future__ import annotations
 import csv
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -244,7 +245,7 @@ def check_signal_against_model(t: np.ndarray, x: np.ndarray, release_x: float,
     if not 1 / SCALE_FACTOR <= ratio <= SCALE_FACTOR:
         unit = (" (is the record in mm? x must be in m)" if 300 < ratio < 3000 else
                 " (is the record in cm? x must be in m)" if 30 < ratio < 300 else
-                " (check the units and the scenario's tip force)")
+                " (check the units and the problem's tip force)")
         raise ValueError(f"the record's first maximum {first:.4g} m is {ratio:.3g} times the "
                          f"model's release deflection {release_x:.4g} m{unit}")
     tk, _ = signal_maxima(t, x)
@@ -253,7 +254,7 @@ def check_signal_against_model(t: np.ndarray, x: np.ndarray, release_x: float,
         r = T / period
         if not 1 / SCALE_FACTOR <= r <= SCALE_FACTOR:
             unit = (" (is time in ms? t must be in s)" if 300 < r < 3000 else
-                    " (check the units of t and the scenario's geometry and material)")
+                    " (check the units of t and the problem's geometry and material)")
             raise ValueError(f"the record's period {T:.4g} s is {r:.3g} times the model's "
                              f"first period {period:.4g} s{unit}")
     span = float(t[-1] - t[0])
@@ -278,7 +279,7 @@ def fit_doubts(tau: float, ci: tuple[float, float], residual_rms: float,
     if signal_rms > 0 and residual_rms > MAX_RESIDUAL_FRACTION * signal_rms:
         doubts.append(f"the residual RMS {residual_rms:.4g} is {residual_rms / signal_rms:.2f} "
                       f"of the signal's RMS {signal_rms:.4g}: the model does not fit the "
-                      "data (units, sign, scenario?)")
+                      "data (units, sign, problem?)")
     return doubts
 
 
@@ -300,41 +301,61 @@ def validate_decrements(delta: Sequence[float]) -> np.ndarray:
 # --------------------------------------------------------------------------------------
 
 
-def _scenario(scenario=None, **kw):
-    from runtime.scenarios import CantileverScenario
+def _problem(problem=None, **overrides):
+    """The calibrated problem: ``problem`` (default: the built-in cantilever at N = 16)
+    with ``overrides`` (aliases or dotted paths)."""
+    from runtime.problem.registry import load_problem
 
-    sc = scenario if scenario is not None else CantileverScenario(n_elements=16)
-    return replace(sc, **kw) if kw else sc
+    base = problem if problem is not None else load_problem("cantilever", {"n_elements": 16})
+    return base.with_overrides(overrides) if overrides else base
 
 
-def decrement_model(scenario=None) -> Callable[[float], float]:
-    """delta(tau) (-) of the first in-plane bending mode from damped modal analysis.
+def _bending_family(problem) -> str:
+    """The modal family that moves the maxima coordinate: a displacement along d1 is
+    bending about d2 ("bending-2"), along d2 about d1 ("bending-1")."""
+    comp = (problem.analysis.maxima or "end.x")[-1]
+    d = problem.rod.geometry.frame(np.array(0.0))
+    e = np.eye(3)["xyz".index(comp)]
+    return "bending-2" if abs(e @ d[:, 0]) >= abs(e @ d[:, 1]) else "bending-1"
 
-    The straight, unloaded cantilever of ``scenario`` (default: the paper's, N = 16) with
-    tau_S = tau_B = tau. Returns a function of tau (s).
-    """
+
+def decrement_model(problem=None) -> Callable[[float], float]:
+    """delta(tau) (-) of the first bending mode in the direction of the maxima, from damped
+    modal analysis of the unloaded rod of ``problem`` (default: the paper's cantilever,
+    N = 16) with tau_S = tau_B = tau. Returns a function of tau (s)."""
+    from dataclasses import replace as dc_replace
+
     from runtime.analysis.modal import modal_analysis
-    from runtime.model.rod import RodModel
+    from runtime.problem.assemble import build_model
 
-    sc = _scenario(scenario)
+    base = _problem(problem)
+    family = _bending_family(base)
 
     def delta(tau: float) -> float:
-        model = RodModel(replace(sc, tau_S=float(tau), tau_B=float(tau)).rod_parameters())
-        modes = modal_analysis(model, count=2, reference=False)
-        m = next((m for m in modes if m.family == "bending-2"), modes[0])
+        p = dc_replace(base.with_overrides({"tau": float(tau)}), loads=())
+        modes = modal_analysis(build_model(p), count=2)
+        m = next((m for m in modes if m.family == family), modes[0])
         z = m.zeta
         return 2 * math.pi * z / math.sqrt(1 - z * z) if z < 1 else math.inf
 
     return delta
 
 
-def _simulate_tip(sc, tau: float, t_end: float) -> tuple[np.ndarray, np.ndarray]:
-    from runtime.scenarios import run_cantilever
+def _component(problem) -> tuple[int, float]:
+    """(coordinate index, reference value) of the maxima coordinate of the s = L end."""
+    comp = "xyz".index((problem.analysis.maxima or "end.x")[-1])
+    ref = problem.rod.geometry.position(np.array(problem.rod.length))[comp]
+    return comp, float(ref)
 
-    run = run_cantilever(replace(sc, tau_S=float(tau), tau_B=float(tau), t_end=float(t_end)))
+
+def _simulate_tip(problem, tau: float, t_end: float) -> tuple[np.ndarray, np.ndarray]:
+    from runtime.simulate.simulate import simulate
+
+    run = simulate(problem.with_overrides({"tau": float(tau), "t_end": float(t_end)}))
     if run.status != "finished":
         raise RuntimeError(f"simulation at tau = {tau!r} s failed: {run.message}")
-    return run.t, run.tip[0]
+    c, ref = _component(problem)
+    return run.t, run.tip[c] - ref
 
 
 def _ci(tau: float, J: np.ndarray, r: np.ndarray) -> tuple[float, tuple[float, float]]:
@@ -363,16 +384,16 @@ def _fit(res: Callable[[float], np.ndarray], tau0: float, diff_step: float,
     return sol, nfev[0]
 
 
-def calibrate_decrements(delta: Sequence[float], scenario=None,
+def calibrate_decrements(delta: Sequence[float], problem=None,
                          tau0: float | None = None) -> CalibrationResult:
     """Fit tau (s) to measured log decrements with the linear modal prediction.
 
-    delta: decrements (-), at least 2; scenario: the cantilever (geometry, material,
+    delta: decrements (-), at least 2; problem: the rod (geometry, material,
     n_elements of the modal model; default the paper's at N = 16); tau0: start (default
     from the mean decrement and the modal frequency).
     """
     d = validate_decrements(delta)
-    model = decrement_model(scenario)
+    model = decrement_model(problem)
     if tau0 is None:
         d1 = model(0.04)
         z1 = float(damping_ratios([d1])[0])
@@ -392,23 +413,26 @@ def calibrate_decrements(delta: Sequence[float], scenario=None,
                                                TAU_MIN))
 
 
-def calibrate_signal(t: Sequence[float], x: Sequence[float], scenario=None,
+def calibrate_signal(t: Sequence[float], x: Sequence[float], problem=None,
                      tau0: float | None = None, n_elements: int = 16,
                      output_step: float = 0.002) -> CalibrationResult:
     """Fit tau (s) to a measured tip signal x(t) (m) by simulations of the cantilever.
 
-    scenario: the cantilever that was released (geometry, material, tip force; default
+    problem: the rod that was released (geometry, material, tip force; default
     the paper's); its n_elements is replaced by ``n_elements`` (coarse, for speed) and
     t_end by the end of the data. tau0: start (default: from the first log decrement of
-    the data and the linear prediction of the scenario).
+    the data and the linear prediction of the problem).
     """
     t, x = validate_signal(t, x)
-    sc = _scenario(scenario, n_elements=n_elements, output_step=output_step)
-    check_signal_against_model(t, x, _release_x(sc), sc.linear_prediction()["period_1"])
+    sc = _problem(problem, n_elements=n_elements, output_step=output_step)
+    lp = sc.linear_prediction()
+    if lp is None:
+        raise ValueError(f"problem {sc.name!r}: the signal calibration needs a straight "
+                         "clamped-free rod whose end maxima are analysed (analysis.maxima)")
+    check_signal_against_model(t, x, _release_x(sc), lp["period_1"])
     if tau0 is None:
         _, xk = signal_maxima(t, x)
         z = float(np.mean(damping_ratios(log_decrements(xk))))
-        lp = sc.linear_prediction()
         tau0 = max(2 * z / lp["omega_1"], 1e-4)
     t_end = float(t[-1]) + 2 * output_step
 
@@ -431,14 +455,16 @@ def calibrate_signal(t: Sequence[float], x: Sequence[float], scenario=None,
                                                TAU_MIN))
 
 
-def _release_x(sc) -> float:
-    """The scenario's static tip x (m) under its tip load: the release deflection."""
-    from runtime.model.rod import RodModel
-    from runtime.solvers.statics import solve_static
+def _release_x(problem) -> float:
+    """The static displacement (m) of the maxima coordinate under the problem's loads at
+    t = 0-: the release deflection."""
+    from runtime.problem.assemble import build_model
+    from runtime.simulate.simulate import static_equilibrium
 
-    model = RodModel(sc.rod_parameters(), tip_force=(sc.tip_force, 0.0, 0.0))
-    st = solve_static(model, model.initial_state(), load_steps=sc.load_steps)
-    return float(model.tip_position(st.y)[0])
+    model = build_model(problem)
+    st = static_equilibrium(problem, model)
+    c, ref = _component(problem)
+    return float(st.tip[c] - ref)
 
 
 # --------------------------------------------------------------------------------------

@@ -20,8 +20,9 @@ damping ratios is predicted as
 
 :func:`compare_damping` checks this by simulation, each decay run with both routes:
 
-* **bending**: the cantilever of Sect. 5 (:func:`runtime.scenarios.run_cantilever`)
-  released from a small static tip force along ``e1`` (linear regime); signal: tip ``x``;
+* **bending**: the cantilever of Sect. 5 (the built-in problem ``cantilever``, run by
+  :func:`runtime.simulate.simulate.simulate`) released from a small static tip force
+  along ``e1`` (linear regime); signal: tip ``x``;
 * **axial**: the same rod, clamped-free, stretched by a dead axial tip force along ``e3``
   and released at rest; signal: tip axial displacement ``u = z_tip - L`` about the
   unloaded equilibrium ``z = L``. With the paper's retardation times the first axial
@@ -48,17 +49,16 @@ from typing import TypedDict
 
 import numpy as np
 
-from generated import rod_layout as layout
 from generated.constitutive import (
     retardation_time_extension,
     retardation_time_extension_naive,
 )
-from runtime.analysis.decay import damping_ratios, find_maxima, log_decrements
+from runtime.analysis.decay import damping_ratios, log_decrements
 from runtime.analysis.modal import modal_analysis
-from runtime.model.rod import RodModel, RodParameters
-from runtime.scenarios import CantileverScenario, run_cantilever
-from runtime.solvers.integrator import solve
-from runtime.solvers.statics import solve_static
+from runtime.problem.assemble import build_model
+from runtime.problem.registry import load_problem
+from runtime.problem.schema import Problem
+from runtime.simulate.simulate import simulate
 
 __all__ = [
     "CASES",
@@ -68,6 +68,7 @@ __all__ = [
     "DecaySignal",
     "RouteResult",
     "axial_release",
+    "check_inputs",
     "compare_damping",
     "measured_zeta",
     "plot_compare",
@@ -157,29 +158,30 @@ def measured_zeta(peaks_x: np.ndarray | list[float]) -> tuple[list[float], float
     return [float(v) for v in z], float(np.mean(z[len(z) // 2:]))
 
 
-def axial_release(params: RodParameters, force: float, t_end: float,
-                  rtol: float = 1e-7, samples: int = 2001) -> DecaySignal:
-    """Clamped-free rod stretched by a dead axial tip force (N), released at t = 0.
+def unloaded(problem: Problem) -> Problem:
+    """The problem without its loads (the straight reference is then an equilibrium)."""
+    return replace(problem, loads=())
 
-    The static stretch is solved under ``force`` along ``e3``; the load is then switched
-    off and the free vibration integrated over ``[0, t_end]`` (s) with the BDF of
-    :mod:`runtime.solvers.integrator`. Returns the tip axial displacement ``u = z_tip - L`` (m) on
-    ``samples`` uniform times and its maxima refined on the dense output (the start, at
-    rest, counts as the first). Raises RuntimeError if the integration fails.
+
+def axial_release(problem: Problem, force: float, t_end: float,
+                  samples: int = 2001) -> DecaySignal:
+    """The rod of ``problem`` stretched by a dead axial tip force (N), released at t = 0.
+
+    The static stretch is solved under ``force`` along ``e3`` (one load step); the load is
+    then switched off and the free vibration run over ``[0, t_end]`` (s). Returns the tip
+    axial displacement ``u = z_tip - L`` (m) on ``samples`` uniform times and its maxima
+    refined on the dense output (the start, at rest, counts as the first). Raises
+    RuntimeError if the run fails.
     """
-    model = RodModel(params, start="clamped", end="free", tip_force=(0.0, 0.0, force))
-    st = solve_static(model, model.initial_state(), load_steps=1)
-    model.load_scale = 0.0
-    N = params.n_elements
-    iz = layout.cell_start(N) + layout.CELL_OFFSETS["phi"] + 2  # tip z
-    u0 = abs(float(st.y[iz]) - params.length)
-    r = solve(model, (0.0, t_end), st.y, rtol=rtol, atol=1e-3 * rtol * max(u0, 1e-12),
-              t_eval=np.linspace(0.0, t_end, samples), dense_output=True)
-    if r.status != 0:
-        raise RuntimeError(f"axial release failed: {r.error}")
-    u = r.y[iz] - params.length
-    tk, uk = find_maxima(r.t, u, sol=lambda s: float(r.sol(s)[iz] - params.length))
-    return DecaySignal(t=r.t, x=u, peaks_t=np.r_[0.0, tk], peaks_x=np.r_[u[0], uk])
+    p = problem.with_overrides({"loads.0.vector": [0.0, 0.0, float(force)],
+                                "statics.load_steps": 1, "analysis.maxima": "end.z",
+                                "simulation.t_end": t_end,
+                                "simulation.output_step": t_end / (samples - 1)})
+    run = simulate(p)
+    if run.status != "finished":
+        raise RuntimeError(f"axial release failed: {run.message}")
+    u = run.tip[2] - problem.rod.length
+    return DecaySignal(t=run.t, x=u, peaks_t=run.peaks_t, peaks_x=run.peaks_x)
 
 
 def _check_inputs(n_elements: int, tau_S: float, tau_B: float, cases: tuple[str, ...],
@@ -208,8 +210,13 @@ def check_inputs(n_elements: int = 20, tau_S: float = 0.04, tau_B: float = 0.0,
     """Validate the parameters of :func:`compare_damping` (ValueError naming the first bad
     one) without running anything."""
     _check_inputs(n_elements, tau_S, tau_B, CASES, 5.0, 6.0, 0.05)
-    CantileverScenario(n_elements=n_elements, tau_S=tau_S, tau_B=tau_B,
-                       poisson_ratio=poisson_ratio, tip_force=tip_force, rtol=rtol)
+    _base(n_elements, tau_S, tau_B, poisson_ratio, tip_force, rtol)
+
+
+def _base(n_elements, tau_S, tau_B, poisson_ratio, tip_force, rtol) -> Problem:
+    return load_problem("cantilever", {"n_elements": n_elements, "tau_S": tau_S,
+                                       "tau_B": tau_B, "poisson_ratio": poisson_ratio,
+                                       "tip_force": tip_force, "rtol": rtol})
 
 
 def compare_damping(n_elements: int = 20, tau_S: float = 0.04, tau_B: float = 0.0,
@@ -236,11 +243,10 @@ def compare_damping(n_elements: int = 20, tau_S: float = 0.04, tau_B: float = 0.
     """
     cases = tuple(cases)
     _check_inputs(n_elements, tau_S, tau_B, cases, bending_cycles, axial_cycles, axial_zeta)
-    base = CantileverScenario(n_elements=n_elements, tau_S=tau_S, tau_B=tau_B,
-                              poisson_ratio=poisson_ratio, tip_force=tip_force, rtol=rtol)
+    base = _base(n_elements, tau_S, tau_B, poisson_ratio, tip_force, rtol)
     omega_eb = base.linear_prediction()["omega_1"]
     t_bend = bending_cycles * 2 * math.pi / omega_eb
-    L, E, rho = base.length, base.youngs_modulus, base.density
+    L, E, rho = base.rod.length, base.material.youngs_modulus, base.material.density
     omega_ax = math.pi / (2 * L) * math.sqrt(E / rho)
     k = axial_zeta * 2 / (omega_ax * float(retardation_time_extension_naive(tau_B, tau_S)))
     ax_tau_S, ax_tau_B = tau_S * k, tau_B * k
@@ -258,18 +264,17 @@ def compare_damping(n_elements: int = 20, tau_S: float = 0.04, tau_B: float = 0.
         w_cont = omega_eb if case == "bending" else omega_ax
         routes: dict[str, RouteResult] = {}
         for route in ROUTES:
-            sc = replace(base, tau_S=ts, tau_B=tb, damping=route)
-            modes = modal_analysis(RodModel(sc.rod_parameters()), count=12, reference=False)
+            sc = base.with_overrides({"tau_S": ts, "tau_B": tb, "damping": route})
+            modes = modal_analysis(build_model(unloaded(sc)), count=12)
             mode = next(m for m in modes if m.family == _FAMILY[case])
             if case == "bending":
-                run = run_cantilever(replace(sc, t_end=t_bend))
+                run = simulate(sc.with_overrides({"t_end": t_bend}))
                 if run.status != "finished":
                     raise RuntimeError(f"cantilever ({route}) failed: {run.message}")
                 sig = DecaySignal(t=run.t, x=run.tip[0], peaks_t=run.peaks_t,
                                   peaks_x=run.peaks_x)
             else:
-                sig = axial_release(sc.rod_parameters(), axial_force,
-                                    axial_cycles * 2 * math.pi / omega_ax, rtol)
+                sig = axial_release(sc, axial_force, axial_cycles * 2 * math.pi / omega_ax)
             per_cycle, zeta = measured_zeta(sig["peaks_x"])
             routes[route] = RouteResult(
                 tau_E=taus[route], measured_zeta=zeta, measured_zeta_per_cycle=per_cycle,

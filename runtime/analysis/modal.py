@@ -57,16 +57,16 @@ import numpy as np
 import scipy.linalg as la
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
-from scipy.optimize import brentq
 
 from runtime.model.rod import RodModel
+from runtime.model.statics import RodStatics
 
 __all__ = [
     "FAMILIES",
     "STRAIN_COMPONENTS",
     "Linearization",
     "Mode",
-    "analytic_frequencies",
+    "family_retardation_time",
     "linearize",
     "modal_analysis",
 ]
@@ -101,6 +101,7 @@ class Linearization:
     E: sp.csc_matrix
     A: sp.csc_matrix
     T: sp.csc_matrix
+    statics: RodStatics
 
     @property
     def nq(self) -> int:
@@ -109,34 +110,29 @@ class Linearization:
 
     def expand(self, q: np.ndarray) -> np.ndarray:
         """Reduced vector (nq,) -> static-layout increment dx (n_static,), zeros at fixed."""
-        dx = np.zeros(self.model.n_static, dtype=np.asarray(q).dtype)
+        dx = np.zeros(self.statics.n_static, dtype=np.asarray(q).dtype)
         dx[self.dofs] = q
         return dx
 
 
-def _fixed_static_dofs(model: RodModel) -> list[int]:
-    N = model.N
-    fixed = [] if model.start == "free" else [0, 1, 2]
-    if model.end != "free":
-        fixed += [int(k) for k in model.static_phi_cols[N]]
-    return fixed
-
-
-def _check_equilibrium(model: RodModel, y0: np.ndarray, rtol: float) -> None:
+def _check_equilibrium(st: RodStatics, y0: np.ndarray, rtol: float) -> None:
     """ValueError unless the static residual at y0 is small against the loads (or rod forces)."""
-    r = np.empty(model.n_static)
-    model.static_residual(y0, r)
+    model = st.model
+    r = np.empty(st.n_static)
+    st.static_residual(y0, r)
     s0 = model.load_scale
     try:
-        model.load_scale = 0.0
-        r0 = np.empty(model.n_static)
-        model.static_residual(y0, r0)
+        st.load_scale = 0.0
+        r0 = np.empty(st.n_static)
+        st.static_residual(y0, r0)
     finally:
-        model.load_scale = s0
+        st.load_scale = s0
     load = float(np.max(np.abs(r - r0)))
     # round-off floor of the internal forces: 1e-9 of the largest stiffness (N)
-    floor = 1e-9 * max(float(np.max(model.parameter("C_F"))),
-                       float(np.max(model.parameter("C_M"))) / model.params.length)
+    a = model.arrays
+    length = float(np.sum(a.seg_field("h")))
+    floor = 1e-9 * max(float(np.max(a.seg_field("C_F"))),
+                       float(np.max(a.jnt_field("C_M"))) / length)
     bad = float(np.max(np.abs(r)))
     if bad > rtol * load and bad > floor:
         raise ValueError(f"y_eq is not an equilibrium under the model's loads: static residual "
@@ -147,11 +143,18 @@ def linearize(model: RodModel, y_eq: np.ndarray | None = None,
               equilibrium_rtol: float = 1e-6) -> Linearization:
     """Linearise the rod's residual at the equilibrium ``y_eq`` (default: straight, at rest).
 
-    Velocities of ``y_eq`` are set to zero; the model's loads (``load_scale``) are used as
-    they are, so a state from ``solve_static`` is linearised under its load. Raises
-    ValueError if ``y_eq`` is not an equilibrium (max static residual above
-    ``equilibrium_rtol`` times the load scale).
+    Velocities of ``y_eq`` are set to zero; the model's loads are those of statics
+    (``RodModel.statics``: at t = 0-, times ``load_scale``), so a state from the static
+    solve is linearised under its load. Raises ValueError if ``y_eq`` is not an
+    equilibrium (max static residual above ``equilibrium_rtol`` times the load scale).
     """
+    with model.statics():
+        return _linearize(model, y_eq, equilibrium_rtol)
+
+
+def _linearize(model: RodModel, y_eq: np.ndarray | None, equilibrium_rtol: float
+               ) -> Linearization:
+    st = RodStatics(model)
     y0 = model.initial_state() if y_eq is None else np.array(y_eq, dtype=float)
     if y0.shape != (model.n,):
         raise ValueError(f"y_eq must have shape ({model.n},), got {y0.shape}")
@@ -161,25 +164,25 @@ def linearize(model: RodModel, y_eq: np.ndarray | None = None,
     p = model.p_index  # (N, 4)
     pq = y0[p]
     y0[p] = pq / np.linalg.norm(pq, axis=1)[:, None]
-    _check_equilibrium(model, y0, equilibrium_rtol)
+    _check_equilibrium(st, y0, equilibrium_rtol)
     zero = np.zeros(model.n)
     Fy = model.dF_dy_sparse(0.0, y0, zero).tocsr()
     Fp = model.dF_dyp_sparse(0.0, y0, zero).tocsr()
-    ns = model.n_static
-    T = model.static_tangent(y0).tocsc()  # positions/rotations -> dy
+    ns = st.n_static
+    T = st.tangent(y0).tocsc()  # positions/rotations -> dy
     # velocities in the static layout: node 0 v, then per cell (Omega_i, v_i)
-    vel_rows = model.static_rows  # the same state indices (v and Omega entries)
+    vel_rows = st.static_rows  # the same state indices (v and Omega entries)
     S = sp.csc_matrix((np.ones(ns), (vel_rows, np.arange(ns))), shape=(model.n, ns))
     mom = vel_rows  # momentum rows: rows of v (linear) and Omega (angular momentum)
     # kinematic rows: phi rows as they are, quaternion rows projected with 4 G(p)^T
-    th_dofs = model.static_theta_cols.ravel()
-    ph_dofs = model.static_phi_cols.ravel()
+    th_dofs = st.theta_cols.ravel()
+    ph_dofs = st.phi_cols.ravel()
     Pphi = sp.csr_matrix((np.ones(ph_dofs.size), (ph_dofs, model.phi_index.ravel())),
                          shape=(ns, model.n))
     Rth = sp.csr_matrix((np.ones(th_dofs.size), (th_dofs, np.arange(th_dofs.size))),
                         shape=(ns, th_dofs.size))
     P = (Pphi + Rth @ (4.0 * T.T).tocsr()[th_dofs]).tocsr()  # 4 G(p)^T on the p rows
-    keep = np.setdiff1d(np.arange(ns), _fixed_static_dofs(model))
+    keep = np.setdiff1d(np.arange(ns), st.fixed_cols)
     Tk, Sk = T[:, keep], S[:, keep]
     Fm, Pm = Fy[mom[keep]], Fp[mom[keep]]
     M = (Pm @ Sk).tocsc()
@@ -194,7 +197,8 @@ def linearize(model: RodModel, y_eq: np.ndarray | None = None,
     A = sp.bmat([[Akin_q, Akin_w], [K, C]]).tocsc()
     for m in (M, C, K, E, A):
         m.eliminate_zeros()
-    return Linearization(model=model, y_eq=y0, dofs=keep, M=M, C=C, K=K, E=E, A=A, T=T)
+    return Linearization(model=model, y_eq=y0, dofs=keep, M=M, C=C, K=K, E=E, A=A, T=T,
+                         statics=st)
 
 
 # --------------------------------------------------------------------------------------
@@ -262,22 +266,24 @@ def _strain_vectors(lin: Linearization, Q: np.ndarray) -> list[np.ndarray]:
     ``static_retract``; weights ``sqrt(h C / 2)`` (segments) and ``sqrt(h_j C_M / 2)``
     (joints; h_j = h/2 at a clamp), so the squared norms are strain energies (J).
     """
-    model = lin.model
-    N, h = model.N, model.params.element_length
-    CF, CM = model.parameter("C_F"), model.parameter("C_M")
-    wU = np.full(N + 1, h)
-    wU[0] = 0.5 * h if model.start == "clamped" else 0.0
-    wU[-1] = 0.5 * h if model.end == "clamped" else 0.0
-    L = model.params.length
+    model, st = lin.model, lin.statics
+    a = model.arrays
+    h = a.seg_field("h")[:, 0]
+    CF, CM = a.seg_field("C_F").T, a.jnt_field("C_M").T          # (3, N), (3, N+1)
+    wU = a.jnt_field("h")[:, 0].copy()
+    wU[0] = wU[0] if a.clamped("start") else 0.0
+    wU[-1] = wU[-1] if a.clamped("end") else 0.0
+    L = float(np.sum(h))
     comps: list[list[np.ndarray]] = [[] for _ in range(6)]
     for k in range(Q.shape[1]):
         dx = lin.expand(Q[:, k])
-        th = dx[model.static_theta_cols]
-        scale = max(float(np.max(np.abs(dx[model.static_phi_cols.ravel()]))) / L,
+        th = dx[st.theta_cols]
+        scale = max(float(np.max(np.abs(dx[st.phi_cols.ravel()]))) / L,
                     float(np.max(np.abs(th))), 1e-300)
         eps = 1e-6 / scale
-        sp_ = model.diagnostics(0.0, model.static_retract(lin.y_eq, eps * dx))["strains"]
-        sm_ = model.diagnostics(0.0, model.static_retract(lin.y_eq, -eps * dx))["strains"]
+        with model.statics():
+            sp_ = model.diagnostics(0.0, st.static_retract(lin.y_eq, eps * dx))["strains"]
+            sm_ = model.diagnostics(0.0, st.static_retract(lin.y_eq, -eps * dx))["strains"]
         dV = (sp_["V"] - sm_["V"]) / (2 * eps)
         dU = (sp_["U"] - sm_["U"]) / (2 * eps)
         for c in range(3):
@@ -509,14 +515,14 @@ def _sparse_modes(lin: Linearization, count: int):
 
 
 def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int = 10,
-                   dense_max: int = 300, reference: bool = True) -> list[Mode]:
+                   dense_max: int = 300) -> list[Mode]:
     """The ``count`` lowest modes of the rod linearised at ``y_eq`` (see module docstring).
 
-    model: the rod (its loads apply at ``y_eq``); y_eq: equilibrium state (n,), default the
-    straight reference; count: number of modes (>= 1); dense_max: largest reduced size
-    ``nq`` solved with dense LAPACK (above: sparse shift-invert ARPACK); reference: attach
-    the continuum frequencies (:func:`analytic_frequencies`) where they apply.
-    Returns the modes sorted by undamped natural frequency.
+    model: the rod (its loads, as in statics, apply at ``y_eq``); y_eq: equilibrium state
+    (n,), default the reference; count: number of modes (>= 1); dense_max: largest reduced
+    size ``nq`` solved with dense LAPACK (above: sparse shift-invert ARPACK).
+    Returns the modes sorted by undamped natural frequency. (Continuum reference values
+    are attached by the command line from the independent ``references`` package.)
     """
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
         raise ValueError(f"count = {count!r} must be an integer >= 1")
@@ -537,11 +543,6 @@ def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int =
     pairs = _assign(lam, Pmat, omega, min(Phi.shape[1], count + 6))
     k_show = min(count, Phi.shape[1])
     energies = _strain_energy_fractions(lin, Phi[:, :k_show])
-    straight = y_eq is None or np.allclose(lin.y_eq, model.initial_state(), atol=1e-12)
-    loaded = any(np.any(model.parameter(n) != 0) for n in ("tip_force", "tip_moment",
-                                                            "gravity"))
-    analytic_ok = (reference and straight and not (loaded and model.load_scale != 0)
-                   and model.start == "clamped" and model.end == "free")
     modes: list[Mode] = []
     family_count: dict[str, int] = {}
     Cd = lin.C
@@ -555,99 +556,28 @@ def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int =
         phi = Phi[:, k]
         zm = float(phi @ (Cd @ phi)) / (2 * omega[k]) if omega[k] > 0 else math.inf
         dx = lin.expand(phi)
-        disp = dx[model.static_phi_cols].T
-        rot = dx[model.static_theta_cols].T
+        disp = dx[lin.statics.phi_cols].T
+        rot = dx[lin.statics.theta_cols].T
         modes.append(Mode(index=k + 1, family=fam, family_index=family_count[fam],
                           omega=float(omega[k]), eigenvalues=(l1, l2), zeta=float(zeta),
                           omega_damped=float(abs(l1.imag)), zeta_modal=zm,
                           energy_fractions=dict(zip(STRAIN_COMPONENTS, map(float, fr),
                                                     strict=True)),
                           displacement=disp, rotation=rot))
-    if analytic_ok:
-        ref = {f: analytic_frequencies(model, f, family_count[f]) for f in family_count}
-        for md in modes:
-            w = float(ref[md.family][md.family_index - 1])
-            md.analytic_omega = w if math.isfinite(w) else None
     return modes
 
 
-# --------------------------------------------------------------------------------------
-# Continuum references (clamped-free, straight, unloaded)
-# --------------------------------------------------------------------------------------
-
-
-def _timoshenko_det(omega: float, rhoA: float, rhoI: float, EI: float, kGA: float,
-                    L: float) -> float:
-    b2 = rhoA * omega**2 * L**4 / EI
-    r2 = rhoI / (rhoA * L * L)
-    s2 = EI / (kGA * L * L)
-    A = np.array([[0.0, 1.0, 0.0, s2], [0.0, 0.0, 1.0, 0.0],
-                  [0.0, -b2 * r2, 0.0, -1.0], [-b2, 0.0, 0.0, 0.0]])
-    P = la.expm(A)
-    return float(P[2, 2] * P[3, 3] - P[2, 3] * P[3, 2])
-
-
-def timoshenko_cantilever(n: int, *, L: float, rhoA: float, rhoI: float, EI: float,
-                          kGA: float) -> np.ndarray:
-    """First n clamped-free Timoshenko bending frequencies (rad/s), shear and rotary inertia.
-
-    Roots of the free-end determinant of the transfer matrix (w, psi, M, Q), bracketed on a
-    grid below the Euler-Bernoulli values and refined by Brent's method.
-    """
-    roots_eb = np.array([1.8751040687119611, 4.6940911329741745, 7.8547574382376126,
-                         10.995540734875467, 14.137168391046471])
-    beta = np.concatenate([roots_eb, (2 * np.arange(6, n + 3) - 1) * math.pi / 2])
-    w_eb = beta**2 * math.sqrt(EI / (rhoA * L**4))
-    grid = np.linspace(1e-3 * w_eb[0], 0.5 * (w_eb[n - 1] + w_eb[n]), 200 * n + 1)
-    vals = [_timoshenko_det(w, rhoA, rhoI, EI, kGA, L) for w in grid]
-    roots: list[float] = []
-    for i in range(grid.size - 1):
-        if vals[i] * vals[i + 1] < 0:
-            roots.append(brentq(_timoshenko_det, grid[i], grid[i + 1],
-                                args=(rhoA, rhoI, EI, kGA, L), xtol=1e-13 * grid[-1]))
-            if len(roots) == n:
-                break
-    return np.array(roots)
-
-
-def analytic_frequencies(model: RodModel, family: str, n: int) -> np.ndarray:
-    """First n continuum angular frequencies (rad/s) of a straight clamped-free rod.
-
-    bending-1: Timoshenko with E I1, kappa_2 G A, rho I1; bending-2: E I2, kappa_1 G A,
-    rho I2; torsion: (2k-1) pi/(2L) sqrt(G J_T / (rho I3)); axial: (2k-1) pi/(2L)
-    sqrt(E/rho); shear: not available (NaN).
-    """
-    prm = model.params
-    L, rho, E = prm.length, prm.density, prm.youngs_modulus
-    CF, CM = model.parameter("C_F"), model.parameter("C_M")
-    rhoA, rhoI = float(model.parameter("rhoA")[0]), model.parameter("rhoI")
-    k = np.arange(1, n + 1)
-    if family == "bending-1":
-        return timoshenko_cantilever(n, L=L, rhoA=rhoA, rhoI=rhoI[0], EI=CM[0], kGA=CF[1])
-    if family == "bending-2":
-        return timoshenko_cantilever(n, L=L, rhoA=rhoA, rhoI=rhoI[1], EI=CM[1], kGA=CF[0])
-    if family == "torsion":
-        return (2 * k - 1) * math.pi / (2 * L) * math.sqrt(CM[2] / rhoI[2])
-    if family == "axial":
-        return (2 * k - 1) * math.pi / (2 * L) * math.sqrt(E / rho)
-    return np.full(n, math.nan)
-
-
-def analytic_frequency(model: RodModel, family: str, index: int) -> float | None:
-    """The index-th (1-based) continuum frequency of a family (rad/s), None if unknown."""
-    w = analytic_frequencies(model, family, index)
-    return None if not np.isfinite(w[-1]) else float(w[-1])
-
-
 def family_retardation_time(model: RodModel, family: str) -> float:
-    """The Kelvin-Voigt retardation time of a family (s): V/C of its governing entry.
+    """The Kelvin-Voigt retardation time of a family (s): V/C of its governing entry at
+    mid-rod.
 
     bending-1: V_M[0]/C_M[0] (tau_E, or tau~_E on the naive route), bending-2:
     V_M[1]/C_M[1], torsion: V_M[2]/C_M[2] (tau_S), axial: V_F[2]/C_F[2], shear: tau_S.
     """
-    CF, CM = model.parameter("C_F"), model.parameter("C_M")
-    VF, VM = model.parameter("V_F"), model.parameter("V_M")
+    a = model.arrays
+    i, j = model.N // 2, max(model.N // 2, 1)
+    CF, VF = a.seg_field("C_F")[i], a.seg_field("V_F")[i]
+    CM, VM = a.jnt_field("C_M")[j], a.jnt_field("V_M")[j]
     table = {"bending-1": VM[0] / CM[0], "bending-2": VM[1] / CM[1],
              "torsion": VM[2] / CM[2], "axial": VF[2] / CF[2], "shear": VF[0] / CF[0]}
     return float(table[family])
-

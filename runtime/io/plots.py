@@ -1,4 +1,10 @@
-"""Plots of cantilever runs (matplotlib, Agg backend; axes labelled with units)."""
+"""Plots of runs (matplotlib, Agg backend; axes labelled with units).
+
+:func:`plot_run` / :func:`plot_folder` draw any run (end displacements, energies, damping
+ratio per cycle when maxima were tracked); the others are the paper's figures for the
+cantilever reproduction. Only on request (``kvrod simulate --plots`` or ``kvrod plot
+DIR``): drawing costs more than a short simulation.
+"""
 
 from __future__ import annotations
 
@@ -83,15 +89,79 @@ def plot_overlay(run_a, label_a: str, run_b, label_b: str, stretch: float, path:
 
 
 def plot_energy(run, path: Path) -> Path:
-    """Kinetic, elastic, dissipated energy and the relative balance error."""
+    """Kinetic, elastic, dissipated energy, external work and the relative balance error."""
     plt = _plt()
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
     a1.plot(run.t, run.kinetic, label="kinetic T")
     a1.plot(run.t, run.elastic, label="elastic W")
     a1.plot(run.t, run.dissipated, label="dissipated int 2D dt")
+    if np.any(run.external_work):
+        a1.plot(run.t, run.external_work, label="external work int P dt")
     a1.set_ylabel("energy [J]")
     a1.legend()
     a2.plot(run.t, run.energy_balance_rel)
     a2.set_xlabel("time t [s]")
     a2.set_ylabel("balance error [-]")
     return _save(fig, path)
+
+
+def plot_ends(run, path: Path) -> Path:
+    """Displacements of both ends from their initial positions over time."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    for arr, name, style in ((run.tip, "s = L", "-"), (run.start, "s = 0", "--")):
+        if arr.size == 0:
+            continue
+        d = arr - arr[:, :1]
+        if name == "s = 0" and not np.any(d):
+            continue
+        for c, comp in enumerate("xyz"):
+            if np.any(d[c]):
+                ax.plot(run.t, d[c], style, color=f"C{c}", lw=1.0, label=f"{comp} ({name})")
+    ax.set_xlabel("time t [s]")
+    ax.set_ylabel("displacement from t = 0 [m]")
+    ax.axhline(0, color="0.7", lw=0.5)
+    ax.legend(fontsize=8)
+    return _save(fig, path)
+
+
+def plot_run(run, out: Path) -> list[Path]:
+    """ends.png, energy.png and (with maxima) damping_ratio.png of a run into ``out``."""
+    out = Path(out)
+    paths = [plot_ends(run, out / "ends.png"), plot_energy(run, out / "energy.png")]
+    if getattr(run, "peaks_x", np.zeros(0)).size >= 2:
+        lp = run.problem.linear_prediction() if hasattr(run, "problem") else None
+        paths.append(plot_damping_vs_amplitude([run], ["run"], [lp["zeta_1"] if lp else
+                                                                np.nan],
+                                               out / "damping_ratio.png"))
+    return paths
+
+
+class _Loaded:
+    """A run read back from series.npz (the attributes the plots use)."""
+
+    def __init__(self, out: Path) -> None:
+        with np.load(Path(out) / "series.npz") as f:
+            for k in ("t", "tip", "start", "kinetic", "elastic", "dissipated", "external_work",
+                      "energy_balance_rel", "peaks_t", "peaks_x"):
+                setattr(self, k, f[k] if k in f.files else np.zeros((3, 0) if k in (
+                    "tip", "start") else 0))
+
+
+def plot_folder(out: Path) -> list[Path]:
+    """The plots of :func:`plot_run` from a results folder's series.npz."""
+    import json
+
+    run = _Loaded(out)
+    zlin = np.nan
+    try:
+        lp = json.loads((Path(out) / "summary.json").read_text()).get("linear_prediction")
+        zlin = lp["zeta_1"] if lp else np.nan
+    except (OSError, ValueError, KeyError, TypeError):
+        pass
+    out = Path(out)
+    paths = [plot_ends(run, out / "ends.png"), plot_energy(run, out / "energy.png")]
+    if run.peaks_x.size >= 2:
+        paths.append(plot_damping_vs_amplitude([run], ["run"], [zlin],
+                                               out / "damping_ratio.png"))
+    return paths

@@ -73,19 +73,52 @@ def write_npz(path: Path, **arrays: np.ndarray) -> Path:
 
 
 def write_run(out_dir: Path, run, extra: dict | None = None) -> dict:
-    """summary.json and series.npz of a :class:`runtime.scenarios.CantileverRun`."""
+    """summary.json, series.npz and problem.toml of a
+    :class:`runtime.simulate.simulate.SimulationResult`.
+
+    series.npz: ``t`` (n,), ``tip`` and ``start`` (3, n) end positions (m), the energies
+    ``kinetic``, ``elastic``, ``dissipated``, ``external_work`` (J) and
+    ``energy_balance_rel`` on the output grid, ``peaks_t``/``peaks_x``, and the static and
+    last states ``y_static``, ``y_last``. problem.toml: the resolved problem (rerun it with
+    ``kvrod simulate DIR/problem.toml``).
+    """
     out_dir = Path(out_dir)
     summary = run.summary()
     if extra:
         summary.update(extra)
-    write_npz(out_dir / "series.npz", t=run.t, tip=run.tip, kinetic=run.kinetic,
-              elastic=run.elastic, dissipated=run.dissipated, external_work=run.external_work,
-              energy_balance_rel=run.energy_balance_rel, peaks_t=run.peaks_t,
-              peaks_x=run.peaks_x,
+    write_npz(out_dir / "series.npz", t=run.t, tip=run.tip, start=run.start,
+              kinetic=run.kinetic, elastic=run.elastic, dissipated=run.dissipated,
+              external_work=run.external_work, energy_balance_rel=run.energy_balance_rel,
+              peaks_t=run.peaks_t, peaks_x=run.peaks_x,
               y_static=run.y_static if run.y_static is not None else np.zeros(0),
               y_last=run.y_last if run.y_last is not None else np.zeros(0))
+    write_problem(out_dir / "problem.toml", summary["parameters"])
     write_json(out_dir / "summary.json", summary)
     return summary
+
+
+def write_problem(path: Path, mapping: dict) -> Path | None:
+    """The resolved problem as TOML (atomically); None when it holds a Python callable."""
+    import tomli_w
+
+    doc = jsonable(mapping, nonfinite="null")
+    if doc.get("rod", {}).get("geometry", {}).get("kind") == "curve":
+        return None
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    with _removed_on_failure(tmp):
+        tmp.write_text("# the resolved problem of this run: kvrod simulate " + path.name + "\n"
+                       + tomli_w.dumps(_drop_none(doc)))
+        tmp.replace(path)
+    return path
+
+
+def _drop_none(obj):
+    if isinstance(obj, dict):
+        return {k: _drop_none(v) for k, v in obj.items() if v is not None}
+    if isinstance(obj, list):
+        return [_drop_none(v) for v in obj]
+    return obj
 
 
 CHECKPOINT = "checkpoint.npz"
@@ -100,7 +133,8 @@ def write_status(out_dir: Path, parameters: dict, status: str, t_reached: float 
 
 
 def write_checkpoint(out_dir: Path, parameters: dict, state: dict) -> Path:
-    """Everything run_cantilever needs to continue (``resume=``), plus the parameters."""
+    """Everything :func:`runtime.simulate.simulate.simulate` needs to continue (its
+    ``resume=``), plus the resolved parameters (a resume with others is refused)."""
     arrays = {k: np.asarray(v) for k, v in state.items() if k != "counters"}
     arrays["counters_json"] = np.array(json.dumps(state["counters"]))
     arrays["parameters_json"] = np.array(json.dumps(jsonable(parameters), sort_keys=True))

@@ -21,8 +21,7 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from generated import rod_layout as L
-from runtime.model.rod import RodModel, quat_rotation
+from runtime.model.rod import RodModel
 
 
 def _array_xml(name: str, data: np.ndarray) -> str:
@@ -36,29 +35,27 @@ def _array_xml(name: str, data: np.ndarray) -> str:
 def element_fields(model: RodModel, y: np.ndarray) -> tuple[dict, dict]:
     """(cell_data, point_data) of state ``y``: see the module docstring for the fields."""
     d = model.diagnostics(0.0, y, None)
+    a = model.arrays
     N = model.N
-    h = model.params.element_length
-    mats = model.params.matrices()
     V, U = d["strains"]["V"], d["strains"]["U"]
     F, M = d["resultants"]["F"], d["resultants"]["M"]
-    dV = V - np.array([[0.0], [0.0], [1.0]])
+    dV = V - a.seg_field("V0").T
+    dU = U - a.jnt_field("U0").T
 
     def viscous_power(viscous, damping):            # x^T V^-1 x per column, 0 where V = 0
         inv = np.divide(1.0, damping, out=np.zeros_like(damping), where=damping > 0)
-        return np.einsum("ij,i,ij->j", viscous, inv, viscous)
+        return np.einsum("ij,ij,ij->j", viscous, inv, viscous)
 
-    Fv = F - mats["C_F"][:, None] * dV
-    Mv = M - mats["C_M"][:, None] * U
-    seg_2D = h * viscous_power(Fv, mats["V_F"])
-    w = np.full(N + 1, h)
-    w[0] = h / 2 if model.start == "clamped" else 0.0
-    w[N] = h / 2 if model.end == "clamped" else 0.0
-    joint_2D = w * viscous_power(Mv, mats["V_M"])
-    R = np.array([quat_rotation(p) for p in model.quaternions(y).T])      # (N, 3, 3)
+    Fv = F - a.seg_field("C_F").T * dV
+    Mv = M - a.jnt_field("C_M").T * dU
+    seg_2D = a.seg_field("h")[:, 0] * viscous_power(Fv, a.seg_field("V_F").T)
+    w = a.jnt_field("h")[:, 0].copy()
+    w[0] = w[0] if a.clamped("start") else 0.0
+    w[N] = w[N] if a.clamped("end") else 0.0
+    joint_2D = w * viscous_power(Mv, a.jnt_field("V_M").T)
+    R = model.frames(y)                                                   # (N, 3, 3)
     pos = model.positions(y)
-    v_idx = [L.CELL0_OFFSETS["v"]] + [L.cell_start(k) + L.CELL_OFFSETS["v"]
-                                      for k in range(1, N + 1)]
-    vel = np.array([y[i:i + 3] for i in v_idx])
+    vel = y[model.v_index]
     cell = {"a1": R[:, :, 0], "a2": R[:, :, 1], "a3": R[:, :, 2], "V": V.T, "F": F.T,
             "dissipation_rate_2D": seg_2D}
     point = {"U": U.T, "M": M.T, "v": vel, "dissipation_rate_2D": joint_2D}

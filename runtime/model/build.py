@@ -158,13 +158,14 @@ def _file_hash(path: Path) -> str:
 
 
 def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
+    """Argument and result types of the C API (generated/rod_assembly.h)."""
     i, d, p = ctypes.c_int, ctypes.c_double, ctypes.c_void_p
-    lib.kvrod_residual.argtypes = [i, p, d, p, p, p]
-    lib.kvrod_jacobian_band.argtypes = [i, p, d, p, p, d, i, p]
-    lib.kvrod_jacobian_band2.argtypes = [i, p, d, p, p, d, d, i, p]
-    lib.kvrod_diagnostics.argtypes = [i, p, d, p, p, p]
-    for name in ("kvrod_residual", "kvrod_jacobian_band", "kvrod_jacobian_band2",
-                 "kvrod_diagnostics", "kvrod_n_state"):
+    lib.kvrod_residual.argtypes = [p, d, p, p, p]
+    lib.kvrod_jacobian_band.argtypes = [p, d, p, p, d, d, i, p]
+    lib.kvrod_diagnostics.argtypes = [p, d, p, p, p]
+    lib.kvrod_energies.argtypes = [p, i, p, p, p, p]
+    for name in ("kvrod_residual", "kvrod_jacobian_band", "kvrod_diagnostics",
+                 "kvrod_energies", "kvrod_n_state"):
         getattr(lib, name).restype = i
     lib.kvrod_n_state.argtypes = [i]
     return lib

@@ -161,7 +161,8 @@ class Maxima:
     """Maxima of one state component (e.g. the tip's x), located on the dense output.
 
     A maximum is where the matching velocity component crosses zero downwards; its time is
-    refined by Brent's method on the step's interpolant. ``positive_only`` keeps maxima
+    refined by Brent's method on the step's interpolant. Values are reported relative to
+    ``offset`` (the component's reference value: a displacement). ``positive_only`` keeps maxima
     with a positive value (the decay of a vibration about zero); ``initial`` also counts a
     release from rest at a positive value as a maximum at the start time.
     """
@@ -169,8 +170,10 @@ class Maxima:
     name = "maxima"
 
     def __init__(self, position_index: int, velocity_index: int, *,
-                 positive_only: bool = True, initial: bool = True) -> None:
+                 positive_only: bool = True, initial: bool = True,
+                 offset: float = 0.0) -> None:
         self.ix, self.iv = int(position_index), int(velocity_index)
+        self.offset = float(offset)     # reported values are y[ix] - offset
         self.positive_only, self.initial = positive_only, initial
         self.t: list[float] = []
         self.x: list[float] = []
@@ -181,10 +184,10 @@ class Maxima:
 
     def begin(self, run: Run) -> None:
         self._v_old = float(run.y[self.iv])
-        if self.initial and not self.t and run.y[self.ix] > 0 and self._keep(
-                float(run.y[self.ix])):
+        x0 = float(run.y[self.ix]) - self.offset
+        if self.initial and not self.t and x0 > 0 and self._keep(x0):
             self.t.append(run.t)
-            self.x.append(float(run.y[self.ix]))
+            self.x.append(x0)
 
     def step(self, run: Run, dense, t0: float, t1: float) -> None:
         from scipy.optimize import brentq
@@ -193,7 +196,7 @@ class Maxima:
         if self._v_old > 0.0 >= v_new and t1 > t0:
             tk = t1 if v_new == 0.0 else brentq(
                 lambda s: dense(s)[self.iv], t0, t1, xtol=1e-14, rtol=1e-13)
-            xk = float(dense(tk)[self.ix])
+            xk = float(dense(tk)[self.ix]) - self.offset
             if self._keep(xk):
                 self.t.append(tk)
                 self.x.append(xk)

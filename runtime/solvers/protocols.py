@@ -77,6 +77,9 @@ class StaticProblem(Protocol):
         """Return a new full state from ``y`` moved by the reduced increment ``dx``."""
         ...
 
+    # optional: ``constrain(y) -> y`` moves prescribed unknowns (held nodes) to their
+    # targets at the current load factor; solve_static calls it after every change of it
+
 
 def band_storage(n: int, kl: int, ku: int) -> np.ndarray:
     """Return a zeroed Fortran-ordered array of shape (2*kl+ku+1, n) for ``dgbtrf``."""

@@ -167,6 +167,7 @@ def solve_static(
         if np.any(scale <= 0):
             raise ParameterError("residual_scale", residual_scale, "> 0 (scalar or per entry)")
     inv_scale = 1.0 / scale
+    constrain = getattr(problem, "constrain", None)
 
     def rnorm(y: np.ndarray) -> float:
         problem.static_residual(y, res)
@@ -183,6 +184,8 @@ def solve_static(
         but fast full steps of rotation problems are kept); otherwise Newton restarts
         from the reference point with damped steps (the line search).
         """
+        if constrain is not None:   # held nodes to their targets at this load factor
+            y = constrain(y)
         r = rnorm(y)
         it = 0
         ref_y, ref_r, left = y, r, watchdog

@@ -18,8 +18,11 @@ a grid (Cartesian product, in the order the keys are written) or as an explicit 
     tau = 0.04
     poisson_ratio = 0.45
 
-Parameter names are the fields of :class:`runtime.scenarios.CantileverScenario` plus
-``tau`` (sets tau_S = tau_B = tau, the paper's convention). Names and types are checked
+``problem`` names a problem file or built-in problem (``scenario``, its earlier name, is
+accepted too). Parameter names are the short aliases of the command line
+(:data:`runtime.problem.schema.ALIASES`: ``tau``, ``tau_S``, ``n_elements``,
+``youngs_modulus``, ``tip_force``, ...) or any dotted path of the problem file (e.g.
+``loads.0.time.start``); ``tau`` sets tau_S = tau_B = tau (the paper's convention). Names and types are checked
 when the study is loaded (:class:`StudyError`); values out of range are not: such a point
 fails (its ParameterError is recorded) and the others run.
 
@@ -63,10 +66,8 @@ from typing import Any
 
 from runtime.io.results import write_json, write_run
 
-#: scenarios a study can name
-SCENARIOS = ("cantilever",)
 #: top-level keys of a study file
-STUDY_KEYS = ("name", "scenario", "fixed", "grid", "points")
+STUDY_KEYS = ("name", "problem", "scenario", "fixed", "grid", "points")
 #: largest study run without confirmation, and the command-line flag that confirms
 MAX_POINTS = 10_000
 CONFIRM_FLAG = "--yes"
@@ -78,66 +79,66 @@ class StudyError(ValueError):
     """A malformed study file or definition (names the offending key and what is allowed)."""
 
 
-def _scenario_fields() -> dict[str, Any]:
-    """name -> type annotation string of the cantilever scenario's fields."""
-    from runtime.scenarios import CantileverScenario
+def parameter_names(problem: str = "cantilever") -> tuple[str, ...]:
+    """Short parameter names a study may set (:data:`runtime.problem.schema.ALIASES`);
+    any dotted path of the problem file (e.g. ``material.tau``) is accepted too."""
+    from runtime.problem.schema import ALIASES
 
-    return {f.name: f.type for f in dataclasses.fields(CantileverScenario)}
-
-
-def parameter_names(scenario: str = "cantilever") -> tuple[str, ...]:
-    """Parameter names a study may set for ``scenario`` (scenario fields plus ``tau``)."""
-    _check_scenario(scenario)
-    return ("tau", *_scenario_fields())
+    return tuple(sorted(ALIASES))
 
 
-def _check_scenario(scenario: object) -> None:
-    if scenario not in SCENARIOS:
-        raise StudyError(f"scenario = {scenario!r} is not known; scenarios are: "
-                         f"{', '.join(SCENARIOS)}")
+def _check_problem(problem: object) -> None:
+    from runtime.problem.registry import ProblemFileError, problem_path
+
+    if not isinstance(problem, str):
+        raise StudyError(f"problem = {problem!r} must be a string: a built-in name or a "
+                         "problem file")
+    try:
+        problem_path(problem)
+    except ProblemFileError as exc:
+        raise StudyError(str(exc)) from None
 
 
 def _coerce(name: str, value: Any, where: str) -> Any:
     """Canonical Python value of a parameter (so 1e6 and 1000000 give the same point id)."""
-    ftype = "float" if name == "tau" else str(_scenario_fields()[name])
-    bad = StudyError(f"{where}: {name} = {value!r} has the wrong type (expected {ftype})")
-    if isinstance(value, bool) and ftype != "bool":
-        raise bad
-    if ftype == "bool":
-        if not isinstance(value, bool):
-            raise bad
+    from runtime.problem.schema import ALIASES
+
+    if name not in ALIASES and "." not in name:
+        raise StudyError(f"{where}: unknown parameter {name!r}; parameters are: "
+                         f"{', '.join(sorted(ALIASES))} or a dotted path of the problem "
+                         "file (e.g. material.tau)")
+    if isinstance(value, bool) or isinstance(value, str):
         return value
-    if ftype == "int":
-        if isinstance(value, float) and value.is_integer():
-            return int(value)
-        if not isinstance(value, int):
-            raise bad
+    if isinstance(value, int):
         return value
-    if ftype == "str":
-        if not isinstance(value, str):
-            raise bad
-        return value
-    # float or "float | None"
-    if value is None and "None" in ftype:
-        return None
-    if not isinstance(value, (int, float)):
-        raise bad
-    if not math.isfinite(value):
-        raise StudyError(f"{where}: {name} = {value!r} is not a finite number")
-    return float(value)
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise StudyError(f"{where}: {name} = {value!r} is not a finite number")
+        return int(value) if name in ("n_elements", "elements", "rod.elements", "max_order",
+                                      "load_steps") and value.is_integer() else value
+    if isinstance(value, list):
+        return [_coerce(name, v, where) for v in value]
+    raise StudyError(f"{where}: {name} = {value!r} has the wrong type (a number, string, "
+                     "boolean or list)")
 
 
 def _check_params(params: Mapping[str, Any], where: str) -> dict[str, Any]:
-    allowed = parameter_names()
-    out: dict[str, Any] = {}
-    for name, value in params.items():
-        if name not in allowed:
-            raise StudyError(f"{where}: unknown parameter {name!r}; parameters are: "
-                             f"{', '.join(allowed)}")
-        out[name] = _coerce(name, value, where)
+    out = {name: _coerce(name, value, where) for name, value in params.items()}
     if "tau" in out and ({"tau_S", "tau_B"} & set(out)):
         raise StudyError(f"{where}: give either tau or tau_S/tau_B, not both")
     return out
+
+
+def check_point(problem: str, params: Mapping[str, Any], where: str) -> None:
+    """Build the point's problem (every value checked by the schema) without running it;
+    StudyError naming the point and the parameter."""
+    from runtime.errors import ParameterError
+    from runtime.problem.registry import load_problem
+
+    try:
+        load_problem(problem, params)
+    except ParameterError as exc:
+        raise StudyError(f"{where}: {exc}") from None
 
 
 def canonical_json(params: Mapping[str, Any]) -> str:
@@ -203,8 +204,10 @@ def study_from_dict(data: Mapping[str, Any], name: str = "study", source: str = 
     if unknown:
         raise StudyError(f"unknown key(s) {', '.join(map(repr, unknown))} in the study; "
                          f"allowed: {', '.join(STUDY_KEYS)}")
-    scenario = data.get("scenario", "cantilever")
-    _check_scenario(scenario)
+    if "scenario" in data and "problem" in data:
+        raise StudyError("give either problem or scenario (its earlier name), not both")
+    scenario = data.get("problem", data.get("scenario", "cantilever"))
+    _check_problem(scenario)
     name = str(data.get("name", name))
     fixed_raw = data.get("fixed", {})
     grid = data.get("grid", {})
@@ -245,6 +248,8 @@ def study_from_dict(data: Mapping[str, Any], name: str = "study", source: str = 
             params.pop("tau", None)
         _check_params(params, "point")
         pid = point_id(params, varied)
+        if pid not in points:   # every value checked by the problem schema before any run
+            check_point(scenario, params, f"point {pid}")
         points.setdefault(pid, StudyPoint(pid, params))
     return Study(name=name, scenario=scenario, fixed=fixed, varied=tuple(varied),
                  points=tuple(points.values()), source=source)
@@ -252,7 +257,7 @@ def study_from_dict(data: Mapping[str, Any], name: str = "study", source: str = 
 
 def load_study(path: str | os.PathLike, max_points: int | float | None = None) -> Study:
     """Read a study TOML file (StudyError for a malformed file or unknown parameter)."""
-    from runtime.config import read_toml
+    from runtime.problem.registry import read_toml
 
     path = Path(path)
     data, text = read_toml(path, StudyError, "study file")
@@ -262,15 +267,6 @@ def load_study(path: str | os.PathLike, max_points: int | float | None = None) -
 # --------------------------------------------------------------------------------------
 # the task: parameters in, outcome out (runs on a worker; ships no compiled objects)
 # --------------------------------------------------------------------------------------
-
-
-def scenario_kwargs(params: Mapping[str, Any]) -> dict[str, Any]:
-    """Scenario constructor keywords of a point (``tau`` -> tau_S = tau_B = tau)."""
-    kw = dict(params)
-    if "tau" in kw:
-        tau = kw.pop("tau")
-        kw["tau_S"] = kw["tau_B"] = tau
-    return kw
 
 
 @dataclass
@@ -321,11 +317,10 @@ def run_point(scenario: str, point_id: str, params: Mapping[str, Any]) -> PointO
     params = dict(params)
     run = None
     try:
-        _check_scenario(scenario)
-        from runtime.scenarios import CantileverScenario, run_cantilever
+        from runtime.problem.registry import load_problem
+        from runtime.simulate.simulate import simulate
 
-        sc = CantileverScenario(**scenario_kwargs(params))
-        run = run_cantilever(sc)
+        run = simulate(load_problem(scenario, params))
         status, message = run.status, run.message
     except Exception as exc:  # noqa: BLE001 - a failing point must not stop the study
         status, message = FAILED, f"{type(exc).__name__}: {exc}"
@@ -443,7 +438,7 @@ def table_row(study: Study, point: StudyPoint, summary: Mapping[str, Any] | None
         "energy_balance_max_rel": s.get("energy_balance_max_rel", "")
         if s.get("energy_balance_max_rel") is not None else "",
         "zeta_linear": (s.get("linear_prediction") or {}).get("zeta_1", ""),
-        "tau_E": (s.get("parameters") or {}).get("tau_E", ""),
+        "tau_E": s.get("tau_E", ""),
         "wall_time_s": s.get("wall_time_s", "") if summary else "",
     })
     return row

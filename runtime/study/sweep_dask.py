@@ -51,7 +51,7 @@ def warm_up() -> dict:
     Returns {"pid", "library"} for diagnostics; ``library`` is None when the in-process
     CasADi fallback is used (no C compiler).
     """
-    import runtime.scenarios  # noqa: F401 - pay the import once, not in the first task
+    import runtime.simulate.simulate  # noqa: F401 - pay the import once, not in the first task
     from runtime.model import build
 
     lib = build.load_library()

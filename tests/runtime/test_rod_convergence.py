@@ -3,13 +3,32 @@ static small-deflection tip displacement vs Timoshenko, and the first frequency.
 
 from __future__ import annotations
 
+from dataclasses import asdict
+
 import numpy as np
 import scipy.linalg as sl
 import scipy.sparse.linalg as spl
 
-from runtime.model.rod import RodModel, RodParameters, _constitutive
+from references import sections
+from runtime.model.rod import RodModel, RodParameters
 
 E, NU, RHO, LEN, W, H = 1e6, 0.3, 1000.0, 0.3, 0.01, 0.01
+
+
+class _Ref:
+    """Section constants and moduli from the independent references."""
+
+    @staticmethod
+    def rectangle_section(w: float, h: float, nu: float) -> dict[str, float]:
+        return asdict(sections.rectangle(w, h, nu))
+
+    @staticmethod
+    def shear_modulus(E: float, nu: float) -> float:
+        return E / (2 * (1 + nu))
+
+
+def _constitutive() -> _Ref:
+    return _Ref()
 
 
 def _model(N, **kw):

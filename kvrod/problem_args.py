@@ -1,0 +1,97 @@
+"""Command-line access to problems: the PROBLEM argument, ``--set`` and the short flags.
+
+Every command that runs a problem (simulate, static, modes, sweep points) takes it the same
+way: a problem file or built-in name, then overrides from ``--config`` (the earlier
+format), the short flags (``--tau``, ``--E``, ``--n-elements``, ...) and ``--set
+path=value`` (any key of the problem file, e.g. ``--set loads.0.time.start=0.5``), in
+that order. The values go through the problem schema's checks (one line naming the key,
+value and range).
+"""
+
+from __future__ import annotations
+
+import argparse
+import tomllib
+from typing import Any
+
+#: short flags: (flag, dest, type, help) -> alias of runtime.problem.schema.ALIASES
+FLAGS: tuple[tuple[str, str, type, str], ...] = (
+    ("--tau", "tau", float, "tau_S = tau_B = tau [s] (the paper's convention)"),
+    ("--tau-S", "tau_S", float, "shear retardation time [s]"),
+    ("--tau-B", "tau_B", float, "bulk retardation time [s]"),
+    ("--E", "youngs_modulus", float, "Young's modulus [Pa]"),
+    ("--nu", "poisson_ratio", float, "Poisson's ratio [-]"),
+    ("--tip-force", "tip_force", float, "magnitude of the force at the s = L end [N]"),
+    ("--n-elements", "n_elements", int, "number of elements"),
+    ("--t-end", "t_end", float, "simulated time [s]"),
+    ("--rtol", "rtol", float, "relative tolerance"),
+    ("--atol", "atol", float, "absolute tolerance (default: scaled per field by the motion)"),
+    ("--max-order", "max_order", int, "highest BDF order 1-5"),
+)
+
+
+def add_problem_arguments(p: argparse.ArgumentParser, required: bool = False) -> None:
+    """PROBLEM, --config, the short flags, --set and --damping."""
+    p.add_argument("problem", nargs=None if required else "?",
+                   help="problem file (.toml) or built-in name (e.g. cantilever)")
+    p.add_argument("--config", help="configuration file: a problem file, or the earlier "
+                                    "format (scenario = NAME, [parameters])")
+    for flag, dest, typ, text in FLAGS:
+        p.add_argument(flag, dest=dest, type=typ, help=text)
+    p.add_argument("--damping", choices=("consistent", "naive"),
+                   help="extensional viscosity eta_E (consistent) or eta~_E (naive)")
+    p.add_argument("--set", dest="sets", action="append", default=[], metavar="PATH=VALUE",
+                   help="set any key of the problem, e.g. --set material.tau=0.02 or "
+                        "--set loads.0.vector=[0.1,0,0] (repeatable; TOML values)")
+
+
+def parse_set(item: str) -> tuple[str, Any]:
+    """``path=value`` with a TOML value (a bare word is a string)."""
+    from kvrod.cli import CliError
+
+    if "=" not in item:
+        raise CliError(f"kvrod: --set {item!r} must be PATH=VALUE (e.g. material.tau=0.02)")
+    key, text = item.split("=", 1)
+    key = key.strip()
+    try:
+        value = tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = text.strip()
+    return key, value
+
+
+def problem_from_args(args, command: str):
+    """The problem named on the command line with all overrides applied (checked)."""
+    from kvrod.cli import CliError
+    from runtime.problem.registry import load_config, load_problem
+
+    spec = args.problem
+    overrides: dict[str, Any] = {}
+    if getattr(args, "config", None):
+        name, kw = load_config(args.config)
+        if spec is not None and spec != name:
+            raise CliError(f"kvrod {command}: problem {spec!r} on the command line but "
+                           f"{name!r} in {args.config}")
+        spec = name
+        overrides.update(kw)
+    if spec is None:
+        raise CliError(f"kvrod {command}: name a problem (a .toml file or a built-in name "
+                       "such as cantilever) or give --config FILE")
+    if args.tau is not None and (args.tau_S is not None or args.tau_B is not None):
+        raise CliError(f"kvrod {command}: --tau sets tau_S = tau_B; do not combine it with "
+                       "--tau-S/--tau-B")
+    if args.tau is not None:
+        for k in ("tau_S", "tau_B"):
+            overrides.pop(k, None)
+    elif args.tau_S is not None or args.tau_B is not None:
+        overrides.pop("tau", None)
+    for _, dest, _, _ in FLAGS:
+        v = getattr(args, dest)
+        if v is not None:
+            overrides[dest] = v
+    if args.damping is not None:
+        overrides["damping"] = args.damping
+    for item in args.sets:
+        k, v = parse_set(item)
+        overrides[k] = v
+    return load_problem(spec, overrides)

@@ -1,0 +1,193 @@
+"""The whole rod as CasADi MX functions over the serialised per-element kernels.
+
+This is the one CasADi assembly of the rod (the compiled C assembly in
+``generated/rod_assembly.c`` is the other, fast one; tests hold them equal to rounding). It
+serves as the in-process fallback when no C compiler is available (residual, Jacobian and
+energies evaluated through CasADi), for SUNDIALS IDAS cross-checks and benchmarks (the
+residual expanded to SX and compiled flat), and for anything that needs derivatives of the
+whole rod.
+
+The functions take the arrays of :class:`runtime.model.arrays.RodArrays` as inputs
+(``par``; ``seg``, ``jnt``, ``nload``, ``sload`` transposed: one column per element), so
+one built function serves every load and motion; which ends are held or clamped is fixed
+when it is built (it decides the assembly's structure).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+import scipy.sparse as sp
+
+from generated import rod_layout as L
+from runtime.model import build
+from runtime.model.arrays import RodArrays
+
+
+def load_kernels(gdir: Path | None = None) -> dict[str, ca.Function]:
+    """The serialised per-element kernels generated/rod_*.casadi, by name."""
+    gdir = gdir or build.generated_dir()
+    return {name: ca.Function.deserialize((gdir / f"{name}.casadi").read_text())
+            for name in L.KERNELS}
+
+
+def _r(start: int, size: int) -> list[int]:
+    return list(range(start, start + size))
+
+
+class CasadiRod:
+    """MX functions of one rod structure (N elements, its held and clamped ends).
+
+    ``residual(t, y, yp, par, seg, jnt, nload, sload) -> F`` (n,);
+    ``jacobian(..., cy, cj) -> cy dF/dy + cj dF/dy'`` (sparse n x n);
+    ``energies(...) -> (T, W, 2D, P_ext, P_bc)`` and ``elements(...) -> (V, F, U, M)``.
+    Call :meth:`args` to get the numeric inputs of a :class:`RodArrays`.
+    """
+
+    def __init__(self, arrays: RodArrays, kernels: dict[str, ca.Function] | None = None):
+        self.N = N = arrays.N
+        self.n = L.n_state(N)
+        self.held = (arrays.held("start"), arrays.held("end"))
+        self.clamped = (arrays.clamped("start"), arrays.clamped("end"))
+        k = self.k = kernels or load_kernels()
+        t = ca.MX.sym("t")
+        y, yp = ca.MX.sym("y", self.n), ca.MX.sym("yp", self.n)
+        par = ca.MX.sym("par", L.N_PARAMS)
+        seg = ca.MX.sym("seg", L.N_SEGMENT, N)
+        jnt = ca.MX.sym("jnt", L.N_JOINT, N + 1)
+        nl = ca.MX.sym("nload", L.N_NODE_LOAD, N + 1)
+        sl = ca.MX.sym("sload", L.N_SEGMENT_LOAD, N)
+        self._inputs = [t, y, yp, par, seg, jnt, nl, sl]
+        self._names = ["t", "y", "yp", "par", "seg", "jnt", "nload", "sload"]
+
+        def P(name):
+            return par[_r(L.PARAM_OFFSETS[name], L.PARAM_SIZES[name])]
+
+        nodes, segs = range(N + 1), range(1, N + 1)
+
+        def g(vec, starts, size):  # columns of gathered fields, (size, K)
+            idx = [s + j for s in starts for j in range(size)]
+            return ca.reshape(vec[idx], size, len(starts))
+
+        phi_i = [L.node_phi(i) for i in nodes]
+        v_i = [L.node_v(i) for i in nodes]
+        p_i = [L.segment_p(i) for i in segs]
+        om_i = [L.segment_omega(i) for i in segs]
+        Y = {"phi": g(y, phi_i, 3), "v": g(y, v_i, 3), "p": g(y, p_i, 4), "Om": g(y, om_i, 3)}
+        YP = {"phi": g(yp, phi_i, 3), "v": g(yp, v_i, 3), "p": g(yp, p_i, 4),
+              "Om": g(yp, om_i, 3)}
+        ls = P("load_scale")
+        so = L.SEGMENT_OFFSETS
+        h = seg[so["h"], :]
+        mseg = seg[so["rhoA"], :] * h                        # segment masses (1, N)
+        zero = ca.MX.zeros(1, 1)
+        mass = 0.5 * (ca.horzcat(zero, mseg) + ca.horzcat(mseg, zero))      # (1, N+1)
+        lump = 0.5 * (ca.horzcat(zero, h) + ca.horzcat(h, zero))
+        host = [max(i, 1) - 1 for i in nodes]                # column of the host segment
+        no = L.NODE_LOAD_OFFSETS
+        f_follow = k["rod_rotate"].map(N + 1)(Y["p"][:, host], nl[_r(no["f_follower"], 3), :])
+        f_ext = ls * (ca.mtimes(P("gravity"), mass) + ca.mtimes(P("f_dist"), lump)
+                      + nl[_r(no["f_dead"], 3), :] + f_follow)           # (3, N+1)
+        held = np.zeros(N + 1)
+        held[0], held[N] = float(self.held[0]), float(self.held[1])
+        v_held = ca.horzcat(P("v_start"), ca.MX.zeros(3, N - 1), P("v_end")) if N > 1 else \
+            ca.horzcat(P("v_start"), P("v_end"))
+        rn = k["rod_node_inertia"].map(N + 1)(Y["phi"], Y["v"], YP["phi"], YP["v"], mass,
+                                              f_ext, ca.DM(held).T, v_held)
+        rs = k["rod_segment_inertia"].map(N)(Y["p"], Y["Om"], YP["p"], YP["Om"], seg)
+        lo = L.SEGMENT_LOAD_OFFSETS
+        t_dead = k["rod_rotate_transposed"].map(N)(Y["p"], sl[_r(lo["m_dead"], 3), :])
+        t_ext = ls * (t_dead + sl[_r(lo["m_follower"], 3), :])
+        Q = k["rod_segment_forces"].map(N)(Y["phi"][:, :N], Y["phi"][:, 1:], Y["p"],
+                                           Y["v"][:, :N], Y["v"][:, 1:], Y["Om"], seg)
+        wa = np.ones((3, N))
+        wb = np.ones((3, N))
+        if self.held[0]:
+            wa[:, 0] = 0.0
+        if self.held[1]:
+            wb[:, N - 1] = 0.0
+
+        rows, vals = [], []
+
+        def put(starts, size, block):
+            rows.append(np.array([s + j for s in starts for j in range(size)]))
+            vals.append(ca.vec(block))
+
+        put(phi_i, 6, rn)                      # node rows (phi, v: consecutive in a cell)
+        put(p_i, 7, rs)                        # segment rows (p, Omega)
+        put(om_i, 3, -t_ext)
+        put(v_i[:N], 3, -Q[0:3, :] * ca.DM(wa))
+        put(v_i[1:], 3, -Q[3:6, :] * ca.DM(wb))
+        put(om_i, 3, -Q[6:9, :])
+        if N > 1:
+            hj = jnt[:, 1:N]
+            T = k["rod_joint_torques"].map(N - 1)(Y["p"][:, :-1], Y["p"][:, 1:],
+                                                  Y["Om"][:, :-1], Y["Om"][:, 1:], hj)
+            put(om_i[:-1], 3, -T[0:3, :])
+            put(om_i[1:], 3, -T[3:6, :])
+        jt = k["rod_joint_torques"]
+        self._clamp_T = []
+        if self.clamped[0]:
+            T0 = jt(P("p_start"), Y["p"][:, 0], P("Omega_start"), Y["Om"][:, 0], jnt[:, 0])
+            put(om_i[:1], 3, -T0[3:6])
+            self._clamp_T.append((T0[0:3], P("Omega_start")))
+        if self.clamped[1]:
+            TN = jt(Y["p"][:, N - 1], P("p_end"), Y["Om"][:, N - 1], P("Omega_end"), jnt[:, N])
+            put(om_i[-1:], 3, -TN[0:3])
+            self._clamp_T.append((TN[3:6], P("Omega_end")))
+        ridx = np.concatenate(rows)
+        S = sp.csc_matrix((np.ones(ridx.size), (ridx, np.arange(ridx.size))),
+                          shape=(self.n, ridx.size))
+        Sd = ca.DM(ca.Sparsity(self.n, ridx.size, S.indptr.tolist(), S.indices.tolist()),
+                   S.data)
+        F = ca.mtimes(Sd, ca.vertcat(*vals))
+        self.residual = ca.Function("rod_residual", self._inputs, [F], self._names, ["F"])
+        cy, cj = ca.MX.sym("c_y"), ca.MX.sym("c_j")
+        J = cy * ca.jacobian(F, y) + cj * ca.jacobian(F, yp)
+        self.jacobian = ca.Function("rod_residual_jac_y_yp", [*self._inputs, cy, cj], [J],
+                                    [*self._names, "c_y", "c_j"], ["J"])
+
+        # energies and powers (as the compiled kvrod_diagnostics)
+        kin = ca.sum2(k["rod_node_kinetic"].map(N + 1)(Y["v"], mass)) + ca.sum2(
+            k["rod_segment_kinetic"].map(N)(Y["Om"], seg))
+        Ws, Ds, V, Fs = k["rod_segment_diagnostics"].map(N)(
+            Y["phi"][:, :N], Y["phi"][:, 1:], Y["p"], Y["v"][:, :N], Y["v"][:, 1:], Y["Om"],
+            seg)
+        el, dis = ca.sum2(Ws), 2 * ca.sum2(Ds)
+        U = [ca.MX.zeros(3, 1) for _ in range(N + 1)]
+        M = [ca.MX.zeros(3, 1) for _ in range(N + 1)]
+        jd = k["rod_joint_diagnostics"]
+        if N > 1:
+            Wj, Dj, Uj, Mj = jd.map(N - 1)(Y["p"][:, :-1], Y["p"][:, 1:], Y["Om"][:, :-1],
+                                           Y["Om"][:, 1:], jnt[:, 1:N])
+            el, dis = el + ca.sum2(Wj), dis + 2 * ca.sum2(Dj)
+            for j in range(1, N):
+                U[j], M[j] = Uj[:, j - 1], Mj[:, j - 1]
+        if self.clamped[0]:
+            Wj, Dj, U[0], M[0] = jd(P("p_start"), Y["p"][:, 0], P("Omega_start"),
+                                    Y["Om"][:, 0], jnt[:, 0])
+            el, dis = el + Wj, dis + 2 * Dj
+        if self.clamped[1]:
+            Wj, Dj, U[N], M[N] = jd(Y["p"][:, N - 1], P("p_end"), Y["Om"][:, N - 1],
+                                    P("Omega_end"), jnt[:, N])
+            el, dis = el + Wj, dis + 2 * Dj
+        pext = ca.sum2(ca.sum1(f_ext * Y["v"])) + ca.sum2(ca.sum1(t_ext * Y["Om"]))
+        pbc = ca.MX.zeros(1, 1)
+        for Tc, om in self._clamp_T:
+            pbc -= ca.dot(Tc, om)
+        for end, i, fint in ((0, 0, Q[0:3, 0]), (1, N, Q[3:6, N - 1])):
+            if self.held[end]:
+                react = mass[i] * YP["v"][:, i] - f_ext[:, i] - fint
+                pbc += ca.dot(react, Y["v"][:, i])
+        self.energies = ca.Function("rod_energy", self._inputs, [kin, el, dis, pext, pbc],
+                                    self._names, list(L.DIAG_SCALARS))
+        self.elements = ca.Function("rod_elements", self._inputs,
+                                    [V, Fs, ca.horzcat(*U), ca.horzcat(*M)], self._names,
+                                    ["V", "F", "U", "M"])
+
+    @staticmethod
+    def args(arrays: RodArrays) -> list[np.ndarray]:
+        """Numeric inputs after (t, y, yp): par and the transposed element arrays."""
+        return [arrays.par, arrays.seg.T, arrays.jnt.T, arrays.nload.T, arrays.sload.T]

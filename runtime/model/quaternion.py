@@ -1,0 +1,81 @@
+"""Quaternion helpers in NumPy (scalar part first, as everywhere in kvrod)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Quaternion product (scalar first), shapes (4,) or (..., 4)."""
+    a0, av, b0, bv = a[..., 0], a[..., 1:], b[..., 0], b[..., 1:]
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a0 * b0 - np.sum(av * bv, axis=-1)
+    out[..., 1:] = a0[..., None] * bv + b0[..., None] * av + np.cross(av, bv)
+    return out
+
+
+def quat_exp(theta: np.ndarray) -> np.ndarray:
+    """exp((0, theta)/2) = (cos(|theta|/2), sin(|theta|/2) theta/|theta|), shape (..., 4)."""
+    th = np.asarray(theta, dtype=float)
+    a = np.linalg.norm(th, axis=-1)
+    out = np.empty(th.shape[:-1] + (4,))
+    out[..., 0] = np.cos(a / 2)
+    sinc = np.where(a > 1e-8, np.sin(a / 2) / np.where(a > 0, a, 1.0), 0.5 - a**2 / 48)
+    out[..., 1:] = sinc[..., None] * th
+    return out
+
+
+def quat_rotation(p: np.ndarray) -> np.ndarray:
+    """R(p) (3, 3) or (..., 3, 3), homogeneous of degree 0 (the kernels' formula)."""
+    p = np.asarray(p, dtype=float)
+    p0, q = p[..., 0], p[..., 1:]
+    n2 = np.sum(p * p, axis=-1)
+    I = np.eye(3)
+    qx = np.zeros(p.shape[:-1] + (3, 3))
+    qx[..., 0, 1], qx[..., 0, 2] = -q[..., 2], q[..., 1]
+    qx[..., 1, 0], qx[..., 1, 2] = q[..., 2], -q[..., 0]
+    qx[..., 2, 0], qx[..., 2, 1] = -q[..., 1], q[..., 0]
+    R = ((p0**2 - np.sum(q * q, axis=-1))[..., None, None] * I
+         + 2 * q[..., :, None] * q[..., None, :] + 2 * p0[..., None, None] * qx)
+    return R / n2[..., None, None]
+
+
+def quat_from_matrix(R: np.ndarray) -> np.ndarray:
+    """Unit quaternion (scalar first, p0 >= 0) of rotation matrices (..., 3, 3)
+    (Shepperd's method: the largest of the four candidates is computed first)."""
+    R = np.asarray(R, dtype=float)
+    shape = R.shape[:-2]
+    R = R.reshape(-1, 3, 3)
+    out = np.empty((R.shape[0], 4))
+    for k, m in enumerate(R):
+        tr = np.trace(m)
+        cand = np.array([tr, m[0, 0], m[1, 1], m[2, 2]])
+        i = int(np.argmax(cand))
+        if i == 0:
+            s = 2 * np.sqrt(1 + tr)
+            q = [s / 4, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
+        elif i == 1:
+            s = 2 * np.sqrt(1 + m[0, 0] - m[1, 1] - m[2, 2])
+            q = [(m[2, 1] - m[1, 2]) / s, s / 4, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s]
+        elif i == 2:
+            s = 2 * np.sqrt(1 - m[0, 0] + m[1, 1] - m[2, 2])
+            q = [(m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, s / 4, (m[1, 2] + m[2, 1]) / s]
+        else:
+            s = 2 * np.sqrt(1 - m[0, 0] - m[1, 1] + m[2, 2])
+            q = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, s / 4]
+        q = np.array(q)
+        out[k] = q if q[0] >= 0 else -q
+    return out.reshape(shape + (4,))
+
+
+def quat_angle(p: np.ndarray) -> np.ndarray:
+    """Rotation angle (rad, in [0, pi]) of quaternions (..., 4) of any norm."""
+    p = np.asarray(p, dtype=float)
+    return 2.0 * np.arctan2(np.linalg.norm(p[..., 1:], axis=-1), np.abs(p[..., 0]))
+
+
+def cayley_curvature(p_a: np.ndarray, p_b: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """The kernels' discrete curvature (2/h) Im(r)/Re(r), r = conj(p_a) p_b: (..., 3)."""
+    conj = p_a * np.array([1.0, -1.0, -1.0, -1.0])
+    r = quat_mul(conj, p_b)
+    return 2.0 / np.asarray(h)[..., None] * r[..., 1:] / r[..., :1]

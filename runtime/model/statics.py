@@ -1,0 +1,134 @@
+"""The rod's static problem in reduced coordinates (for :func:`runtime.solvers.statics.
+solve_static` and the modal analysis).
+
+Unknowns per cell (``generated/rod_layout.py``): node positions ``dphi`` (m) and segment
+rotation increments ``dtheta`` (rad, material, ``p <- p exp(dtheta/2)``); rows: the force
+balance of every node and the torque balance of every segment at rest. A held node's rows
+and unknowns are replaced by identities (its position is prescribed: :meth:`constrain`).
+Loads are evaluated as in statics (:meth:`RodModel.statics`: at ``t = 0-``, the load factor
+also scaling prescribed end motion).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from generated import rod_layout as L
+from runtime.model.quaternion import quat_exp, quat_mul
+from runtime.model.rod import RodModel
+
+
+class RodStatics:
+    """:class:`~runtime.solvers.protocols.StaticProblem` of a :class:`RodModel`.
+
+    Use inside ``with model.statics():`` so that loads and ends are driven as in statics.
+    """
+
+    def __init__(self, model: RodModel) -> None:
+        self.model = m = model
+        N = self.N = m.N
+        self.n_static = L.n_static(N)
+        self.kl_static, self.ku_static = L.STATIC_KL, L.STATIC_KU
+        nodes = np.arange(N + 1)
+        self.static_rows = np.concatenate(
+            [m.v_index[0]] + [np.r_[m.omega_index[i - 1], m.v_index[i]] for i in range(1, N + 1)])
+        self.phi_cols = np.array([L.static_phi(i) for i in nodes])[:, None] + np.arange(3)
+        self.theta_cols = np.array([L.static_theta(i) for i in range(1, N + 1)])[
+            :, None] + np.arange(3)
+        fixed = []
+        for end, i in (("start", 0), ("end", N)):
+            if m.arrays.held(end):
+                fixed += list(self.phi_cols[i])
+        self.fixed_cols = np.array(fixed, dtype=int)
+        self._fixed = sp.csr_matrix((np.ones(len(fixed)), (fixed, fixed)),
+                                    shape=(self.n_static, self.n_static))
+        self._rowmask = np.ones(self.n_static, dtype=bool)
+        self._rowmask[self.fixed_cols] = False
+        # solve_static moves held nodes to their targets when the load factor changes;
+        # only needed when an end moves (a fixed end stays where the reference put it)
+        moving = bool(getattr(m.drive, "moving_ends", False))
+        self.constrain = self._constrain if moving else None
+
+    @property
+    def load_scale(self) -> float:
+        return self.model.load_scale
+
+    @load_scale.setter
+    def load_scale(self, value: float) -> None:
+        self.model.load_scale = value
+        self.model.at(0.0)
+
+    def at_rest(self, y: np.ndarray) -> np.ndarray:
+        """y with every velocity zero (copy)."""
+        y0 = np.array(y, dtype=float)
+        y0[self.model.velocity_mask] = 0.0
+        return y0
+
+    def _constrain(self, y: np.ndarray) -> np.ndarray:
+        """Held nodes at their prescribed positions at the current load factor, at rest."""
+        return self.at_rest(self.model.constrain(y))
+
+    def static_residual(self, y: np.ndarray, out: np.ndarray) -> None:
+        """Force/torque balance at rest (n_static,): node 0 forces, then per cell i the
+        segment i torques (material) and node i forces; zero on held nodes."""
+        m = self.model
+        r = np.empty(m.n)
+        m.residual(0.0, self.at_rest(y), m._zeros, r)
+        out[:] = r[self.static_rows]
+        out[~self._rowmask] = 0.0
+
+    def jacobian_csr(self, y: np.ndarray) -> sp.csr_matrix:
+        m = self.model
+        y0 = self.at_rest(y)
+        ab = np.zeros((m.ldab, m.n), order="F")
+        m.jacobian_band2(0.0, y0, m._zeros, 1.0, 0.0, ab)
+        Jd = m.band_to_csc(ab, m.kl, m.ku).tocsr()[self.static_rows]
+        J = (Jd @ self.tangent(y0)).tocsr()
+        keep = sp.diags(self._rowmask.astype(float))
+        return (keep @ J).tocsr() + self._fixed
+
+    def tangent(self, y: np.ndarray) -> sp.csc_matrix:
+        """T (n x n_static): dy = T dx; dphi -> phi (identity), dtheta -> dp = 1/2 L(p) [0; I]."""
+        m, N = self.model, self.N
+        p = y[m.p_index]  # (N, 4)
+        p0, q = p[:, 0], p[:, 1:]
+        z = np.zeros(N)
+        qx = np.stack([np.stack([z, -q[:, 2], q[:, 1]], -1),
+                       np.stack([q[:, 2], z, -q[:, 0]], -1),
+                       np.stack([-q[:, 1], q[:, 0], z], -1)], 1)  # [q]x, (N, 3, 3)
+        Lm = np.empty((N, 4, 3))
+        Lm[:, 0, :] = -q
+        Lm[:, 1:, :] = p0[:, None, None] * np.eye(3) + qx
+        Lm *= 0.5
+        rows_p = np.broadcast_to(m.p_index[:, :, None], (N, 4, 3))
+        cols_p = np.broadcast_to(self.theta_cols[:, None, :], (N, 4, 3))
+        rows = np.concatenate([m.phi_index.ravel(), rows_p.ravel()])
+        cols = np.concatenate([self.phi_cols.ravel(), cols_p.ravel()])
+        vals = np.concatenate([np.ones(m.phi_index.size), Lm.ravel()])
+        return sp.csc_matrix((vals, (rows, cols)), shape=(m.n, self.n_static))
+
+    def static_jacobian_sparse(self, y: np.ndarray) -> sp.csc_matrix:
+        """d(static residual)/d(dphi, dtheta) at dx = 0 (CSC)."""
+        return self.jacobian_csr(y).tocsc()
+
+    def static_jacobian_band(self, y: np.ndarray, out_ab: np.ndarray) -> None:
+        """Static Jacobian in LAPACK band storage (2 kl_static + ku_static + 1, n_static)."""
+        kl, ku = self.kl_static, self.ku_static
+        if out_ab.shape != (2 * kl + ku + 1, self.n_static):
+            raise TypeError(f"out_ab must have shape {(2 * kl + ku + 1, self.n_static)}")
+        c = self.jacobian_csr(y).tocoo()
+        out_ab[:] = 0.0
+        if c.nnz and (np.max(c.row - c.col) > kl or np.max(c.col - c.row) > ku):
+            raise RuntimeError("static Jacobian outside its band")  # pragma: no cover
+        np.add.at(out_ab, (kl + ku + c.row - c.col, c.col), c.data)
+
+    def static_retract(self, y: np.ndarray, dx: np.ndarray) -> np.ndarray:
+        """New state: phi += dphi, p <- p*exp(dtheta/2) renormalised; velocities kept."""
+        m = self.model
+        y1 = np.array(y, dtype=float)
+        dx = np.asarray(dx)
+        y1[m.phi_index] += dx[self.phi_cols]
+        p = quat_mul(y1[m.p_index], quat_exp(dx[self.theta_cols]))
+        y1[m.p_index] = p / np.linalg.norm(p, axis=1)[:, None]
+        return y1

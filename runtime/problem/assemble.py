@@ -1,0 +1,170 @@
+"""From a problem to the numbers of its discrete rod: arrays, reference state and drive.
+
+:func:`build_model` discretizes the reference geometry (nodes at ``s_i``, segment frames
+at the midpoints, clamp frames at the ends), fills the per-element arrays (lengths,
+stiffness and damping from the material and section, inertia, and the intrinsic strains
+V0, U0 computed from the discrete reference with the kernels' own strain measures, so
+the reference configuration is exactly stress-free), sets the ends, and returns a
+:class:`~runtime.model.rod.RodModel` with a :class:`ProblemDrive` that writes the loads and
+the prescribed end motion at any time.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from runtime.model.arrays import RodArrays
+from runtime.model.quaternion import (
+    cayley_curvature,
+    quat_exp,
+    quat_from_matrix,
+    quat_mul,
+    quat_rotation,
+)
+from runtime.model.rod import RodModel
+from runtime.problem.geometry import Straight, discretize
+from runtime.problem.materials import joint_average
+from runtime.problem.schema import Problem
+
+
+class ProblemDrive:
+    """Loads with time functions and prescribed end motion, written into the arrays.
+
+    The ends' reference positions and frames are those of the discrete reference; a
+    motion adds ``translation * f(t)`` and rotates the clamp frame about the fixed spatial
+    axis by ``angle * g(t)``. In statics (``static``) the velocities are zero and the
+    displacement and rotation are scaled by the load factor (they are load-stepped).
+    """
+
+    def __init__(self, problem: Problem, N: int, r_ends: np.ndarray, p_ends: np.ndarray):
+        self.problem = problem
+        self.N = N
+        self.length = problem.rod.length
+        self.r_ends, self.p_ends = r_ends, p_ends        # (2, 3), (2, 4)
+        self.loads = problem.loads
+        self.ends = (problem.start, problem.end)
+        self.time_dependent = any(not ld.time.is_constant for ld in self.loads) or any(
+            e.motion is not None and e.motion.time_dependent for e in self.ends)
+        self._nodes = [ld.node(N, self.length) for ld in self.loads]
+        #: an end has prescribed motion (statics must move the held nodes)
+        self.moving_ends = any(e.motion is not None and e.motion.moves for e in self.ends)
+
+    def apply(self, a: RodArrays, t: float, *, left: bool = False, scale: float = 1.0,
+              static: bool = False) -> None:
+        grav, dist = np.zeros(3), np.zeros(3)
+        fd, ff = a.node_load("f_dead"), a.node_load("f_follower")
+        md, mf = a.segment_load("m_dead"), a.segment_load("m_follower")
+        for arr in (fd, ff, md, mf):
+            arr[:] = 0.0
+        N = self.N
+        for ld, node in zip(self.loads, self._nodes, strict=True):
+            v = np.asarray(ld.vector) * ld.time.value_at(t, left=left)
+            if ld.kind == "gravity":
+                grav += v
+            elif ld.kind == "distributed":
+                dist += v
+            elif ld.kind == "force":
+                (ff if ld.frame == "follower" else fd)[node] += v
+            else:
+                target = mf if ld.frame == "follower" else md
+                if node == 0:
+                    target[0] += v
+                elif node == N:
+                    target[N - 1] += v
+                else:                 # an interior node: half on each adjacent segment
+                    target[node - 1] += 0.5 * v
+                    target[node] += 0.5 * v
+        a.set_param("gravity", grav)
+        a.set_param("f_dist", dist)
+        for k, (end, name) in enumerate(zip(self.ends, ("start", "end"), strict=True)):
+            if not end.held:
+                continue
+            r, v = self.r_ends[k].copy(), np.zeros(3)
+            p, om = self.p_ends[k].copy(), np.zeros(3)
+            mo = end.motion
+            if mo is not None:
+                s = scale if static else 1.0
+                tr = np.asarray(mo.translation)
+                r = r + s * tr * mo.translation_time.value_at(t, left=left)
+                if not static:
+                    v = tr * mo.translation_time.rate_at(t)
+                if mo.rotation_angle:
+                    ang = np.radians(mo.rotation_angle)
+                    axis = np.asarray(mo.rotation_axis)
+                    theta = s * ang * mo.rotation_time.value_at(t, left=left)
+                    p = quat_mul(quat_exp(theta * axis), p)       # spatial rotation first
+                    if not static:
+                        om = quat_rotation(p).T @ (axis * ang * mo.rotation_time.rate_at(t))
+            a.set_param("r_" + name, r)
+            a.set_param("v_" + name, v)
+            a.set_param("p_" + name, p)
+            a.set_param("Omega_" + name, om)
+
+
+def reference_arrays(problem: Problem) -> tuple[RodArrays, np.ndarray, np.ndarray, np.ndarray]:
+    """(arrays, reference state, end positions (2, 3), end quaternions (2, 4))."""
+    from generated import rod_layout as L
+
+    N = problem.rod.elements
+    disc = discretize(problem.rod.geometry, N)
+    a = RodArrays.zeros(N)
+    mats = problem.segment_matrices()
+    h = disc.h
+    p_seg = quat_from_matrix(disc.frames)                        # (N, 4)
+    p_start = quat_from_matrix(disc.start_frame)
+    p_end = quat_from_matrix(disc.end_frame)
+    # keep neighbouring quaternions in the same hemisphere (Cayley curvature is sign-safe,
+    # but continuity makes the reference readable and the initial guesses smooth)
+    for i in range(1, N):
+        if np.dot(p_seg[i], p_seg[i - 1]) < 0:
+            p_seg[i] = -p_seg[i]
+    if np.dot(p_start, p_seg[0]) < 0:
+        p_start = -p_start
+    if np.dot(p_end, p_seg[-1]) < 0:
+        p_end = -p_end
+    a.seg_field("h")[:, 0] = h
+    a.seg_field("C_F")[:] = mats["C_F"]
+    a.seg_field("V_F")[:] = mats["V_F"]
+    a.seg_field("rhoA")[:, 0] = mats["rhoA"]
+    a.seg_field("rhoI")[:] = mats["rhoI"]
+    R = quat_rotation(p_seg)
+    chord = np.diff(disc.nodes, axis=0)
+    V0 = np.einsum("nji,nj->ni", R, chord) / h[:, None]
+    if isinstance(problem.rod.geometry, Straight):
+        # the chords of a straight rod are its tangent: V0 = e3 exactly (the rounding of
+        # the node coordinates would otherwise leave a round-off prestress)
+        V0 = np.tile([0.0, 0.0, 1.0], (N, 1))
+    a.seg_field("V0")[:] = V0
+    hj = np.empty(N + 1)
+    hj[1:-1] = 0.5 * (h[:-1] + h[1:])
+    hj[0], hj[-1] = 0.5 * h[0], 0.5 * h[-1]
+    a.jnt_field("h")[:, 0] = hj
+    a.jnt_field("C_M")[:] = joint_average(mats["C_M"])
+    a.jnt_field("V_M")[:] = joint_average(mats["V_M"])
+    U0 = np.zeros((N + 1, 3))
+    if N > 1:
+        U0[1:-1] = cayley_curvature(p_seg[:-1], p_seg[1:], hj[1:-1])
+    U0[0] = cayley_curvature(p_start, p_seg[0], hj[0])
+    U0[-1] = cayley_curvature(p_seg[-1], p_end, hj[-1])
+    a.jnt_field("U0")[:] = U0
+    a.set_param("load_scale", 1.0)
+    for name, end in (("start", problem.start), ("end", problem.end)):
+        a.set_param("fix_" + name, float(end.held))
+        a.set_param("clamp_" + name, float(end.clamped))
+    a.set_param("r_start", disc.nodes[0])
+    a.set_param("r_end", disc.nodes[-1])
+    a.set_param("p_start", p_start)
+    a.set_param("p_end", p_end)
+    y = np.zeros(L.n_state(N))
+    for i in range(N + 1):
+        y[L.node_phi(i):L.node_phi(i) + 3] = disc.nodes[i]
+    for i in range(1, N + 1):
+        y[L.segment_p(i):L.segment_p(i) + 4] = p_seg[i - 1]
+    return a, y, np.array([disc.nodes[0], disc.nodes[-1]]), np.array([p_start, p_end])
+
+
+def build_model(problem: Problem, backend: str = "auto") -> RodModel:
+    """The :class:`RodModel` of a problem (see the module docstring)."""
+    arrays, y_ref, r_ends, p_ends = reference_arrays(problem)
+    drive = ProblemDrive(problem, arrays.N, r_ends, p_ends)
+    return RodModel(arrays, y_ref, drive=drive, backend=backend)

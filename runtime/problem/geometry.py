@@ -1,0 +1,459 @@
+"""Reference centrelines and director frames of a rod (the stress-free configuration).
+
+A geometry gives, at arc length ``s`` in ``[0, L]``, the position ``r(s)`` (m) and the
+director frame ``D(s) = [d1, d2, d3]`` (columns; ``d3`` the tangent, ``d1`` the section's
+first axis, the width direction of a rectangle). The discrete rod takes node positions
+at ``s_i = i L/N``, segment frames at the segment midpoints and clamp frames at the ends
+(:func:`discretize`); its intrinsic strains V0, U0 are then computed from this discrete
+reference by the kernels' own strain measures (:mod:`runtime.problem.assemble`), so the
+reference configuration is exactly stress-free.
+
+Kinds (TOML ``[rod.geometry] kind = ...``): ``straight`` (direction, normal, twist),
+``arc`` (radius, angle in degrees, initial direction, curving toward), ``helix`` (coil
+radius, pitch, turns, handedness, axis), ``points`` (a polyline or CSV file through which
+a smooth curve is drawn; frames by parallel transport). In Python, :class:`Curve` takes
+any callable ``s -> position``. Every geometry may add a uniform ``twist`` (rad/m) of the
+directors about the tangent, and starts at ``origin`` (default: the origin).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from runtime.errors import ParameterError
+from runtime.problem import coerce as C
+
+
+def _perp(d: np.ndarray, n: np.ndarray | None = None) -> np.ndarray:
+    """A unit vector perpendicular to unit ``d`` (``n`` made orthogonal if given)."""
+    if n is not None:
+        v = n - np.dot(n, d) * d
+        if np.linalg.norm(v) > 1e-9:
+            return v / np.linalg.norm(v)
+    e = np.eye(3)[int(np.argmin(np.abs(d)))]
+    v = e - np.dot(e, d) * d
+    return v / np.linalg.norm(v)
+
+
+def _twisted(D: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Frames (..., 3, 3) rotated about their own d3 by ``angle`` (rad)."""
+    c, s = np.cos(angle)[..., None], np.sin(angle)[..., None]
+    d1, d2 = D[..., :, 0], D[..., :, 1]
+    out = D.copy()
+    out[..., :, 0] = c * d1 + s * d2
+    out[..., :, 1] = -s * d1 + c * d2
+    return out
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """Base: ``position(s)`` (..., 3) and ``frame(s)`` (..., 3, 3) for arrays of s."""
+
+    twist: float = 0.0
+    origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    @property
+    def length(self) -> float:  # pragma: no cover - every kind overrides it
+        raise NotImplementedError
+
+    def _position(self, s: np.ndarray) -> np.ndarray:  # pragma: no cover
+        raise NotImplementedError
+
+    def _frame(self, s: np.ndarray) -> np.ndarray:  # pragma: no cover
+        raise NotImplementedError
+
+    def position(self, s) -> np.ndarray:
+        s = np.asarray(s, dtype=float)
+        return self._position(s) + np.asarray(self.origin)
+
+    def frame(self, s) -> np.ndarray:
+        s = np.asarray(s, dtype=float)
+        D = self._frame(s)
+        return _twisted(D, self.twist * s) if self.twist else D
+
+    def to_mapping(self) -> dict[str, Any]:  # pragma: no cover
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class Straight(Geometry):
+    """A straight rod of ``length`` (m) along ``direction``, first director ``normal``."""
+
+    rod_length: float = 1.0
+    direction: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    normal: tuple[float, float, float] = (1.0, 0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        C.positive("rod.length", self.rod_length)
+        d = np.array(C.unit_vector("rod.geometry.direction", self.direction))
+        n = np.array(C.vector("rod.geometry.normal", self.normal, nonzero=True))
+        if np.linalg.norm(np.cross(d, n / np.linalg.norm(n))) < 1e-9:
+            raise ParameterError("rod.geometry.normal", self.normal,
+                                 "a vector not parallel to the direction")
+
+    @property
+    def length(self) -> float:
+        return self.rod_length
+
+    def _basis(self) -> np.ndarray:
+        d = np.array(self.direction) / np.linalg.norm(self.direction)
+        n = _perp(d, np.array(self.normal, dtype=float))
+        return np.column_stack([n, np.cross(d, n), d])
+
+    def _position(self, s):
+        return s[..., None] * self._basis()[:, 2]
+
+    def _frame(self, s):
+        return np.broadcast_to(self._basis(), s.shape + (3, 3)).copy()
+
+    def to_mapping(self) -> dict[str, Any]:
+        return {"kind": "straight", "direction": list(self.direction),
+                "normal": list(self.normal), "twist": self.twist, "origin": list(self.origin)}
+
+
+@dataclass(frozen=True)
+class Arc(Geometry):
+    """A circular arc of ``radius`` (m) through ``angle`` (degrees), starting along
+    ``direction`` and curving toward ``toward``; ``first_director``: "normal" (d1 toward
+    the centre, in the plane) or "binormal" (d1 out of the plane)."""
+
+    radius: float = 1.0
+    angle: float = 90.0
+    direction: tuple[float, float, float] = (1.0, 0.0, 0.0)
+    toward: tuple[float, float, float] = (0.0, 1.0, 0.0)
+    first_director: str = "normal"
+
+    def __post_init__(self) -> None:
+        C.positive("rod.geometry.radius", self.radius)
+        C.number("rod.geometry.angle", self.angle, low=0.0, high=360.0, low_incl=False)
+        d = np.array(C.unit_vector("rod.geometry.direction", self.direction))
+        w = np.array(C.vector("rod.geometry.toward", self.toward, nonzero=True))
+        if np.linalg.norm(np.cross(d, w / np.linalg.norm(w))) < 1e-9:
+            raise ParameterError("rod.geometry.toward", self.toward,
+                                 "a vector not parallel to the direction")
+        C.choice("rod.geometry.first_director", self.first_director, ("normal", "binormal"))
+
+    @property
+    def length(self) -> float:
+        return self.radius * math.radians(self.angle)
+
+    def _tw(self):
+        t0 = np.array(self.direction) / np.linalg.norm(self.direction)
+        return t0, _perp(t0, np.array(self.toward, dtype=float))
+
+    def _position(self, s):
+        t0, w = self._tw()
+        a = s / self.radius
+        return self.radius * (np.sin(a)[..., None] * t0 + (1 - np.cos(a))[..., None] * w)
+
+    def _frame(self, s):
+        t0, w = self._tw()
+        a = s / self.radius
+        T = np.cos(a)[..., None] * t0 + np.sin(a)[..., None] * w
+        N = -np.sin(a)[..., None] * t0 + np.cos(a)[..., None] * w
+        B = np.broadcast_to(np.cross(t0, w), T.shape)
+        cols = (N, B, T) if self.first_director == "normal" else (B, -N, T)
+        return np.stack(cols, axis=-1)
+
+    def to_mapping(self) -> dict[str, Any]:
+        return {"kind": "arc", "radius": self.radius, "angle": self.angle,
+                "direction": list(self.direction), "toward": list(self.toward),
+                "first_director": self.first_director, "twist": self.twist,
+                "origin": list(self.origin)}
+
+
+@dataclass(frozen=True)
+class Helix(Geometry):
+    """A helix of ``coil_radius`` R (m) and ``pitch`` (m per turn) about ``axis``,
+    ``turns`` turns, ``handedness`` "right" or "left", starting at the origin:
+    ``r(phi) = R (cos phi - 1) e1 +/- R sin phi e2 + pitch phi/(2 pi) axis`` with
+    ``e1 = radial`` made normal to the axis (the axis passes through ``-R e1``). Frenet
+    frame: d1 the principal normal (toward the axis), d2 the binormal, d3 the tangent."""
+
+    coil_radius: float = 0.01
+    pitch: float = 0.005
+    turns: float = 5.0
+    handedness: str = "right"
+    axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    radial: tuple[float, float, float] = (1.0, 0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        C.positive("rod.geometry.coil_radius", self.coil_radius)
+        C.nonnegative("rod.geometry.pitch", self.pitch)
+        C.positive("rod.geometry.turns", self.turns)
+        C.choice("rod.geometry.handedness", self.handedness, ("right", "left"))
+        a = np.array(C.unit_vector("rod.geometry.axis", self.axis))
+        e = np.array(C.vector("rod.geometry.radial", self.radial, nonzero=True))
+        if np.linalg.norm(np.cross(a, e / np.linalg.norm(e))) < 1e-9:
+            raise ParameterError("rod.geometry.radial", self.radial,
+                                 "a vector not parallel to the axis")
+
+    def _basis(self):
+        a = np.array(self.axis) / np.linalg.norm(self.axis)
+        e1 = _perp(a, np.array(self.radial, dtype=float))
+        e2 = np.cross(a, e1) * (1.0 if self.handedness == "right" else -1.0)
+        return e1, e2, a
+
+    @property
+    def _k(self) -> float:
+        b = self.pitch / (2 * math.pi)
+        return math.hypot(self.coil_radius, b)
+
+    @property
+    def length(self) -> float:
+        return 2 * math.pi * self.turns * self._k
+
+    @property
+    def helix_angle(self) -> float:
+        """Angle of the tangent with the plane normal to the axis (rad)."""
+        return math.atan2(self.pitch, 2 * math.pi * self.coil_radius)
+
+    def _position(self, s):
+        e1, e2, a = self._basis()
+        R, b = self.coil_radius, self.pitch / (2 * math.pi)
+        ph = s / self._k
+        return (R * (np.cos(ph) - 1)[..., None] * e1 + R * np.sin(ph)[..., None] * e2
+                + b * ph[..., None] * a)
+
+    def _frame(self, s):
+        e1, e2, a = self._basis()
+        R, b, k = self.coil_radius, self.pitch / (2 * math.pi), self._k
+        ph = s / k
+        T = (-R * np.sin(ph)[..., None] * e1 + R * np.cos(ph)[..., None] * e2
+             + b * np.ones_like(ph)[..., None] * a) / k
+        N = -np.cos(ph)[..., None] * e1 - np.sin(ph)[..., None] * e2
+        B = np.cross(T, N)
+        return np.stack((N, B, T), axis=-1)
+
+    def to_mapping(self) -> dict[str, Any]:
+        return {"kind": "helix", "coil_radius": self.coil_radius, "pitch": self.pitch,
+                "turns": self.turns, "handedness": self.handedness, "axis": list(self.axis),
+                "radial": list(self.radial), "twist": self.twist, "origin": list(self.origin)}
+
+
+@dataclass(frozen=True)
+class Curve(Geometry):
+    """Any smooth centreline: ``function(s) -> (..., 3)`` positions for arc length ``s``
+    in [0, ``curve_length``] (the caller's parametrisation must be by arc length), frames
+    by parallel transport of ``normal`` (d1 at s = 0) along the tangent."""
+
+    function: Callable[[np.ndarray], np.ndarray] | None = None
+    curve_length: float = 1.0
+    normal: tuple[float, float, float] | None = None
+    samples: int = 4001
+    _table: tuple = field(default=(), repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        C.positive("rod.length", self.curve_length)
+        if not callable(self.function):
+            raise ParameterError("rod.geometry.function", self.function, "a callable s -> r(s)")
+        s = np.linspace(0.0, self.curve_length, int(self.samples))
+        r = np.asarray(self.function(s), dtype=float)
+        if r.shape != (s.size, 3) or not np.all(np.isfinite(r)):
+            raise ParameterError("rod.geometry.function", self.function,
+                                 "a function returning finite (len(s), 3) positions")
+        t = np.gradient(r, s, axis=0, edge_order=2)
+        nt = np.linalg.norm(t, axis=1)
+        if np.any(nt < 1e-9):
+            raise ParameterError("rod.geometry.function", self.function,
+                                 "a regular curve (non-zero tangent)")
+        if np.max(np.abs(nt - 1.0)) > 1e-3:
+            raise ParameterError("rod.geometry.function", self.function,
+                                 f"parametrised by arc length (|r'(s)| = {nt.min():.4g} ... "
+                                 f"{nt.max():.4g}, must be 1)")
+        t /= nt[:, None]
+        n0 = np.array(self.normal, dtype=float) if self.normal is not None else None
+        frames = _transport(t, _perp(t[0], n0))
+        object.__setattr__(self, "_table", (s, r, frames))
+
+    @property
+    def length(self) -> float:
+        return self.curve_length
+
+    def _position(self, s):
+        ss, r, _ = self._table
+        return np.stack([np.interp(s, ss, r[:, k]) for k in range(3)], axis=-1) - r[0]
+
+    def _frame(self, s):
+        ss, _, D = self._table
+        flat = np.atleast_1d(s).ravel()
+        i = np.clip(np.searchsorted(ss, flat), 1, ss.size - 1)
+        lo = np.where(flat - ss[i - 1] <= ss[i] - flat, i - 1, i)
+        F = D[lo]
+        # re-orthonormalise after picking the nearest sample (exact at the samples)
+        return F.reshape(np.shape(s) + (3, 3))
+
+    def to_mapping(self) -> dict[str, Any]:
+        source = getattr(self, "_source", None)
+        if source is None:
+            return {"kind": "curve", "function": repr(self.function),
+                    "length": self.curve_length, "note": "a Python callable (not for TOML)"}
+        return {**source, **({"normal": list(self.normal)} if self.normal is not None
+                             else {}), "twist": self.twist, "origin": list(self.origin)}
+
+
+def _transport(t: np.ndarray, n0: np.ndarray) -> np.ndarray:
+    """Rotation-minimising frames along unit tangents ``t`` (M, 3) from d1 = n0."""
+    frames = np.empty((t.shape[0], 3, 3))
+    d1 = n0 - np.dot(n0, t[0]) * t[0]
+    d1 /= np.linalg.norm(d1)
+    for k in range(t.shape[0]):
+        if k:
+            a, b = t[k - 1], t[k]
+            v = np.cross(a, b)
+            c = float(np.dot(a, b))
+            if np.linalg.norm(v) > 1e-15:      # rotate d1 by the rotation taking a to b
+                vx = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+                Rm = np.eye(3) + vx + vx @ vx / (1 + c)
+                d1 = Rm @ d1
+            d1 = d1 - np.dot(d1, b) * b
+            d1 /= np.linalg.norm(d1)
+        frames[k] = np.column_stack([d1, np.cross(t[k], d1), t[k]])
+    return frames
+
+
+def points_curve(points: np.ndarray, normal=None, path: str = "rod.geometry.points") -> Curve:
+    """A :class:`Curve` through the polyline ``points`` (M, 3): a cubic spline in the chord
+    length, re-parametrised by arc length (so its frames and curvature are smooth)."""
+    from scipy.interpolate import CubicSpline
+
+    P = np.asarray(points, dtype=float)
+    if P.ndim != 2 or P.shape[1] != 3 or P.shape[0] < 2 or not np.all(np.isfinite(P)):
+        raise ParameterError(path, "points", "at least 2 finite [x, y, z] points")
+    chord = np.linalg.norm(np.diff(P, axis=0), axis=1)
+    if np.any(chord <= 0):
+        raise ParameterError(path, "points", "distinct consecutive points")
+    u = np.concatenate([[0.0], np.cumsum(chord)])
+    spl = CubicSpline(u, P, bc_type="natural") if P.shape[0] > 2 else None
+    fine = np.linspace(0.0, u[-1], 20001)
+    if spl is None:
+        r_f = P[0] + np.outer(fine / u[-1], P[1] - P[0])
+        ds = np.full(fine.size - 1, u[-1] / (fine.size - 1))
+    else:
+        r_f = spl(fine)
+        ds = np.linalg.norm(np.diff(r_f, axis=0), axis=1)
+    s_f = np.concatenate([[0.0], np.cumsum(ds)])
+    length = float(s_f[-1])
+
+    def function(s: np.ndarray) -> np.ndarray:
+        uu = np.interp(s, s_f, fine)
+        return (spl(uu) if spl is not None else P[0] + np.outer(uu / u[-1], P[1] - P[0])) - P[0]
+
+    return Curve(function=function, curve_length=length, normal=normal)
+
+
+@dataclass(frozen=True)
+class Discrete:
+    """The discrete reference: nodes (N+1, 3), segment frames (N, 3, 3), clamp frames at
+    s = 0 and s = L (3, 3), segment lengths h (N,) (arc length)."""
+
+    nodes: np.ndarray
+    frames: np.ndarray
+    start_frame: np.ndarray
+    end_frame: np.ndarray
+    h: np.ndarray
+
+
+def discretize(geom: Geometry, n_elements: int) -> Discrete:
+    """Nodes at s_i = i h (h = L/N), segment frames at the midpoints, end frames at 0
+    and L."""
+    N, Lr = int(n_elements), geom.length
+    h = Lr / N
+    s = np.arange(N + 1) * h
+    mid = (np.arange(N) + 0.5) * h
+    return Discrete(nodes=geom.position(s), frames=geom.frame(mid),
+                    start_frame=geom.frame(np.array(0.0)), end_frame=geom.frame(np.array(Lr)),
+                    h=np.full(N, h))
+
+
+KINDS = ("straight", "arc", "helix", "points")
+_KEYS = {
+    "straight": ("kind", "direction", "normal", "twist", "origin"),
+    "arc": ("kind", "radius", "angle", "direction", "toward", "first_director", "twist",
+            "origin"),
+    "helix": ("kind", "coil_radius", "pitch", "turns", "handedness", "axis", "radial", "twist",
+              "origin"),
+    "points": ("kind", "points", "file", "normal", "twist", "origin"),
+}
+
+
+def geometry_from_mapping(m: Mapping[str, Any] | None, length: float | None,
+                          base: Path | None = None) -> Geometry:
+    """A geometry from ``[rod.geometry]`` (``length`` from ``[rod]``: needed for straight,
+    must agree with the arc/helix/points length when given)."""
+    m = dict(m or {"kind": "straight"})
+    path = "rod.geometry"
+    kind = C.choice(f"{path}.kind", m.get("kind", "straight"), KINDS)
+    C.no_unknown_keys(path, m, _KEYS[kind])
+    common: dict[str, Any] = {}
+    if "twist" in m:
+        common["twist"] = C.number(f"{path}.twist", m["twist"])
+    if "origin" in m:
+        common["origin"] = C.vector(f"{path}.origin", m["origin"])
+    vec = {k: C.vector(f"{path}.{k}", m[k]) for k in ("direction", "normal", "toward", "axis",
+                                                       "radial") if k in m}
+    if kind == "straight":
+        if length is None:
+            raise ParameterError("rod.length", None, "a length in m (> 0) for a straight rod")
+        g: Geometry = Straight(rod_length=length, **vec, **common)
+    elif kind == "arc":
+        kw = {k: C.number(f"{path}.{k}", m[k]) for k in ("radius", "angle") if k in m}
+        if "first_director" in m:
+            kw["first_director"] = m["first_director"]
+        g = Arc(**kw, **vec, **common)
+    elif kind == "helix":
+        kw = {k: C.number(f"{path}.{k}", m[k]) for k in ("coil_radius", "pitch", "turns")
+              if k in m}
+        if "handedness" in m:
+            kw["handedness"] = m["handedness"]
+        g = Helix(**kw, **vec, **common)
+    else:
+        if ("points" in m) == ("file" in m):
+            raise ParameterError(f"{path}.points", m.get("points"),
+                                 "either points = [[x, y, z], ...] or file = CSV")
+        pts = m["points"] if "points" in m else _read_points(f"{path}.file", m["file"], base)
+        c = points_curve(np.asarray(pts, dtype=float) if _numeric_rows(pts) else
+                         _bad_points(f"{path}.points", pts), vec.get("normal"))
+        g = Curve(function=c.function, curve_length=c.curve_length, normal=c.normal, **common)
+        object.__setattr__(g, "_source", {"kind": "points", "points": [list(map(float, p))
+                                                                        for p in pts]})
+    if kind != "straight" and length is not None and abs(length - g.length) > 1e-9 * g.length:
+        raise ParameterError("rod.length", length, f"the geometry's length {g.length:.9g} m "
+                             f"(or leave rod.length out for a {kind})")
+    return g
+
+
+def _numeric_rows(pts: Any) -> bool:
+    try:
+        a = np.asarray(pts, dtype=float)
+    except (TypeError, ValueError):
+        return False
+    return a.ndim == 2 and a.shape[1] == 3
+
+
+def _bad_points(path: str, pts: Any):
+    raise ParameterError(path, pts, "at least 2 finite [x, y, z] points")
+
+
+def _read_points(path: str, file: Any, base: Path | None) -> list[list[float]]:
+    name = C.string(path, file)
+    f = Path(name) if Path(name).is_absolute() or base is None else base / name
+    try:
+        text = f.read_text()
+    except OSError as exc:
+        raise ParameterError(path, name, f"a readable CSV file ({exc.strerror})") from None
+    rows = []
+    for row in csv.reader(ln for ln in text.splitlines()
+                          if ln.strip() and not ln.lstrip().startswith("#")):
+        try:
+            rows.append([float(v) for v in row[:3]])
+        except ValueError:
+            continue                                   # a header
+    return rows

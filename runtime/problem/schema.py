@@ -1,0 +1,358 @@
+"""The problem description: one schema for the Python API and for TOML files.
+
+A :class:`Problem` is a frozen tree of dataclasses::
+
+    name, description
+    rod         Rod(geometry, elements)             [rod], [rod.geometry]
+    section     Shape | GivenStiffness              [section]
+    material    KelvinVoigt                         [material]
+    start, end  End(kind, motion)                   [start], [end]
+    loads       tuple[Load, ...]                    [[loads]]
+    simulation  Simulation(t_end, rtol, atol, ...)  [simulation]
+    statics     Statics(load_steps)                 [statics]
+    analysis    Analysis(maxima)                    [analysis]
+
+:meth:`Problem.from_mapping` builds it from a TOML table (every value checked, every
+error naming its key, value and allowed range), :meth:`Problem.to_mapping` writes it back
+(the resolved problem in a results folder), :meth:`Problem.with_overrides` applies
+``{"material.tau": 0.02, "rod.elements": 30}`` (dotted paths, or the short
+:data:`ALIASES` of the command line and of sweeps) through the same checks. The problem
+file reference lists every key: ``kvrod problem keys``.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from runtime.errors import ParameterError
+from runtime.problem import coerce as C
+from runtime.problem.geometry import Curve, Geometry, Straight, geometry_from_mapping
+from runtime.problem.loads import End, Load, end_from_mapping, load_from_mapping
+from runtime.problem.materials import Material, material_from_mapping
+from runtime.problem.sections import GivenStiffness, Section, section_from_mapping
+
+#: guards against runs that cannot finish on one machine
+MAX_ELEMENTS = 200_000          # ~1 GiB of band storage and work arrays
+MAX_SAMPLES = 10_000_000        # output samples t_end / output_step
+MAX_PERIODS = 1e6               # first-mode periods in t_end (~50 steps each)
+#: accepted tolerance ranges: below them the error test works on round-off
+RTOL_MIN = 100 * float(np.finfo(float).eps)
+ATOL_MIN = 1e-20
+#: first root of 1 + cos(x) cosh(x) = 0 (clamped-free Euler-Bernoulli beam)
+BETA1_L = 1.8751040687119611
+
+TOP_KEYS = ("name", "description", "rod", "section", "material", "start", "end", "loads",
+            "simulation", "statics", "analysis")
+
+
+@dataclass(frozen=True)
+class Rod:
+    """The rod's reference geometry and its number of elements."""
+
+    geometry: Geometry = field(default_factory=lambda: Straight(rod_length=0.3))
+    elements: int = 50
+
+    def __post_init__(self) -> None:
+        C.integer("rod.elements", self.elements, low=1, high=MAX_ELEMENTS)
+
+    @property
+    def length(self) -> float:
+        return self.geometry.length
+
+
+@dataclass(frozen=True)
+class Simulation:
+    """The dynamic run: end time (s), tolerances, output sampling (s), BDF settings and
+    the initial state ("static": equilibrium under the loads at t = 0-; "reference": the
+    stress-free reference at rest)."""
+
+    t_end: float = 10.0
+    rtol: float = 1e-6
+    atol: float | None = None
+    output_step: float = 0.005
+    max_order: int = 5
+    min_step: float = 0.0
+    initial: str = "static"
+
+    def __post_init__(self) -> None:
+        C.positive("simulation.t_end", self.t_end)
+        C.number("simulation.rtol", self.rtol, low=RTOL_MIN, high=1.0, high_incl=False)
+        if self.atol is not None:
+            C.number("simulation.atol", self.atol, low=ATOL_MIN, high=1.0, high_incl=False)
+        C.positive("simulation.output_step", self.output_step)
+        if self.t_end / self.output_step > MAX_SAMPLES:
+            raise ParameterError("simulation.output_step", self.output_step,
+                                 f">= t_end/{MAX_SAMPLES:.0e} = {self.t_end / MAX_SAMPLES:.3g} s "
+                                 "(at most 1e7 samples)")
+        C.integer("simulation.max_order", self.max_order, low=1, high=5)
+        C.number("simulation.min_step", self.min_step, low=0.0, high=self.t_end)
+        C.choice("simulation.initial", self.initial, ("static", "reference"))
+
+
+@dataclass(frozen=True)
+class Statics:
+    """Static equilibrium by Newton with ``load_steps`` load increments (continuation)."""
+
+    load_steps: int = 10
+
+    def __post_init__(self) -> None:
+        C.integer("statics.load_steps", self.load_steps, low=1, high=10_000)
+
+
+MAXIMA = tuple(f"{e}.{c}" for e in ("end", "start") for c in "xyz")
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """What to analyse in a run: ``maxima`` of one end coordinate ("end.x", ...; their
+    logarithmic decrements and damping ratios), or None."""
+
+    maxima: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.maxima is not None:
+            C.choice("analysis.maxima", self.maxima, MAXIMA)
+
+
+@dataclass(frozen=True)
+class Problem:
+    """A rod problem (see the module docstring)."""
+
+    name: str = "problem"
+    description: str = ""
+    rod: Rod = field(default_factory=Rod)
+    section: Section = field(default_factory=lambda: section_from_mapping(
+        {"kind": "rectangle", "width": 0.01, "height": 0.01}))
+    material: Material = field(default_factory=lambda: material_from_mapping({}))
+    start: End = field(default_factory=lambda: End("clamped"))
+    end: End = field(default_factory=End)
+    loads: tuple[Load, ...] = ()
+    simulation: Simulation = field(default_factory=Simulation)
+    statics: Statics = field(default_factory=Statics)
+    analysis: Analysis = field(default_factory=Analysis)
+    base: Path | None = field(default=None, compare=False, repr=False)
+
+    def __post_init__(self) -> None:
+        N = self.rod.elements
+        for ld in self.loads:
+            if ld.s is not None and ld.s > self.rod.length * (1 + 1e-12):
+                raise ParameterError("loads.s", ld.s, f"0 ... rod length {self.rod.length:g} m")
+            if isinstance(ld.at, int) and not 0 <= ld.at <= N:
+                raise ParameterError("loads.at", ld.at, f"a node 0 ... {N} (rod.elements)")
+        if self.simulation.initial == "reference" and self.loads and all(
+                ld.kind == "gravity" for ld in self.loads):
+            pass  # a falling rod (pendulum): nothing to check
+        periods = self.simulation.t_end * self.characteristic_frequency() / (2 * math.pi)
+        if periods > MAX_PERIODS:
+            raise ParameterError(
+                "simulation.t_end", self.simulation.t_end,
+                f"at most {MAX_PERIODS:.0e} periods of the rod's first bending mode "
+                f"({MAX_PERIODS * 2 * math.pi / self.characteristic_frequency():.3g} s for "
+                f"this rod: length {self.rod.length:g} m); the run would need more than "
+                f"{50 * periods:.2g} steps")
+
+    # -- derived figures ---------------------------------------------------------------
+    def segment_matrices(self) -> dict[str, np.ndarray]:
+        """Per segment: C_F, C_M, V_F, V_M diagonals (N, 3), rhoA (N,), rhoI (N, 3)."""
+        N = self.rod.elements
+        x = (np.arange(N) + 0.5) / N
+        return self.material.rod_matrices(self.section, x)
+
+    def _uniform_matrices(self) -> dict[str, np.ndarray]:
+        return self.material.rod_matrices(self.section, np.array([0.5]))
+
+    def characteristic_frequency(self) -> float:
+        """Euler-Bernoulli clamped-free first bending frequency (rad/s) of the rod at mid
+        length, with its softer bending stiffness: the time scale of tolerances and
+        guards (an estimate for other ends and shapes)."""
+        m = self._uniform_matrices()
+        EI = float(min(m["C_M"][0, 0], m["C_M"][0, 1]))
+        rhoA = float(m["rhoA"][0])
+        return BETA1_L**2 * math.sqrt(EI / (rhoA * self.rod.length**4))
+
+    def linear_prediction(self) -> dict[str, float] | None:
+        """For a straight, uniform, clamped-free rod whose end maxima are analysed: the
+        Euler-Bernoulli first mode in the direction of the maxima and the Kelvin-Voigt
+        damping ratio omega_1 tau/2 (tau = tau_E, or tau~_E on the naive route); else
+        None."""
+        if not (isinstance(self.rod.geometry, Straight) and self.start.kind == "clamped"
+                and self.start.motion is None and self.end.kind == "free"
+                and self.analysis.maxima and self.analysis.maxima.startswith("end")
+                and not getattr(self.section, "tapered", False)):
+            return None
+        m = self._uniform_matrices()
+        basis = self.rod.geometry._basis()
+        e = np.eye(3)["xyz".index(self.analysis.maxima[-1])]
+        # a displacement along d1 bends about d2 (E I2), along d2 about d1 (E I1)
+        along_d1 = abs(float(e @ basis[:, 0])) >= abs(float(e @ basis[:, 1]))
+        EI = float(m["C_M"][0, 1] if along_d1 else m["C_M"][0, 0])
+        tau = float(m["V_M"][0, 1] / m["C_M"][0, 1] if along_d1 else
+                    m["V_M"][0, 0] / m["C_M"][0, 0])
+        omega = BETA1_L**2 * math.sqrt(EI / (float(m["rhoA"][0]) * self.rod.length**4))
+        zeta = omega * tau / 2.0
+        return {"omega_1": omega, "period_1": 2 * math.pi / omega, "tau": tau, "zeta_1": zeta,
+                "log_decrement_1": 2 * math.pi * zeta / math.sqrt(1 - zeta**2)
+                if zeta < 1 else math.inf}
+
+    # -- mappings ------------------------------------------------------------------------
+    def to_mapping(self) -> dict[str, Any]:
+        """The resolved problem as a TOML-ready table (numbers, strings, lists)."""
+        g = self.rod.geometry
+        rod: dict[str, Any] = {"elements": self.rod.elements, "geometry": g.to_mapping()}
+        if isinstance(g, Straight):
+            rod["length"] = g.rod_length
+        return {"name": self.name, "description": self.description, "rod": rod,
+                "section": self.section.to_mapping(), "material": self.material.to_mapping(),
+                "start": self.start.to_mapping(), "end": self.end.to_mapping(),
+                "loads": [ld.to_mapping() for ld in self.loads],
+                "simulation": {k: v for k, v in vars(self.simulation).items()
+                               if v is not None},
+                "statics": dict(vars(self.statics)),
+                "analysis": {k: v for k, v in vars(self.analysis).items() if v is not None}}
+
+    @classmethod
+    def from_mapping(cls, m: Mapping[str, Any], base: Path | None = None,
+                     name: str = "problem") -> Problem:
+        """Build and check a problem from a TOML table (see the module docstring)."""
+        m = C.table("", m)
+        C.no_unknown_keys("", m, TOP_KEYS)
+        rod_m = dict(C.table("rod", m.get("rod", {})))
+        C.no_unknown_keys("rod", rod_m, ("length", "elements", "geometry"))
+        length = C.positive("rod.length", rod_m["length"]) if "length" in rod_m else None
+        geometry = geometry_from_mapping(rod_m.get("geometry"), length, base)
+        rod = Rod(geometry, C.integer("rod.elements", rod_m.get("elements", 50), low=1,
+                                      high=MAX_ELEMENTS))
+        loads_m = m.get("loads", [])
+        if not isinstance(loads_m, list):
+            raise ParameterError("loads", loads_m, "an array of tables [[loads]]")
+        loads = tuple(load_from_mapping(f"loads[{i}]", ld, base)
+                      for i, ld in enumerate(loads_m))
+        return cls(
+            name=C.string("name", m.get("name", name)),
+            description=str(m.get("description", "")),
+            rod=rod,
+            section=section_from_mapping(m.get("section")),
+            material=material_from_mapping(m.get("material")),
+            start=end_from_mapping("start", m.get("start", "clamped"), base),
+            end=end_from_mapping("end", m.get("end", "free"), base),
+            loads=loads,
+            simulation=_settings(Simulation, "simulation", m.get("simulation")),
+            statics=_settings(Statics, "statics", m.get("statics")),
+            analysis=_settings(Analysis, "analysis", m.get("analysis")),
+            base=base,
+        )
+
+    def with_overrides(self, overrides: Mapping[str, Any]) -> Problem:
+        """A new problem with dotted-path values replaced (aliases allowed), all checked."""
+        if not overrides:
+            return self
+        if isinstance(self.rod.geometry, Curve) and getattr(self.rod.geometry, "_source",
+                                                           None) is None:
+            raise ParameterError("rod.geometry", "curve", "a TOML-expressible geometry for "
+                                 "overrides (a Python callable)")
+        m = copy.deepcopy(self.to_mapping())
+        for key, value in overrides.items():
+            apply_override(m, key, value)
+        return Problem.from_mapping(m, base=self.base, name=self.name)
+
+
+def _settings(cls, path: str, m: Any):
+    m = dict(C.table(path, m if m is not None else {}))
+    names = tuple(cls.__dataclass_fields__)
+    C.no_unknown_keys(path, m, names)
+    return cls(**m)
+
+
+#: short names of the command line and of sweeps -> dotted paths
+ALIASES: dict[str, str] = {
+    "tau": "material.tau", "tau_S": "material.tau_S", "tau_B": "material.tau_B",
+    "youngs_modulus": "material.youngs_modulus", "E": "material.youngs_modulus",
+    "poisson_ratio": "material.poisson_ratio", "nu": "material.poisson_ratio",
+    "density": "material.density", "damping": "material.damping",
+    "n_elements": "rod.elements", "elements": "rod.elements", "length": "rod.length",
+    "width": "section.width", "height": "section.height", "radius": "section.radius",
+    "t_end": "simulation.t_end", "rtol": "simulation.rtol", "atol": "simulation.atol",
+    "output_step": "simulation.output_step", "max_order": "simulation.max_order",
+    "min_step": "simulation.min_step", "load_steps": "statics.load_steps",
+    "shear_correction": "section.shear_correction",
+    "tip_force": "tip_force",
+}
+
+
+def resolve_alias(key: str) -> str:
+    """The dotted path of a key or alias (unknown single words are errors)."""
+    if key in ALIASES:
+        return ALIASES[key]
+    if "." in key:
+        return key
+    raise ParameterError(key, None, "a dotted path (e.g. material.tau) or one of: "
+                         + ", ".join(sorted(ALIASES)))
+
+
+def apply_override(m: dict[str, Any], key: str, value: Any) -> None:
+    """Set ``key`` (dotted path or alias) in the problem mapping ``m`` in place."""
+    path = resolve_alias(key)
+    if path == "tip_force":
+        _set_tip_force(m, value)
+        return
+    parts = path.split(".")
+    if parts[0] == "material" and len(parts) == 2:  # one way of giving the viscosity
+        mat = m.setdefault("material", {})
+        if parts[1] == "tau":
+            for k in ("tau_S", "tau_B", "eta", "zeta"):
+                mat.pop(k, None)
+        elif parts[1] in ("tau_S", "tau_B"):
+            if "tau" in mat:
+                t = mat.pop("tau")
+                mat.setdefault("tau_S", t)
+                mat.setdefault("tau_B", t)
+            mat.pop("eta", None)
+            mat.pop("zeta", None)
+    node: Any = m
+    for i, part in enumerate(parts[:-1]):
+        if isinstance(node, list):
+            try:
+                node = node[int(part)]
+            except (ValueError, IndexError):
+                raise ParameterError(".".join(parts[:i + 1]), part,
+                                     f"an index 0 ... {len(node) - 1}") from None
+        else:
+            if part not in node or not isinstance(node[part], (dict, list)):
+                node[part] = {}
+            node = node[part]
+    last = parts[-1]
+    if isinstance(node, list):
+        try:
+            node[int(last)] = value
+        except (ValueError, IndexError):
+            raise ParameterError(path, last, f"an index 0 ... {len(node) - 1}") from None
+    else:
+        node[last] = value
+
+
+def _set_tip_force(m: dict[str, Any], value: Any) -> None:
+    """tip_force F: the first point force at the s = L end gets magnitude |F| along its
+    direction (the sign of F flips it)."""
+    F = C.number("tip_force", value)
+    for ld in m.get("loads", []):
+        if ld.get("kind", "force") == "force" and ld.get("at", "end") == "end" and "s" not in ld:
+            v = np.array(ld.get("vector", [0.0, 0.0, 0.0]), dtype=float)
+            nv = float(np.linalg.norm(v))
+            if nv == 0:
+                raise ParameterError("tip_force", value, "a problem whose end force has a "
+                                     "direction (its vector is zero)")
+            ld["vector"] = list(F * v / nv)
+            return
+    raise ParameterError("tip_force", value, "a problem with a point force at the end "
+                         "(use --set loads.K.vector=... otherwise)")
+
+
+def is_given_stiffness(p: Problem) -> bool:
+    return isinstance(p.section, GivenStiffness)

@@ -1,0 +1,193 @@
+"""Time functions that scale loads and prescribed motions (dimensionless, of t in s).
+
+Kinds (TOML ``time = {kind = "...", ...}``; a missing ``time`` is ``constant``):
+
+* ``constant``: ``value`` (default 1);
+* ``ramp``: 0 before ``start``, linear to 1 over ``duration``, then 1;
+* ``smooth_ramp``: the same with a cosine profile (continuous rate: for prescribed motion);
+* ``step``: 0 before ``start``, 1 from ``start`` on;
+* ``release``: 1 before ``start``, 0 from ``start`` on (a load held until it is let go:
+  statics at ``t = 0-`` sees it, the motion after ``start`` does not);
+* ``harmonic``: ``offset + amplitude sin(2 pi frequency t + phase)`` (frequency in Hz,
+  phase in rad);
+* ``table``: piecewise linear through ``points = [[t, value], ...]`` (or a CSV ``file``
+  with columns t, value), held constant outside.
+
+``value(t, left=True)`` is the limit from the left (the value statics at ``t`` uses).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from runtime.errors import ParameterError
+from runtime.problem import coerce as C
+
+KINDS = ("constant", "ramp", "smooth_ramp", "step", "release", "harmonic", "table")
+_KEYS = {"constant": ("value",), "ramp": ("start", "duration"),
+         "smooth_ramp": ("start", "duration"), "step": ("start",), "release": ("start",),
+         "harmonic": ("amplitude", "frequency", "phase", "offset"),
+         "table": ("points", "file")}
+
+
+@dataclass(frozen=True)
+class TimeFunction:
+    """A dimensionless function of time (see the module docstring for the kinds)."""
+
+    kind: str = "constant"
+    value: float = 1.0
+    start: float = 0.0
+    duration: float = 0.0
+    amplitude: float = 1.0
+    frequency: float = 0.0
+    phase: float = 0.0
+    offset: float = 0.0
+    points: tuple[tuple[float, float], ...] = ()
+
+    def __post_init__(self) -> None:
+        C.choice("time.kind", self.kind, KINDS)
+        if self.kind in ("ramp", "smooth_ramp"):
+            C.positive("time.duration", self.duration)
+        if self.kind == "harmonic":
+            C.nonnegative("time.frequency", self.frequency)
+        if self.kind == "table":
+            if len(self.points) < 2:
+                raise ParameterError("time.points", self.points, "at least 2 [t, value] pairs")
+            ts = [p[0] for p in self.points]
+            if any(b <= a for a, b in zip(ts, ts[1:], strict=False)):
+                raise ParameterError("time.points", ts, "strictly increasing times")
+
+    @property
+    def is_constant(self) -> bool:
+        return self.kind == "constant"
+
+    def value_at(self, t: float, left: bool = False) -> float:
+        """f(t); ``left``: the limit from the left at a jump (``step``, ``release``)."""
+        k = self.kind
+        if k == "constant":
+            return self.value
+        if k in ("step", "release"):
+            on = t > self.start if left else t >= self.start
+            return float(on) if k == "step" else float(not on)
+        if k in ("ramp", "smooth_ramp"):
+            x = min(max((t - self.start) / self.duration, 0.0), 1.0)
+            return x if k == "ramp" else 0.5 * (1.0 - math.cos(math.pi * x))
+        if k == "harmonic":
+            w = 2 * math.pi * self.frequency
+            return self.offset + self.amplitude * math.sin(w * t + self.phase)
+        ts, vs = zip(*self.points, strict=True)
+        return float(np.interp(t, ts, vs))
+
+    def rate_at(self, t: float) -> float:
+        """df/dt (1/s); 0 at the jumps of ``step``/``release`` (they are not for motion)."""
+        k = self.kind
+        if k in ("constant", "step", "release"):
+            return 0.0
+        if k in ("ramp", "smooth_ramp"):
+            x = (t - self.start) / self.duration
+            if not 0.0 < x < 1.0:
+                return 0.0
+            return (1.0 / self.duration if k == "ramp"
+                    else 0.5 * math.pi / self.duration * math.sin(math.pi * x))
+        if k == "harmonic":
+            w = 2 * math.pi * self.frequency
+            return self.amplitude * w * math.cos(w * t + self.phase)
+        ts = np.array([p[0] for p in self.points])
+        vs = np.array([p[1] for p in self.points])
+        i = int(np.searchsorted(ts, t, side="right")) - 1
+        if i < 0 or i >= ts.size - 1:
+            return 0.0
+        return float((vs[i + 1] - vs[i]) / (ts[i + 1] - ts[i]))
+
+    def peak(self, t_end: float) -> float:
+        """max |f| over [0, t_end] (for scales: tolerances, checks)."""
+        k = self.kind
+        if k == "constant":
+            return abs(self.value)
+        if k in ("ramp", "smooth_ramp", "step", "release"):
+            return 1.0
+        if k == "harmonic":
+            return abs(self.offset) + abs(self.amplitude)
+        return max(abs(p[1]) for p in self.points)
+
+    @property
+    def continuous(self) -> bool:
+        """False for the jumps of ``step`` and ``release`` (not allowed for positions)."""
+        return self.kind not in ("step", "release")
+
+    def to_mapping(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"kind": self.kind}
+        for key in _KEYS[self.kind]:
+            if key == "file":
+                continue
+            v = getattr(self, key)
+            out[key] = [list(p) for p in v] if key == "points" else v
+        return out
+
+    @classmethod
+    def from_mapping(cls, m: Any, path: str = "time", base: Path | None = None
+                     ) -> TimeFunction:
+        """From a TOML table (``{kind = "ramp", start = 0, duration = 1}``) or a number
+        (a constant)."""
+        if m is None:
+            return cls()
+        if not isinstance(m, Mapping):
+            return cls(value=C.number(path, m))
+        kind = C.choice(f"{path}.kind", m.get("kind", "constant"), KINDS)
+        C.no_unknown_keys(path, m, ("kind", *_KEYS[kind]))
+        kw: dict[str, Any] = {"kind": kind}
+        for key in _KEYS[kind]:
+            if key not in m:
+                continue
+            if key == "points":
+                kw["points"] = _points(f"{path}.points", m[key])
+            elif key == "file":
+                kw["points"] = read_table_csv(f"{path}.file", m[key], base)
+            else:
+                kw[key] = C.number(f"{path}.{key}", m[key])
+        if kind == "table" and "points" not in kw:
+            raise ParameterError(f"{path}.points", None, "[[t, value], ...] or file = CSV")
+        try:
+            return cls(**kw)
+        except ParameterError as exc:
+            raise ParameterError(exc.name.replace("time", path, 1), exc.value,
+                                 exc.allowed) from None
+
+
+def _points(path: str, value: Any) -> tuple[tuple[float, float], ...]:
+    if isinstance(value, (str, bytes, Mapping)) or not hasattr(value, "__len__"):
+        raise ParameterError(path, value, "[[t, value], ...]")
+    return tuple(C.vector(f"{path}[{i}]", p, 2) for i, p in enumerate(value))
+
+
+def read_table_csv(path: str, file: Any, base: Path | None = None
+                   ) -> tuple[tuple[float, float], ...]:
+    """(t, value) rows of a CSV file (header optional; '#' comments)."""
+    name = C.string(path, file)
+    f = Path(name)
+    if not f.is_absolute() and base is not None:
+        f = base / f
+    try:
+        text = f.read_text()
+    except OSError as exc:
+        raise ParameterError(path, name, f"a readable CSV file ({exc.strerror})") from None
+    rows = []
+    for i, row in enumerate(csv.reader(line for line in text.splitlines()
+                                       if line.strip() and not line.lstrip().startswith("#"))):
+        try:
+            rows.append((float(row[0]), float(row[1])))
+        except (ValueError, IndexError):
+            if i == 0:
+                continue          # a header line
+            raise ParameterError(path, name, f"two numeric columns t, value (row {i + 1})"
+                                 ) from None
+    if len(rows) < 2 or not all(math.isfinite(a) and math.isfinite(b) for a, b in rows):
+        raise ParameterError(path, name, "at least 2 finite rows t, value")
+    return tuple(rows)
