@@ -13,17 +13,21 @@ TEMPLATE_DIR = Path(__file__).parent / "templates"
 TAUS = (0.02, 0.04, 0.08)
 
 
-def _reissner_reference(sc) -> dict | None:
-    """Independent static reference (the references package, SciPy shooting)."""
-    from generated.constitutive import rectangle_section, shear_modulus
+def _reissner_reference(problem) -> dict | None:
+    """Independent static reference: the references package (SciPy shooting, section
+    constants from its own formulas, not kvrod's generated ones)."""
+    from references import sections
     from references.reissner import elastica_tip, solve_reissner
 
-    sec = rectangle_section(sc.width, sc.height, sc.poisson_ratio)
-    EI = sc.youngs_modulus * sec["I2"]         # bending about a^(2) (tip force along e1)
-    r = solve_reissner(sc.tip_force, L=sc.length, EA=sc.youngs_modulus * sec["A"],
-                       GA=shear_modulus(sc.youngs_modulus, sc.poisson_ratio) * sec["A"]
-                       * sec["kappa_1"], EI=EI)
-    e = elastica_tip(sc.tip_force, EI, sc.length)
+    d = dict(problem.section.dims)
+    m = problem.material
+    E, nu = m.youngs_modulus, m.poisson_ratio
+    sec = sections.rectangle(d["width"], d["height"], nu)
+    F = float(np.linalg.norm(problem.loads[0].vector))
+    EI = E * sec.I2                            # bending about a^(2) (tip force along e1)
+    r = solve_reissner(F, L=problem.rod.length, EA=E * sec.A,
+                       GA=E / (2 * (1 + nu)) * sec.A * sec.kappa_1, EI=EI)
+    e = elastica_tip(F, EI, problem.rod.length)
     return {"reissner": [float(r.tip[0]), float(r.tip[1])],
             "elastica": [float(e.x), float(e.z)]}
 

@@ -99,6 +99,12 @@ def _check_problem(problem: object) -> None:
         raise StudyError(str(exc)) from None
 
 
+#: integer parameters (their values stay integers; every other number is a float, so
+#: 1e6 and 1000000 give the same point)
+INTEGER_PARAMETERS = ("n_elements", "elements", "rod.elements", "max_order",
+                      "simulation.max_order", "load_steps", "statics.load_steps")
+
+
 def _coerce(name: str, value: Any, where: str) -> Any:
     """Canonical Python value of a parameter (so 1e6 and 1000000 give the same point id)."""
     from runtime.problem.schema import ALIASES
@@ -109,13 +115,13 @@ def _coerce(name: str, value: Any, where: str) -> Any:
                          "file (e.g. material.tau)")
     if isinstance(value, bool) or isinstance(value, str):
         return value
+    integer = name in INTEGER_PARAMETERS
     if isinstance(value, int):
-        return value
+        return value if integer else float(value)
     if isinstance(value, float):
         if not math.isfinite(value):
             raise StudyError(f"{where}: {name} = {value!r} is not a finite number")
-        return int(value) if name in ("n_elements", "elements", "rod.elements", "max_order",
-                                      "load_steps") and value.is_integer() else value
+        return int(value) if integer and value.is_integer() else value
     if isinstance(value, list):
         return [_coerce(name, v, where) for v in value]
     raise StudyError(f"{where}: {name} = {value!r} has the wrong type (a number, string, "

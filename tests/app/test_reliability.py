@@ -11,7 +11,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from runtime.scenarios import CantileverScenario, run_cantilever
+from runtime.problem.registry import load_problem
+from runtime.simulate.simulate import simulate
+
+
+def CantileverScenario(**kw):  # noqa: N802 - the built-in cantilever with aliases
+    return load_problem("cantilever", kw)
+
+
+def run_cantilever(problem, **kw):
+    return simulate(problem, **kw)
 
 KVROD = [sys.executable, "-m", "kvrod"]
 
@@ -34,10 +43,10 @@ def test_impossible_run_fails_with_a_clear_message_and_keeps_results(tmp_path):
 
 
 def test_non_finite_values_stop_at_once():
-    from runtime.model.rod import RodModel, RodParameters
     from runtime.solvers.bdf import BDF, IntegrationError
+    from tests.rods import rod_model
 
-    model = RodModel(RodParameters(0.3, 4, 1000.0, 1e6, 0.3, 0.04, 0.04, 0.01, 0.01))
+    model = rod_model(4)
     y = model.initial_state()
     y[-1] = np.nan
     with pytest.raises((IntegrationError, ValueError), match="non-finite|NaN|nan|finite"):
@@ -137,10 +146,12 @@ def test_config_file_resolved_into_summary(tmp_path):
                                 "--out", str(tmp_path / "o")], capture_output=True, text=True,
                        timeout=120)
     assert r.returncode == 0, r.stderr
-    p = json.loads((tmp_path / "o" / "summary.json").read_text())["parameters"]
-    assert p["tau_S"] == p["tau_B"] == 0.08 and p["n_elements"] == 6
-    assert p["t_end"] == 0.4                       # the command line overrides the file
-    assert p["tau_E"] == pytest.approx(0.08)
+    s = json.loads((tmp_path / "o" / "summary.json").read_text())
+    p = s["parameters"]
+    assert p["material"]["tau_S"] == p["material"]["tau_B"] == 0.08
+    assert p["rod"]["elements"] == 6
+    assert p["simulation"]["t_end"] == 0.4         # the command line overrides the file
+    assert s["tau_E"] == pytest.approx(0.08)
 
 
 def test_results_never_half_written(tmp_path):

@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 
 from derive import formulas
 from derive.formulas import in_material_parameters
-from derive.symbols import I3, A, E, I1, I2, eta, kappa_1, kappa_2, kappa_3, nu, tau_B, tau_S, zeta
+from derive.symbols import I1, I2, I3, A, E, eta, kappa_1, kappa_2, kappa_3, nu, tau_B, tau_S, zeta
 from generated import constitutive as gc
 
 f = formulas()

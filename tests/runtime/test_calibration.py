@@ -11,7 +11,8 @@ from kvrod import cli_beyond
 from kvrod.cli import CliError, _Parser
 from runtime.analysis import calibration as cal
 from runtime.analysis.decay import damping_ratios
-from runtime.scenarios import CantileverScenario, run_cantilever
+from runtime.problem.registry import load_problem
+from runtime.simulate.simulate import simulate
 
 
 def parse(argv):
@@ -25,8 +26,9 @@ def parse(argv):
 def synthetic_signal():
     """Tip x after release, tau = 0.05 s (N = 16, as the calibration model), 1 mm noise."""
     tau = 0.05
-    sc = CantileverScenario.with_tau(tau, n_elements=16, t_end=4.0, output_step=0.01)
-    run = run_cantilever(sc)
+    sc = load_problem("cantilever", {"tau": tau, "n_elements": 16, "t_end": 4.0,
+                                     "output_step": 0.01})
+    run = simulate(sc)
     assert run.status == "finished"
     rng = np.random.default_rng(7)
     return tau, run.t, run.tip[0] + 1e-3 * rng.standard_normal(run.t.size)
@@ -48,10 +50,11 @@ def test_signal_fit_recovers_tau(synthetic_signal, tmp_path):
 
 def test_decrement_fit_recovers_tau():
     tau = 0.03
-    model = cal.decrement_model(CantileverScenario(n_elements=8))
+    problem = load_problem("cantilever", {"n_elements": 8})
+    model = cal.decrement_model(problem)
     rng = np.random.default_rng(3)
     d = model(tau) + 0.01 * rng.standard_normal(8)
-    res = cal.calibrate_decrements(d, scenario=CantileverScenario(n_elements=8))
+    res = cal.calibrate_decrements(d, problem=problem)
     assert res.ci95[0] < tau < res.ci95[1]
     assert res.tau == pytest.approx(tau, rel=0.05)
     # proportional damping: the modal decrement is linear in zeta = omega_1 tau / 2
@@ -120,7 +123,7 @@ def _write(tmp_path, text: str):
 
 # ----------------------------------------------------------------------------- CLI
 def test_cli_calibrate_decrements(tmp_path, capsys):
-    model = cal.decrement_model(CantileverScenario(n_elements=8))
+    model = cal.decrement_model(load_problem("cantilever", {"n_elements": 8}))
     data = tmp_path / "delta.csv"
     data.write_text("delta\n" + "\n".join(f"{model(0.04) * (1 + e):.6f}"
                                           for e in (0.01, -0.01, 0.005, -0.004)))
@@ -160,7 +163,9 @@ def test_cli_modes(tmp_path, capsys):
 
 
 def test_cli_modes_errors():
-    with pytest.raises(CliError, match="unknown scenario"):
+    from runtime.problem.registry import ProblemFileError
+
+    with pytest.raises(ProblemFileError, match="unknown problem"):
         a = parse(["modes", "beam"])
         a.func(a)
     with pytest.raises(CliError, match="count"):

@@ -14,9 +14,20 @@ from references import sections
 from references.beams import kelvin_voigt_damping_ratio, timoshenko_frequencies
 from references.reissner import solve_reissner
 from runtime.io.results import write_run
-from runtime.scenarios import CantileverScenario, run_cantilever
+from runtime.problem.registry import load_problem
+from runtime.simulate.simulate import simulate
 
-PAPER = CantileverScenario()
+
+def cantilever(**overrides):
+    """The paper's cantilever (examples/cantilever.toml) with overrides (aliases)."""
+    return load_problem("cantilever", overrides)
+
+
+def run_cantilever(problem, **kw):
+    return simulate(problem, **kw)
+
+
+PAPER = cantilever()
 
 
 def rectangle_section(width: float, height: float, nu: float) -> dict[str, float]:
@@ -28,11 +39,13 @@ def shear_modulus(E: float, nu: float) -> float:
     return E / (2 * (1 + nu))
 
 
-def reissner_tip(sc: CantileverScenario) -> tuple[float, float]:
-    sec = rectangle_section(sc.width, sc.height, sc.poisson_ratio)
-    r = solve_reissner(sc.tip_force, L=sc.length, EA=sc.youngs_modulus * sec["A"],
-                       GA=shear_modulus(sc.youngs_modulus, sc.poisson_ratio) * sec["A"]
-                       * sec["kappa_1"], EI=sc.youngs_modulus * sec["I2"])
+def reissner_tip(sc) -> tuple[float, float]:
+    d, m = dict(sc.section.dims), sc.material
+    sec = rectangle_section(d["width"], d["height"], m.poisson_ratio)
+    F = float(np.linalg.norm(sc.loads[0].vector))
+    r = solve_reissner(F, L=sc.rod.length, EA=m.youngs_modulus * sec["A"],
+                       GA=shear_modulus(m.youngs_modulus, m.poisson_ratio) * sec["A"]
+                       * sec["kappa_1"], EI=m.youngs_modulus * sec["I2"])
     return r.tip
 
 
@@ -41,24 +54,24 @@ def paper_run():
     # maxima at 0, T, 2T. rtol = 1e-7: the energy audit is the integrator's global error,
     # below 1e-5 from rtol = 1e-7 on (at 1e-6 it is 1.9e-5 here; SUNDIALS IDAS on the same
     # residual misses 1e-5 at 1e-6 as well: `kvrod bench --only energy_audit`)
-    return run_cantilever(CantileverScenario(n_elements=25, t_end=4.0, rtol=1e-7))
+    return run_cantilever(cantilever(n_elements=25, t_end=4.0, rtol=1e-7))
 
 
 def test_static_tip_against_reissner_shooting():
-    sc = CantileverScenario(n_elements=100, t_end=0.01)
+    sc = cantilever(n_elements=100, t_end=0.01)
     run = run_cantilever(sc)
     rx, rz = reissner_tip(sc)
     assert abs(run.static_tip[0] - rx) / rx < 1e-3
     assert abs(run.static_tip[2] - rz) / rz < 1e-3
     assert abs(run.static_tip[1]) < 1e-12
-    assert 0 < run.static_iterations < 120
+    assert 0 < run.static.iterations < 120
 
 
 def test_static_tip_converges_at_second_order():
     errs = []
     rx, _ = reissner_tip(PAPER)
     for N in (8, 16, 32):
-        run = run_cantilever(CantileverScenario(n_elements=N, t_end=0.001))
+        run = run_cantilever(cantilever(n_elements=N, t_end=0.001))
         errs.append(abs(run.static_tip[0] - rx))
     orders = np.log2(np.array(errs[:-1]) / np.array(errs[1:]))
     assert np.all(orders > 1.7), orders
@@ -66,17 +79,18 @@ def test_static_tip_converges_at_second_order():
 
 @pytest.fixture(scope="module")
 def small_amplitude():
-    sc = CantileverScenario(n_elements=50, tip_force=5e-5, t_end=5.5, rtol=1e-8)
+    sc = cantilever(n_elements=50, tip_force=5e-5, t_end=5.5, rtol=1e-8)
     return sc, run_cantilever(sc)
 
 
 def test_small_amplitude_period_and_damping_ratio(small_amplitude):
     sc, run = small_amplitude
-    sec = rectangle_section(sc.width, sc.height, sc.poisson_ratio)
-    kGA = shear_modulus(sc.youngs_modulus, sc.poisson_ratio) * sec["A"] * sec["kappa_1"]
-    omega = timoshenko_frequencies(1, E=sc.youngs_modulus, rho=sc.density, A=sec["A"],
-                                   I=sec["I2"], kGA=kGA, L=sc.length)[0]
-    zeta = kelvin_voigt_damping_ratio(omega, sc.tau_E)
+    d, m = dict(sc.section.dims), sc.material
+    sec = rectangle_section(d["width"], d["height"], m.poisson_ratio)
+    kGA = shear_modulus(m.youngs_modulus, m.poisson_ratio) * sec["A"] * sec["kappa_1"]
+    omega = timoshenko_frequencies(1, E=m.youngs_modulus, rho=m.density, A=sec["A"],
+                                   I=sec["I2"], kGA=kGA, L=sc.rod.length)[0]
+    zeta = kelvin_voigt_damping_ratio(omega, m.tau_E)
     T_damped = 2 * math.pi / (omega * math.sqrt(1 - zeta**2))
     s = run.summary()
     assert run.status == "finished"
@@ -101,20 +115,19 @@ def test_energy_audit(paper_run):
 
 def test_time_step_convergence():
     """Tip at t = 1 s against a tight run: the error falls with rtol."""
-    ref = run_cantilever(CantileverScenario(n_elements=10, t_end=1.0, rtol=1e-10))
+    ref = run_cantilever(cantilever(n_elements=10, t_end=1.0, rtol=1e-10))
     errs = []
     for rtol in (1e-4, 1e-6):
-        r = run_cantilever(CantileverScenario(n_elements=10, t_end=1.0, rtol=rtol))
+        r = run_cantilever(cantilever(n_elements=10, t_end=1.0, rtol=rtol))
         errs.append(np.max(np.abs(r.tip[0] - ref.tip[0])))
     assert errs[1] < errs[0] / 10 and errs[1] < 1e-5
 
 
 def test_stiffness_time_scaling_is_exact():
     """E -> 4E, tau -> tau/2, F -> 4F: the same motion on a time axis halved."""
-    a = run_cantilever(CantileverScenario(n_elements=10, t_end=2.0, rtol=1e-9))
-    b = run_cantilever(CantileverScenario(n_elements=10, t_end=1.0, rtol=1e-9,
-                                          youngs_modulus=4e6, tau_S=0.02, tau_B=0.02,
-                                          tip_force=0.2))
+    a = run_cantilever(cantilever(n_elements=10, t_end=2.0, rtol=1e-9))
+    b = run_cantilever(cantilever(n_elements=10, t_end=1.0, rtol=1e-9,
+                                  youngs_modulus=4e6, tau=0.02, tip_force=0.2))
     n = b.t.size
     assert np.allclose(a.t[: 2 * n - 1 : 2], 2 * b.t)            # matching output instants
     assert np.max(np.abs(a.tip[0][: 2 * n - 1 : 2] - b.tip[0])) < 1e-6
@@ -122,7 +135,7 @@ def test_stiffness_time_scaling_is_exact():
 
 
 def test_summary_keys_and_failed_run_keeps_results(tmp_path):
-    sc = CantileverScenario(n_elements=6, t_end=0.5)
+    sc = cantilever(n_elements=6, t_end=0.5)
     run = run_cantilever(sc, max_steps=60)      # stops early: a failed run
     assert run.status == "failed" and "max_steps" in run.message
     s = write_run(tmp_path, run)
@@ -138,25 +151,26 @@ def test_summary_keys_and_failed_run_keeps_results(tmp_path):
 
 @pytest.mark.parametrize(("kw", "match"), [
     ({"t_end": 0.0}, "t_end. = 0.0"), ({"t_end": -1.0}, "t_end"), ({"rtol": 0.0}, "rtol"),
-    ({"rtol": float("nan")}, "rtol"), ({"n_elements": 0}, "n_elements"),
+    ({"rtol": float("nan")}, "rtol"), ({"n_elements": 0}, "elements"),
     ({"youngs_modulus": -1.0}, "youngs_modulus|E"), ({"poisson_ratio": 0.7}, "nu|poisson"),
     ({"tau_S": -0.1}, "tau_S"), ({"damping": "magic"}, "damping"),
     ({"tip_force": float("inf")}, "tip_force"), ({"load_steps": 0}, "load_steps"),
 ])
-def test_bad_scenario_parameters(kw, match):
+def test_bad_problem_parameters(kw, match):
     with pytest.raises((ParameterError, ValueError), match=match):
-        CantileverScenario(**kw)
+        cantilever(**kw)
 
 
 def test_linear_prediction_uses_the_bending_axis_of_the_tip_force():
     """Rectangular (not square) section: the e1 tip motion is bending about a^(2), E I2.
     Checked against the modal analysis of the discrete rod (undamped, straight)."""
-    from runtime.analysis.modal import modal_analysis
+    from dataclasses import replace
 
-    sc = CantileverScenario(width=0.02, height=0.01, tau_S=0.0, tau_B=0.0, n_elements=40)
-    model = run_cantilever(CantileverScenario(width=0.02, height=0.01, tau_S=0.0, tau_B=0.0,
-                                              n_elements=40, t_end=1e-3)).model
-    model.load_scale = 0.0
+    from runtime.analysis.modal import modal_analysis
+    from runtime.problem.assemble import build_model
+
+    sc = cantilever(width=0.02, height=0.01, tau=0.0, n_elements=40)
+    model = build_model(replace(sc, loads=()))
     modes = modal_analysis(model, count=6)
     along_e1 = [m for m in modes
                 if np.abs(m.displacement[0]).max() > 10 * np.abs(m.displacement[1]).max()]
@@ -170,12 +184,12 @@ def test_time_step_order_of_fixed_step_bdf2_on_the_rod():
     from runtime.solvers.bdf import BDF
     from runtime.solvers.integrator import consistent_initial
 
-    base = run_cantilever(CantileverScenario(n_elements=8, t_end=1e-3))
+    base = run_cantilever(cantilever(n_elements=8, t_end=1e-3))
     model = base.model
-    model.load_scale = 0.0
+    model.at(0.0)                       # the tip load is released from t = 0 on
     y0, yp0 = consistent_initial(model, 0.0, base.y_static, np.zeros(model.n))
     T = 0.4
-    i_tip = model.n - 13 + 7           # phi_x of node N (layout: p, Omega, phi, v)
+    i_tip = int(model.phi_index[-1][0])
 
     def tip_at_T(**opts) -> float:
         s = BDF(model, 0.0, y0.copy(), yp0.copy(), T, **opts)

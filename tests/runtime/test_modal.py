@@ -19,15 +19,15 @@ from references import beams, sections
 from runtime.analysis.decay import find_maxima
 from runtime.analysis.modal import (
     FAMILIES,
-    analytic_frequencies,
     family_retardation_time,
     linearize,
     modal_analysis,
 )
-from runtime.model.rod import RodModel, RodParameters
-from runtime.scenarios import CantileverScenario
+from runtime.model.statics import RodStatics
+from runtime.problem.assemble import build_model
+from runtime.simulate.simulate import static_equilibrium
 from runtime.solvers.integrator import solve
-from runtime.solvers.statics import solve_static
+from tests.rods import rod_problem
 
 
 def rectangle_section(w: float, h: float, nu: float) -> dict[str, float]:
@@ -35,14 +35,15 @@ def rectangle_section(w: float, h: float, nu: float) -> dict[str, float]:
     return asdict(sections.rectangle(w, h, nu))
 
 
-PAPER = dict(length=0.3, density=1000.0, youngs_modulus=1e6, poisson_ratio=0.3,
-             width=0.01, height=0.01)
+def rod(N: int, tau_S: float = 0.0, tau_B: float = 0.0, height: float = 0.01,
+        loads: list | bool = False):
+    """The paper's clamped-free rod (1 cm wide), unloaded unless told."""
+    return rod_problem(N, loads=loads, tau=None, tau_S=tau_S, tau_B=tau_B,
+                       section={"kind": "rectangle", "width": 0.01, "height": height})
 
 
-def rod(N: int, tau_S: float = 0.0, tau_B: float = 0.0, **kw) -> RodParameters:
-    base = dict(PAPER, n_elements=N, tau_S=tau_S, tau_B=tau_B)
-    base.update(kw)
-    return RodParameters(**base)
+def RodModel(problem):  # noqa: N802 - the model of a test problem
+    return build_model(problem)
 
 
 def by_family(modes):
@@ -76,8 +77,6 @@ def test_undamped_bending_vs_timoshenko(undamped_n50):
         assert w.size == 3
         rel = w / ref - 1
         assert np.all(np.abs(rel) < tol), (f, rel)
-        # the modal module's own reference agrees with the independent one
-        assert [m.analytic_omega for m in fam[f][:3]] == pytest.approx(ref, rel=1e-9)
     for m in modes:  # undamped: purely imaginary eigenvalues
         assert abs(m.zeta) < 1e-8
         assert m.omega_damped == pytest.approx(m.omega, rel=1e-8)
@@ -164,8 +163,10 @@ def test_linearization_structure():
     assert np.allclose(E[:nq, :nq], np.eye(nq)) and np.allclose(A[:nq, nq:], -np.eye(nq))
     assert np.allclose(A[:nq, :nq], 0) and np.allclose(E[nq:, :nq], 0)
     K = lin.K.toarray()
-    Ks = model.static_jacobian_sparse(model.initial_state()).toarray()[np.ix_(lin.dofs,
-                                                                              lin.dofs)]
+    st = RodStatics(model)
+    with model.statics():
+        Ks = st.static_jacobian_sparse(model.initial_state()).toarray()[np.ix_(lin.dofs,
+                                                                               lin.dofs)]
     assert np.allclose(K, Ks)
     assert np.allclose(K, K.T, atol=1e-10 * np.abs(K).max())
     # stiffness-proportional damping in the unloaded straight state: C = tau K
@@ -174,9 +175,10 @@ def test_linearization_structure():
 
 @pytest.fixture(scope="module")
 def deformed_n10():
-    prm = rod(10, tau_S=0.005, tau_B=0.005)
-    model = RodModel(prm, tip_force=(0.05, 0.0, 0.0))
-    st = solve_static(model, model.initial_state(), load_steps=10)
+    prm = rod(10, tau_S=0.005, tau_B=0.005,
+              loads=[{"kind": "force", "vector": [0.05, 0.0, 0.0]}])
+    model = RodModel(prm)
+    st = static_equilibrium(prm, model)
     return model, st.y, modal_analysis(model, st.y, count=4)
 
 
@@ -187,12 +189,11 @@ def test_predeformed_frequency_shift(deformed_n10):
     5.865 rad/s against 3.562 rad/s straight (+46 %, +65 %).
     """
     model, y, modes = deformed_n10
-    straight = modal_analysis(RodModel(model.params), count=2)
+    straight = modal_analysis(RodModel(rod(10, tau_S=0.005, tau_B=0.005)), count=2)
     w0 = straight[0].omega
     assert abs(modes[0].omega / w0 - 1) > 0.01
     fam = by_family(modes)
     assert fam["bending-2"][0].omega / w0 > 1.3 and fam["bending-1"][0].omega / w0 > 1.2
-    assert all(m.analytic_omega is None for m in modes)
     with pytest.raises(ValueError, match="not an equilibrium"):
         modal_analysis(model, None, count=2)  # straight is no equilibrium under the load
 
@@ -202,10 +203,12 @@ def test_predeformed_frequency_matches_time_integration(deformed_n10):
     model, y, modes = deformed_n10
     m_in = by_family(modes)["bending-2"][0]
     y0 = y.copy()
-    y0[model.n - 3] = 1e-4  # tip velocity along e1
-    r = solve(model, (0.0, 4.0), y0, rtol=1e-6, atol=1e-9, t_eval=np.linspace(0, 4, 4001))
+    y0[model.v_index[-1][0]] = 1e-4  # tip velocity along e1
+    with model.statics():           # the static load stays on
+        r = solve(model, (0.0, 4.0), y0, rtol=1e-6, atol=1e-9,
+                  t_eval=np.linspace(0, 4, 4001))
     assert r.status == 0
-    x = r.y[model.n - 6]
+    x = r.y[model.phi_index[-1][0]]
     tk, _ = find_maxima(r.t, x - np.mean(x))
     T_sim = float(np.mean(np.diff(tk)))
     assert T_sim == pytest.approx(2 * math.pi / m_in.omega_damped, rel=3e-3)
@@ -221,13 +224,22 @@ def test_bad_input():
         modal_analysis(model, count=10_000)
 
 
-def test_analytic_frequencies_helper():
-    model = RodModel(rod(4, height=0.012))
+def test_continuum_column_comes_from_the_independent_references():
+    """`kvrod modes` labels modes with continuum frequencies from the references package
+    (its own section formulas), not with a copy inside the runtime."""
+    from kvrod import continuum
+
+    problem = rod(4, height=0.012)
     sec = rectangle_section(0.01, 0.012, 0.3)
     ref = beams.timoshenko_frequencies(2, L=0.3, rho=1000.0, A=sec["A"], E=1e6,
                                        I=sec["I2"], kGA=sec["kappa_1"] * 1e6 / 2.6 * sec["A"])
-    assert analytic_frequencies(model, "bending-2", 2) == pytest.approx(ref, rel=1e-9)
-    assert np.isnan(analytic_frequencies(model, "shear", 1)).all()
+    assert continuum.frequencies(problem, "bending-2", 2) == pytest.approx(ref, rel=1e-9)
+    assert np.isnan(continuum.frequencies(problem, "shear", 1)).all()
+    assert not continuum.applies(rod_problem(4, "pinned", "pinned"))
+    import runtime.analysis.modal as modal_module
+
+    src = open(modal_module.__file__).read()
+    assert "expm(" not in src and "brentq" not in src   # no transfer-matrix copy here
 
 
 def test_repeated_frequencies_span_their_eigenspace_and_runs_are_deterministic():
@@ -238,7 +250,7 @@ def test_repeated_frequencies_span_their_eigenspace_and_runs_are_deterministic()
     cluster that does not span its eigenspace is recomputed."""
     from runtime.analysis.modal import _span_clusters, linearize
 
-    model = RodModel(CantileverScenario(n_elements=80).rod_parameters())
+    model = RodModel(rod(80))
     runs = [modal_analysis(model, count=2) for _ in range(3)]
     for other in runs[1:]:
         assert [m.to_dict() for m in other] == [m.to_dict() for m in runs[0]]

@@ -15,7 +15,7 @@ import pytest
 
 from runtime.errors import GeneratedCodeError
 from runtime.model import build
-from runtime.model.rod import RodModel, RodParameters
+from tests.rods import rod_model
 
 ROOT = Path(__file__).resolve().parents[2]
 needs_cc = pytest.mark.skipif(build.find_compiler() is None, reason="no C compiler")
@@ -30,13 +30,9 @@ def fresh_build(monkeypatch, tmp_path):
     build.clear_cache()
 
 
-def _params(N=3):
-    return RodParameters(0.3, N, 1000.0, 1e6, 0.3, 0.04, 0.04, 0.01, 0.01)
-
-
 @needs_cc
 def test_compiles_into_content_keyed_cache(fresh_build):
-    m = RodModel(_params())
+    m = rod_model(3)
     assert m.backend == "c"
     libs = list(fresh_build.glob("kvrod_rod_*.so"))
     assert len(libs) == 1
@@ -69,23 +65,52 @@ def test_manifest_mismatch_tells_the_user_to_regenerate(tmp_path):
     }
     man = {"files": {k: {"sha256": v} for k, v in good.items()}}
     (tmp_path / "MANIFEST.json").write_text(json.dumps(man))
-    build.verify_manifest(tmp_path)  # consistent: no error
+    names = build.SOURCES + build.HEADERS
+    build.verify_manifest(tmp_path, names)  # consistent: no error
     with open(tmp_path / "rod_assembly.c", "a") as fh:
         fh.write("/* hand edit */\n")
     with pytest.raises(GeneratedCodeError, match="kvrod generate"):
-        build.verify_manifest(tmp_path)
+        build.verify_manifest(tmp_path, names)
+
+
+@pytest.mark.parametrize("damage", ["missing", "truncated", "not_json", "no_entry",
+                                    "source_missing"])
+def test_manifest_problems_are_errors_naming_the_file(tmp_path, damage):
+    """Issue 12: without a usable MANIFEST.json the generated code is never compiled."""
+    gdir = build.generated_dir()
+    names = build.SOURCES + build.HEADERS
+    for name in names:
+        shutil.copy(gdir / name, tmp_path / name)
+    text = (gdir / "MANIFEST.json").read_text()
+    man = tmp_path / "MANIFEST.json"
+    if damage == "truncated":
+        man.write_text(text[: len(text) // 2])
+    elif damage == "not_json":
+        man.write_text("[1, 2, 3]")
+    elif damage == "no_entry":
+        doc = json.loads(text)
+        del doc["files"]["rod_kernels.c"]
+        man.write_text(json.dumps(doc))
+    elif damage == "source_missing":
+        man.write_text(text)
+        (tmp_path / "rod_kernels.h").unlink()
+    with pytest.raises(GeneratedCodeError) as exc:
+        build.verify_manifest(tmp_path, names)
+    msg = str(exc.value)
+    assert "MANIFEST.json" in msg or "rod_kernels" in msg
+    assert "kvrod generate" in msg
 
 
 def test_fallback_without_compiler_warns_once_and_gives_same_numbers(fresh_build, monkeypatch):
     ref = None
     if build.find_compiler() is not None:
-        ref = RodModel(_params(), tip_force=(0.05, 0, 0))
+        ref = rod_model(3)
     monkeypatch.setenv("KVROD_NO_COMPILER", "1")
     build.clear_cache()
     with warnings.catch_warnings(record=True) as rec:
         warnings.simplefilter("always")
-        m1 = RodModel(_params(), tip_force=(0.05, 0, 0))
-        RodModel(_params(4))
+        m1 = rod_model(3)
+        rod_model(4)
     msgs = [w for w in rec if "in-process" in str(w.message)]
     assert len(msgs) == 1
     assert m1.backend == "casadi"
