@@ -51,6 +51,7 @@ RANGES: dict[str, Range] = {
     "eta": Range("0.0", "math.inf", True, False, "Pa s"),
     "zeta": Range("0.0", "math.inf", True, False, "Pa s"),
     "length": Range("0.0", "math.inf", False, False, "m"),
+    "length_or_zero": Range("0.0", "math.inf", True, False, "m"),
     "section": Range("0.0", "math.inf", False, False, "m^2 or m^4"),
     "kappa": Range("0.0", "1.0", False, True, ""),
 }
@@ -154,6 +155,7 @@ def _context() -> dict:
     b, d, a_e, b_e = sec.b, sec.d, sec.a_e, sec.b_e
     rect_args = {b, d, nu}
     ell_args = {a_e, b_e, nu}
+    tube_args = {sec.r_o, sec.r_i}
     m = sec.m
     term = cs["rectangle_J_T_tanh_term"]
     return {
@@ -173,6 +175,10 @@ def _context() -> dict:
         "rect_terms": RECTANGLE_TERMS,
         "rect_terms_var": "terms",
         "rect_J_doc": "J_T = b d^3/3 - 64 d^4/pi^5 sum tanh((2m+1) pi b/(2d))/(2m+1)^5",
+        "tube": {"A": code(cs["tube_A"], tube_args), "I1": code(cs["tube_I1"], tube_args),
+                 "I2": code(cs["tube_I2"], tube_args), "J_T": code(cs["tube_J_T"], tube_args),
+                 "kappa_3": code(cs["tube_kappa_3"], tube_args),
+                 "kappa": code(cs["cowper_tube"], {sec.m_t, nu})},
         "ell": {"A": code(cs["ellipse_A"], ell_args), "I1": code(cs["ellipse_I1"], ell_args),
                 "I2": code(cs["ellipse_I2"], ell_args), "J_T": code(cs["ellipse_J_T"], ell_args),
                 "kappa_a": code(cs["cowper_ellipse_along_a"], ell_args),
@@ -205,5 +211,6 @@ def artifacts() -> list[Artifact]:
                                               "retardation_time_extension",
                                               "retardation_time_extension_naive",
                                               "rectangle_section", "ellipse_section",
-                                              "circle_section", "stiffness_matrices",
+                                              "circle_section", "tube_section",
+                                              "stiffness_matrices",
                                               "damping_matrices"]})]

@@ -1,7 +1,7 @@
 # GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 # source: derive/templates/constitutive.py.jinja
 # derivation step: isotropic_moduli, stored_energy, dissipation, naive_resultants, cross_sections
-# inputs sha256: 025cb86b3b72dad34cd0d331ecbb066e2ed78c15ab3100736c18e645a8c582b1
+# inputs sha256: d85754a43411f22c1551b7bc11b2f5985ed6951c849dc935b69e42e91e03d61c
 # tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 """Rod stiffness and damping parameters of the Kelvin-Voigt Cosserat rod.
@@ -30,6 +30,7 @@ __all__ = [
     "rectangle_section",
     "ellipse_section",
     "circle_section",
+    "tube_section",
     "stiffness_matrices",
     "damping_matrices",
 ]
@@ -49,6 +50,7 @@ PARAMETER_RANGES = {
     "eta": (0.0, math.inf, True, False, "Pa s"),
     "zeta": (0.0, math.inf, True, False, "Pa s"),
     "length": (0.0, math.inf, False, False, "m"),
+    "length_or_zero": (0.0, math.inf, True, False, "m"),
     "section": (0.0, math.inf, False, False, "m^2 or m^4"),
     "kappa": (0.0, 1.0, False, True, ""),
 }
@@ -251,6 +253,38 @@ def circle_section(radius, nu):
     """
     _check("radius", radius, "length")
     return ellipse_section(radius, radius, nu)
+
+
+def tube_section(r_outer, r_inner, nu):
+    """Section constants of a tube (hollow circle, annulus r_inner <= |xi| <= r_outer).
+
+    Derivation step: cross_sections (explicit integration in polar coordinates; Prandtl
+    stress function constant on the inner boundary, single-valued warping: the annulus does
+    not warp, J_T = I3 = pi/2 (r_outer^4 - r_inner^4), kappa_3 = 1). Shear factor: Cowper
+    (1966) for the hollow circle, cited; r_inner = 0 gives :func:`circle_section`.
+    r_outer: outer radius [m] (> 0); r_inner: inner radius [m] (0 <= r_inner < r_outer);
+    nu: Poisson's ratio [-].
+    Returns dict with A [m^2], I1 = I2, I3, J_T [m^4], kappa_1 = kappa_2, kappa_3 [-].
+    """
+    _check("r_outer", r_outer, "length")
+    _check("r_inner", r_inner, "length_or_zero")
+    _check("nu", nu)
+    r_o, r_i = numpy.broadcast_arrays(numpy.asarray(r_outer, dtype=float),
+                                      numpy.asarray(r_inner, dtype=float))
+    if not numpy.all(r_i < r_o):
+        bad, top = float(r_i[r_i >= r_o].flat[0]), float(r_o[r_i >= r_o].flat[0])
+        raise ParameterError(f"parameter 'r_inner' = {bad!r} is outside the allowed range: "
+                             f"[0, r_outer) = [0, {top:g}) m")
+    if numpy.ndim(r_outer) == 0 and numpy.ndim(r_inner) == 0:
+        r_o, r_i = float(r_o), float(r_i)
+    m = r_i / r_o
+    A = -numpy.pi*(r_i - r_o)*(r_i + r_o)
+    I1 = -1/4*numpy.pi*(r_i - r_o)*(r_i + r_o)*(r_i**2 + r_o**2)
+    I2 = -1/4*numpy.pi*(r_i - r_o)*(r_i + r_o)*(r_i**2 + r_o**2)
+    J_T = -1/2*numpy.pi*(r_i - r_o)*(r_i + r_o)*(r_i**2 + r_o**2)
+    kappa = (m**2 + 1)**2*(6*nu + 6)/(m**2*(12*nu + 20) + (m**2 + 1)**2*(6*nu + 7))
+    return {"A": A, "I1": I1, "I2": I2, "I3": I1 + I2, "J_T": J_T,
+            "kappa_1": kappa, "kappa_2": kappa, "kappa_3": 1 + 0.0 * A}
 
 
 def _check_matrix_inputs(E, nu, A, I1, I2, I3, kappa_1, kappa_2, kappa_3) -> None:
