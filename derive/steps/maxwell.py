@@ -1,5 +1,5 @@
 """Generalised Maxwell (Prony series) -> Kelvin-Voigt low-frequency limit (Sect. 4.4), and
-the 3-D isotropic generalized Maxwell solid (the paper's future work, Sect. 5)."""
+the 3-D isotropic generalized Maxwell solid (the paper's future work, Sect. 6)."""
 
 from __future__ import annotations
 
@@ -61,7 +61,7 @@ def maxwell_limit() -> Step:
     terms_abs = [sp.simplify(sp.Abs(sp.simplify(x))) for x in terms]
     term_abs = terms_abs[0]
     w_r, t_r = sp.Symbol("omega", real=True), sp.Symbol("t", real=True)
-    eps_hat = sp.Function("epsilon_hat")
+    eps_hat = sp.Function("epsilonhat")             # prints as a hatted epsilon
     stress_diff = sp.Integral(diff.subs(w, w_r) * eps_hat(w_r) * sp.exp(sp.I * w_r * t_r),
                               (w_r, -sp.oo, sp.oo)) / (2 * sp.pi)
     unimodular = sp.Abs(sp.exp(sp.I * w_r * t_r))                      # = 1 for real w, t
@@ -202,7 +202,7 @@ def maxwell_material(maxwell_limit_: Step, dissipation: Step) -> Step:
     return make_step(
         name="maxwell_material",
         title="3-D generalized Maxwell solid: internal variables, Laplace moduli, KV limit",
-        equations=("Sect. 4.4", "Sect. 5 (future work)"),
+        equations=("Sect. 4.4", "Sect. 6 (future work)"),
         assumptions=(
             "isotropic linear viscoelastic solid: equilibrium spring (K_inf, G_inf) in parallel "
             "with M Maxwell branches j",
