@@ -1,7 +1,7 @@
 # GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 # source: derive/templates/constitutive.py.jinja
 # derivation step: isotropic_moduli, stored_energy, dissipation, naive_resultants, cross_sections, maxwell_material, maxwell_rod
-# inputs sha256: 7681f4c8011c61fe5529d799bc5947c071cfb84fec66b6de69162f4f9d3b5616
+# inputs sha256: d3475138e7715d41f99c639a3797fefeb82e6a0afcbd935f0b8baca4926fc56a
 # tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 """Rod stiffness and damping parameters of the Kelvin-Voigt Cosserat rod.
@@ -399,7 +399,7 @@ def maxwell_rod_prony(G_inf, K_inf, G_j, K_j, tau_j):
     Derivation step: maxwell_rod. Extension and bending carry
     E(s) = 9 K(s) G(s)/(3 K(s) + G(s)) = E_inf + sum_k E_k s theta_k/(1 + s theta_k) with
     up to 2M terms: one at each branch time theta = tau_j with the branch's own Young's
-    modulus E_j = 9 K_j G_j/(3 K_j + G_j) (the residue at the pole -1/tau_j), and one at each
+    modulus E_j = 9 K_j G_j/(3 K_j + G_j) (from the residue -E_j/tau_j at -1/tau_j), and one at each
     theta_k = -1/s_k, s_k a zero of D(s) = 3 K(s) + G(s), with the residue formula
     E_k = -3 G(s_k)^2/(s_k D'(s_k)). The zeros are found numerically: they are real, negative
     and interlace the branch poles (the eigenvalues of a symmetric diagonal-plus-rank-one

@@ -132,14 +132,10 @@ def _sym_entries(Q: sp.Matrix) -> list[sp.Basic]:
     return [Q[i, k] for i in range(3) for k in range(i, 3)]
 
 
-def isotropic(Q: sp.Matrix, bulk, shear) -> sp.Matrix:
-    """bulk tr(Q) I + 2 shear dev(Q): the isotropic operator of the dissipation step's (29)."""
+def isotropic(Q: sp.Matrix, bulk: sp.Expr, shear: sp.Expr) -> sp.Matrix:
+    """bulk tr(Q) I + 2 shear dev(Q): the isotropic operator of the dissipation step's (29)
+    (moduli [Pa] give a stress from a strain, viscosities [Pa s] from a strain rate)."""
     return viscous_stress(Q, bulk, shear)
-
-
-def branch_term(modulus, s, tau) -> sp.Expr:
-    """The Maxwell branch factor modulus * s tau / (1 + s tau), derived in maxwell_material."""
-    return modulus * s * tau / (1 + s * tau)
 
 
 def maxwell_material(maxwell_limit_: Step, dissipation: Step) -> Step:

@@ -17,6 +17,8 @@ semidefinite diagonal-plus-rank-one matrix (secular equation).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import sympy as sp
 
 from derive.moments import section_integral
@@ -79,8 +81,10 @@ c_inf, c_j = sp.symbols("c_inf c_j", positive=True)
 M2_EXAMPLE = {"K_inf": 3, "G_inf": 1, "K": (2, 5), "G": (1, 2), "tau": (1, sp.Rational(1, 10))}
 
 
-def maxwell_moduli(M: int, K_sym=None, G_sym=None, tau_sym=None) -> tuple[sp.Expr, sp.Expr]:
-    """(K(s), G(s)) of M explicit branches with symbols K_1.., G_1.., tau_1.. (or given ones)."""
+def maxwell_moduli(M: int, K_sym: Sequence | None = None, G_sym: Sequence | None = None,
+                   tau_sym: Sequence | None = None) -> tuple[sp.Expr, sp.Expr]:
+    """(K(s), G(s)) [Pa] of M explicit branches: step maxwell_material's sums written out with
+    symbols K_1.., G_1.. [Pa], tau_1.. [s] (or the given values); s the Laplace variable [1/s]."""
     K_sym = K_sym or sp.symbols(f"K_1:{M + 1}", positive=True)
     G_sym = G_sym or sp.symbols(f"G_1:{M + 1}", positive=True)
     tau_sym = tau_sym or sp.symbols(f"tau_1:{M + 1}", positive=True)
@@ -92,7 +96,7 @@ def maxwell_moduli(M: int, K_sym=None, G_sym=None, tau_sym=None) -> tuple[sp.Exp
 def prony_terms(rational: sp.Expr, full: bool = False
                 ) -> tuple[sp.Expr, list[tuple[sp.Expr, sp.Expr]]]:
     """(E_inf, [(E_k, theta_k), ...]) of a proper-plus-constant rational function of s with
-    simple poles, read off its partial fractions (``apart``).
+    simple poles, read off its partial fractions (``apart``); moduli [Pa], times [s].
 
     Each pole term r/(s - p) of the decomposition is written as
     E_k s theta_k/(1 + s theta_k) - E_k with theta_k = -1/p and E_k = r/p (the residue of
@@ -167,7 +171,8 @@ def secular_matrix(M: int) -> tuple[sp.Matrix, sp.Expr]:
 
 def maxwell_rod(kinematics: Step, lateral_contraction: Step, isotropic_moduli: Step,
                 stored_energy: Step, maxwell_material: Step) -> Step:
-    """Laplace-domain rod stiffnesses C_F(s), C_M(s) and the rod's Prony series of E(s)."""
+    """Laplace-domain rod stiffnesses C_F(s) [N], C_M(s) [N m^2] ((7) with E(s), G(s)), the
+    lateral-stress-free E(s) [Pa] ((24) with nu(s)) and the rod's Prony series of E(s)."""
     s = s_lap
     Kf, Gf, nuf = K_of(s), G_of(s), nu_of(s)
     # (a) uniform lateral contraction with lateral ratio nu(s), lateral stress free
