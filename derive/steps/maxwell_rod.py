@@ -93,19 +93,17 @@ def maxwell_moduli(M: int, K_sym: Sequence | None = None, G_sym: Sequence | None
             G_inf + sum(g * f for g, f in zip(G_sym, b, strict=True)))
 
 
-def prony_terms(rational: sp.Expr, full: bool = False
-                ) -> tuple[sp.Expr, list[tuple[sp.Expr, sp.Expr]]]:
+def prony_terms(rational: sp.Expr) -> tuple[sp.Expr, list[tuple[sp.Expr, sp.Expr]]]:
     """(E_inf, [(E_k, theta_k), ...]) of a proper-plus-constant rational function of s with
     simple poles, read off its partial fractions (``apart``); moduli [Pa], times [s].
 
     Each pole term r/(s - p) of the decomposition is written as
     E_k s theta_k/(1 + s theta_k) - E_k with theta_k = -1/p and E_k = r/p (the residue of
-    E_k s theta/(1 + s theta) at s = -1/theta is -E_k/theta); E_inf = E(0). ``full``: split
-    irreducible denominators over their (radical) roots, for numerical coefficients; a term
-    r(s)/q(s) that ``apart`` leaves unsplit gives one Prony term per root p of q, with
-    residue r(p)/q'(p).
+    E_k s theta/(1 + s theta) at s = -1/theta is -E_k/theta); E_inf = E(0). A term
+    r(s)/q(s) whose denominator ``apart`` leaves irreducible over the rationals (numerical
+    coefficients) gives one Prony term per root p of q, with residue r(p)/q'(p).
     """
-    parts = sp.Add.make_args(sp.apart(rational, s_lap, full=full).doit())
+    parts = sp.Add.make_args(sp.apart(rational, s_lap))
     terms = []
     for term in parts:
         if not term.has(s_lap):
@@ -251,7 +249,7 @@ def maxwell_rod(kinematics: Step, lateral_contraction: Step, isotropic_moduli: S
     K2, G2 = maxwell_moduli(2, ex["K"], ex["G"], ex["tau"])
     K2, G2 = K2.subs(vals), G2.subs(vals)
     E2 = sp.cancel(sp.together(E_s.subs({Kf: K2, Gf: G2})))
-    E2_inf, E2_terms = prony_terms(E2, full=True)
+    E2_inf, E2_terms = prony_terms(E2)             # apart over Q, the quadratic split by roots
     E2_terms.sort(key=lambda et: float(et[1]))
     m2_sum = sp.radsimp(sp.cancel(prony_sum(E2_inf, E2_terms) - E2))
     roots2 = sp.solve(sp.numer(sp.together(3 * K2 + G2)), s)
