@@ -13,17 +13,30 @@ from derive.artifacts import Artifact, sha256_text
 from derive.formulas import formulas, in_material_parameters
 from derive.pipeline import run
 from derive.steps import sections as sec
+from derive.steps.maxwell_rod import G_k, dD_k, s_k
 from derive.symbols import (
     I1,
     I2,
     I3,
     A,
     E,
+    G,
+    G_br,
+    G_inf,
+    G_j,
+    K,
+    K_br,
+    K_inf,
+    K_j,
+    j_idx,
     kappa_1,
     kappa_2,
     kappa_3,
     nu,
+    s_lap,
     tau_B,
+    tau_br,
+    tau_j,
     tau_S,
 )
 
@@ -51,8 +64,11 @@ RANGES: dict[str, Range] = {
     "eta": Range("0.0", "math.inf", True, False, "Pa s"),
     "zeta": Range("0.0", "math.inf", True, False, "Pa s"),
     "length": Range("0.0", "math.inf", False, False, "m"),
+    "length_or_zero": Range("0.0", "math.inf", True, False, "m"),
     "section": Range("0.0", "math.inf", False, False, "m^2 or m^4"),
     "kappa": Range("0.0", "1.0", False, True, ""),
+    "modulus": Range("0.0", "math.inf", True, False, "Pa"),
+    "relaxation_time": Range("0.0", "math.inf", False, False, "s"),
 }
 
 
@@ -93,6 +109,33 @@ def code(expr: sp.Basic, allowed: set[sp.Symbol]) -> str:
     if extra:
         raise ValueError(f"expression {expr} has symbols {extra} outside {allowed}")
     return _Printer().doprint(stable_form(expr))
+
+
+def code_as(expr: sp.Basic, names: dict[sp.Basic, str]) -> str:
+    """Python source of ``expr`` with each key (symbol or indexed symbol) renamed to the given
+    variable name of the generated function; refuses any other free symbol."""
+    new = {old: sp.Symbol(name) for old, name in names.items()}
+    return code(expr.xreplace(new), set(new.values()))
+
+
+def _maxwell_context(f: dict) -> dict:
+    """Printed formulas of the generalized Maxwell functions (steps maxwell_material,
+    maxwell_rod, isotropic_moduli), in the variable names of the template."""
+    branch = {s_lap: "s_b", tau_j: "tau_j"}
+    indexed = {G_br[j_idx]: "G_j", K_br[j_idx]: "K_j", tau_br[j_idx]: "tau_j", s_lap: "s_b"}
+    return {
+        "branch_G": code_as(f["maxwell_branch_shear"], {**branch, G_j: "G_j"}),
+        "branch_K": code_as(f["maxwell_branch_bulk"], {**branch, K_j: "K_j"}),
+        "E_of_KG": code_as(f["E_of_KG"], {K: "K", G: "G"}),
+        "c_inf": code_as(f["secular_coefficient_inf"], {K_inf: "K_inf", G_inf: "G_inf"}),
+        "c_j": code_as(f["secular_coefficient"], {K_j: "K_j", G_j: "G_j"}),
+        "dD_branch": code_as(f["secular_derivative_branch"], indexed),
+        "E_inf": code_as(f["maxwell_E_inf"], {K_inf: "K_inf", G_inf: "G_inf"}),
+        "E_branch": code_as(f["prony_E_branch"], {K_j: "K_j", G_j: "G_j"}),
+        "E_root": code_as(f["prony_E_root"], {G_k: "G_k", s_k: "s_k", dD_k: "dD_k"}),
+        "G_of_E": code_as(f["G_of_E"], {E: "E_j", nu: "nu_j"}),
+        "K_of_E": code_as(f["K_of_E"], {E: "E_j", nu: "nu_j"}),
+    }
 
 
 def _fn(name, args, doc, step, eqs, arg_docs, returns, expr, checks):
@@ -154,9 +197,11 @@ def _context() -> dict:
     b, d, a_e, b_e = sec.b, sec.d, sec.a_e, sec.b_e
     rect_args = {b, d, nu}
     ell_args = {a_e, b_e, nu}
+    tube_args = {sec.r_o, sec.r_i}
     m = sec.m
     term = cs["rectangle_J_T_tanh_term"]
     return {
+        "maxwell": _maxwell_context(f),
         "functions": functions,
         "ranges": list(RANGES.items()),
         "CF": [code(CF[i, i], mat_args) for i in range(3)],
@@ -173,6 +218,10 @@ def _context() -> dict:
         "rect_terms": RECTANGLE_TERMS,
         "rect_terms_var": "terms",
         "rect_J_doc": "J_T = b d^3/3 - 64 d^4/pi^5 sum tanh((2m+1) pi b/(2d))/(2m+1)^5",
+        "tube": {"A": code(cs["tube_A"], tube_args), "I1": code(cs["tube_I1"], tube_args),
+                 "I2": code(cs["tube_I2"], tube_args), "J_T": code(cs["tube_J_T"], tube_args),
+                 "kappa_3": code(cs["tube_kappa_3"], tube_args),
+                 "kappa": code(cs["cowper_tube"], {sec.m_t, nu})},
         "ell": {"A": code(cs["ellipse_A"], ell_args), "I1": code(cs["ellipse_I1"], ell_args),
                 "I2": code(cs["ellipse_I2"], ell_args), "J_T": code(cs["ellipse_J_T"], ell_args),
                 "kappa_a": code(cs["cowper_ellipse_along_a"], ell_args),
@@ -196,7 +245,7 @@ def artifacts() -> list[Artifact]:
     text, h = render_constitutive()
     return [Artifact(path="constitutive.py", text=text, source=f"derive/templates/{TEMPLATE}",
                      step="isotropic_moduli, stored_energy, dissipation, naive_resultants, "
-                          "cross_sections",
+                          "cross_sections, maxwell_material, maxwell_rod",
                      inputs_hash=h,
                      signature={"functions": ["shear_modulus", "bulk_modulus", "lame_lambda",
                                               "extensional_viscosity",
@@ -205,5 +254,9 @@ def artifacts() -> list[Artifact]:
                                               "retardation_time_extension",
                                               "retardation_time_extension_naive",
                                               "rectangle_section", "ellipse_section",
-                                              "circle_section", "stiffness_matrices",
+                                              "circle_section", "tube_section",
+                                              "maxwell_branch_moduli",
+                                              "maxwell_moduli_laplace",
+                                              "maxwell_rod_prony",
+                                              "stiffness_matrices",
                                               "damping_matrices"]})]

@@ -7,6 +7,7 @@ from pathlib import Path
 import jinja2
 import sympy as sp
 
+from derive import symbols as S
 from derive.formulas import formulas
 from derive.pipeline import run
 
@@ -16,8 +17,10 @@ MAX_LATEX = 1500
 
 
 def _latex_names() -> dict:
-    """Readable LaTeX for rate symbols (dV1 -> \\dot V_1 ...) and Greek names."""
-    from derive import symbols as S
+    """Readable LaTeX for rate symbols (dV1 -> \\dot V_1 ...), equilibrium moduli
+    (G_inf -> G_\\infty), the Maxwell branch's viscous strain (Qv11 -> Q^v_{11}) and the
+    values at a zero s_k of D(s) = 3K(s) + G(s) (G_k -> G(s_k), dD_k -> D'(s_k))."""
+    from derive.steps import maxwell_rod as mr
 
     names = {}
     for base in ("V", "U", "H"):
@@ -25,6 +28,14 @@ def _latex_names() -> dict:
             sym = getattr(S, f"d{base}{i}", None)
             if sym is not None:
                 names[sym] = rf"\dot{{{base}}}_{{{i}}}"
+    for sym in (S.G_inf, S.K_inf, S.E_inf, mr.c_inf):
+        names[sym] = sym.name.replace("_inf", r"_\infty")
+    for i in range(1, 4):
+        for k in range(i, 4):
+            for prefix, tex in (("Qv", "Q^{{v}}"), ("dQv", r"\dot{{Q}}^{{v}}")):
+                names[sp.Symbol(f"{prefix}{i}{k}", real=True)] = tex.format() + f"_{{{i}{k}}}"
+    names.update({mr.G_k: "G(s_k)", mr.K_k: "K(s_k)", mr.dK_k: "K'(s_k)",
+                  mr.dG_k: "G'(s_k)", mr.dD_k: "D'(s_k)"})
     return names
 
 
@@ -64,6 +75,12 @@ def render_derivation_notes() -> str:
         "S_in_plane": latex(naive["S_viscous_in_plane"]),
         "in_plane": latex(f["in_plane_dissipation"]),
         "tau_diff": latex(naive["tau_E_minus_naive"]),
+        "E_of_KG": latex(f["E_of_KG"].subs({S.K: S.K_of(S.s_lap), S.G: S.G_of(S.s_lap)})),
+        "E_branch": latex(f["prony_E_branch"]),
+        "E_root": latex(f["prony_E_root"]),
+        "kv_tau_E": latex(f["kv_tau_E"]),
+        "kv_tau_D": latex(f["kv_tau_D"]),
+        "kv_remainder": latex(steps["kelvin_voigt_uniaxial"].results["remainder_in_tau_D"]),
     }
     env = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATE_DIR),
                              keep_trailing_newline=True, autoescape=False,

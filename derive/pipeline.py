@@ -13,9 +13,11 @@ from derive.step import Step, StepFunction
 from derive.steps.biot import biot_strain
 from derive.steps.dissipation import dissipation
 from derive.steps.energy import stored_energy
+from derive.steps.kelvin_voigt import kelvin_voigt_uniaxial
 from derive.steps.kinematics import kinematics
 from derive.steps.material import isotropic_moduli, lateral_contraction, svk_material
-from derive.steps.maxwell import maxwell_limit
+from derive.steps.maxwell import maxwell_limit, maxwell_material
+from derive.steps.maxwell_rod import maxwell_rod
 from derive.steps.naive import naive_resultants
 from derive.steps.sections import cross_sections
 from derive.steps.strain import green_lagrange
@@ -45,6 +47,12 @@ PIPELINE: tuple[PipelineEntry, ...] = (
     PipelineEntry("cross_sections", cross_sections,
                   ("kinematics", "stored_energy", "dissipation")),
     PipelineEntry("maxwell_limit", maxwell_limit, ()),
+    PipelineEntry("maxwell_material", maxwell_material, ("maxwell_limit", "dissipation")),
+    PipelineEntry("maxwell_rod", maxwell_rod,
+                  ("kinematics", "lateral_contraction", "isotropic_moduli", "stored_energy",
+                   "maxwell_material")),
+    PipelineEntry("kelvin_voigt_uniaxial", kelvin_voigt_uniaxial,
+                  ("isotropic_moduli", "dissipation", "naive_resultants", "maxwell_rod")),
     PipelineEntry("biot_strain", biot_strain, ("green_lagrange", "lateral_contraction")),
 )
 

@@ -49,3 +49,19 @@ Hvec = sp.Matrix([H1, H2, H3])
 dHvec = sp.Matrix([dH1, dH2, dH3])
 e1, e2, e3 = (sp.Matrix([1, 0, 0]), sp.Matrix([0, 1, 0]), sp.Matrix([0, 0, 1]))
 I_3 = sp.eye(3)
+
+# generalized Maxwell solid, Laplace domain (steps maxwell_material, maxwell_rod) ---------
+#: Laplace variable [1/s]; complex, so no assumptions (the arc-length ``s`` above is real)
+s_lap = sp.Symbol("s")
+omega = sp.Symbol("omega", **_pos)                        # angular frequency [1/s]
+G_inf, K_inf = sp.symbols("G_inf K_inf", **_pos)          # equilibrium moduli [Pa]
+G_j, K_j, tau_j = sp.symbols("G_j K_j tau_j", **_pos)     # one branch: moduli [Pa], time [s]
+eta_j, zeta_j = sp.symbols("eta_j zeta_j", **_pos)        # branch viscosities G_j tau_j, K_j tau_j
+E_inf = sp.Symbol("E_inf", **_pos)
+j_idx = sp.Symbol("j", integer=True, positive=True)       # branch index 1..M
+M_br = sp.Symbol("M", integer=True, nonnegative=True)     # number of branches
+G_br, K_br = sp.IndexedBase("G", **_pos), sp.IndexedBase("K", **_pos)
+tau_br = sp.IndexedBase("tau", **_pos)
+eta_br, zeta_br = sp.IndexedBase("eta", **_pos), sp.IndexedBase("zeta", **_pos)
+#: Laplace-domain moduli G(s), K(s), E(s) and lateral ratio nu(s) as undetermined functions
+G_of, K_of, E_of, nu_of = (sp.Function(n) for n in ("G", "K", "E", "nu"))

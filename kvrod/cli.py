@@ -49,7 +49,7 @@ def _show_text(s) -> str:
     for k, v in s.results.items():
         mark = ""
         if k in s.matches:
-            mark = "   [= paper]" if s.matches[k] else "   [DIFFERS from paper]"
+            mark = "   [= stated]" if s.matches[k] else "   [DIFFERS from stated]"
         out.append(f"  {k}{mark}:")
         pretty = sp.pretty(v, use_unicode=True, wrap_line=False)
         out += ["    " + line for line in pretty.splitlines()]

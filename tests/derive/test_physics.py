@@ -75,7 +75,7 @@ def test_damping_is_stiffness_times_retardation_times():
 def test_moment_rules_agree_with_explicit_integration():
     r = step("cross_sections").results
     keys = [k for k in r if k.endswith("_explicit_minus_rules")]
-    assert len(keys) == 4
+    assert len(keys) == 6                    # energy, dissipation x rectangle, ellipse, tube
     assert all(r[k] == 0 for k in keys)
 
 
@@ -97,6 +97,33 @@ def test_ellipse_kappa3_below_one_and_circle_one():
     k = sp.lambdify((a, b), r["ellipse_kappa_3"])
     assert abs(k(1.0, 1.0) - 1) < 1e-15
     assert k(1.0, 2.0) < 1 and k(3.0, 1.0) < 1
+
+
+def test_tube_torsion_is_multiply_connected_and_warp_free():
+    """Annulus: psi constant but non-zero on the hole, single-valued (zero) warping,
+    J_T = I3 = pi/2 (r_o^4 - r_i^4); the simply connected recipes fail."""
+    r = step("cross_sections").results
+    r_o, r_i = sp.symbols("r_o r_i", positive=True)
+    assert sp.simplify(r["tube_psi_inner"] - (r_o**2 - r_i**2) / 2) == 0
+    assert r["tube_warping_gradient"] == sp.zeros(2, 1)
+    assert sp.simplify(r["tube_J_T"] - r["tube_I3"]) == 0 and r["tube_kappa_3"] == 1
+    # 2 <psi> alone misses 2 psi_i A_hole; psi = 0 on both circles makes w multivalued
+    assert sp.simplify(r["tube_J_T"] - r["tube_two_psi_only"]
+                       - 2 * r["tube_psi_inner"] * sp.pi * r_i**2) == 0
+    vals = {r_o: 2, r_i: 1}
+    assert float(r["tube_psi_zero_both_warping_circulation"].subs(vals)) != 0
+
+
+def test_cowper_tube_limits_and_monotone():
+    """Cowper's hollow circle: solid circle at m = 0, thin-walled tube at m -> 1, and the
+    factor falls monotonically with m in between (nu = 0.3)."""
+    r = step("cross_sections").results
+    m = sp.Symbol("m", nonnegative=True)
+    k = sp.lambdify(m, r["cowper_tube"].subs(nu, sp.Rational(3, 10)))
+    ms = np.linspace(0, 1, 101)
+    vals = np.array([k(x) for x in ms])
+    assert np.isclose(vals[0], 6 * 1.3 / (7 + 1.8)) and np.isclose(vals[-1], 2 * 1.3 / 4.9)
+    assert np.all(np.diff(vals) < 0)
 
 
 def test_maxwell_limit():

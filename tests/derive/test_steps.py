@@ -6,6 +6,7 @@ import dataclasses
 
 import pytest
 import sympy as sp
+from sympy.core.function import AppliedUndef
 
 from derive import STEP_NAMES, run, step
 from derive.pipeline import PIPELINE, UnknownStepError
@@ -21,10 +22,12 @@ def test_derived_equals_stated(name, key):
         else derived - stated
     assert s.matches[key], f"{name}.{key}: derived {derived} != paper {stated}"
     # recheck independently of the record's own comparison, numerically at a random point
+    # (undetermined functions such as K(s), G(s) of the Laplace-domain steps get values too)
     free = sorted(diff.free_symbols, key=str)
-    if free and not diff.has(sp.Sum):
-        vals = {sym: sp.Rational(3 + 7 * i % 11, 10 + i) for i, sym in enumerate(free)}
-        num = diff.subs(vals)
+    if free and not diff.has(sp.Sum, sp.Integral):
+        funcs = sorted(diff.atoms(AppliedUndef), key=str)
+        vals = {sym: sp.Rational(3 + 7 * i % 11, 10 + i) for i, sym in enumerate(funcs + free)}
+        num = diff.xreplace({f: vals[f] for f in funcs}).subs(vals)
         num = num.evalf() if not isinstance(num, sp.MatrixBase) else num.evalf()
         assert sp.Abs(sp.N(sp.Matrix(num).norm() if isinstance(num, sp.MatrixBase) else num)) < 1e-9
 

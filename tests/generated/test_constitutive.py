@@ -81,6 +81,26 @@ def test_sections():
                       gc.rectangle_section(0.01, 0.02, 0.3)["J_T"], rtol=1e-13)
 
 
+def test_tube_section():
+    """Tube against the difference of two solid circles, the solid limit and thin walls."""
+    t = gc.tube_section(0.02, 0.015, 0.3)
+    outer, inner = gc.circle_section(0.02, 0.3), gc.circle_section(0.015, 0.3)
+    for key in ("A", "I1", "I2", "I3", "J_T"):
+        assert np.isclose(t[key], outer[key] - inner[key], rtol=1e-13), key
+    assert t["kappa_3"] == 1.0 and set(t) == set(outer)
+    m = 0.75
+    assert np.isclose(t["kappa_1"], 6 * 1.3 * (1 + m**2) ** 2
+                      / ((7 + 1.8) * (1 + m**2) ** 2 + (20 + 3.6) * m**2))
+    solid = gc.tube_section(0.02, 0.0, 0.3)
+    for key in outer:
+        assert np.isclose(solid[key], outer[key], rtol=1e-13), key
+    thin = gc.tube_section(1.0, 1.0 - 1e-6, 0.3)       # Cowper's thin-walled tube
+    assert np.isclose(thin["kappa_1"], 2 * 1.3 / 4.9, rtol=1e-5)
+    assert np.isclose(thin["A"], 2 * np.pi * 1e-6, rtol=1e-5)
+    arr = gc.tube_section(np.array([0.02, 0.03]), np.array([0.0, 0.01]), 0.3)
+    assert arr["A"].shape == (2,) and np.allclose(arr["kappa_3"], 1.0)
+
+
 @pytest.mark.parametrize(("call", "match"), [
     (lambda: gc.shear_modulus(-1.0, 0.3), r"'E' = -1.0 is outside the allowed range: \(0, inf\) Pa"),
     (lambda: gc.shear_modulus(1.0, 0.6), r"'nu' = 0.6 .*\(-1, 0.5\]"),
@@ -90,6 +110,12 @@ def test_sections():
     (lambda: gc.retardation_time_extension(0.1, -0.1, 0.3), "'tau_S' = -0.1"),
     (lambda: gc.rectangle_section(0.0, 0.01, 0.3), "'width' = 0.0"),
     (lambda: gc.ellipse_section(0.01, float("inf"), 0.3), "'b' = inf"),
+    (lambda: gc.tube_section(0.0, 0.0, 0.3), r"'r_outer' = 0.0 .*\(0, inf\) m"),
+    (lambda: gc.tube_section(0.02, -0.001, 0.3), r"'r_inner' = -0.001 .*\[0, inf\) m"),
+    (lambda: gc.tube_section(0.02, 0.02, 0.3), r"'r_inner' = 0.02 .*\[0, r_outer\)"),
+    (lambda: gc.tube_section(np.array([0.02, 0.01]), np.array([0.01, 0.03]), 0.3),
+     r"'r_inner' = 0.03 .*\[0, r_outer\) = \[0, 0.01\) m"),
+    (lambda: gc.tube_section(0.02, 0.01, 0.7), "'nu' = 0.7"),
     (lambda: gc.stiffness_matrices(1.0, 0.3, 1.0, 1.0, 1.0, 2.0, 1.2, 1.0, 1.0), "'kappa_1' = 1.2"),
     (lambda: gc.damping_matrices(1.0, 0.3, 0.1, 0.1, 1, 1, 1, 2, route="bogus"), "route"),
 ])
