@@ -22,6 +22,8 @@ from pathlib import Path
 import jinja2
 import numpy as np
 
+from runtime.io.atomic import write_text
+
 TEMPLATE_DIR = Path(__file__).parent / "templates"
 
 #: settings of the notes (modest, < 2 min in total)
@@ -174,16 +176,12 @@ def _calibration(out: Path) -> dict:
     rng = np.random.default_rng(CAL_SEED)
     t, x = run.t, run.tip[0] + CAL_NOISE * rng.standard_normal(run.t.size)
     data = out / "synthetic.csv"
-    tmp = data.with_name(f".{data.name}.tmp")
-    with tmp.open("w") as fh:
-        fh.write(f"# synthetic tip signal: kvrod cantilever (paper's, N = {CAL_DATA_N}), "
-                 f"tau_S = tau_B = {CAL_TAU} s, release from F = "
-                 f"{float(np.linalg.norm(sc.loads[0].vector))} N, "
-                 f"+ N(0, {CAL_NOISE} m) noise, seed {CAL_SEED}\n")
-        fh.write("t,x\n")
-        for a, b in zip(t, x, strict=True):
-            fh.write(f"{a:.6f},{b:.10e}\n")
-    tmp.replace(data)
+    lines = [f"# synthetic tip signal: kvrod cantilever (paper's, N = {CAL_DATA_N}), "
+             f"tau_S = tau_B = {CAL_TAU} s, release from F = "
+             f"{float(np.linalg.norm(sc.loads[0].vector))} N, "
+             f"+ N(0, {CAL_NOISE} m) noise, seed {CAL_SEED}", "t,x"]
+    lines += [f"{a:.6f},{b:.10e}" for a, b in zip(t, x, strict=True)]
+    write_text(data, "\n".join(lines) + "\n")
     # exactly what `kvrod calibrate --data synthetic.csv` does (the cantilever, N = 16)
     td, xd = cal.load_csv(data, ("t", "x"))
     res = cal.calibrate_signal(td, xd, problem=load_problem("cantilever"),
@@ -244,8 +242,4 @@ def write_beyond_notes(path: Path = Path("notes/beyond.md"),
     env = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATE_DIR),
                              undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
     text = env.get_template("beyond.md.jinja").render(**ctx)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(text)
-    tmp.replace(path)
-    return path
+    return write_text(path, text)

@@ -72,13 +72,12 @@ def plot_mode_shapes(modes, length: float, path: Path) -> Path:
     for ax in axes.ravel()[n:]:
         ax.set_visible(False)
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
-    fig.savefig(tmp, dpi=110)
-    plt.close(fig)
-    tmp.replace(path)
-    return path
+    from runtime.io.atomic import save_figure
+
+    try:
+        return save_figure(fig, path, dpi=110)
+    finally:
+        plt.close(fig)
 
 
 def run_modes(problem, count: int = 10, deformed: bool = False) -> dict:
@@ -154,33 +153,46 @@ def _modes_into(args, problem, out: Path) -> int:
 
 
 def _cmd_calibrate(args) -> int:
+    """Validate the data and the model first, then lock the folder and fit."""
     from kvrod.outputs import results_folder
-
-    with results_folder(Path(args.out), "calibrate", markers=("calibration.json",),
-                        overwrite=args.overwrite,
-                        names=("calibration.json", "calibration.png")):
-        return _calibrate_into(args, Path(args.out))
-
-
-def _calibrate_into(args, out: Path) -> int:
     from runtime.analysis import calibration as cal
-    from runtime.io.results import write_json
     from runtime.problem.registry import load_problem
 
+    if args.tau0 is not None and not (math.isfinite(args.tau0) and args.tau0 > 0):
+        raise _cli_error(f"kvrod calibrate: --tau0 = {args.tau0} must be a finite time > 0 s")
     kw: dict = {}
     if args.tip_force is not None:
         kw["tip_force"] = args.tip_force
-    if args.n_elements is not None and args.n_elements < 1:
-        raise _cli_error(f"kvrod calibrate: --n-elements must be >= 1, got {args.n_elements}")
+    n = args.n_elements or 16
+    try:
+        if args.mode == "signal":
+            data = cal.validate_signal(*cal.load_csv(args.data, ("t", "x")))
+            problem = load_problem(args.problem, {"n_elements": n, **kw})
+            cal.check_record(data[0], data[1], problem)
+        else:
+            data = (cal.validate_decrements(*cal.load_csv(args.data, ("delta",))),)
+            problem = load_problem(args.problem, {"n_elements": n, **kw})
+    except ValueError as exc:
+        from runtime.errors import ParameterError
+
+        if isinstance(exc, ParameterError):
+            raise
+        raise _cli_error(f"kvrod calibrate: {args.data}: {exc}") from None
+    with results_folder(Path(args.out), "calibrate", markers=("calibration.json",),
+                        overwrite=args.overwrite,
+                        names=("calibration.json", "calibration.png")):
+        return _calibrate_into(args, Path(args.out), data, problem)
+
+
+def _calibrate_into(args, out: Path, data: tuple, problem) -> int:
+    from runtime.analysis import calibration as cal
+    from runtime.io.results import write_json
+
     if args.mode == "signal":
-        t, x = cal.load_csv(args.data, ("t", "x"))
-        problem = load_problem(args.problem, kw)
-        res = cal.calibrate_signal(t, x, problem=problem, tau0=args.tau0,
-                                   n_elements=args.n_elements or 16)
+        res = cal.calibrate_signal(*data, problem=problem, tau0=args.tau0,
+                                   n_elements=problem.rod.elements)
     else:
-        (d,) = cal.load_csv(args.data, ("delta",))
-        problem = load_problem(args.problem, {"n_elements": args.n_elements or 16, **kw})
-        res = cal.calibrate_decrements(d, problem=problem, tau0=args.tau0)
+        res = cal.calibrate_decrements(data[0], problem=problem, tau0=args.tau0)
     write_json(out / "calibration.json", {"data": str(args.data), **res.summary()})
     cal.plot_calibration(res, out / "calibration.png")
     lo, hi = res.ci95
@@ -254,11 +266,9 @@ def write_compare(result, out: Path) -> list[Path]:
 
     out = Path(out)
     paths = [write_json(out / "compare_damping.json", summary(result))]
-    md = out / "compare_damping.md"
-    tmp = md.with_name(f".{md.name}.tmp")
-    tmp.write_text(compare_markdown(result))
-    tmp.replace(md)
-    paths.append(md)
+    from runtime.io.atomic import write_text
+
+    paths.append(write_text(out / "compare_damping.md", compare_markdown(result)))
     return paths + plot_compare(result, out)
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 import sys
 from pathlib import Path
@@ -78,6 +79,19 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
     if not resume:
         F.refuse_existing(out, "simulate", overwrite=overwrite, resumable=True)
     state = load_checkpoint(out, params) if resume else None
+    if state is not None:
+        import numpy as np
+
+        from generated import rod_layout
+        from runtime.io.results import CheckpointError
+
+        n = rod_layout.n_state(problem.rod.elements)
+        for key in ("y", "yp"):
+            if np.shape(state[key]) != (n,) or not np.all(np.isfinite(state[key])):
+                raise CheckpointError(f"--resume: checkpoint {str(out / CHECKPOINT)!r} holds a "
+                                      f"state {key} of shape {np.shape(state[key])}, this "
+                                      f"problem needs ({n},) finite values; start again with "
+                                      "--overwrite")
     build.require_generated()
     with F.claim(out, "simulate", overwrite=overwrite and not resume) as claimed:
         t_start = float(state["t"]) if state else 0.0
@@ -85,6 +99,8 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
         claimed.keep()
 
         def on_checkpoint(st):
+            if series is not None:       # the frames so far survive a kill after this
+                series.write_collection()
             write_checkpoint(out, params, st)
             write_status(out, params, "running", st["t"])
 
@@ -110,7 +126,13 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
             if series is not None:
                 series.close()
         extra = {"resumed_from_t": t_start} if state else None
-        summary = write_run(out, run, extra=extra)
+        try:
+            summary = write_run(out, run, extra=extra)
+        except BaseException as exc:   # e.g. disk full: do not leave "running" behind
+            with contextlib.suppress(Exception):
+                write_status(out, params, "failed", run.t_last,
+                             f"the results could not be written: {exc}")
+            raise
         if run.status == "finished":
             (out / CHECKPOINT).unlink(missing_ok=True)
         if run.interrupt is not None:

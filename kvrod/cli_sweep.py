@@ -10,6 +10,7 @@ By default the points run on a LocalCluster with one worker process per core; wi
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 
@@ -48,6 +49,10 @@ def _cmd_sweep(args) -> int:
     safe = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in study.name)
     out = Path(args.out) if args.out else Path("results") / f"sweep-{safe}"
     F.check_output_path(out)
+    holder = F.lock_holder(out)
+    if holder is not None:
+        raise CliError(f"kvrod sweep: results folder {str(out)!r} is in use by process "
+                       f"{holder} (lock file {F.LOCK_NAME}); wait for it or choose another --out")
     saved = out / "study.toml"
     if saved.exists() and not args.overwrite:
         try:
@@ -58,7 +63,8 @@ def _cmd_sweep(args) -> int:
             raise CliError(f"kvrod sweep: {str(out)!r} holds a different study (study.toml); "
                            "use --overwrite to replace it or choose another --out")
     with F.claim(out, "sweep", overwrite=args.overwrite,
-                 names=("study.toml", "study.csv", "summary.png", "points")) as claimed:
+                 names=("study.toml", "study.csv", "progress.json", "summary.png",
+                        "points")) as claimed:
         claimed.keep()
         return _run_sweep(args, study, out, points_to_run, run_study_serial)
 
@@ -97,7 +103,8 @@ def _run_sweep(args, study, out, points_to_run, run_study_serial) -> int:
           + (f", {out}/summary.png" if (out / "summary.png").exists() else ""))
     if report.failed:
         print(f"kvrod sweep: {len(report.failed)} point(s) failed; see the 'message' column "
-              f"of {out}/study.csv (run again on restart unless --keep-failed)")
+              f"of {out}/study.csv (run again on restart unless --keep-failed)",
+              file=sys.stderr)
         return 1
     return 0
 

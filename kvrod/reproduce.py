@@ -9,6 +9,8 @@ from pathlib import Path
 import jinja2
 import numpy as np
 
+from runtime.io.atomic import write_text
+
 TEMPLATE_DIR = Path(__file__).parent / "templates"
 TAUS = (0.02, 0.04, 0.08)
 
@@ -132,9 +134,7 @@ def reproduce(out: Path, n_elements: int = 100, t_end: float = 10.0,
                              undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
     text = env.get_template("reproduction.md.jinja").render(**ctx)
     notes.parent.mkdir(parents=True, exist_ok=True)
-    tmp = notes.with_name(notes.name + ".tmp")
-    tmp.write_text(text)
-    tmp.replace(notes)
+    write_text(notes, text)
     import shutil
 
     dest = notes.parent / "figures"

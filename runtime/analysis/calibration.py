@@ -112,9 +112,16 @@ def load_csv(path: str | Path, columns: Sequence[str]) -> list[np.ndarray]:
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"data file {str(path)!r} does not exist")
-    with path.open(newline="") as fh:
-        rows = [r for r in csv.reader(line for line in fh if not line.lstrip().startswith("#"))
-                if any(c.strip() for c in r)]
+    try:
+        with path.open(newline="", encoding="utf-8") as fh:
+            rows = [r for r in csv.reader(line for line in fh
+                                          if not line.lstrip().startswith("#"))
+                    if any(c.strip() for c in r)]
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"data file {str(path)!r} is not UTF-8 text ({exc.reason} at byte "
+                         f"{exc.start}): save it as a plain CSV") from None
+    except OSError as exc:
+        raise ValueError(f"data file {str(path)!r} cannot be read ({exc.strerror})") from None
     if not rows:
         raise ValueError(f"data file {str(path)!r} is empty")
     header = [c.strip().lower() for c in rows[0]]
@@ -241,7 +248,10 @@ def check_signal_against_model(t: np.ndarray, x: np.ndarray, release_x: float,
     if first < 0 < release_x or first > 0 > release_x:
         raise ValueError(f"the record starts at x = {first:.4g} m but the model is released "
                          f"from x = {release_x:.4g} m: is the sign of the record flipped?")
-    ratio = abs(first) / abs(release_x) if release_x else math.inf
+    if release_x == 0.0:
+        raise ValueError("the model is not deflected before the release (its tip force is "
+                         "zero): give the static tip force of the experiment (--tip-force)")
+    ratio = abs(first) / abs(release_x)
     if not 1 / SCALE_FACTOR <= ratio <= SCALE_FACTOR:
         unit = (" (is the record in mm? x must be in m)" if 300 < ratio < 3000 else
                 " (is the record in cm? x must be in m)" if 30 < ratio < 300 else
@@ -255,7 +265,7 @@ def check_signal_against_model(t: np.ndarray, x: np.ndarray, release_x: float,
         if not 1 / SCALE_FACTOR <= r <= SCALE_FACTOR:
             unit = (" (is time in ms? t must be in s)" if 300 < r < 3000 else
                     " (check the units of t and the problem's geometry and material)")
-            raise ValueError(f"the record's period {T:.4g} s is {r:.3g} times the model's "
+            raise ValueError(f"the signal's period {T:.4g} s is {r:.3g} times the model's "
                              f"first period {period:.4g} s{unit}")
     span = float(t[-1] - t[0])
     if span > MAX_RECORD_PERIODS * period:
@@ -425,11 +435,8 @@ def calibrate_signal(t: Sequence[float], x: Sequence[float], problem=None,
     """
     t, x = validate_signal(t, x)
     sc = _problem(problem, n_elements=n_elements, output_step=output_step)
+    check_record(t, x, sc)
     lp = sc.linear_prediction()
-    if lp is None:
-        raise ValueError(f"problem {sc.name!r}: the signal calibration needs a straight "
-                         "clamped-free rod whose end maxima are analysed (analysis.maxima)")
-    check_signal_against_model(t, x, _release_x(sc), lp["period_1"])
     if tau0 is None:
         _, xk = signal_maxima(t, x)
         z = float(np.mean(damping_ratios(log_decrements(xk))))
@@ -453,6 +460,16 @@ def calibrate_signal(t: Sequence[float], x: Sequence[float], problem=None,
                              fit_y=model_at(tau, tf),
                              doubts=fit_doubts(tau, ci, rms, float(np.sqrt(np.mean(x**2))),
                                                TAU_MIN))
+
+
+def check_record(t: np.ndarray, x: np.ndarray, problem) -> None:
+    """Reject a signal the problem's model cannot produce (see
+    :func:`check_signal_against_model`), before any fitting."""
+    lp = problem.linear_prediction()
+    if lp is None:
+        raise ValueError(f"problem {problem.name!r}: the signal calibration needs a straight "
+                         "clamped-free rod whose end maxima are analysed (analysis.maxima)")
+    check_signal_against_model(t, x, _release_x(problem), lp["period_1"])
 
 
 def _release_x(problem) -> float:
@@ -496,8 +513,9 @@ def plot_calibration(res: CalibrationResult, path: str | Path) -> Path:
         ax.set_ylabel("log decrement delta_k [-]")
     ax.legend(loc="best", fontsize=8)
     ax.grid(alpha=0.3)
-    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
-    fig.savefig(tmp, dpi=120, bbox_inches="tight")
-    plt.close(fig)
-    tmp.replace(path)
-    return path
+    from runtime.io.atomic import save_figure
+
+    try:
+        return save_figure(fig, path, dpi=120, bbox_inches="tight")
+    finally:
+        plt.close(fig)

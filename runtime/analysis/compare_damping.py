@@ -305,14 +305,13 @@ def summary(result: ComparisonResult) -> dict:
 def _save_fig(fig, path: Path) -> Path:
     import matplotlib.pyplot as plt
 
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
+    from runtime.io.atomic import save_figure
+
     fig.tight_layout()
-    fig.savefig(tmp, dpi=110)
-    plt.close(fig)
-    tmp.replace(path)
-    return path
+    try:
+        return save_figure(fig, path, dpi=110)
+    finally:
+        plt.close(fig)
 
 
 def plot_compare(result: ComparisonResult, out: Path | str) -> list[Path]:

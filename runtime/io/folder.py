@@ -115,14 +115,30 @@ def refuse_existing(path: Path, command: str, markers: Iterable[str] = ("summary
     it is refused too, and the message points at ``--resume`` where the command has it.
     Returns the existing status (None for an empty or new folder).
     """
+    holder = lock_holder(path)
+    if holder is not None:
+        raise FolderError(f"kvrod {command}: results folder {str(path)!r} is in use by process "
+                          f"{holder} (lock file {LOCK_NAME}); wait for it or choose another "
+                          "--out")
     status = existing_result(path, markers)
     if status is None or overwrite:
         return status
-    hint = "use --overwrite to replace it"
-    if resumable:
-        hint += " or --resume to continue it" if status in ("running", "interrupted") else ""
+    hint = "use --overwrite to replace it" + (" or --resume to continue it" if resumable
+                                               else "")
     raise FolderError(f"kvrod {command}: results folder {str(path)!r} already holds a "
                       f"{status} result; {hint} (or choose another --out)")
+
+
+def lock_holder(path: Path) -> int | None:
+    """The pid of the live process holding ``path``'s lock, or None."""
+    lock = Path(path) / LOCK_NAME
+    try:
+        holder = json.loads(lock.read_text()).get("pid", -1)
+    except (OSError, ValueError, AttributeError):
+        return None
+    if isinstance(holder, int) and holder != os.getpid() and _pid_alive(holder):
+        return holder
+    return None
 
 
 def _pid_alive(pid: int) -> bool:
@@ -166,6 +182,10 @@ def _take_lock(lock: Path, command: str) -> None:
                                   "another --out") from None
             with contextlib.suppress(FileNotFoundError):  # stale: its owner is gone
                 lock.unlink()
+            if isinstance(holder, int) and holder > 0:      # and its half-written files
+                for stale in lock.parent.rglob(f".*.{holder}.tmp*"):
+                    with contextlib.suppress(OSError):
+                        stale.unlink()
             continue
         with os.fdopen(fd, "wb") as fh:
             fh.write(payload)

@@ -26,13 +26,12 @@ def _plt():
 
 
 def _save(fig, path: Path) -> Path:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
-    fig.savefig(tmp, dpi=120, bbox_inches="tight")
-    tmp.replace(path)
-    _plt().close(fig)
-    return path
+    from runtime.io.atomic import save_figure
+
+    try:
+        return save_figure(fig, path, dpi=120, bbox_inches="tight")
+    finally:
+        _plt().close(fig)
 
 
 def plot_tip(runs: Sequence, labels: Sequence[str], path: Path, envelopes: bool = True) -> Path:

@@ -6,16 +6,15 @@ reader never sees half a file, and a run that dies leaves the previous complete 
 
 from __future__ import annotations
 
-import contextlib
 import json
 import math
-import os
 import zipfile
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from runtime.io.atomic import atomic_path, write_text
 
 
 def jsonable(obj: Any, nonfinite: str = "string") -> Any:
@@ -37,38 +36,19 @@ def jsonable(obj: Any, nonfinite: str = "string") -> Any:
     return obj
 
 
-@contextlib.contextmanager
-def _removed_on_failure(tmp: Path) -> Iterator[None]:
-    """Remove the temporary file ``tmp`` if writing it fails (disk full, Ctrl-C, ...), so a
-    failed write leaves neither a partial file nor a stray temporary one."""
-    try:
-        yield
-    except BaseException:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
-        raise
-
-
 def write_json(path: Path, data: dict) -> Path:
     """Write ``data`` as indented JSON atomically (non-finite floats become strings)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    text = json.dumps(jsonable(data), indent=2) + "\n"
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with _removed_on_failure(tmp):
-        tmp.write_text(text)
-        tmp.replace(path)
-    return path
+    return write_text(path, json.dumps(jsonable(data), indent=2) + "\n")
 
 
 def write_npz(path: Path, **arrays: np.ndarray) -> Path:
     """Write arrays to a compressed NPZ atomically."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp.npz")
-    with _removed_on_failure(tmp):
+    with atomic_path(path, suffix=".npz") as tmp:
         np.savez_compressed(tmp, **arrays)
-        tmp.replace(path)
     return path
 
 
@@ -104,13 +84,8 @@ def write_problem(path: Path, mapping: dict) -> Path | None:
     doc = jsonable(mapping, nonfinite="null")
     if doc.get("rod", {}).get("geometry", {}).get("kind") == "curve":
         return None
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with _removed_on_failure(tmp):
-        tmp.write_text("# the resolved problem of this run: kvrod simulate " + path.name + "\n"
-                       + tomli_w.dumps(_drop_none(doc)))
-        tmp.replace(path)
-    return path
+    return write_text(path, "# the resolved problem of this run: kvrod simulate " + path.name
+                      + "\n" + tomli_w.dumps(_drop_none(doc)))
 
 
 def _drop_none(obj):
@@ -139,6 +114,29 @@ def write_checkpoint(out_dir: Path, parameters: dict, state: dict) -> Path:
     arrays["counters_json"] = np.array(json.dumps(state["counters"]))
     arrays["parameters_json"] = np.array(json.dumps(jsonable(parameters), sort_keys=True))
     return write_npz(Path(out_dir) / CHECKPOINT, **arrays)
+
+
+def _flatten(obj, prefix: str = "") -> dict:
+    """{dotted.path: value} of nested tables (lists by index)."""
+    if isinstance(obj, dict):
+        out: dict = {}
+        for k, v in obj.items():
+            out.update(_flatten(v, f"{prefix}{k}."))
+        return out
+    if isinstance(obj, list) and obj and all(isinstance(v, dict) for v in obj):
+        out = {}
+        for i, v in enumerate(obj):
+            out.update(_flatten(v, f"{prefix}{i}."))
+        return out
+    return {prefix[:-1]: obj}
+
+
+def _named(path: str) -> str:
+    """A dotted path with its command-line alias, e.g. 'rod.elements (n_elements)'."""
+    from runtime.problem.schema import ALIASES
+
+    alias = next((a for a, p in ALIASES.items() if p == path and "_" in a), None)
+    return f"{path} ({alias})" if alias else path
 
 
 class CheckpointError(ValueError):
@@ -171,11 +169,11 @@ def load_checkpoint(out_dir: Path, parameters: dict,
         raise CheckpointError(f"--resume: checkpoint {str(path)!r} is incomplete (missing "
                               f"{', '.join(missing) or 'metadata'}); start again with "
                               "--overwrite")
-    wanted = jsonable(parameters)
-    for key in sorted(set(saved) | set(wanted)):
-        if saved.get(key) != wanted.get(key):
+    a, b = _flatten(saved), _flatten(jsonable(parameters))
+    for key in sorted(set(a) | set(b)):
+        if a.get(key) != b.get(key):
             raise CheckpointError(f"--resume: checkpoint in {str(out_dir)!r} was written with "
-                                  f"{key} = {saved.get(key)!r}, this run has "
-                                  f"{wanted.get(key)!r}")
+                                  f"{_named(key)} = {a.get(key)!r}, this run has "
+                                  f"{b.get(key)!r}")
     data["counters"] = counters
     return data

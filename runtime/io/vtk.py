@@ -14,13 +14,13 @@ segment (W); point data at nodes: curvature/twist U and moments M of the joint a
 
 from __future__ import annotations
 
-import os
 from collections.abc import Iterable
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from runtime.io.atomic import write_text
 from runtime.model.rod import RodModel
 
 
@@ -83,12 +83,7 @@ def write_vtp(path: Path, points: np.ndarray, cell_data: dict, point_data: dict)
         f'<DataArray type="Int64" Name="offsets" format="ascii">{offs}</DataArray>',
         "</Lines>", "</Piece>", "</PolyData>", "</VTKFile>",
     ]
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text("\n".join(xml) + "\n")
-    tmp.replace(path)
-    return path
+    return write_text(Path(path), "\n".join(xml) + "\n")
 
 
 def _pvd_text(entries: list[tuple[float, str]]) -> str:
@@ -148,11 +143,7 @@ class VtkSeries:
 
     def write_collection(self) -> Path:
         """(Re)write ``stem.pvd`` with the frames so far (atomically)."""
-        self.folder.mkdir(parents=True, exist_ok=True)
-        tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
-        tmp.write_text(_pvd_text(self.entries))
-        tmp.replace(self.path)
-        return self.path
+        return write_text(self.path, _pvd_text(self.entries))
 
     close = write_collection
 

@@ -43,11 +43,9 @@ def nonnegative(path: str, value: Any) -> float:
 
 
 def integer(path: str, value: Any, low: int = -(2**62), high: int = 2**62) -> int:
-    """An integer in [low, high] (floats with an integer value are accepted)."""
+    """An integer in [low, high] (a float, even 2.0, is not: TOML distinguishes them)."""
     if isinstance(value, bool):
         raise ParameterError(path, value, f"integer {low} ... {high}")
-    if isinstance(value, (float, np.floating)) and math.isfinite(value) and value.is_integer():
-        value = int(value)
     if not isinstance(value, (int, np.integer)) or not low <= int(value) <= high:
         raise ParameterError(path, value, f"integer {low} ... {high}")
     return int(value)

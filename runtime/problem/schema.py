@@ -155,8 +155,10 @@ class Problem:
                 "simulation.t_end", self.simulation.t_end,
                 f"at most {MAX_PERIODS:.0e} periods of the rod's first bending mode "
                 f"({MAX_PERIODS * 2 * math.pi / self.characteristic_frequency():.3g} s for "
-                f"this rod: length {self.rod.length:g} m); the run would need more than "
-                f"{50 * periods:.2g} steps")
+                f"this rod: length {self.rod.length:g} m, density "
+                f"{getattr(self.material, 'density', float('nan')):g} kg/m^3, E "
+                f"{getattr(self.material, 'youngs_modulus', float('nan')):g} Pa); the run "
+                f"would need more than {50 * periods:.2g} steps")
 
     # -- derived figures ---------------------------------------------------------------
     def segment_matrices(self) -> dict[str, np.ndarray]:
@@ -260,7 +262,14 @@ class Problem:
         m = copy.deepcopy(self.to_mapping())
         for key, value in overrides.items():
             apply_override(m, key, value)
-        return Problem.from_mapping(m, base=self.base, name=self.name)
+        try:
+            return Problem.from_mapping(m, base=self.base, name=self.name)
+        except ParameterError as exc:   # name the value as the caller wrote it
+            used = {resolve_alias(k): k for k in overrides if k != "tip_force"}
+            if exc.name in used and used[exc.name] != exc.name:
+                raise ParameterError(f"{used[exc.name]} ({exc.name})", exc.value,
+                                     exc.allowed, exc.where) from None
+            raise
 
 
 def _settings(cls, path: str, m: Any):

@@ -109,6 +109,22 @@ class SimulationResult:
         idx = _maxima_indices(self.model, self.problem.analysis.maxima)[0]
         return 1e3 * float(np.broadcast_to(self.atol, (self.model.n,))[idx])
 
+    def tolerance_warnings(self) -> list[str]:
+        """Doubts about the tolerances: a user's atol that is not small against the
+        motion's displacement scale, or a loose rtol."""
+        out = []
+        sim = self.problem.simulation
+        if sim.atol is not None and self.model is not None and self.y_last is not None:
+            y0 = self.static.y if self.static is not None else self.model.reference
+            d, _ = motion_scale(self.problem, self.model, y0)
+            if sim.atol > 1e-2 * d:
+                out.append(f"atol = {sim.atol:g} is not small against the motion's "
+                           f"displacement scale {d:.3g} m (the default scales atol by it): "
+                           "the result is doubtful")
+        if sim.rtol > 1e-3:
+            out.append(f"rtol = {sim.rtol:g} is loose: expect errors of that order")
+        return out
+
     def summary(self) -> dict:
         """JSON-ready summary: status, resolved parameters, static result, maxima and
         decrements, the energy audit, warnings and solver counters."""
@@ -132,6 +148,7 @@ class SimulationResult:
             pk.update(log_decrements=[], damping_ratios=[], periods=[])
         audit = self.audit()
         warnings += audit.warnings
+        warnings += self.tolerance_warnings()
         st = self.static
         return {
             "status": self.status,

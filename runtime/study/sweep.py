@@ -22,16 +22,19 @@ a grid (Cartesian product, in the order the keys are written) or as an explicit 
 accepted too). Parameter names are the short aliases of the command line
 (:data:`runtime.problem.schema.ALIASES`: ``tau``, ``tau_S``, ``n_elements``,
 ``youngs_modulus``, ``tip_force``, ...) or any dotted path of the problem file (e.g.
-``loads.0.time.start``); ``tau`` sets tau_S = tau_B = tau (the paper's convention). Names and types are checked
-when the study is loaded (:class:`StudyError`); values out of range are not: such a point
-fails (its ParameterError is recorded) and the others run.
+``loads.0.time.start``); ``tau`` sets tau_S = tau_B = tau (the paper's convention). Every
+point is built through the problem schema when the study is loaded, so a bad name, type or
+value is a :class:`StudyError` naming the point before anything runs; a point whose run
+fails is recorded as failed and the others run.
 
 Results layout of a study folder ``DIR``::
 
     DIR/study.toml                       copy of the study file
     DIR/points/<point id>/summary.json   per point (status, message, figures, parameters)
     DIR/points/<point id>/series.npz     per point time series (when a run got that far)
-    DIR/study.csv                        one row per point, rebuilt from the summaries
+    DIR/progress.json                    live counts: done, failed, running, queued
+    DIR/study.csv                        one row per point: appended as points return,
+                                         rebuilt in study order from the summaries
     DIR/summary.png                      damping ratios and periods against a varied parameter
 
 The point id is stable: a readable slug of the varied parameters plus a hash of all of
@@ -49,7 +52,6 @@ Dask.
 from __future__ import annotations
 
 import csv
-import dataclasses
 import hashlib
 import io
 import itertools
@@ -64,6 +66,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from runtime.io.atomic import write_bytes, write_text
 from runtime.io.results import write_json, write_run
 
 #: top-level keys of a study file
@@ -246,12 +249,14 @@ def study_from_dict(data: Mapping[str, Any], name: str = "study", source: str = 
         varied += [k for k in p if k not in varied]
     points: dict[str, StudyPoint] = {}
     for p in raw_points:
+        for a, b in ((("tau",), ("tau_S", "tau_B")), (("tau_S", "tau_B"), ("tau",))):
+            fa = [k for k in a if k in fixed]
+            pb = [k for k in b if k in p]
+            if fa and pb:     # would tau_B keep the fixed tau, or not? say it instead
+                raise StudyError(f"{fa[0]} is fixed but {pb[0]} varies: give the viscosity "
+                                 "one way, either tau or tau_S/tau_B, in [fixed] and the "
+                                 "points alike")
         params = {**{k: v for k, v in fixed.items() if k not in p}, **p}
-        if "tau" in p:       # a varied tau overrides fixed tau_S/tau_B
-            params.pop("tau_S", None)
-            params.pop("tau_B", None)
-        elif {"tau_S", "tau_B"} & set(p):
-            params.pop("tau", None)
         _check_params(params, "point")
         pid = point_id(params, varied)
         if pid not in points:   # every value checked by the problem schema before any run
@@ -327,6 +332,8 @@ def run_point(scenario: str, point_id: str, params: Mapping[str, Any]) -> PointO
         from runtime.simulate.simulate import simulate
 
         run = simulate(load_problem(scenario, params))
+        if run.interrupt is not None:      # Ctrl-C stops the study, it is no failed point
+            raise run.interrupt
         status, message = run.status, run.message
     except Exception as exc:  # noqa: BLE001 - a failing point must not stop the study
         status, message = FAILED, f"{type(exc).__name__}: {exc}"
@@ -387,9 +394,7 @@ def write_point(out: Path, outcome: PointOutcome) -> dict:
         (d / "series.npz").unlink()
     names = sorted(outcome.files, key=lambda n: n == "summary.json")
     for name in names:
-        tmp = d / f".{name}.{os.getpid()}.tmp"
-        tmp.write_bytes(outcome.files[name])
-        tmp.replace(d / name)
+        write_bytes(d / name, outcome.files[name])
     return json.loads(outcome.files["summary.json"])
 
 
@@ -451,11 +456,7 @@ def table_row(study: Study, point: StudyPoint, summary: Mapping[str, Any] | None
 
 
 def _atomic_text(path: Path, text: str) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(text)
-    tmp.replace(path)
-    return path
+    return write_text(path, text)
 
 
 def write_table(out: Path, study: Study, rows: Mapping[str, Mapping[str, Any]]) -> Path:
@@ -643,15 +644,29 @@ class StudyRecorder:
         # study.csv grows by one row per returned point (rows of earlier runs first); the
         # final table in study order is written by close()
         self._table = TableAppender(self.out / "study.csv", study)
+        self._last_progress = -1e9
         for p in study.points:
             if p.id in self.report.skipped:
                 self._table.append(self.rows[p.id])
 
     def mark_running(self, ids: Iterable[str]) -> None:
-        """Count submitted points as running (the table shows them at the end)."""
+        """Count submitted points as running (progress.json shows them at once)."""
         for pid in ids:
             self.rows[pid]["status"] = RUNNING
         self._count_in_flight()
+        self._write_progress(force=True)
+
+    def _write_progress(self, force: bool = False) -> None:
+        """DIR/progress.json: the live counts (throttled to one write per 0.5 s)."""
+        now = time.monotonic()
+        if not force and now - self._last_progress < 0.5:
+            return
+        self._last_progress = now
+        pr = self.progress
+        write_json(self.out / "progress.json",
+                   {"total": pr.total, "skipped": pr.skipped, "done": pr.done,
+                    "failed": pr.failed, "running": pr.running, "queued": pr.queued,
+                    "last": pr.last, "last_status": pr.last_status})
 
     def _count_in_flight(self) -> None:
         inflight = sum(r["status"] == RUNNING for r in self.rows.values())
@@ -674,6 +689,7 @@ class StudyRecorder:
             self.report.failed.append(point.id)
         self._count_in_flight()
         pr.last, pr.last_status = point.id, summary["status"]
+        self._write_progress()
         now = time.monotonic()
         if self.plots and now - self._last_plot >= self.plot_interval:
             self._last_plot = now
@@ -683,6 +699,11 @@ class StudyRecorder:
     def close(self) -> StudyReport:
         """Final table (rebuilt from the summaries on disk, in study order) and plots."""
         self._table.close()
+        for row in self.rows.values():
+            if row.get("status") == RUNNING:
+                row["status"] = PENDING
+        self._count_in_flight()
+        self._write_progress(force=True)
         self.rows = rebuild_table(self.out, self.study)
         if self.plots:
             write_plots(self.out, self.study, self.rows)

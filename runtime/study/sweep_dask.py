@@ -113,9 +113,12 @@ def _children_ignore_sigint() -> Iterator[None]:
 def start_local_cluster(n_workers: int | None = None) -> LocalCluster:
     """A LocalCluster of single-threaded worker processes (scheduler and dashboard on free
     ports) that leave Ctrl-C to this process."""
+    # silence_logs: the workers log a warning for every task cancelled by an interrupted
+    # study; keep their logs to errors
     with _children_ignore_sigint():
         return LocalCluster(n_workers=n_workers or default_workers(), threads_per_worker=1,
-                            processes=True, dashboard_address=":0", scheduler_port=0)
+                            processes=True, dashboard_address=":0", scheduler_port=0,
+                            silence_logs=logging.ERROR)
 
 
 @contextlib.contextmanager

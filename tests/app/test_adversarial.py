@@ -71,6 +71,10 @@ def _prepare(case: A.Case, tmp: Path, templates) -> A.Ctx:
     for fn in case.setup:
         fn(ctx)
     ctx.snapshot = A.snapshot(ctx.out)
+    # what a SIGKILLed earlier run left (a stale lock, a half-written temporary file): a
+    # refused command must leave it alone, a successful one must clean it up
+    ctx.vars["_stale"] = {A.LOCK_NAME} if A.lexists(ctx.out / A.LOCK_NAME) else set()
+    ctx.vars["_stale"] |= set(A.stray_tmp(ctx.out))
     return ctx
 
 
@@ -115,14 +119,16 @@ class ComputationStarted(BaseException):  # noqa: N818 - not an error of the pro
     in the product swallows it)."""
 
 
-_GUARDED = (("runtime.scenarios", "run_cantilever"), ("runtime.modal", "modal_analysis"),
-            ("runtime.statics", "solve_static"), ("runtime.sweep", "run_point"),
-            ("runtime.compare_damping", "compare_damping"),
-            ("runtime.calibration", "calibrate_signal"),
-            ("runtime.calibration", "calibrate_decrements"))
-_PREIMPORT = ("runtime.scenarios", "runtime.modal", "runtime.statics", "runtime.sweep",
-              "runtime.calibration", "runtime.compare_damping", "kvrod.reproduce",
-              "kvrod.beyond", "kvrod.cli_beyond", "kvrod.cli_runtime", "kvrod.cli_sweep")
+_GUARDED = (("runtime.simulate.simulate", "simulate"),
+            ("runtime.analysis.modal", "modal_analysis"),
+            ("runtime.solvers.statics", "solve_static"), ("runtime.study.sweep", "run_point"),
+            ("runtime.analysis.compare_damping", "compare_damping"),
+            ("runtime.analysis.calibration", "calibrate_signal"),
+            ("runtime.analysis.calibration", "calibrate_decrements"))
+_PREIMPORT = ("runtime.simulate.simulate", "runtime.analysis.modal", "runtime.solvers.statics",
+              "runtime.study.sweep", "runtime.analysis.calibration",
+              "runtime.analysis.compare_damping", "kvrod.reproduce", "kvrod.beyond",
+              "kvrod.cli_beyond", "kvrod.cli_runtime", "kvrod.cli_sweep")
 
 
 def _install_guard(monkeypatch) -> None:
@@ -188,9 +194,10 @@ def _verify(case: A.Case, ctx: A.Ctx, r: A.Result) -> list[str]:
     if ctx.planted_lock is not None:
         if not A.lexists(lock) or lock.read_bytes() != ctx.planted_lock:
             problems.append(f"the live holder's {A.LOCK_NAME} was removed or replaced")
-    elif A.lexists(lock):
+    stale = ctx.vars.get("_stale", set()) if r.rc not in (0, None) else set()
+    if ctx.planted_lock is None and A.lexists(lock) and A.LOCK_NAME not in stale:
         problems.append(f"{A.LOCK_NAME} left in the results folder")
-    tmp = A.stray_tmp(ctx.out)
+    tmp = [f for f in A.stray_tmp(ctx.out) if f not in stale]
     if tmp:
         problems.append(f"stray temporary files: {tmp[:5]}")
     return problems

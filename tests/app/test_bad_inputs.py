@@ -4,6 +4,7 @@ non-zero exit, no traceback); valid inputs never raise (Hypothesis)."""
 from __future__ import annotations
 
 import math
+import re
 import subprocess
 import sys
 
@@ -77,15 +78,15 @@ def test_cli_bad_input(argv, needle, tmp_path):
 
 
 CONFIG_BAD = [
-    ('scenario = "cantilever"\n[parameters]\ntau = "x"\n', "'material.tau' = 'x'"),
+    ('scenario = "cantilever"\n[parameters]\ntau = "x"\n', "material.tau)' = 'x'"),
     ('scenario = "pendulum_x"\n', "unknown problem"),
     ('scenario = "cantilever"\n[parameters]\nyoung = 1e6\n', "unknown parameter 'young'"),
-    ('scenario = "cantilever"\n[parameters]\nn_elements = 2.5\n', "'rod.elements' = 2.5"),
-    ('scenario = "cantilever"\n[parameters]\nn_elements = true\n', "'rod.elements' = True"),
+    ('scenario = "cantilever"\n[parameters]\nn_elements = 2.5\n', "rod.elements)' = 2.5"),
+    ('scenario = "cantilever"\n[parameters]\nn_elements = true\n', "rod.elements)' = True"),
     ('scenario = "cantilever"\n[parameters\n', "malformed TOML"),
     ('scenario = "cantilever"\nparameters = 3\n', "must be a table"),
     ('scenario = "cantilever"\n[other]\nx = 1\n', "unknown table"),
-    ('scenario = "cantilever"\n[parameters]\ndamping = 1\n', "'material.damping' = 1"),
+    ('scenario = "cantilever"\n[parameters]\ndamping = 1\n', "material.damping)' = 1"),
     ('scenario = ["cantilever"]\n', "must be a string"),
     ('scenario = "cantilever"\n[parameters]\ntau = 0.1\ntau_S = 0.2\n', "both given"),
 ]
@@ -95,7 +96,7 @@ CONFIG_BAD = [
 def test_config_bad_input(text, needle, tmp_path):
     f = tmp_path / "run.toml"
     f.write_text(text)
-    with pytest.raises(ValueError, match=needle.replace("[", r"\[").replace("(", r"\(")):
+    with pytest.raises(ValueError, match=re.escape(needle)):
         name, kw = load_config(f)
         load_problem(name, kw)
 

@@ -142,8 +142,9 @@ def test_cli_calibrate_bad_data(tmp_path):
     data = tmp_path / "bad.csv"
     data.write_text("t,x\n0,0.1\n0.1,0.2\n0.05,0.1\n")
     args = parse(["calibrate", "--data", str(data), "--out", str(tmp_path / "o")])
-    with pytest.raises(ValueError, match="too short"):
+    with pytest.raises(CliError, match="bad.csv: signal too short"):
         args.func(args)
+    assert not (tmp_path / "o").exists()          # rejected before anything is written
 
 
 def test_cli_modes(tmp_path, capsys):
