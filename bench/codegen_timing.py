@@ -69,7 +69,7 @@ def run(log=print) -> dict:
             log(f"  {stage}: failed: {r['message']}")
     from bench.meta import metadata
 
-    return {"rows": rows, "meta": metadata()}
+    return {"rows": rows, "targets": [], "meta": metadata()}
 
 
 if __name__ == "__main__":

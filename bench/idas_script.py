@@ -30,11 +30,16 @@ that does what a strong CasADi user would do with kvrod's rod, and prints the ti
    ``IDACalcIC``), outputs every ``output_step`` (as ``kvrod simulate``); tip maxima from
    the outputs by cubic Hermite interpolation of (x, x') between samples.
 
-The flat C grows with N (about 5.5 MB and 45 s of gcc at N = 50, 22 MB at N = 200):
-``--build map`` generates the MX function instead (C loops over the per-element kernels,
-its size independent of N) for large N. Build variants for the benchmark tables (see
-:func:`build_function`): "flat", "map", "sx" (SX virtual machine, no compile), "mx" (MX
-virtual machine). The benchmarks (:mod:`bench.integrators`) import this module.
+The flat C grows with N: 5.5 MB at N = 50 (gcc about 45 s), 22 MB at N = 200 (gcc
+255-340 s, 3.8 GB of memory); N = 1000 (~110 MB) is beyond a small machine. For large N,
+``--build kernels`` gives SUNDIALS kvrod's own compiled residual and banded Jacobian
+(``bench/idas_kernels.c`` behind CasADi's external-function API, one library for every N,
+compiled in about 1 s; per step as fast as flat at N = 50, faster from N = 200), so that
+the comparison measures the integrators and their linear algebra on equal functions.
+Other variants for the benchmark tables (see :func:`build_function`): "map" (the MX
+function over the kernel maps, generated to C: its MX Jacobian is slow), "sx" (SX virtual
+machine, no compile), "mx" (MX virtual machine). The benchmarks
+(:mod:`bench.integrators`) import this module.
 
 Whole-process timing of this script against ``kvrod simulate`` (medians over runs; for
 example with ``/usr/bin/time`` or hyperfine)::

@@ -65,7 +65,7 @@ REF_RTOL = 1e-9
 RTOL_SCAN = (1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6, 3e-7, 1e-7, 3e-8, 1e-8)
 OUT_PER_SECOND = 100
 #: repeats of each matched run in the final alternating comparison (medians)
-DUEL_REPEATS = 5
+DUEL_REPEATS = 7
 
 
 @dataclass(frozen=True)
@@ -106,7 +106,7 @@ ALL_CONFIGS = (
 #: 3.5 GB); at N = 1000 it would be ~110 MB, beyond this machine (23 GB, 2 cores)
 FLAT_MAX_N = 200
 FLAT_SKIPPED = ("flat SX build not made for N > 200: its C grows linearly with N (5.5 MB at "
-                "N = 50, 22 MB at N = 200, where gcc -O2 took ~340 s and 3.5 GB); N = 1000 "
+                "N = 50, 22 MB at N = 200, where gcc -O2 took 255-340 s and 3.5-3.8 GB); N = 1000 "
                 "would be ~110 MB of straight-line C")
 
 
@@ -355,7 +355,9 @@ def matched(runner, ref: np.ndarray, rtols=RTOL_SCAN, budget: float = math.inf,
 def duel(r: ReleasedRod, T: float, kvrod_rtol: float, opponents: dict[str, tuple[Config,
          float]], repeats: int = DUEL_REPEATS) -> dict:
     """Alternate kvrod and every opponent at their matched rtols ``repeats`` times
-    (A B C A B C ...); median wall time, per-step cost and all walls of each."""
+    (A B C A B C ...); median wall time, per-step cost and all walls of each, and for each
+    opponent the median of the paired ratios kvrod / opponent (repeat by repeat, so that
+    the ratio holds when the machine's speed drifts)."""
     names = ["kvrod", *opponents]
     walls: dict[str, list[float]] = {k: [] for k in names}
     steps: dict[str, int] = {}
@@ -372,6 +374,9 @@ def duel(r: ReleasedRod, T: float, kvrod_rtol: float, opponents: dict[str, tuple
         med = statistics.median(walls[name])
         out[name] = {"median": med, "walls": walls[name], "steps": steps[name],
                      "us_per_step": 1e6 * med / steps[name]}
+        if name != "kvrod":
+            out[name]["paired_ratio_kvrod_over_this"] = statistics.median(
+                a / b for a, b in zip(walls["kvrod"], walls[name], strict=True))
     return out
 
 
@@ -419,15 +424,15 @@ def compare(N: int, T: float, configs: tuple[Config, ...], scipy_methods=("BDF",
                   if out["opponents"][c.name]["matched"]}
     if out["kvrod"]["matched"] and contenders:
         out["duel"] = duel(r, T, out["kvrod"]["matched"]["rtol"], contenders, repeats)
-        k = out["duel"]["kvrod"]["median"]
-        best = min(contenders, key=lambda c: out["duel"][c]["median"])
+        d = out["duel"]
+        best = min(contenders, key=lambda c: d[c]["median"])
         idas = [c for c in contenders if c.startswith("idas")]
-        best_idas = min(idas, key=lambda c: out["duel"][c]["median"]) if idas else None
+        best_idas = min(idas, key=lambda c: d[c]["median"]) if idas else None
         out["strongest"] = best
         out["strongest_idas"] = best_idas
-        out["ratio_kvrod_over_strongest"] = k / out["duel"][best]["median"]
+        out["ratio_kvrod_over_strongest"] = d[best]["paired_ratio_kvrod_over_this"]
         out["ratio_kvrod_over_strongest_idas"] = (
-            k / out["duel"][best_idas]["median"] if best_idas else None)
+            d[best_idas]["paired_ratio_kvrod_over_this"] if best_idas else None)
         log(f"  N={N}: duel medians: " + ", ".join(
             f"{n} {d['median']:.3f} s ({d['us_per_step']:.0f} us/step)"
             for n, d in out["duel"].items()))

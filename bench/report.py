@@ -37,7 +37,8 @@ def integrators_md(doc: dict) -> list[str]:
            "(`bench/idas_kernels.c`; compile independent of N); CSparse LU; IDAS with "
            "`abstolv`, CVODES with its scalar abstol on the scaled state (= the same "
            "per-component atol). Times: medians of the matched runs timed alternately "
-           "(kvrod, then each configuration, repeated); per step = wall / accepted steps.",
+           "(kvrod, then each configuration, repeated); ratios: medians of the ratios of "
+           "each repeat (paired); per step = wall / accepted steps.",
            "",
            "| N | kvrod s | kvrod us/step | strongest SUNDIALS | its s | its us/step | "
            "kvrod / strongest | strongest IDAS | kvrod / IDAS |",
@@ -55,14 +56,15 @@ def integrators_md(doc: dict) -> list[str]:
     if doc.get("targets"):
         out += ["", *targets_md(doc["targets"])]
     out += ["", "Alternating timing of the matched runs (median and range of the repeats):",
-            "", "| N | integrator | rtol | median s | min-max s | steps | us/step |",
-            "|---:|:--|---:|---:|:--|---:|---:|"]
+            "", "| N | integrator | rtol | median s | min-max s | steps | us/step | "
+            "kvrod / this (paired) |", "|---:|:--|---:|---:|:--|---:|---:|---:|"]
     for r in runs:
         for name, d in (r.get("duel") or {}).items():
             m = r["kvrod"]["matched"] if name == "kvrod" else r["opponents"][name]["matched"]
             out.append(_row([str(r["N"]), name, f"{m['rtol']:.0e}", _f(d["median"]),
                              f"{min(d['walls']):.3f}-{max(d['walls']):.3f}",
-                             str(d["steps"]), _us(d["us_per_step"])]))
+                             str(d["steps"]), _us(d["us_per_step"]),
+                             _f(d.get("paired_ratio_kvrod_over_this"), ".2f")]))
     out += ["", "Matched runs (the loosest rtol of the half-decade scan with max tip-x error "
             "<= 1e-5 m; one run each, so their times are noisier than the medians above). "
             "LU = factorisations; SUNDIALS's Jacobian evaluations equal its linear-solver "
@@ -151,7 +153,7 @@ def scaling_md(doc: dict) -> list[str]:
     out = ["## 2. Scaling in N (kvrod)", "",
            f"Cantilever release, rtol = {doc['rtol']:.0e} with default_atol, T = "
            f"{doc['T']:g} s, output every 0.1 s, one subprocess per N, median of 3 solves "
-           "(1 above N = 1000). Peak RSS is the whole process (Python, NumPy, SciPy, "
+           "(2 above N = 2000). Peak RSS is the whole process (Python, NumPy, SciPy, "
            "CasADi); tracemalloc peak is the solve's own Python/NumPy allocations.", "",
            "| N | n | wall s | s per simulated s | steps | us/step | LU | peak RSS MiB | "
            "solve alloc peak MiB |", "|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
