@@ -1,33 +1,33 @@
-"""``python -m bench [--quick] [--out DIR]``: every benchmark, JSON + Markdown.
+"""``python -m bench [--quick] [--out DIR] [--only SECTION]``: every benchmark, JSON + Markdown.
 
 Writes ``DIR/integrators.json``, ``scaling.json``, ``codegen.json``, ``peers.json``,
 ``kernels.json`` (+ ``kernels.md``), ``energy_audit.json`` and ``README.md`` (all tables).
+Every JSON document records its date, platform, versions and command line (``meta``) and
+its targets with a verdict (``targets``: met / missed / not measured).
 ``--only SECTION`` (repeatable) reruns just those sections and rebuilds the README from
-the JSON of the others. ``--quick``: N = 25, 50,
-2 s simulated, IDAS without jit, no SciPy Radau / codegen / PyElastica / kernel table
-(under a minute).
+the JSON of the others. ``--quick``: N = 25 only for the SUNDIALS comparison (IDAS and
+CVODES on kvrod's compiled kernels: no flat SX compile) and N = 25, 50 for scaling, 2 s
+simulated, SciPy BDF only; no codegen / PyElastica / kernel table / energy audit (well
+under a minute).
+
+Timings are medians over repeats (the machine has 2 cores shared with other jobs).
 """
 
 from __future__ import annotations
 
 import argparse
-import datetime
 import json
-import os
-import platform
 import sys
 import time
 from pathlib import Path
 
-import casadi
-import numpy as np
-import scipy
-
 from bench import codegen_timing, energy_audit, integrators, peers, report, scaling
+from bench.meta import metadata, target
 from runtime.io.results import jsonable
 
-FULL_N = (25, 50, 200, 1000)
-QUICK_N = (25, 50)
+FULL_N = (50, 200, 1000)
+QUICK_N = (25,)
+RATIO_MAX = 0.5
 
 
 def _clean(obj):
@@ -47,39 +47,45 @@ def _log(msg: str) -> None:
 def run_integrators(quick: bool) -> dict:
     T = 2.0 if quick else 10.0
     sizes = QUICK_N if quick else FULL_N
-    how = "expand" if quick else "jit"
-    idas_funcs = ("jit-compiled (gcc -O2) residual and sparse Jacobian" if how == "jit"
-                  else "expanded SX functions (no compile)")
     runs = []
     for N in sizes:
+        configs = integrators.strong_configs(N, quick)
         if quick:
             methods: tuple[str, ...] = ("BDF",)
         else:
             methods = ("BDF", "Radau") if N <= 200 else ()
-        runs.append(integrators.compare(N, T, scipy_methods=methods, idas_how=how, log=_log))
-    doc = {"T": T, "runs": runs, "protocol": (
-        f"Cantilever release (paper Sect. 5), {T:g} s simulated, output every 0.01 s. "
-        "Accuracy: max tip-x error over the outputs against kvrod at rtol = atol = 1e-9. "
-        "kvrod: IDA-form residual and banded Jacobian of the compiled kernels, LAPACK band "
-        "LU. IDAS (SUNDIALS via CasADi "
-        f"{casadi.__version__}): the same residual as a semi-explicit DAE (differential rows "
-        "divided by the constant diagonal dF/dy'), state cell by cell, "
-        f"{idas_funcs}"
-        ", CSparse sparse LU. SciPy solve_ivp: the ODE form y_d' = -g_d(y)/D_d with the "
-        "compiled residual and sparse Jacobian (CSC) through Python callbacks; Radau/BDF "
-        "scanned from loose to tight (runs over 60 s end the scan); not run at N = 1000.")}
+        _log(f"  N={N}: " + ", ".join(c.name for c in configs))
+        repeats = 3 if quick else (integrators.DUEL_REPEATS if N <= 200 else 5)
+        run = integrators.compare(N, T, configs, scipy_methods=methods, repeats=repeats,
+                                  log=_log)
+        if N > integrators.FLAT_MAX_N and not quick:
+            run["flat_skipped"] = integrators.FLAT_SKIPPED
+        runs.append(run)
+    doc: dict = {"T": T, "runs": runs, "protocol": integrators.__doc__.split("\n\n", 2)[2]
+                 .split("\n\nHow each")[0].replace("\n", " ")}
     if not quick:
-        rtol50 = next((r["kvrod"]["matched"]["rtol"] for r in runs
-                       if r["N"] == 50 and r["kvrod"]["matched"]), 1e-7)
-        _log("  IDAS configurations at N = 50 ...")
-        jit_s = next((r.get("idas_first_setup_seconds") for r in runs if r["N"] == 50), None)
+        r50 = next((r for r in runs if r["N"] == 50), None)
+        rtol50 = r50["kvrod"]["matched"]["rtol"] if r50 and r50["kvrod"]["matched"] else 1e-7
+        _log(f"  every configuration at N = 50, rtol = {rtol50:g} ...")
         doc["idas_configs"] = {"N": 50, "T": T, "rtol": rtol50,
-                               "rows": integrators.idas_configs(50, T, rtol50, jit_s)}
+                               "rows": integrators.idas_configs(50, T, rtol50, log=_log)}
     doc["breakdown"] = []
     for r in runs:
-        if r["N"] in (50, 1000) and r["kvrod"]["matched"]:
+        if (r["N"] in (50, 1000) or quick) and r["kvrod"]["matched"]:
             doc["breakdown"].append(integrators.breakdown(r["N"], T,
                                                           r["kvrod"]["matched"]["rtol"]))
+    doc["targets"] = []
+    for N in FULL_N if not quick else sizes:
+        r = next((x for x in runs if x["N"] == N), None)
+        ratio = r.get("ratio_kvrod_over_strongest") if r else None
+        note = (f"strongest: {r['strongest']}" if r and r.get("strongest") else
+                "not run")
+        if quick:
+            note += f"; quick run (N = {N}, {T:g} s), the target is for N = 50, 200, 1000"
+        doc["targets"].append(target(
+            f"N = {N}: kvrod integrator / strongest SUNDIALS configuration at matched "
+            f"accuracy <= {RATIO_MAX}", ratio, RATIO_MAX, note=note))
+    doc["meta"] = metadata()
     return doc
 
 
@@ -112,23 +118,30 @@ def run_all(quick: bool = False, out_dir: Path = Path("bench/results"),
         _write(out_dir / f"{name}.json", json.dumps(_clean(doc), indent=1))
 
     if "integrators" in chosen:
-        _log("== integrators: kvrod vs IDAS vs SciPy at matched accuracy")
+        _log("== integrators: kvrod vs SUNDIALS (IDAS, CVODES) vs SciPy at matched accuracy")
         keep("integrators", run_integrators(quick))
     if "scaling" in chosen:
         rtol = 1e-7
-        for r in (docs.get("integrators") or _load(out_dir, "integrators") or {}).get("runs", []):
-            if r["N"] == 50 and r["kvrod"]["matched"]:
+        prior = (docs.get("integrators") or _load(out_dir, "integrators") or {}).get("runs", [])
+        for r in sorted(prior, key=lambda r: r["N"] != 50):   # N = 50 first, else any
+            if r["kvrod"]["matched"]:
                 rtol = r["kvrod"]["matched"]["rtol"]
+                break
         _log("== scaling in N")
-        keep("scaling", scaling.run(scaling.QUICK_SIZES if quick else scaling.SIZES,
-                                    T=2.0 if quick else 10.0, rtol=rtol, log=_log))
+        doc = scaling.run(scaling.QUICK_SIZES if quick else scaling.SIZES,
+                          T=2.0 if quick else 10.0, rtol=rtol, log=_log)
+        doc["meta"] = metadata()
+        keep("scaling", doc)
     if not quick:
         if "codegen" in chosen:
             _log("== derivation / generate / compile")
             keep("codegen", codegen_timing.run(log=_log))
         if "peers" in chosen:
             _log("== PyElastica")
-            keep("peers", peers.run(log=_log))
+            doc = peers.run(log=_log)
+            doc["targets"] = []
+            doc["meta"] = metadata()
+            keep("peers", doc)
         if "kernels" in chosen:
             _log("== generated kernels")
             from bench import kernels
@@ -143,11 +156,7 @@ def run_all(quick: bool = False, out_dir: Path = Path("bench/results"),
             loaded = _load(out_dir, name)
             if loaded is not None:
                 docs[name] = loaded
-    docs["meta"] = {"quick": quick, "platform": platform.platform(), "cpus": os.cpu_count(),
-                    "python": platform.python_version(), "numpy": np.__version__,
-                    "scipy": scipy.__version__, "casadi": casadi.__version__,
-                    "pyelastica": peers.available(),
-                    "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
+    docs["meta"] = {**metadata(), "quick": quick, "pyelastica": peers.available(),
                     "seconds": time.perf_counter() - t0,
                     "sections_run": [n for n in SECTIONS if n in chosen]}
     md = report.markdown(docs)
@@ -158,7 +167,7 @@ def run_all(quick: bool = False, out_dir: Path = Path("bench/results"),
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m bench", description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="N = 25, 50, 2 s; under a minute")
+    ap.add_argument("--quick", action="store_true", help="N = 25 (and 50), 2 s; under a minute")
     ap.add_argument("--out", default="bench/results", help="results folder")
     ap.add_argument("--only", action="append", choices=SECTIONS,
                     help="run only this section (repeatable); the others are read back "

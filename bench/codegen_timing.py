@@ -67,7 +67,9 @@ def run(log=print) -> dict:
                 f"process {r['process_seconds']:.2f} s)")
         else:
             log(f"  {stage}: failed: {r['message']}")
-    return {"rows": rows}
+    from bench.meta import metadata
+
+    return {"rows": rows, "targets": [], "meta": metadata()}
 
 
 if __name__ == "__main__":

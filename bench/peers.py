@@ -2,18 +2,18 @@
 
 PyElastica's rods are circular: we build one with the same area (so the same mass) and
 then override the shear/stretch matrix, the bend/twist matrix and the mass second moments
-with kvrod's square-section values (``RodParameters.matrices()``: kappa G A, E A, E I,
-G J_T, rho I). Its clamp (``OneEndFixedBC``: node 0 and the first element's directors)
-sits effectively at h/2, so its frequencies carry an O(h) error that kvrod's half-cell
-clamp avoids.
+with kvrod's square-section values (the model's arrays of the paper's cantilever,
+``build_model(load_problem("cantilever"))``: kappa G A, E A, E I, G J_T, rho I). Its
+clamp (``OneEndFixedBC``: node 0 and the first element's directors) sits effectively at
+h/2, so its frequencies carry an O(h) error that kvrod's half-cell clamp avoids.
 
 Protocol per N (25, 50, 100):
 
 1. static: the tip force (0.05 N along e1) on, PyElastica's ``AnalyticalLinearDamper``
    with ``uniform_damping_constant`` 7 1/s (about critical for the first mode) for 6 s;
    static tip error against the Simo-Reissner shooting solution
-   (``references/reissner.py``) with the same stiffnesses; kvrod's ``solve_static``
-   error beside it.
+   (``references/reissner.py``) with the same stiffnesses; kvrod's
+   ``static_equilibrium`` error beside it.
 2. largest stable step: position Verlet on the release (force off) at
    dt = dt0 * 1.25^k for growing k, each for 2 s; the last dt that stays finite and bounded
    (every node within 1.2 L of the origin) is kept, and reduced by 1.25 until the full
@@ -27,7 +27,7 @@ Protocol per N (25, 50, 100):
 PyElastica has no strain-rate (Kelvin-Voigt) damping: its dampers act on absolute
 velocities. An explicit method with Kelvin-Voigt damping is bounded by the fastest decay
 rate of the linearised rod: :func:`explicit_step_estimate` computes the eigenvalues of
-``-D^-1 dg/dy`` (F = D y' + g(y)) at the straight state with ``RodModel.jacobian_sparse``
+``-D^-1 dg/dy`` (F = D y' + g(y)) at the straight state with ``RodModel.dF_dy_sparse``
 and reports dt ~ 2/|lambda|_max and the steps that 10 s would need.
 """
 
@@ -38,10 +38,34 @@ import time
 
 import numpy as np
 
-from bench.integrators import PAPER, TIP_FORCE, cantilever
-from runtime.model.rod import RodModel, RodParameters
+from bench import integrators as bi
+from runtime.problem.assemble import build_model
+from runtime.problem.registry import load_problem
 
 SIZES = (25, 50, 100)
+
+
+def _paper() -> tuple[dict, tuple[float, float, float]]:
+    """The cantilever's numbers (examples/cantilever.toml) and its tip force (N)."""
+    p = load_problem("cantilever")
+    sec = dict(p.section.dims)
+    par = {"length": p.rod.length, "density": p.material.density,
+           "youngs_modulus": p.material.youngs_modulus,
+           "poisson_ratio": p.material.poisson_ratio, "tau_B": p.material.tau_B,
+           "width": sec["width"], "height": sec["height"]}
+    force = next(ld.vector for ld in p.loads if ld.kind == "force")
+    return par, tuple(float(v) for v in force)
+
+
+PAPER, TIP_FORCE = _paper()
+
+
+def matrices(N: int) -> dict[str, np.ndarray]:
+    """kvrod's section values of the paper's cantilever: C_F (3,) = (GA1, GA2, EA), C_M
+    (3,) = (EI1, EI2, GJ_T), rhoA (1,), rhoI (3,) (uniform rod: element 0)."""
+    a = build_model(load_problem("cantilever", {"n_elements": N})).arrays
+    return {"C_F": a.seg_field("C_F")[0].copy(), "C_M": a.jnt_field("C_M")[1].copy(),
+            "rhoA": a.seg_field("rhoA")[0].copy(), "rhoI": a.seg_field("rhoI")[0].copy()}
 
 
 def available() -> str | None:
@@ -63,7 +87,7 @@ def reissner_tip(N: int = 50) -> tuple[float, float]:
     """(x, z) of the Simo-Reissner tip under the paper's load (same stiffnesses as kvrod)."""
     from references.reissner import solve_reissner
 
-    mats = RodParameters(n_elements=N, **PAPER).matrices()
+    mats = matrices(N)
     sol = solve_reissner(TIP_FORCE[0], L=PAPER["length"], EA=float(mats["C_F"][2]),
                          GA=float(mats["C_F"][0]), EI=float(mats["C_M"][0]))
     return float(sol.tip[0]), float(sol.tip[1])
@@ -102,8 +126,7 @@ def _simulation(N: int, force_until: float, damping: list[tuple[float, float, fl
                     system.velocity_collection[:] *= f
                     system.omega_collection[:] *= f
 
-    P = RodParameters(n_elements=N, **PAPER)
-    mats = P.matrices()
+    mats = matrices(N)
     L, A = PAPER["length"], PAPER["width"] * PAPER["height"]
     sim = Sim()
     rod = ea.CosseratRod.straight_rod(
@@ -161,16 +184,15 @@ def period(ts: np.ndarray, xs: np.ndarray) -> float | None:
 def kvrod_period(N: int, T: float = 10.0) -> float | None:
     from runtime.solvers.integrator import solve
 
-    c = cantilever(N)
+    c = bi.rod(N, T)
     grid = np.linspace(0.0, T, 2001)
-    s = solve(c.model, (0.0, T), c.y0, c.yp0, rtol=1e-7, atol=1e-7, t_eval=grid)
+    s = solve(c.model, (0.0, T), c.y0, c.yp0, rtol=1e-7, atol=c.atol(1e-7), t_eval=grid)
     return period(grid, s.y[c.tip_x])
 
 
 def elastica_case(N: int, T: float = 10.0, t_static: float = 6.0, log=print) -> dict:
     ref = reissner_tip(N)
-    P = RodParameters(n_elements=N, **PAPER)
-    mats = P.matrices()
+    mats = matrices(N)
     omega1 = 1.875104**2 * math.sqrt(float(mats["C_M"][0]) / (float(mats["rhoA"][0])
                                                            * PAPER["length"] ** 4))
     nu_kv = omega1**2 * PAPER["tau_B"]
@@ -186,8 +208,8 @@ def elastica_case(N: int, T: float = 10.0, t_static: float = 6.0, log=print) -> 
     out["static"] = {"ok": ok, "dt": dt_s, "steps": n, "wall": wall,
                      "tip": tip.tolist(),
                      "tip_error": float(math.hypot(tip[0] - ref[0], tip[2] - ref[1]))}
-    c = cantilever(N)
-    ty = c.tip_static
+    c = bi.rod(N, T)
+    ty = c.model.tip_position(c.static_y)
     out["kvrod_static_tip_error"] = float(math.hypot(ty[0] - ref[0], ty[2] - ref[1]))
     state = (rod.position_collection.copy(), rod.director_collection.copy())
 
@@ -231,7 +253,8 @@ def elastica_case(N: int, T: float = 10.0, t_static: float = 6.0, log=print) -> 
 def explicit_step_estimate(N: int) -> dict:
     """Fastest decay/oscillation rate of the linearised Kelvin-Voigt rod at the straight
     state and the explicit step it allows (dt ~ 2/|lambda|_max)."""
-    m = RodModel(RodParameters(n_elements=N, **PAPER))
+    m = build_model(load_problem("cantilever", {"n_elements": N}))
+    m.at(0.0)                 # released: no load
     y = m.initial_state()
     z = np.zeros(m.n)
     di = np.nonzero(m.differential)[0]

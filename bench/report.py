@@ -6,6 +6,7 @@ import math
 from typing import Any
 
 from bench.energy_audit import markdown as energy_audit_md
+from bench.meta import targets_md
 
 
 def _f(v: Any, fmt: str = ".3f") -> str:
@@ -20,111 +21,155 @@ def _row(cells: list[str]) -> str:
     return "| " + " | ".join(cells) + " |"
 
 
+def _us(v: Any) -> str:
+    return _f(v, ".0f")
+
+
 def integrators_md(doc: dict) -> list[str]:
     runs = doc["runs"]
-    out = ["## 1. kvrod vs SUNDIALS IDAS (and SciPy) at matched accuracy", "",
-           doc["protocol"], ""]
-    out += ["| N | kvrod s | IDAS s | kvrod / IDAS | IDAS / kvrod | target |",
-            "|---:|---:|---:|---:|---:|:--|"]
+    out = ["## 1. kvrod vs SUNDIALS (IDAS, CVODES) and SciPy at matched accuracy", "",
+           doc["protocol"], "",
+           "Strong SUNDIALS configurations (`bench/idas_script.py`): the ODE form "
+           "y_d' = -g_d/D_d in per-component scaled variables; *flat* = residual and exact "
+           "sparse Jacobian expanded to SX and generated into one C library (gcc -O2 "
+           "-march=native, cached by content hash); *kernels* = kvrod's own compiled "
+           "residual and banded Jacobian behind CasADi's external-function API "
+           "(`bench/idas_kernels.c`; compile independent of N); CSparse LU; IDAS with "
+           "`abstolv`, CVODES with its scalar abstol on the scaled state (= the same "
+           "per-component atol). Times: medians of the matched runs timed alternately "
+           "(kvrod, then each configuration, repeated); ratios: medians of the ratios of "
+           "each repeat (paired); per step = wall / accepted steps.",
+           "",
+           "| N | kvrod s | kvrod us/step | strongest SUNDIALS | its s | its us/step | "
+           "kvrod / strongest | strongest IDAS | kvrod / IDAS |",
+           "|---:|---:|---:|:--|---:|---:|---:|:--|---:|"]
     for r in runs:
-        a, b = r["kvrod"]["matched"], r["idas"]["matched"]
-        ratio = r.get("ratio_kvrod_over_idas")
-        target = ""
-        if r["N"] in (50, 200) and ratio is not None and doc["T"] == 10.0:
-            target = "2x met" if ratio <= 0.5 else "2x missed"
-        out.append(_row([str(r["N"]), _f(a and a["wall"]), _f(b and b["wall"]), _f(ratio, ".2f"),
-                         _f(ratio and 1.0 / ratio, ".2f"), target]))
+        d = r.get("duel") or {}
+        k = d.get("kvrod", {})
+        best = r.get("strongest")
+        b = d.get(best, {}) if best else {}
+        out.append(_row([str(r["N"]), _f(k.get("median")), _us(k.get("us_per_step")),
+                         best or "-", _f(b.get("median")), _us(b.get("us_per_step")),
+                         _f(r.get("ratio_kvrod_over_strongest"), ".2f"),
+                         r.get("strongest_idas") or "-",
+                         _f(r.get("ratio_kvrod_over_strongest_idas"), ".2f")]))
+    if doc.get("targets"):
+        out += ["", *targets_md(doc["targets"])]
+    out += ["", "Alternating timing of the matched runs (median and range of the repeats):",
+            "", "| N | integrator | rtol | median s | min-max s | steps | us/step | "
+            "kvrod / this (paired) |", "|---:|:--|---:|---:|:--|---:|---:|---:|"]
+    for r in runs:
+        for name, d in (r.get("duel") or {}).items():
+            m = r["kvrod"]["matched"] if name == "kvrod" else r["opponents"][name]["matched"]
+            out.append(_row([str(r["N"]), name, f"{m['rtol']:.0e}", _f(d["median"]),
+                             f"{min(d['walls']):.3f}-{max(d['walls']):.3f}",
+                             str(d["steps"]), _us(d["us_per_step"]),
+                             _f(d.get("paired_ratio_kvrod_over_this"), ".2f")]))
     out += ["", "Matched runs (the loosest rtol of the half-decade scan with max tip-x error "
-            "<= 1e-5 m; atol = rtol). LU = factorisations; IDAS's Jacobian evaluations "
-            "equal its linear-solver setups.", "",
-            "| N | integrator | rtol | wall s | steps | residual evals | Jacobian evals | "
-            "LU | Newton iters | error test fails | max tip err m |",
-            "|---:|:--|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+            "<= 1e-5 m; one run each, so their times are noisier than the medians above). "
+            "LU = factorisations; SUNDIALS's Jacobian evaluations equal its linear-solver "
+            "set-ups.", "",
+            "| N | integrator | rtol | wall s | steps | us/step | residual evals | "
+            "Jacobian evals | LU | Newton iters | error test fails | max tip err m |",
+            "|---:|:--|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in runs:
-        for key in ("kvrod", "idas", "scipy_bdf", "scipy_radau"):
-            if key not in r:
-                continue
-            m = r[key]["matched"]
+        entries = [("kvrod", r["kvrod"]), *r["opponents"].items()]
+        for key, res in entries:
+            m = res["matched"]
             if m is None:
-                last = r[key]["scan"][-1] if r[key]["scan"] else {}
+                last = res["scan"][-1] if res["scan"] else {}
                 why = (f"none (scan stopped: {last.get('rtol', 0):.0e} took > 60 s)"
                        if (last.get("wall") or 0) > 60 else "none in scan")
                 out.append(_row([str(r["N"]), last.get("integrator", key), why,
-                                 _f(last.get("wall")), "-", "-", "-", "-", "-", "-",
+                                 _f(last.get("wall")), "-", "-", "-", "-", "-", "-", "-",
                                  _f(last.get("tip_error"), ".1e")]))
                 continue
             out.append(_row([str(r["N"]), m["integrator"], f"{m['rtol']:.0e}", _f(m["wall"]),
-                             _f(m.get("steps")), _f(m.get("nfev")), _f(m.get("njev")),
-                             _f(m.get("nlu")), _f(m.get("nni")), _f(m.get("netf")),
-                             _f(m["tip_error"], ".1e")]))
-    out += ["", "Reference and cross-check (kvrod at rtol = atol = 1e-9 vs IDAS at 1e-9):", "",
-            "| N | n | reference s | IDAS 1e-9 s | max tip-x difference m | "
-            "IDAS build + first set-up s |", "|---:|---:|---:|---:|---:|---:|"]
+                             _f(m.get("steps")), _us(m.get("us_per_step")),
+                             _f(m.get("nfev")), _f(m.get("njev")), _f(m.get("nlu")),
+                             _f(m.get("nni")), _f(m.get("netf")), _f(m["tip_error"], ".1e")]))
+    out += ["", "Reference and cross-check (kvrod at rtol = 1e-9 with default_atol against a "
+            "SUNDIALS configuration at 1e-9), and the one-off cost of each configuration's "
+            "functions (SX/MX construction, C generation, gcc; 0 when the library was in the "
+            "cache):", "",
+            "| N | n | reference s | cross-check | its s | max tip-x difference m | "
+            "functions: build / codegen / compile s (C MB) |",
+            "|---:|---:|---:|:--|---:|---:|:--|"]
     for r in runs:
         cc = r["cross_check"]
-        first = (r["idas_build_seconds"] or 0.0) + (r.get("idas_first_setup_seconds") or 0.0)
-        out.append(_row([str(r["N"]), str(r["n"]), _f(r["reference"]["wall"]),
-                         _f(cc["idas_wall"]), _f(cc["max_tip_diff"], ".1e"),
-                         _f(first, ".1f")]))
-    out += ["", "(IDAS build + first set-up: CasADi function construction and, for jit, "
-            "the gcc compile of the integrator's functions, once per N; not in the wall "
-            "times above, like kvrod's one-off kernel compile.)"]
+        builds = []
+        for name, b in r.get("builds", {}).items():
+            sec = b["seconds"]
+            mb = f", {b['c_bytes'] / 2**20:.1f} MB" if b.get("c_bytes") else ""
+            how = ("cached" if b["cached"] else
+                   f"{sec.get('build', 0):.1f} / {sec.get('codegen', 0):.1f} / "
+                   f"{sec.get('compile', 0):.1f}{mb}")
+            builds.append(f"{name}: {how}")
+        out.append(_row([str(r["N"]), str(r["n"]), _f(r["reference"]["wall"]), cc["config"],
+                         _f(cc.get("wall")), _f(cc.get("max_tip_diff"), ".1e"),
+                         "; ".join(builds)]))
+    for r in runs:
+        if r.get("flat_skipped"):
+            out += ["", f"N = {r['N']}: {r['flat_skipped']}."]
     if doc.get("idas_configs"):
         cfg = doc["idas_configs"]
-        out += ["", f"IDAS configurations at N = {cfg['N']}, rtol = {cfg['rtol']:.0e} "
-                f"(T = {cfg['T']:g} s): jit = CasADi jit-compiles the functions the "
-                "integrator derives (residual, sparse Jacobian) with gcc -O2; external = DAE "
-                "and full Jacobian code-generated here and loaded with casadi.external; "
-                "expand = SX virtual machine; mx = MX virtual machine; then the linear solver "
-                "(csparse = sparse LU, qr = CasADi's default). Build = function "
-                "construction (+ C generation and gcc for external); setup = integrator "
-                "construction (includes the jit compile for jit).", "",
-                "| config | build s | setup s | run s | steps | LU | max tip err m |",
-                "|:--|---:|---:|---:|---:|---:|---:|"]
+        out += ["", f"Every configuration at N = {cfg['N']}, rtol = {cfg['rtol']:.0e}, "
+                f"T = {cfg['T']:g} s (median of 3 runs each, atol = default_atol unless "
+                "marked): *flat*, *kernels* as above; *map* = the MX function over the "
+                "per-element kernel maps generated to C and compiled (the earlier "
+                "\"external\"); *jit* = CasADi's integrator jit-compiles the functions it "
+                "derives from the MX DAE (gcc -O2); *sx* / *mx* = CasADi's SX / MX virtual "
+                "machines; then the linear solver (csparse = sparse LU, qr = CasADi's "
+                "default). Build s = construction + C generation + gcc (0: cached); set-up s "
+                "= integrator construction (includes the jit compile).", "",
+                "| config | build s | set-up s | run s | steps | us/step | LU | max tip err m |",
+                "|:--|---:|---:|---:|---:|---:|---:|---:|"]
         for c in cfg["rows"]:
-            how = c["how"] + (f" ({c['detail']})" if c.get("detail") else "")
-            out.append(_row([how, _f(c.get("build_seconds"), ".2f"),
+            sec = c.get("seconds") or {}
+            build_s = sum(sec.get(k, 0.0) for k in ("build", "codegen", "compile"))
+            out.append(_row([c["config"], "-" if c["config"] == "kvrod" else
+                             ("cached" if c.get("cached") else _f(build_s, ".1f")),
                              _f(c.get("setup_seconds"), ".2f"), _f(c.get("wall")),
-                             _f(c.get("steps")), _f(c.get("nlu")),
-                             _f(c.get("tip_error"), ".1e")]))
+                             _f(c.get("steps")), _us(c.get("us_per_step")),
+                             _f(c.get("nlu")), _f(c.get("tip_error"), ".1e")]))
     if doc.get("breakdown"):
         out += ["", "Where kvrod's time goes (matched rtol, no output points; C helpers "
-                "timed through wrappers):", "",
-                "| N | T s | total s | residual | Jacobian | LU | Newton solve+update | "
-                "norms | integrator Python |", "|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+                "timed through wrappers; drive = the problem's loads re-applied at every new "
+                "t, inside the residual and Jacobian calls):", "",
+                "| N | T s | total s | us/step | residual | Jacobian | drive | LU | "
+                "Newton solve+update | norms | integrator Python |",
+                "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
         for b in doc["breakdown"]:
-            s, tot = b["seconds"], b["total"]
-            cells = [str(b["N"]), _f(b["T"], "g"), _f(tot)]
-            for k in ("residual", "jacobian", "lu", "newton_solve_update", "norms",
+            s_, tot = b["seconds"], b["total"]
+            cells = [str(b["N"]), _f(b["T"], "g"), _f(tot), _us(b.get("us_per_step"))]
+            for k in ("residual", "jacobian", "drive", "lu", "newton_solve_update", "norms",
                       "python_integrator"):
-                cells.append(f"{s.get(k, 0.0):.3f} ({100 * s.get(k, 0.0) / tot:.0f} %)")
+                cells.append(f"{s_.get(k, 0.0):.3f} ({100 * s_.get(k, 0.0) / tot:.0f} %)")
             out.append(_row(cells))
     return out + [""]
 
 
 def scaling_md(doc: dict) -> list[str]:
     out = ["## 2. Scaling in N (kvrod)", "",
-           f"Cantilever release, rtol = atol = {doc['rtol']:.0e}, T = {doc['T']:g} s, "
-           "output every 0.1 s, one subprocess per N. Peak RSS is the whole process "
-           "(Python, NumPy, SciPy, CasADi); tracemalloc peak is the solve's own Python/NumPy "
-           "allocations.", "",
-           "| N | n | wall s | s per simulated s | steps | LU | peak RSS MiB | "
-           "solve alloc peak MiB |", "|---:|---:|---:|---:|---:|---:|---:|---:|"]
+           f"Cantilever release, rtol = {doc['rtol']:.0e} with default_atol, T = "
+           f"{doc['T']:g} s, output every 0.1 s, one subprocess per N, median of 3 solves "
+           "(2 above N = 2000). Peak RSS is the whole process (Python, NumPy, SciPy, "
+           "CasADi); tracemalloc peak is the solve's own Python/NumPy allocations.", "",
+           "| N | n | wall s | s per simulated s | steps | us/step | LU | peak RSS MiB | "
+           "solve alloc peak MiB |", "|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in doc["rows"]:
         if not r.get("ok"):
-            out.append(_row([str(r["N"]), "-", "failed", "-", "-", "-", "-", "-"]))
+            out.append(_row([str(r["N"]), "-", "failed", "-", "-", "-", "-", "-", "-"]))
             continue
         out.append(_row([str(r["N"]), str(r["n"]), _f(r["wall"]),
                          _f(r["wall_per_simulated_second"], ".4f"), str(r["nstep"]),
-                         str(r["nlu"]), _f(r["peak_rss_MiB"], ".0f"),
+                         _us(r.get("us_per_step")), str(r["nlu"]),
+                         _f(r["peak_rss_MiB"], ".0f"),
                          _f(r["solve_tracemalloc_peak_MiB"], ".1f")]))
     out += ["", f"Log-log slope of time against N: {_f(doc['loglog_slope'], '.2f')} over all "
-            f"N, {_f(doc['loglog_slope_N_ge_200'], '.2f')} for N >= 200 (target <= 1.1)."]
-    n1000 = [r for r in doc["rows"] if r.get("N") == 1000 and r.get("ok")]
-    if n1000 and doc["T"] == 10.0:
-        w = n1000[0]["wall"]
-        out.append(f"N = 1000 for 10 s simulated: {w:.2f} s (target < 5 s: "
-                   f"{'met' if w < 5 else 'missed'}).")
+            f"N, {_f(doc['loglog_slope_N_ge_200'], '.2f')} for N >= 200."]
+    if doc.get("targets"):
+        out += ["", *targets_md(doc["targets"])]
     return out + [""]
 
 
@@ -178,12 +223,15 @@ def kernels_md(doc: dict) -> list[str]:
     out = ["## 5. Generated kernels", "",
            f"Compile {doc['compile_seconds']:.2f} s; generated C+H "
            f"{doc['generated_bytes_total'] / 1024:.0f} KiB.", "",
-           "| N | residual us/cell | Jacobian us/cell | residual+Jacobian us/cell |",
-           "|---:|---:|---:|---:|"]
+           "| N | residual us/cell | Jacobian us/cell | residual+Jacobian us/cell | "
+           "at(new t) us |", "|---:|---:|---:|---:|---:|"]
     for r in doc["results"]:
         out.append(_row([str(r["N"]), f"{r['residual_us_per_cell']:.3f}",
                          f"{r['jacobian_us_per_cell']:.3f}",
-                         f"{r['residual_plus_jacobian_us_per_cell']:.3f}"]))
+                         f"{r['residual_plus_jacobian_us_per_cell']:.3f}",
+                         _f(r.get("at_new_time_us_per_call"), ".1f")]))
+    if isinstance(doc.get("targets"), list):
+        out += ["", *targets_md(doc["targets"])]
     return out + [""]
 
 
@@ -198,15 +246,16 @@ def markdown(docs: dict) -> str:
              f"`python -m bench{' --quick' if meta['quick'] else ''}` on {meta['platform']}, "
              f"{meta['cpus']} CPUs, Python {meta['python']}, NumPy {meta['numpy']}, SciPy "
              f"{meta['scipy']}, CasADi {meta['casadi']}; {meta['date']}; total "
-             f"{meta['seconds']:.0f} s.", ""]
+             f"{meta['seconds']:.0f} s. Command: `{meta.get('command', '')}`.", ""]
     if meta.get("sections_run") and set(meta["sections_run"]) != set(SECTION_MD) \
             and not meta["quick"]:
         lines += [f"This run: {', '.join(meta['sections_run'])}; the other sections are read "
                   "back from their JSON in this folder (earlier runs, same machine).", ""]
     if meta["quick"]:
-        lines += ["Quick mode: N = 25, 50 only, 2 s simulated, IDAS on the expanded (SX) "
-                  "function (no jit compile), no SciPy Radau, no codegen timing, no "
-                  "PyElastica, no kernel table. Use the full run for the quoted figures.", ""]
+        lines += ["Quick mode: N = 25 (scaling: 25, 50) only, 2 s simulated, IDAS and CVODES "
+                  "on kvrod's compiled kernels (no flat SX compile), SciPy BDF only, no "
+                  "codegen timing, PyElastica, kernel table or energy audit. Use the full run "
+                  "for the quoted figures.", ""]
     for name, section_md in SECTION_MD.items():
         if name in docs:
             lines += section_md(docs[name])
