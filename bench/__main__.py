@@ -110,6 +110,10 @@ def run_all(quick: bool = False, out_dir: Path = Path("bench/results"),
     if bad:
         raise ValueError(f"only = {bad} is outside the allowed range: {', '.join(SECTIONS)}")
     chosen = tuple(only) if only else SECTIONS
+    from bench import meta
+
+    meta.COMMAND = ("python -m bench" + (" --quick" if quick else "") + f" --out {out_dir}"
+                    + "".join(f" --only {name}" for name in only or ()))
     t0 = time.perf_counter()
     docs: dict = {}
 

@@ -6,7 +6,7 @@ banded Jacobian through the compiled C API (``RodModel.residual`` / ``jacobian_b
 batches), the cost of driving the arrays to a new time (``RodModel.at``, which the
 residual calls first), the compile time of the generated C (fresh cache), and the
 generated code size. Writes ``bench/results/kernels.json`` and ``kernels.md``.
-Targets (design section 7): residual <= 0.1 us/cell, residual + Jacobian <= 1 us/cell,
+Targets (docs/design.md, section 7): residual <= 0.1 us/cell, residual + Jacobian <= 1 us/cell,
 compile <= 5 s independent of N.
 """
 

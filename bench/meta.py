@@ -10,10 +10,15 @@ import shlex
 import sys
 from typing import Any
 
+#: the bench command being run, set by :func:`bench.__main__.run_all` (a programmatic call,
+#: e.g. from the tests, records the equivalent command, not the caller's command line)
+COMMAND: str | None = None
+
 
 def metadata() -> dict[str, Any]:
-    """Date (UTC), platform, CPUs, load average, Python/NumPy/SciPy/CasADi versions and
-    the command line of this process."""
+    """Date (UTC), platform, CPUs, load average, Python/NumPy/SciPy/CasADi versions, the
+    bench command (:data:`COMMAND`, else this process's command line) and the process's
+    command line."""
     import casadi
     import numpy
     import scipy
@@ -27,7 +32,8 @@ def metadata() -> dict[str, Any]:
             "load_average_at_end": load, "python": platform.python_version(),
             "numpy": numpy.__version__, "scipy": scipy.__version__,
             "casadi": casadi.__version__,
-            "command": shlex.join(getattr(sys, "orig_argv", sys.argv))}
+            "command": COMMAND or shlex.join(getattr(sys, "orig_argv", sys.argv)),
+            "process": shlex.join(getattr(sys, "orig_argv", sys.argv))}
 
 
 def target(text: str, value: float | None, limit: float, *, below: bool = True,

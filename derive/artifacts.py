@@ -1,7 +1,7 @@
 """Generated files with provenance: the one mechanism behind `kvrod generate`.
 
 Every generator in derive/ returns :class:`Artifact` records. :func:`write_tree` prefixes
-each file with the provenance header of design section 3 (template or CasADi function it
+each file with the provenance header of docs/design.md, section 3 (template or CasADi function it
 came from, derivation step, hash of the inputs, tool versions, "do not edit") and writes
 ``MANIFEST.json``. Nothing here carries a timestamp, so regeneration is byte-identical;
 :func:`check_tree` regenerates into a temporary folder and reports every difference.
@@ -10,13 +10,15 @@ came from, derivation step, hash of the inputs, tool versions, "do not edit") an
 from __future__ import annotations
 
 import difflib
-import hashlib
 import json
 import tempfile
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
 from importlib import metadata
 from pathlib import Path
+
+from derive.artifact import Artifact, sha256_text
+
+__all__ = ["Artifact", "check_tree", "generated_dir", "render", "sha256_text", "write_tree"]
 
 HEADER_TOOLS = ("sympy", "casadi", "jinja2")
 MANIFEST_NAME = "MANIFEST.json"
@@ -24,35 +26,6 @@ MANIFEST_NAME = "MANIFEST.json"
 #: comment syntax by file suffix; files whose format admits no comment (CasADi
 #: serialisations) get no header and are described by their manifest entry alone.
 _COMMENT = {".py": "# ", ".c": "// ", ".h": "// ", ".jinja": "# "}
-
-
-@dataclass(frozen=True)
-class Artifact:
-    """One generated file.
-
-    path: file name relative to ``generated/``.
-    text: the file body (without the provenance header).
-    source: the Jinja2 template or CasADi function the body came from.
-    step: the derivation step(s) (``derive list``) whose results it renders.
-    inputs_hash: sha256 of everything the body was generated from (expressions, options).
-    signature: optional description of the functions in the file (names, inputs, outputs).
-    """
-
-    path: str
-    text: str
-    source: str
-    step: str
-    inputs_hash: str
-    signature: dict = field(default_factory=dict)
-
-
-def sha256_text(*parts: str) -> str:
-    """sha256 hex digest of the concatenated parts (each followed by a NUL separator)."""
-    h = hashlib.sha256()
-    for part in parts:
-        h.update(part.encode())
-        h.update(b"\0")
-    return h.hexdigest()
 
 
 def tool_versions() -> dict[str, str]:

@@ -9,7 +9,7 @@ import jinja2
 import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 
-from derive.artifacts import Artifact, sha256_text
+from derive.artifact import Artifact, sha256_text
 from derive.formulas import formulas, in_material_parameters
 from derive.pipeline import run
 from derive.steps import sections as sec
@@ -225,7 +225,10 @@ def _context() -> dict:
         "ell": {"A": code(cs["ellipse_A"], ell_args), "I1": code(cs["ellipse_I1"], ell_args),
                 "I2": code(cs["ellipse_I2"], ell_args), "J_T": code(cs["ellipse_J_T"], ell_args),
                 "kappa_a": code(cs["cowper_ellipse_along_a"], ell_args),
-                "kappa_b": code(cs["cowper_ellipse_along_b"], ell_args)},
+                "kappa_b": code(cs["cowper_ellipse_along_b"], ell_args),
+                # the derived J_T / I3 (exactly 1 in floating point for a circle, where
+                # the quotient of the rounded J_T and I3 can exceed the bound 1 by an ulp)
+                "kappa_3": code(cs["ellipse_kappa_3"], ell_args)},
     }
 
 

@@ -1,5 +1,5 @@
 """Generate the discrete rod's C kernels, assembly loop, layout module and serialised
-CasADi functions (issue 3; design section 3).
+CasADi functions (docs/design.md, section 3).
 
 Files (all in ``generated/``):
 
@@ -22,7 +22,7 @@ import casadi as ca
 import jinja2
 
 from derive import discrete_rod as dr
-from derive.artifacts import Artifact, sha256_text
+from derive.artifact import Artifact, sha256_text
 
 STEP = "discrete_rod"
 TEMPLATES = Path(__file__).resolve().parent / "templates"

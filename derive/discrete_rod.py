@@ -1,4 +1,4 @@
-"""Discrete Cosserat rod with Kelvin-Voigt damping as CasADi SX kernels (design section 4).
+"""Discrete Cosserat rod with Kelvin-Voigt damping as CasADi SX kernels (docs/design.md, section 4).
 
 Quaternion staggered grid of Lang, Linn and Arnold (2011):
 
@@ -12,7 +12,7 @@ Quaternion staggered grid of Lang, Linn and Arnold (2011):
   ``U = (2/h_j) Im(r)/Re(r)``, ``r = conj(p_a) p_b`` (= rotation angle/h_j + O(theta^3)),
   with ``h_j = h`` at interior joints and ``h_j = h/2`` between a clamp frame and the
   adjacent segment (a half-length curvature cell keeps the O(h^2) accuracy that fixing
-  p_1 to the clamp frame would lose, design section 7).
+  p_1 to the clamp frame would lose, docs/design.md, section 7).
 
 Functionals (paper eqs. (10), (11), footnote 4):
 

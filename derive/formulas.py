@@ -1,4 +1,4 @@
-"""The formula table: the derivation's end results under stable names (issue 2, item 3).
+"""The formula table: the derivation's end results under stable names.
 
 Every entry is taken from a derived step result (never typed in). Symbols are those of
 :mod:`derive.symbols`: ``E, nu, G, K, eta, zeta, tau_S, tau_B, A, I1, I2, I3, kappa_1,

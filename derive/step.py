@@ -1,4 +1,4 @@
-"""The derivation step record and the registry of steps (design section 2).
+"""The derivation step record and the registry of steps (docs/design.md, section 2).
 
 A step is a pure function from earlier steps' records to a frozen :class:`Step`. Its
 ``results`` are SymPy objects computed from the inputs; ``stated`` holds the paper's

@@ -1,7 +1,7 @@
 # GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 # source: derive/templates/constitutive.py.jinja
 # derivation step: isotropic_moduli, stored_energy, dissipation, naive_resultants, cross_sections, maxwell_material, maxwell_rod
-# inputs sha256: d3475138e7715d41f99c639a3797fefeb82e6a0afcbd935f0b8baca4926fc56a
+# inputs sha256: 27d9ec4ba9fe97c123622c57752ce90d590a7ad02572dab2fb1e821ff0ba913a
 # tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 """Rod stiffness and damping parameters of the Kelvin-Voigt Cosserat rod.
@@ -248,7 +248,7 @@ def ellipse_section(a, b, nu):
     J_T = numpy.pi*a**3*b**3/(a**2 + b**2)
     return {"A": A, "I1": I1, "I2": I2, "I3": I1 + I2, "J_T": J_T,
             "kappa_1": b**2*(a**2 + 3*b**2)*(12*nu + 12)/(a**4*nu + a**2*b**2*(10*nu + 16) + b**4*(37*nu + 40)), "kappa_2": a**2*(3*a**2 + b**2)*(12*nu + 12)/(a**4*(37*nu + 40) + a**2*b**2*(10*nu + 16) + b**4*nu),
-            "kappa_3": J_T / (I1 + I2)}
+            "kappa_3": 4*a**2*b**2/(a**2 + b**2)**2}
 
 
 def circle_section(radius, nu):

@@ -51,7 +51,7 @@ def _rel(p: Path) -> str:
 
 
 def _compare(out: Path) -> dict:
-    from kvrod.cli_beyond import write_compare
+    from kvrod.analyses import write_compare
     from runtime.analysis import compare_damping as cd
     from runtime.problem.registry import load_problem
 
@@ -86,7 +86,7 @@ def _compare(out: Path) -> dict:
 
 def _write_modes(res: dict, out: Path) -> list[Path]:
     """modes.json and mode_shapes.png as `kvrod modes` writes them."""
-    from kvrod.cli_beyond import plot_mode_shapes
+    from kvrod.analyses import plot_mode_shapes
     from runtime.io.results import write_json
 
     sc, modes = res["problem"], res["modes"]
@@ -109,7 +109,7 @@ def _distinct(modes: list, count: int, rtol: float = 1e-6) -> list[list]:
 
 
 def _modes(out: Path) -> dict:
-    from kvrod.cli_beyond import run_modes
+    from kvrod.analyses import run_modes
     from runtime.analysis.modal import family_retardation_time
     from runtime.problem.registry import load_problem
 

@@ -13,9 +13,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-
-class CliError(Exception):
-    """A user error: printed as one line, exit code 2."""
+from kvrod.errors import CliError
 
 
 class _Parser(argparse.ArgumentParser):
@@ -179,7 +177,7 @@ def build_parser() -> argparse.ArgumentParser:
     from kvrod import cli_sweep
 
     cli_sweep.add_commands(sub, _Parser)
-    try:  # modal analysis, calibration (issue 7)
+    try:  # modal analysis, calibration
         from kvrod import cli_beyond
     except ImportError:  # pragma: no cover - while it does not exist
         cli_beyond = None

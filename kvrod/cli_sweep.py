@@ -1,4 +1,4 @@
-"""`kvrod sweep STUDY.toml`: parameter studies on Dask (issue 8).
+"""`kvrod sweep STUDY.toml`: parameter studies on Dask.
 
 By default the points run on a LocalCluster with one worker process per core; with
 ``--scheduler tcp://host:8786`` they run on an existing Dask cluster::
@@ -31,7 +31,7 @@ def _progress_bar(total: int, skipped: int):
 
 
 def _cmd_sweep(args) -> int:
-    from kvrod.cli import CliError
+    from kvrod.errors import CliError
 
     if args.workers is not None and args.workers < 1:
         raise CliError(f"kvrod sweep: --workers {args.workers} must be >= 1")
@@ -70,7 +70,7 @@ def _cmd_sweep(args) -> int:
 
 
 def _run_sweep(args, study, out, points_to_run, run_study_serial) -> int:
-    from kvrod.cli import CliError
+    from kvrod.errors import CliError
 
     n = len(study.points)
     where = ("serial (this process)" if args.serial else

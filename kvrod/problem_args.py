@@ -47,7 +47,7 @@ def add_problem_arguments(p: argparse.ArgumentParser, required: bool = False) ->
 
 def parse_set(item: str) -> tuple[str, Any]:
     """``path=value`` with a TOML value (a bare word is a string)."""
-    from kvrod.cli import CliError
+    from kvrod.errors import CliError
 
     if "=" not in item:
         raise CliError(f"kvrod: --set {item!r} must be PATH=VALUE (e.g. material.tau=0.02)")
@@ -62,7 +62,7 @@ def parse_set(item: str) -> tuple[str, Any]:
 
 def problem_from_args(args, command: str):
     """The problem named on the command line with all overrides applied (checked)."""
-    from kvrod.cli import CliError
+    from kvrod.errors import CliError
     from runtime.problem.registry import load_config, load_problem
 
     spec = args.problem

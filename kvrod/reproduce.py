@@ -62,8 +62,8 @@ def reproduce(out: Path, n_elements: int = 100, t_end: float = 10.0,
     Every run folder under ``out`` is checked before the first run starts: one that holds
     a result is refused unless ``overwrite``.
     """
-    from kvrod.cli_runtime import run_and_write
     from kvrod.outputs import check_file_argument
+    from kvrod.runs import run_and_write
     from runtime.io import folder as F
     from runtime.io import plots as P
     from runtime.problem.registry import load_problem

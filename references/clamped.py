@@ -33,9 +33,12 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 __all__ = [
     "clamped_center_load_deflection",
     "clamped_center_load_end_moment",
+    "clamped_uniform_load_curve",
     "clamped_uniform_load_deflection",
     "clamped_uniform_load_end_moment",
 ]
@@ -52,6 +55,20 @@ def clamped_uniform_load_deflection(
     """Midspan deflection (m) under a uniform load ``q`` (N/m): ``qL^4/(384EI) + qL^2/(8kGA)``."""
     _check(L, EI, kGA)
     return q * L**4 / (384.0 * EI) + q * L * L / (8.0 * kGA)
+
+
+def clamped_uniform_load_curve(
+    x: np.ndarray | float, q: float, *, L: float, EI: float, kGA: float = math.inf
+) -> np.ndarray:
+    """Deflection ``w(x)`` (m) under a uniform load ``q`` (N/m)::
+
+        w = q x^2 (L - x)^2 / (24 EI) + q x (L - x) / (2 kGA)
+
+    (bending: the clamped-clamped Euler-Bernoulli curve; shear: ``int_0^x Q / kGA`` with
+    ``Q = q (L/2 - x)``); at ``x = L/2`` it is :func:`clamped_uniform_load_deflection`."""
+    _check(L, EI, kGA)
+    x = np.asarray(x, dtype=float)
+    return q * x**2 * (L - x) ** 2 / (24.0 * EI) + q * x * (L - x) / (2.0 * kGA)
 
 
 def clamped_center_load_deflection(

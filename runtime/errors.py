@@ -1,4 +1,4 @@
-"""Project error classes (design section 5)."""
+"""Project error classes (docs/design.md, section 5)."""
 
 from __future__ import annotations
 

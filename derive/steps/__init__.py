@@ -1,1 +1,1 @@
-"""The derivation steps, one module per part of the paper (design section 2)."""
+"""The derivation steps, one module per part of the paper (docs/design.md, section 2)."""

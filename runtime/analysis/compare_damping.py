@@ -1,4 +1,4 @@
-"""Energy-consistent eta_E against the naive eta~_E in simulation (issue 7 item 1).
+"""Energy-consistent eta_E against the naive eta~_E in simulation.
 
 The extensional viscosity of the rod follows from the 3-D Kelvin-Voigt dissipation as
 ``eta_E`` (paper eq. (5)), i.e. the retardation time ``tau_E = eta_E / E`` (eq. (6))

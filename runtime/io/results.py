@@ -1,4 +1,4 @@
-"""Results folders: atomic JSON/NPZ writes of a run (design section 4, I/O).
+"""Results folders: atomic JSON/NPZ writes of a run (docs/design.md, section 4, I/O).
 
 Every file is written under a temporary name in the same folder and renamed, so a
 reader never sees half a file, and a run that dies leaves the previous complete file.

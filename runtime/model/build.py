@@ -1,4 +1,4 @@
-"""Compile and load the generated rod C code (issue 3, item 4).
+"""Compile and load the generated rod C code.
 
 On first use the C sources in ``generated/`` (``rod_kernels.c``, ``rod_assembly.c``) are
 compiled with the system C compiler into a shared library in a cache folder keyed by the

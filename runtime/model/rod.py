@@ -104,6 +104,7 @@ class RodModel:
         self.ldab = 2 * self.kl + self.ku + 1
         self.drive = drive
         self._key: tuple = ()       # (time, statics?, load factor) the arrays were driven to
+        self._steady = (0.0, 0.0)   # times on which those arrays hold (empty: none known)
         self._static = False
         build.require_generated()
         lib = None if backend == "casadi" else build.load_library()
@@ -156,11 +157,26 @@ class RodModel:
         no-op when nothing changed since the last call."""
         if self.drive is None:
             return
-        key = (t if self.drive.time_dependent else None, self._static, self.load_scale)
+        lo, hi = self._steady
+        if self.drive.time_dependent and not self._static and lo <= t < hi:
+            tk = self._key[0] if self._key else None   # arrays of an earlier t still hold
+        else:
+            tk = t if self.drive.time_dependent else None
+        key = (tk, self._static, self.load_scale)
         if key != self._key:
             self.drive.apply(self.arrays, t, left=self._static, scale=self.load_scale,
                              static=self._static)
             self._key = key
+            self._steady = ((-math.inf, -math.inf) if self._static or not
+                            self.drive.time_dependent else self.drive.steady_interval(t))
+
+    def steady_over(self, t0: float, t1: float) -> bool:
+        """True when the loads and end motion are constant on [t0, t1] (so one set of
+        arrays serves every time in it)."""
+        if self.drive is None or not self.drive.time_dependent:
+            return True
+        lo, hi = self.drive.steady_interval(t0)
+        return lo <= t0 and t1 < hi
 
     _time = at
 
@@ -365,7 +381,7 @@ class RodModel:
         ts = np.ascontiguousarray(ts, dtype=float)
         m = ys.shape[0]
         out = np.empty((m, len(L.DIAG_SCALARS)))
-        if self._lib is not None and (self.drive is None or not self.drive.time_dependent):
+        if self._lib is not None and self.steady_over(float(ts.min()), float(ts.max())):
             self._time(float(ts[0]))
             rc = self._lib.kvrod_energies(self._struct_ptr(), m, ts.ctypes.data, ys.ctypes.data,
                                           yps.ctypes.data, out.ctypes.data)

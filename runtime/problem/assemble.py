@@ -49,6 +49,22 @@ class ProblemDrive:
         #: an end has prescribed motion (statics must move the held nodes)
         self.moving_ends = any(e.motion is not None and e.motion.moves for e in self.ends)
 
+    def steady_interval(self, t: float) -> tuple[float, float]:
+        """``(a, b)``, ``a <= t < b``: an interval on which every load and end motion is
+        constant (the arrays written at ``t`` hold on all of it); empty when something
+        varies at ``t``."""
+        a, b = -np.inf, np.inf
+        funcs = [ld.time for ld in self.loads]
+        funcs += [f for e in self.ends if e.motion is not None
+                  for f, on in ((e.motion.translation_time, any(e.motion.translation)),
+                                (e.motion.rotation_time, e.motion.rotation_angle != 0.0)) if on]
+        for f in funcs:
+            lo, hi = f.constant_interval(t)
+            a, b = max(a, lo), min(b, hi)
+            if not a <= t < b:
+                return t, t
+        return a, b
+
     def apply(self, a: RodArrays, t: float, *, left: bool = False, scale: float = 1.0,
               static: bool = False) -> None:
         grav, dist = np.zeros(3), np.zeros(3)

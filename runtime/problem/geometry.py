@@ -282,12 +282,13 @@ class Curve(Geometry):
         return np.stack([np.interp(s, ss, r[:, k]) for k in range(3)], axis=-1) - r[0]
 
     def _frame(self, s):
+        from scipy.spatial.transform import Rotation, Slerp
+
         ss, _, D = self._table
-        flat = np.atleast_1d(s).ravel()
-        i = np.clip(np.searchsorted(ss, flat), 1, ss.size - 1)
-        lo = np.where(flat - ss[i - 1] <= ss[i] - flat, i - 1, i)
-        F = D[lo]
-        # re-orthonormalise after picking the nearest sample (exact at the samples)
+        flat = np.clip(np.atleast_1d(np.asarray(s, dtype=float)).ravel(), ss[0], ss[-1])
+        # spherical linear interpolation between the transported sample frames (exact
+        # at the samples, orthonormal in between)
+        F = Slerp(ss, Rotation.from_matrix(D))(flat).as_matrix()
         return F.reshape(np.shape(s) + (3, 3))
 
     def to_mapping(self) -> dict[str, Any]:

@@ -9,7 +9,7 @@ A :class:`Problem` is a frozen tree of dataclasses::
     start, end  End(kind, motion)                   [start], [end]
     loads       tuple[Load, ...]                    [[loads]]
     simulation  Simulation(t_end, rtol, atol, ...)  [simulation]
-    statics     Statics(load_steps)                 [statics]
+    statics     Statics(load_steps, report)         [statics]
     analysis    Analysis(maxima)                    [analysis]
 
 :meth:`Problem.from_mapping` builds it from a TOML table (every value checked, every
@@ -98,12 +98,23 @@ class Simulation:
 
 @dataclass(frozen=True)
 class Statics:
-    """Static equilibrium by Newton with ``load_steps`` load increments (continuation)."""
+    """Static equilibrium by Newton with ``load_steps`` initial load increments
+    (continuation); ``report``: load factors in (0, 1) at which the end positions are
+    recorded on the way (``static.path`` of the summary; the full load is always
+    recorded), e.g. ``[0.5, 0.75]`` for 300 and 450 of a 600 load."""
 
     load_steps: int = 10
+    report: tuple[float, ...] = ()
 
     def __post_init__(self) -> None:
         C.integer("statics.load_steps", self.load_steps, low=1, high=10_000)
+        if isinstance(self.report, (str, bytes, Mapping)) or not hasattr(self.report,
+                                                                         "__len__"):
+            raise ParameterError("statics.report", self.report,
+                                 "a list of load factors in (0, 1)")
+        vals = tuple(C.number(f"statics.report[{i}]", v, low=0.0, high=1.0, low_incl=False,
+                              high_incl=False) for i, v in enumerate(self.report))
+        object.__setattr__(self, "report", tuple(sorted(set(vals))))
 
 
 MAXIMA = tuple(f"{e}.{c}" for e in ("end", "start") for c in "xyz")
@@ -216,7 +227,9 @@ class Problem:
                 "loads": [ld.to_mapping() for ld in self.loads],
                 "simulation": {k: v for k, v in vars(self.simulation).items()
                                if v is not None},
-                "statics": dict(vars(self.statics)),
+                "statics": {"load_steps": self.statics.load_steps,
+                            **({"report": list(self.statics.report)}
+                               if self.statics.report else {})},
                 "analysis": {k: v for k, v in vars(self.analysis).items() if v is not None}}
 
     @classmethod

@@ -85,6 +85,33 @@ class TimeFunction:
         ts, vs = zip(*self.points, strict=True)
         return float(np.interp(t, ts, vs))
 
+    def constant_interval(self, t: float) -> tuple[float, float]:
+        """``(a, b)`` with ``a <= t < b`` on which f is constant (rate 0), the largest such
+        that is known; ``(t, t)`` (empty) when f varies at ``t``. Lets the drive skip
+        re-writing loads that do not change (a released load stays off)."""
+        inf = math.inf
+        k = self.kind
+        if k == "constant" or (k == "harmonic" and (self.amplitude == 0.0
+                                                    or self.frequency == 0.0)):
+            return -inf, inf
+        if k in ("step", "release"):
+            return (-inf, self.start) if t < self.start else (self.start, inf)
+        if k in ("ramp", "smooth_ramp"):
+            if t < self.start:
+                return -inf, self.start
+            end = self.start + self.duration
+            return (end, inf) if t >= end else (t, t)
+        if k == "table":
+            ts = [p[0] for p in self.points]
+            vs = [p[1] for p in self.points]
+            if t < ts[0]:
+                return -inf, ts[0]
+            if t >= ts[-1]:
+                return ts[-1], inf
+            i = int(np.searchsorted(ts, t, side="right")) - 1
+            return (ts[i], ts[i + 1]) if vs[i] == vs[i + 1] else (t, t)
+        return t, t
+
     def rate_at(self, t: float) -> float:
         """df/dt (1/s); 0 at the jumps of ``step``/``release`` (they are not for motion)."""
         k = self.kind

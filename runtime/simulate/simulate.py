@@ -41,13 +41,24 @@ ATOL_FLOOR = 1e4 * float(np.finfo(float).eps)
 
 @dataclass
 class StaticOutcome:
-    """The static solve of a run: state, end position, Newton iterations, wall time."""
+    """The static solve of a run: state, end position, Newton iterations, wall time, and
+    the load path: ``path`` = [(load factor, s = L end position)] at ``statics.report``
+    and at the full load."""
 
     y: np.ndarray
     tip: np.ndarray
     iterations: int
     per_step: list[int]
     wall_time_s: float
+    path: list[tuple[float, np.ndarray]] = field(default_factory=list)
+
+    def path_table(self) -> list[dict]:
+        return load_path_table(self.path)
+
+
+def load_path_table(path: list[tuple[float, np.ndarray]]) -> list[dict]:
+    """A static load path for JSON: [{"load_factor": f, "tip": [x, y, z] (m)}]."""
+    return [{"load_factor": float(f), "tip": [float(v) for v in tip]} for f, tip in path]
 
 
 @dataclass
@@ -162,6 +173,7 @@ class SimulationResult:
                 "newton_iterations": 0 if st is None else int(st.iterations),
                 "newton_iterations_per_load_step": [] if st is None else list(st.per_step),
                 "wall_time_s": 0.0 if st is None else st.wall_time_s,
+                "path": [] if st is None else st.path_table(),
             },
             **pk,
             "energy_balance_max_rel": audit.max_rel,
@@ -249,7 +261,7 @@ def _linear_response(problem: Problem) -> tuple[float, float]:
 
 
 def default_atol(problem: Problem, model: RodModel, y0: np.ndarray) -> np.ndarray:
-    """Absolute tolerances per state component, scaled by the motion (issue 12).
+    """Absolute tolerances per state component, scaled by the motion.
 
     ``atol_i = max(ATOL_FRACTION * rtol * scale_i, floor_i)``: positions by the motion's
     displacement scale d (:func:`motion_scale`), velocities by d omega, quaternions by its
@@ -281,11 +293,20 @@ def static_equilibrium(problem: Problem, model: RodModel) -> StaticOutcome:
     with load stepping. Raises StaticSolveError (with the last converged state)."""
     wall0 = time.perf_counter()
     st = RodStatics(model)
+    path: list[tuple[float, np.ndarray]] = []
     with model.statics():
-        res = solve_static(st, model.initial_state(), load_steps=problem.statics.load_steps)
+        try:
+            res = solve_static(st, model.initial_state(),
+                               load_steps=problem.statics.load_steps,
+                               stations=problem.statics.report + (1.0,),
+                               on_station=lambda lam, y: path.append(
+                                   (lam, model.tip_position(y))))
+        except StaticSolveError as exc:
+            exc.path = path   # the stations reached before the failure are kept
+            raise
     return StaticOutcome(y=res.y.copy(), tip=model.tip_position(res.y),
                          iterations=res.total_iterations, per_step=list(res.iterations),
-                         wall_time_s=time.perf_counter() - wall0)
+                         wall_time_s=time.perf_counter() - wall0, path=path)
 
 
 def simulate(problem: Problem, *, progress: Callable[[float], object] | None = None,

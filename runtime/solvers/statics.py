@@ -101,6 +101,8 @@ def solve_static(
     step_tol: float = 1e-12,
     line_search: str = "natural",
     watchdog: int = 4,
+    stations: tuple[float, ...] = (),
+    on_station=None,
 ) -> StaticResult:
     """Solve ``R(y; load_scale = 1) = 0`` starting from ``y0`` at zero load.
 
@@ -130,6 +132,9 @@ def solve_static(
         steps if it then falls below its earlier value (rotations make full steps
         non-monotone; plain Newton is fast there); else Newton returns to the last
         reference point and damps.  0 disables it (always damped).
+    stations, on_station : load factors in (0, 1] the stepping lands on exactly (the
+        increment is shortened to reach them); ``on_station(load_factor, y)`` is called
+        with the converged state at each (a load-deflection path at chosen loads).
     armijo, min_alpha : Armijo constant; smallest damping factor ``a``.  The factor is
         reduced by model-based guesses safeguarded to [0.1, 0.5] of the previous one;
         below ``min_alpha`` the load step counts as failed and the load increment is cut
@@ -147,6 +152,9 @@ def solve_static(
         raise ParameterError("load_steps", load_steps, "integers >= 1")
     if not tol > 0:
         raise ParameterError("tol", tol, "> 0")
+    marks = sorted({float(x) for x in stations})
+    if any(not 0.0 < x <= 1.0 for x in marks):
+        raise ParameterError("stations", stations, "load factors in (0, 1]")
     n = int(problem.n_static)
     kl, ku = int(problem.kl_static), int(problem.ku_static)
     ab = band_storage(n, kl, ku)
@@ -288,6 +296,9 @@ def solve_static(
         lam_try = min(1.0, lam + dlam)
         if 1.0 - lam_try < 1e-12:
             lam_try = 1.0
+        upcoming = [x for x in marks if x > lam + 1e-12]
+        if upcoming and lam_try > upcoming[0] - 1e-12:
+            lam_try = upcoming[0]
         problem.load_scale = lam_try
         try:
             y_new, it, r_new = newton(y)
@@ -311,6 +322,8 @@ def solve_static(
         y, lam, r = y_new, lam_try, r_new
         iterations.append(it)
         load_scales.append(lam)
+        if on_station is not None and any(abs(lam - x) <= 1e-12 for x in marks):
+            on_station(lam, y.copy())
         if it <= easy_iterations:
             dlam *= grow
 

@@ -1,4 +1,4 @@
-"""Parameter studies (issue 8): study definition, per-point runs, the study table.
+"""Parameter studies: study definition, per-point runs, the study table.
 
 A study is a TOML file naming a scenario, fixed parameters and the varied ones, either as
 a grid (Cartesian product, in the order the keys are written) or as an explicit list::

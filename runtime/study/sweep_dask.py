@@ -1,4 +1,4 @@
-"""The distributed engine of parameter studies (issue 8): Dask ``distributed``.
+"""The distributed engine of parameter studies: Dask ``distributed``.
 
 By default a :class:`distributed.LocalCluster` with one single-threaded worker process
 per core is started (nothing to set up); with ``scheduler="tcp://host:8786"`` a

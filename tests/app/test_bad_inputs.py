@@ -61,6 +61,8 @@ CLI_BAD = [
     (["generate", "--chek"], "unrecognized"),
     (["frobnicate"], "invalid choice"),
     (["reproduce", "--n-elements", "x"], "n-elements"),
+    (["static", "rollup", "--set", "statics.report=[1.5]"], "statics.report[0]"),
+    (["static", "rollup", "--set", "statics.report=0.5"], "statics.report"),
 ]
 
 

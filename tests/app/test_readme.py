@@ -71,3 +71,20 @@ def test_readme_block(block, tmp_path):
         r = subprocess.run([sys.executable, "-m", "kvrod", *argv[1:]], cwd=tmp_path,
                            capture_output=True, text=True, timeout=600)
         assert r.returncode == 0, f"{cmd}\n{r.stdout[-2000:]}\n{r.stderr[-2000:]}"
+
+
+def test_readme_problem_file_and_python_snippet(tmp_path):
+    """The abridged problem file of the README is a valid problem, and the Python snippet
+    runs as written (from the checkout, where examples/ is)."""
+    import tomllib
+
+    from runtime.problem.schema import Problem
+
+    text = README.read_text()
+    (toml_block,) = re.findall(r"```toml\n(.*?)```", text, flags=re.S)
+    problem = Problem.from_mapping(tomllib.loads(toml_block))
+    assert problem.name == "my_rod" and problem.section.kind == "circle"
+    (py_block,) = re.findall(r"```python\n(.*?)```", text, flags=re.S)
+    r = subprocess.run([sys.executable, "-c", py_block], cwd=README.parent,
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0 and r.stdout.startswith("finished"), r.stderr[-2000:]

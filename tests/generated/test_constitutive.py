@@ -81,6 +81,16 @@ def test_sections():
                       gc.rectangle_section(0.01, 0.02, 0.3)["J_T"], rtol=1e-13)
 
 
+def test_circle_torsion_factor_is_one_for_every_radius():
+    """kappa_3 = J_T / I3 is exactly 1 for a circle (the derived quotient, not the ratio of
+    the rounded constants, which exceeded the bound 1 by an ulp and was rejected)."""
+    for r in np.geomspace(1e-6, 10.0, 200):
+        k = gc.circle_section(float(r), 0.3)
+        assert k["kappa_3"] == 1.0
+        gc.stiffness_matrices(2.1e11, 0.3, k["A"], k["I1"], k["I2"], k["I3"], k["kappa_1"],
+                              k["kappa_2"], k["kappa_3"])
+
+
 def test_tube_section():
     """Tube against the difference of two solid circles, the solid limit and thin walls."""
     t = gc.tube_section(0.02, 0.015, 0.3)

@@ -10,6 +10,7 @@ import pytest
 from references.clamped import (
     clamped_center_load_deflection,
     clamped_center_load_end_moment,
+    clamped_uniform_load_curve,
     clamped_uniform_load_deflection,
     clamped_uniform_load_end_moment,
 )
@@ -44,6 +45,12 @@ def test_uniform_load_gravity_like():
     shear = q * L * L / (8 * GA2)
     assert 0.05 < shear / expect < 0.2
     assert w == pytest.approx(expect, rel=1e-8)
+    # the whole curve, not only midspan
+    x = np.linspace(0.0, L, 101)
+    np.testing.assert_allclose(-s.displacement[:, 1],
+                               clamped_uniform_load_curve(x, q, L=L, EI=EI1, kGA=GA2),
+                               rtol=0, atol=1e-8 * w)
+    assert clamped_uniform_load_curve(L / 2, q, L=L, EI=EI1, kGA=GA2) == pytest.approx(expect)
     # symmetry, reactions, clamp moments (Euler-Bernoulli values also with shear)
     np.testing.assert_allclose(s.displacement[:, 1], s.displacement[::-1, 1], atol=1e-8 * w)
     assert s.base_force[1] == pytest.approx(-q * L / 2, rel=1e-10)

@@ -1,4 +1,5 @@
-"""O(h^2) convergence of the clamped cantilever (half-length clamp joint, design section 7):
+"""O(h^2) convergence of the clamped cantilever (half-length clamp joint, docs/design.md
+section 7):
 static small-deflection tip displacement vs Timoshenko, and the first frequency."""
 
 from __future__ import annotations

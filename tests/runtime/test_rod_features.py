@@ -1,8 +1,10 @@
-"""The rod model's problem features (issue 13): follower loads, moving ends, curved and
+"""The rod model's problem features: follower loads, moving ends, curved and
 tapered rods, the two assemblies (compiled C and the CasADi MX function), the stencil
 table the band widths come from, objectivity of precurved rods."""
 
 from __future__ import annotations
+
+import math
 
 import casadi as ca
 import numpy as np
@@ -11,7 +13,8 @@ import pytest
 from derive import discrete_rod as dr
 from runtime.model.casadi_rod import CasadiRod
 from runtime.model.quaternion import quat_exp, quat_mul, quat_rotation
-from tests.rods import random_state, residual, rod_model
+from runtime.problem.assemble import build_model
+from tests.rods import random_state, residual, rod_model, rod_problem
 
 FOLLOWER = [
     {"kind": "force", "at": "end", "vector": [0.01, 0.02, -0.03], "frame": "follower"},
@@ -168,3 +171,39 @@ def test_taper_varies_the_section_along_the_rod():
     CM = m.arrays.jnt_field("C_M")[:, 0]           # joints: mean of the adjacent segments
     assert np.allclose(CM[1:-1], 0.5 * (EI_seg[:-1] + EI_seg[1:]), rtol=1e-12)
     assert CM[0] == pytest.approx(EI_seg[0]) and CM[-1] == pytest.approx(EI_seg[-1])
+
+
+def _arc_tip_under_load(geometry, N: int = 16) -> np.ndarray:
+    """Static end position of a precurved rod (radius 0.2 m, 90 degrees) under a dead tip
+    force out of its plane."""
+    from dataclasses import replace
+
+    from runtime.simulate.simulate import static_equilibrium
+
+    base = rod_problem(N, loads=[{"kind": "force", "at": "end", "vector": [0.0, 0.0, 0.02]}],
+                       geometry={"kind": "arc", "radius": 0.2, "angle": 90.0})
+    problem = base if geometry is None else replace(base, rod=replace(base.rod,
+                                                                       geometry=geometry))
+    model = build_model(problem)
+    return static_equilibrium(problem, model).tip
+
+
+def test_curve_and_points_geometries_reproduce_the_arc():
+    """A callable quarter circle (Curve: parallel-transported frames) and a polyline through
+    41 points of it (points: a cubic spline) give the Arc geometry's solution."""
+    from runtime.problem.geometry import Curve, geometry_from_mapping
+
+    R, L = 0.2, 0.2 * math.pi / 2
+
+    def circle(s):
+        a = np.asarray(s) / R
+        return np.stack([R * np.sin(a), R * (1 - np.cos(a)), 0 * a], axis=-1)
+
+    arc = _arc_tip_under_load(None)
+    curve = _arc_tip_under_load(Curve(function=circle, curve_length=L, normal=(0.0, 1.0, 0.0)))
+    pts = circle(np.linspace(0.0, L, 41))
+    points = _arc_tip_under_load(geometry_from_mapping(
+        {"kind": "points", "points": pts.tolist(), "normal": [0.0, 1.0, 0.0]}, None))
+    assert np.linalg.norm(curve - arc) < 1e-8 * L
+    assert np.linalg.norm(points - arc) < 1e-4 * L
+    assert np.linalg.norm(arc - pts[-1]) > 0.05 * L          # the load does deflect the rod

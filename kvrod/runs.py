@@ -1,0 +1,190 @@
+"""Run a problem into a results folder: the work behind `kvrod simulate` and `kvrod static`,
+shared by those commands, `kvrod reproduce` and the example notes."""
+
+from __future__ import annotations
+
+import contextlib
+import sys
+from pathlib import Path
+
+
+def progress_bar(t_end: float, desc: str):
+    """A tqdm bar over simulated time, redrawn at most every 0.2 s; returns (callback,
+    close). Not shown when stderr is not a terminal."""
+    from tqdm import tqdm
+
+    bar = tqdm(total=round(t_end, 6), desc=desc, unit="s sim", leave=False, mininterval=0.2,
+               disable=not sys.stderr.isatty(),
+               bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.2f}/{total:.2f} s [{elapsed}]")
+    step = t_end / 200.0
+    last = [0.0]
+
+    def update(t: float) -> None:
+        if t - last[0] >= step or t >= t_end:
+            last[0] = t
+            bar.n = round(min(t, t_end), 6)
+            bar.refresh() if not bar.disable else None
+
+    return update, bar.close
+
+
+def already_finished(problem, out: Path) -> bool:
+    """True when DIR holds a finished run of exactly this problem (and no checkpoint)."""
+    import json
+
+    from runtime.io.results import CHECKPOINT, jsonable
+
+    path = out / "summary.json"
+    if (out / CHECKPOINT).exists() or not path.exists():
+        return False
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return False
+    return (isinstance(data, dict) and data.get("status") == "finished"
+            and data.get("parameters") == jsonable(problem.to_mapping()))
+
+
+def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: bool = False,
+                  vtk_every: float | None = None, checkpoint_every: float = 1.0,
+                  overwrite: bool = False, progress: bool = True) -> tuple:
+    """Run one problem into results folder ``out`` and write its results.
+
+    Everything that can be checked is checked before anything is written (parameters, the
+    folder, an existing result, the checkpoint to resume, the generated code). Then the
+    folder is locked (``.kvrod.lock``), ``summary.json`` says "running" (with t_reached)
+    while the run goes and a checkpoint is written every ``checkpoint_every`` simulated
+    seconds; when the run stops, ``summary.json`` says "finished", "failed" or
+    "interrupted" (never "running", except after SIGKILL). ``resume`` continues from
+    DIR/checkpoint.npz (VTK frames before the checkpoint are kept); ``overwrite`` replaces
+    a finished result. Returns (result, summary).
+    """
+    from runtime.io import folder as F
+    from runtime.io.results import (
+        CHECKPOINT,
+        jsonable,
+        load_checkpoint,
+        write_checkpoint,
+        write_run,
+        write_status,
+    )
+    from runtime.model import build
+    from runtime.simulate.simulate import simulate
+
+    out = Path(out)
+    params = jsonable(problem.to_mapping())
+    F.check_output_path(out)
+    if not resume:
+        F.refuse_existing(out, "simulate", overwrite=overwrite, resumable=True)
+    state = load_checkpoint(out, params) if resume else None
+    if state is not None:
+        import numpy as np
+
+        from generated import rod_layout
+        from runtime.io.results import CheckpointError
+
+        n = rod_layout.n_state(problem.rod.elements)
+        for key in ("y", "yp"):
+            if np.shape(state[key]) != (n,) or not np.all(np.isfinite(state[key])):
+                raise CheckpointError(f"--resume: checkpoint {str(out / CHECKPOINT)!r} holds a "
+                                      f"state {key} of shape {np.shape(state[key])}, this "
+                                      f"problem needs ({n},) finite values; start again with "
+                                      "--overwrite")
+    build.require_generated()
+    with F.claim(out, "simulate", overwrite=overwrite and not resume) as claimed:
+        t_start = float(state["t"]) if state else 0.0
+        write_status(out, params, "running", t_start)
+        claimed.keep()
+
+        def on_checkpoint(st):
+            if series is not None:       # the frames so far survive a kill after this
+                series.write_collection()
+            write_checkpoint(out, params, st)
+            write_status(out, params, "running", st["t"])
+
+        series = None
+        if vtk_every is not None:
+            from runtime.io.vtk import VtkSeries
+            from runtime.problem.assemble import build_model
+
+            series = VtkSeries(out / "vtk", build_model(problem),
+                               resume_from=t_start if state else None)
+        cb, close = (progress_bar(problem.simulation.t_end, label) if progress
+                     else (None, lambda: None))
+        try:
+            run = simulate(problem, progress=cb, checkpoint=on_checkpoint,
+                           checkpoint_every=checkpoint_every, resume=state,
+                           snapshot_every=vtk_every,
+                           snapshot_sink=series.add if series else None)
+        except BaseException as exc:   # a bug or resource error: say so, keep the checkpoint
+            write_status(out, params, "failed", t_start, f"{type(exc).__name__}: {exc}")
+            raise
+        finally:
+            close()
+            if series is not None:
+                series.close()
+        extra = {"resumed_from_t": t_start} if state else None
+        try:
+            summary = write_run(out, run, extra=extra)
+        except BaseException as exc:   # e.g. disk full: do not leave "running" behind
+            with contextlib.suppress(Exception):
+                write_status(out, params, "failed", run.t_last,
+                             f"the results could not be written: {exc}")
+            raise
+        if run.status == "finished":
+            (out / CHECKPOINT).unlink(missing_ok=True)
+        if run.interrupt is not None:
+            raise run.interrupt
+        if plots and run.t.size > 1:
+            from runtime.io.plots import plot_run
+
+            plot_run(run, out)
+    return run, summary
+
+
+def static_and_write(problem, out: Path, overwrite: bool = False) -> tuple[dict, object, object]:
+    """Static equilibrium of ``problem`` under its loads at t = 0- into results folder
+    ``out`` (checked and locked like :func:`run_and_write`): summary.json with the end
+    positions, the load path and Newton iterations; static.npz with the state ``y``, node
+    ``positions`` (3, N+1) and segment ``frames`` (N, 3, 3; columns d1, d2, d3) of the
+    equilibrium and of the ``reference``, and the segment ``quaternions`` (4, N);
+    problem.toml. Returns (summary, model, y); a failed solve keeps its last converged
+    state (status "failed")."""
+    import time
+
+    from kvrod.outputs import results_folder
+    from runtime.io.results import jsonable, write_json, write_npz, write_problem
+    from runtime.model import build
+    from runtime.problem.assemble import build_model
+    from runtime.simulate.simulate import load_path_table, static_equilibrium
+    from runtime.solvers.statics import StaticSolveError
+
+    build.require_generated()
+    with results_folder(out, "static", markers=("summary.json",), overwrite=overwrite,
+                        names=("summary.json", "static.npz", "problem.toml")):
+        wall0 = time.perf_counter()
+        model = build_model(problem)
+        params = jsonable(problem.to_mapping())
+        try:
+            st = static_equilibrium(problem, model)
+            status, message, y, its, per = "finished", "ok", st.y, st.iterations, st.per_step
+            path = st.path_table()
+        except StaticSolveError as exc:
+            status, message, y, its, per = ("failed", f"static solve failed: {exc}", exc.y,
+                                            sum(exc.iterations), list(exc.iterations))
+            path = load_path_table(getattr(exc, "path", []))
+        pos = model.positions(y)
+        summary = {"status": status, "message": message, "problem": problem.name,
+                   "parameters": params,
+                   "static": {"tip": pos[:, -1].tolist(), "start": pos[:, 0].tolist(),
+                              "newton_iterations": int(its),
+                              "newton_iterations_per_load_step": per,
+                              "path": path,
+                              "wall_time_s": time.perf_counter() - wall0},
+                   "backend": model.backend}
+        write_npz(out / "static.npz", y=y, positions=pos, quaternions=model.quaternions(y),
+                  frames=model.frames(y), reference=model.positions(model.reference),
+                  reference_frames=model.frames(model.reference))
+        write_problem(out / "problem.toml", params)
+        write_json(out / "summary.json", summary)
+    return summary, model, y
