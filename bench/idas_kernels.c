@@ -45,6 +45,10 @@ EXPORT int kv_setup(int N, const double *par, const double *seg, const double *j
                     const double *y_fixed, casadi_int n_nz, const casadi_int *src,
                     const double *coef, const casadi_int *sp) {
   rod.N = N;
+  rod.nb = 0;                    /* Kelvin-Voigt: no relaxation terms */
+  rod.kl = kvrod_kl(N, 0);       /* the band the caller allocated (ldab = 2 kl + ku + 1) */
+  rod.ku = kvrod_ku(N, 0);
+  if (ld < 2 * rod.kl + rod.ku + 1) return 2;
   rod.par = par;
   rod.seg = seg;
   rod.jnt = jnt;

@@ -303,7 +303,8 @@ def _kernels_function(rod: ReleasedRod, so: Path) -> tuple[ca.Function, Any]:
                       k["fac"].ctypes.data, k["yfix"].ctypes.data, int(src.size),
                       k["src"].ctypes.data, k["coef"].ctypes.data, k["sp"].ctypes.data)
     if rc:
-        raise RuntimeError("kv_setup failed (out of memory)")
+        raise RuntimeError("kv_setup failed: " + ("out of memory" if rc == 1 else
+                                                  f"band storage ldab = {m.ldab} too small"))
     keep["lib"] = lib
     return ca.external("rod_ode", str(path)), keep
 

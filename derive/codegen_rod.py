@@ -58,6 +58,25 @@ def _build() -> tuple[list[ca.Function], str, str, tuple, tuple]:
     return fns, c_text, h_text, bands, sbands
 
 
+def _offsets_b(fields) -> dict[str, tuple[int, int]]:
+    """{field: (base, per relaxation term)} offsets of a cell's fields."""
+    out, a, b = {}, 0, 0
+    for name, base, per in fields:
+        out[name] = (a, b)
+        a, b = a + base, b + per
+    return out
+
+
+def _n1_delta(formula) -> tuple[int, int]:
+    """How much narrower the band of N = 1 is than the formula (the same for every B)."""
+    (kl0, kl1), (ku0, ku1) = formula
+    deltas = {(kl0 + kl1 * B - dr.bandwidths(1, B)[0], ku0 + ku1 * B - dr.bandwidths(1, B)[1])
+              for B in range(dr.MAX_BRANCHES + 1)}
+    if len(deltas) != 1:
+        raise RuntimeError(f"N = 1 band widths are not a fixed offset: {deltas}")
+    return deltas.pop()
+
+
 def _context() -> dict:
     fns, _, _, bands, sbands = _build()
     kl, ku = bands[-1]
@@ -66,7 +85,20 @@ def _context() -> dict:
     skl, sku = max(b[0] for b in sbands), max(b[1] for b in sbands)
     small = {n: b for n, b in zip((1,), bands[:1], strict=True) if b != (kl, ku)}
     max_jac = max(f.nnz_out(0) for f in fns if f.name().endswith("_jac"))
+    formula = dr.bandwidth_formula()
+    if formula != ((kl, formula[0][1]), (ku, formula[1][1])):
+        raise RuntimeError(f"band formula {formula} disagrees with the B = 0 band {kl, ku}")
+    dkl, dku = _n1_delta(formula)
     return {
+        "cell0_fields_b": dr.CELL0_FIELDS_B, "cell_fields_b": dr.CELL_FIELDS_B,
+        "cell0_offsets_b": _offsets_b(dr.CELL0_FIELDS_B),
+        "cell_offsets_b": _offsets_b(dr.CELL_FIELDS_B),
+        "cell0_base": sum(f[1] for f in dr.CELL0_FIELDS_B),
+        "cell0_per": sum(f[2] for f in dr.CELL0_FIELDS_B),
+        "cell_base": sum(f[1] for f in dr.CELL_FIELDS_B),
+        "cell_per": sum(f[2] for f in dr.CELL_FIELDS_B),
+        "kl_formula": formula, "kl_n1_delta": dkl, "ku_n1_delta": dku,
+        "max_branches": dr.MAX_BRANCHES,
         "cell0_fields": dr.CELL0_FIELDS, "cell_fields": dr.CELL_FIELDS,
         "cell0_size": dr.CELL0_SIZE, "cell_size": dr.CELL_SIZE,
         "cell0_offsets": dr.CELL0_OFFSETS, "cell_offsets": dr.CELL_OFFSETS,

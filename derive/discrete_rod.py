@@ -70,10 +70,29 @@ import casadi as ca
 # Layout: the single source of truth (rendered into generated/rod_layout.py)
 # --------------------------------------------------------------------------------------
 
-#: fields of cell 0 (node 0 only), in order, with sizes
-CELL0_FIELDS: tuple[tuple[str, int], ...] = (("phi", 3), ("v", 3))
-#: fields of cell i = 1..N (segment i and node i), in order, with sizes
-CELL_FIELDS: tuple[tuple[str, int], ...] = (("p", 4), ("Omega", 3), ("phi", 3), ("v", 3))
+#: fields of cell 0 (node 0 and joint 0), in order: (name, size, size per relaxation term)
+CELL0_FIELDS_B: tuple[tuple[str, int, int], ...] = (("phi", 3, 0), ("v", 3, 0),
+                                                     ("q_joint", 0, 3))
+#: fields of cell i = 1..N (segment i, node i, joint i), in order, with sizes. The internal
+#: strains q (generalized Maxwell, :func:`branch_quantities`) of a rod with B relaxation
+#: terms: 3 per term for the segment (toward V - V0) and 3 per term for the joint (toward
+#: U - U0); a Kelvin-Voigt rod has B = 0 and cells of 6 and 13.
+CELL_FIELDS_B: tuple[tuple[str, int, int], ...] = (
+    ("p", 4, 0), ("Omega", 3, 0), ("q_segment", 0, 3), ("phi", 3, 0), ("v", 3, 0),
+    ("q_joint", 0, 3))
+#: largest number of rod-level relaxation terms (a generous bound: 2 per 3-D branch)
+MAX_BRANCHES = 24
+
+
+def cell_fields(branches: int = 0, first: bool = False) -> tuple[tuple[str, int], ...]:
+    """(name, size) of the fields of a cell (``first``: cell 0) for B relaxation terms."""
+    return tuple((n, a + b * branches) for n, a, b in (CELL0_FIELDS_B if first else
+                                                        CELL_FIELDS_B) if a + b * branches)
+
+
+#: the Kelvin-Voigt layout (B = 0)
+CELL0_FIELDS: tuple[tuple[str, int], ...] = cell_fields(0, first=True)
+CELL_FIELDS: tuple[tuple[str, int], ...] = cell_fields(0)
 
 #: parameters of one segment i = 1..N (between nodes i-1 and i): (name, size, unit, meaning)
 SEGMENT_PARAMS: tuple[tuple[str, int, str, str], ...] = (
@@ -260,13 +279,15 @@ class _Sym:
     omega_b: ca.SX
     sp: ca.SX      # segment parameters (SEGMENT_PARAMS)
     jp: ca.SX      # joint parameters (JOINT_PARAMS)
+    n_q: ca.SX     # resultant of the relaxation terms on a segment (3, N): -sum_b C_b q_b
+    m_q: ca.SX     # the same on a joint (3, N m): -sum_b C_b q_b
 
 
 def _symbols() -> _Sym:
     S = ca.SX.sym
     return _Sym(S("phi_a", 3), S("phi_b", 3), S("p", 4), S("v_a", 3), S("v_b", 3),
                 S("Omega", 3), S("p_b", 4), S("Omega_b", 3), S("seg", N_SEGMENT),
-                S("jnt", N_JOINT))
+                S("jnt", N_JOINT), S("n_q", 3), S("m_q", 3))
 
 
 def rotate_transposed(p, x):
@@ -316,18 +337,22 @@ def segment_forces_ad(s: _Sym) -> ca.SX:
     """Generalized forces of a segment by CasADi AD of W and D (the definition).
 
     ``Q = [-dW/dphi_a - dD/dv_a; -dW/dphi_b - dD/dv_b; T]`` with the torque
-    ``T = -1/2 vec(L(p)^T dW/dp) - dD/dOmega``.
+    ``T = -1/2 vec(L(p)^T dW/dp) - dD/dOmega``; the relaxation terms' resultant ``n_q``
+    (held fixed here, :func:`branch_quantities`) adds the work ``h n_q . dV``.
     """
     f = segment_functionals(s)
-    gW = ca.gradient(f["W"], ca.vertcat(s.phi_a, s.phi_b, s.p))
+    Wq = f["W"] + _seg(s.sp, "h") * ca.dot(s.n_q, f["V"] - _seg(s.sp, "V0"))
+    gW = ca.gradient(Wq, ca.vertcat(s.phi_a, s.phi_b, s.p))
     gD = ca.gradient(f["D"], ca.vertcat(s.v_a, s.v_b, s.omega))
     return ca.vertcat(-gW[0:3], -gW[3:6], torque_from_gradient(s.p, gW[6:10])) - gD
 
 
 def joint_torques_ad(s: _Sym) -> ca.SX:
-    """Torques of a joint on its two segments by CasADi AD of W and D (the definition)."""
+    """Torques of a joint on its two segments by CasADi AD of W and D (the definition);
+    the relaxation terms' resultant ``m_q`` adds the work ``h_j m_q . dU``."""
     f = joint_functionals(s)
-    gW = ca.gradient(f["W"], ca.vertcat(s.p, s.p_b))
+    Wq = f["W"] + _jnt(s.jp, "h") * ca.dot(s.m_q, f["U"] - _jnt(s.jp, "U0"))
+    gW = ca.gradient(Wq, ca.vertcat(s.p, s.p_b))
     gD = ca.gradient(f["D"], ca.vertcat(s.omega, s.omega_b))
     return ca.vertcat(torque_from_gradient(s.p, gW[0:4]),
                       torque_from_gradient(s.p_b, gW[4:8])) - gD
@@ -350,7 +375,7 @@ def segment_quantities(s: _Sym) -> dict[str, ca.SX]:
     dV = V - _seg(s.sp, "V0")
     Vdot = rotate_transposed(s.p, s.v_b - s.v_a) / h + ca.cross(V, s.omega)
     C_F, V_F = _seg(s.sp, "C_F"), _seg(s.sp, "V_F")
-    n = C_F * dV + V_F * Vdot
+    n = C_F * dV + V_F * Vdot + s.n_q
     Rn = rotate(s.p, n)
     Q = ca.vertcat(Rn, -Rn, h * ca.cross(V, n))
     return {"V": V, "Vdot": Vdot, "W": h / 2 * _quad(C_F, dV), "D": h / 2 * _quad(V_F, Vdot),
@@ -368,10 +393,10 @@ def joint_quantities(s: _Sym) -> dict[str, ca.SX]:
     (:func:`joint_torques_ad`; tested).
     """
     r = qmul(qconj(s.p), s.p_b)
-    return _joint_of_r(r, s.omega, s.omega_b, s.jp)
+    return _joint_of_r(r, s.omega, s.omega_b, s.jp, s.m_q)
 
 
-def _joint_of_r(r, oa, ob, jp) -> dict[str, ca.SX]:
+def _joint_of_r(r, oa, ob, jp, m_q) -> dict[str, ca.SX]:
     hj = _jnt(jp, "h")
     u = r[1:4] / r[0]
     U = 2.0 / hj * u
@@ -380,15 +405,38 @@ def _joint_of_r(r, oa, ob, jp) -> dict[str, ca.SX]:
     Udot = Aw / hj
     dU = U - _jnt(jp, "U0")
     C_M, V_M = _jnt(jp, "C_M"), _jnt(jp, "V_M")
-    m = C_M * dU + V_M * Udot
+    m = C_M * dU + V_M * Udot + m_q
     Atm = m - ca.cross(u, m) + u * ca.dot(u, m)
     T = ca.vertcat(rotate(r, Atm), -Atm)
     return {"U": U, "Udot": Udot, "W": hj / 2 * _quad(C_M, dU), "D": hj / 2 * _quad(V_M, Udot),
             "T": T, "M": m}
 
 
-def _joint_torques_of_r(r, oa, ob, jp) -> ca.SX:
-    return _joint_of_r(r, oa, ob, jp)["T"]
+def _joint_torques_of_r(r, oa, ob, jp, m_q) -> ca.SX:
+    return _joint_of_r(r, oa, ob, jp, m_q)["T"]
+
+
+def branch_quantities(s: _Sym) -> dict[str, ca.SX]:
+    """What the relaxation terms (generalized Maxwell rod) need of an element.
+
+    Each of B terms b carries an internal strain ``q_b`` per element that relaxes toward
+    the element's strain, ``q_b' = (dV - q_b)/theta_b`` (segment, ``dV = V - V0``) and
+    ``q_b' = (dU - q_b)/theta_b`` (joint, ``dU = U - U0``), with the resultant
+    ``n = C_inf dV + sum_b C_b (dV - q_b) = C_F dV + n_q``, ``C_F = C_inf + sum_b C_b`` (the
+    instantaneous stiffness) and ``n_q = -sum_b C_b q_b`` (and likewise ``m`` on joints).
+    The assembly therefore needs the strain, its derivative and the forces per unit
+    resultant: segment ``dV``, ``d dV/d(phi_b, p)`` (3x7; ``d/dphi_a = -d/dphi_b``) and
+    ``G = d(f_b, T)/dn`` (6x3); joint ``dU``, ``d dU/d(p_a, p_b)`` (3x8) and
+    ``G = d(T_a, T_b)/dm`` (6x3).
+    """
+    seg = segment_quantities(s)
+    dV = seg["V"] - _seg(s.sp, "V0")
+    jnt = joint_quantities(s)
+    dU = jnt["U"] - _jnt(s.jp, "U0")
+    return {"dV": dV, "dV_dx": ca.jacobian(dV, ca.vertcat(s.phi_b, s.p)),
+            "G_seg": ca.jacobian(seg["Q"][3:9], s.n_q),
+            "dU": dU, "dU_dx": ca.jacobian(dU, ca.vertcat(s.p, s.p_b)),
+            "G_jnt": ca.jacobian(jnt["T"], s.m_q)}
 
 
 def _increment_projection(p):
@@ -422,7 +470,7 @@ def segment_jacobian(s: _Sym) -> ca.SX:
     V = RT @ (s.phi_b - s.phi_a) / h
     g = RT @ (s.v_b - s.v_a) / h
     C, Vf = ca.diag(_seg(s.sp, "C_F")), ca.diag(_seg(s.sp, "V_F"))
-    n = C @ (V - _seg(s.sp, "V0")) + Vf @ (g + ca.cross(V, s.omega))
+    n = C @ (V - _seg(s.sp, "V0")) + Vf @ (g + ca.cross(V, s.omega)) + s.n_q
     Vx, nx, Ox = skew(V), skew(n), skew(s.omega)
     NV = C - Vf @ Ox
     Nth = C @ Vx + Vf @ (skew(g) - Ox @ Vx)
@@ -452,7 +500,7 @@ def joint_jacobian(s: _Sym) -> ca.SX:
     u = u0 + 0.5 * (th + ca.cross(u0, th) + u0 * ca.dot(u0, th))
     w = ob - (a0 + ca.cross(a0, th))
     Aw = w + ca.cross(u, w) + u * ca.dot(u, w)
-    m = _jnt(jp, "C_M") * (2.0 / hj * u - _jnt(jp, "U0")) + _jnt(jp, "V_M") * Aw / hj
+    m = _jnt(jp, "C_M") * (2.0 / hj * u - _jnt(jp, "U0")) + _jnt(jp, "V_M") * Aw / hj + s.m_q
     Atm = m - ca.cross(u, m) + u * ca.dot(u, m)
     T = ca.vertcat(rotate(r, Atm + ca.cross(th, Atm)), -Atm)
     J_th = ca.substitute(ca.jacobian(T, th), th, ca.DM.zeros(3))
@@ -492,11 +540,12 @@ def kernels() -> list[ca.Function]:
     s = _symbols()
     S = ca.SX.sym
     seg_in = {"phi_a": s.phi_a, "phi_b": s.phi_b, "p": s.p, "v_a": s.v_a, "v_b": s.v_b,
-              "Omega": s.omega, "seg": s.sp}
+              "Omega": s.omega, "seg": s.sp, "n_q": s.n_q}
     seg = segment_quantities(s)
     jnt_in = {"p_a": s.p, "p_b": s.p_b, "Omega_a": s.omega, "Omega_b": s.omega_b,
-              "jnt": s.jp}
+              "jnt": s.jp, "m_q": s.m_q}
     jnt = joint_quantities(s)
+    br = branch_quantities(s)
 
     # segment inertia and kinematics rows: [p' - 1/2 p*(0,Omega); J Omega' + Omega x J Omega]
     p, om = s.p, s.omega
@@ -546,6 +595,13 @@ def kernels() -> list[ca.Function]:
         _fn("rod_segment_kinetic", {"Omega": om, "seg": s.sp},
             {"T": 0.5 * ca.dot(om, Jd * om)}),
         _fn("rod_node_kinetic", {"v": v, "m": m}, {"T": 0.5 * m * ca.dot(v, v)}),
+        _fn("rod_segment_branch", {"phi_a": s.phi_a, "phi_b": s.phi_b, "p": s.p,
+                                   "seg": s.sp},
+            {"dV": br["dV"], "dV_dx": ca.densify(br["dV_dx"]),
+             "G": ca.densify(br["G_seg"])}),
+        _fn("rod_joint_branch", {"p_a": s.p, "p_b": s.p_b, "jnt": s.jp},
+            {"dU": br["dU"], "dU_dx": ca.densify(br["dU_dx"]),
+             "G": ca.densify(br["G_jnt"])}),
     ]
 
 
@@ -554,53 +610,83 @@ def kernels() -> list[ca.Function]:
 # --------------------------------------------------------------------------------------
 
 
-def cell_start(i: int) -> int:
-    """Index of the first unknown of cell i in y."""
-    return 0 if i == 0 else CELL0_SIZE + CELL_SIZE * (i - 1)
+def cell_start(i: int, branches: int = 0) -> int:
+    """Index of the first unknown of cell i in y (B = ``branches`` relaxation terms)."""
+    return 0 if i == 0 else (_size(cell_fields(branches, True))
+                             + _size(cell_fields(branches)) * (i - 1))
 
 
-def _node(i: int, name: str) -> range:
-    off = CELL0_OFFSETS if i == 0 else CELL_OFFSETS
-    return range(cell_start(i) + off[name], cell_start(i) + off[name] + 3)
+def _field_range(i: int, name: str, branches: int) -> range:
+    fields = cell_fields(branches, first=i == 0)
+    off, size = _offsets(fields)[name], dict(fields)[name]
+    return range(cell_start(i, branches) + off, cell_start(i, branches) + off + size)
 
 
-def _segment(i: int, name: str) -> range:
-    k = cell_start(i) + CELL_OFFSETS[name]
-    return range(k, k + (4 if name == "p" else 3))
+def _node(i: int, name: str, branches: int = 0) -> range:
+    return _field_range(i, name, branches)
 
 
-def element_stencils(n_elements: int) -> list[tuple[list[int], list[int]]]:
+def _segment(i: int, name: str, branches: int = 0) -> range:
+    return _field_range(i, name, branches)
+
+
+def _q_joint(j: int, branches: int) -> list[int]:
+    return list(_field_range(j, "q_joint", branches)) if branches else []
+
+
+def element_stencils(n_elements: int, branches: int = 0) -> list[tuple[list[int], list[int]]]:
     """(rows, columns) of every element's block in dF/dy + c dF/dy' (all ends clamped,
-    every load present: the widest pattern). A declarative table of which unknowns each
-    element couples, from which the band widths follow; the assembled C Jacobian is
-    tested to have exactly this pattern."""
-    N = n_elements
-    nd = lambda i: [*_node(i, "phi"), *_node(i, "v")]  # noqa: E731
-    sg = lambda i: [*_segment(i, "p"), *_segment(i, "Omega")]  # noqa: E731
+    every load present: the widest pattern) for B = ``branches`` relaxation terms. A
+    declarative table of which unknowns each element couples, from which the band widths
+    follow; the assembled C Jacobian is tested to have exactly this pattern."""
+    N, B = n_elements, branches
+    nd = lambda i: [*_node(i, "phi", B), *_node(i, "v", B)]  # noqa: E731
+    sg = lambda i: [*_segment(i, "p", B), *_segment(i, "Omega", B)]  # noqa: E731
+    qs = lambda i: list(_segment(i, "q_segment", B)) if B else []  # noqa: E731
     out = []
     for i in range(N + 1):
         out.append((nd(i), nd(i)))                                   # node inertia
-        out.append((list(_node(i, "v")), list(_segment(max(i, 1), "p"))))  # follower force
+        out.append((list(_node(i, "v", B)), list(_segment(max(i, 1), "p", B))))  # follower
     for i in range(1, N + 1):
         out.append((sg(i), sg(i)))                                   # segment inertia
-        out.append((list(_segment(i, "Omega")), list(_segment(i, "p"))))   # dead moment
-        rows = [*_node(i - 1, "v"), *_node(i, "v"), *_segment(i, "Omega")]
-        out.append((rows, [*nd(i - 1), *nd(i), *sg(i)]))             # segment forces
-    for j in range(1, N):
-        rows = [*_segment(j, "Omega"), *_segment(j + 1, "Omega")]
-        out.append((rows, [*sg(j), *sg(j + 1)]))                     # interior joints
-    out.append((list(_segment(1, "Omega")), sg(1)))                 # clamp joint at s = 0
-    out.append((list(_segment(N, "Omega")), sg(N)))                 # clamp joint at s = L
+        out.append((list(_segment(i, "Omega", B)), list(_segment(i, "p", B))))  # dead moment
+        rows = [*_node(i - 1, "v", B), *_node(i, "v", B), *_segment(i, "Omega", B)]
+        out.append((rows, [*nd(i - 1), *nd(i), *sg(i), *qs(i)]))     # segment forces
+        if B:                                                        # q' = (V - V0 - q)/theta
+            out.append((qs(i), [*_node(i - 1, "phi", B), *_node(i, "phi", B),
+                                *_segment(i, "p", B), *qs(i)]))
+    for j in range(N + 1):                     # interior joints and the clamp joints
+        segs = [k for k in (j, j + 1) if 1 <= k <= N]
+        rows = [r for k in segs for r in _segment(k, "Omega", B)]
+        out.append((rows, [c for k in segs for c in sg(k)] + _q_joint(j, B)))
+        if B:
+            out.append((_q_joint(j, B), [c for k in segs for c in _segment(k, "p", B)]
+                        + _q_joint(j, B)))
     return out
 
 
-def bandwidths(n_elements: int) -> tuple[int, int]:
+def bandwidths(n_elements: int, branches: int = 0) -> tuple[int, int]:
     """Exact (kl, ku) of dF/dy + c dF/dy' from :func:`element_stencils`."""
     kl = ku = 0
-    for rows, cols in element_stencils(n_elements):
+    for rows, cols in element_stencils(n_elements, branches):
         for r in rows:
             for c in cols:
                 kl, ku = max(kl, r - c), max(ku, c - r)
+    return kl, ku
+
+
+def bandwidth_formula(max_branches: int = MAX_BRANCHES) -> tuple[tuple[int, int], ...]:
+    """(kl0, kl1, ku0, ku1) with kl = kl0 + kl1 B, ku = ku0 + ku1 B for N >= 3, checked
+    exact for B = 0..``max_branches`` (so the C assembly and the layout can compute the
+    band of any B without the stencil table); returned as ((kl0, kl1), (ku0, ku1))."""
+    b0, b1 = bandwidths(4, 0), bandwidths(4, 1)
+    kl = (b0[0], b1[0] - b0[0])
+    ku = (b0[1], b1[1] - b0[1])
+    for B in range(max_branches + 1):
+        for N in (3, 4, 7):
+            got = bandwidths(N, B)
+            if got != (kl[0] + kl[1] * B, ku[0] + ku[1] * B):
+                raise AssertionError(f"band widths not linear in B at N = {N}, B = {B}: {got}")
     return kl, ku
 
 

@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_assembly.c.jinja
 // derivation step: discrete_rod
-// inputs sha256: bddd5467fea5d4cd1547447d1edfb28b48a25b4dd560096c8999424ef16e32fd
+// inputs sha256: 33afcbfb6157721f7d230ab4e2e09c1fcd7ff0d774fafb3b902a4f1a3d8360d8
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*
@@ -16,10 +16,16 @@
 #include "rod_kernels.h"
 #include "rod_assembly.h"
 
-#define CELL0 6
-#define CELL 13
-#define KL 19
-#define KU 15
+/* cell sizes and field offsets for nb relaxation terms: base + per * nb */
+#define CELL0_BASE 6
+#define CELL0_PER 3
+#define CELL_BASE 13
+#define CELL_PER 6
+#define KL0 19
+#define KL1 6
+#define KU0 15
+#define KU1 6
+#define MAX_NB 24
 #define NSEG 14
 #define NJNT 10
 #define NNL 6
@@ -60,12 +66,34 @@
 #define SL_M_DEAD 0
 #define SL_M_FOLLOWER 3
 
-/* indices of the fields of node i / segment i (i >= 1) in y */
-static inline int cs(int i) { return i == 0 ? 0 : CELL0 + CELL * (i - 1); }
-static inline int i_phi(int i) { return i == 0 ? 0 : cs(i) + 7; }
-static inline int i_v(int i) { return i == 0 ? 3 : cs(i) + 10; }
-static inline int i_p(int i) { return cs(i) + 0; }
-static inline int i_om(int i) { return cs(i) + 4; }
+/* indices of the fields of node i / segment i (i >= 1) / joint j in y */
+static inline int c0size(const kvrod_rod* r) { return CELL0_BASE + CELL0_PER * r->nb; }
+static inline int csize(const kvrod_rod* r) { return CELL_BASE + CELL_PER * r->nb; }
+static inline int cs(const kvrod_rod* r, int i) {
+  return i == 0 ? 0 : c0size(r) + csize(r) * (i - 1);
+}
+static inline int i_phi(const kvrod_rod* r, int i) {
+  return i == 0 ? 0 + 0 * r->nb
+                : cs(r, i) + 7 + 3 * r->nb;
+}
+static inline int i_v(const kvrod_rod* r, int i) {
+  return i == 0 ? 3 + 0 * r->nb
+                : cs(r, i) + 10 + 3 * r->nb;
+}
+static inline int i_p(const kvrod_rod* r, int i) {
+  return cs(r, i) + 0 + 0 * r->nb;
+}
+static inline int i_om(const kvrod_rod* r, int i) {
+  return cs(r, i) + 4 + 0 * r->nb;
+}
+/* internal strains: segment i's 3 nb values and joint j's 3 nb values (term b at 3b) */
+static inline int i_qs(const kvrod_rod* r, int i) {
+  return cs(r, i) + 7 + 0 * r->nb;
+}
+static inline int i_qj(const kvrod_rod* r, int j) {
+  return j == 0 ? 6 + 0 * r->nb
+                : cs(r, j) + 13 + 3 * r->nb;
+}
 
 /* per-element data: segment i = 1..N, joint j = 0..N, node i = 0..N */
 static inline const double* segp(const kvrod_rod* r, int i) {
@@ -79,6 +107,33 @@ static inline const double* nlp(const kvrod_rod* r, int i) {
 }
 static inline const double* slp(const kvrod_rod* r, int i) {
   return r->sload + (size_t)(i - 1) * NSL;
+}
+/* moduli C_b (3) of relaxation term b on segment i / joint j */
+static inline const double* segb(const kvrod_rod* r, int i, int b) {
+  return r->segb + ((size_t)(i - 1) * (size_t)r->nb + (size_t)b) * 3;
+}
+static inline const double* jntb(const kvrod_rod* r, int j, int b) {
+  return r->jntb + ((size_t)j * (size_t)r->nb + (size_t)b) * 3;
+}
+
+/* the resultant of the relaxation terms of segment i (joint: jq): -sum_b C_b q_b */
+static void seg_nq(const kvrod_rod* r, int i, const double* y, double* nq) {
+  int b, k;
+  nq[0] = nq[1] = nq[2] = 0.0;
+  for (b = 0; b < r->nb; ++b) {
+    const double* C = segb(r, i, b);
+    const double* q = y + i_qs(r, i) + 3 * b;
+    for (k = 0; k < 3; ++k) nq[k] -= C[k] * q[k];
+  }
+}
+static void jnt_mq(const kvrod_rod* r, int j, const double* y, double* mq) {
+  int b, k;
+  mq[0] = mq[1] = mq[2] = 0.0;
+  for (b = 0; b < r->nb; ++b) {
+    const double* C = jntb(r, j, b);
+    const double* q = y + i_qj(r, j) + 3 * b;
+    for (k = 0; k < 3; ++k) mq[k] -= C[k] * q[k];
+  }
 }
 
 static const double kZero3[3] = {0.0, 0.0, 0.0};
@@ -135,7 +190,7 @@ static int node_force(const kvrod_rod* r, int i, const double* y, work_t* W, dou
     f[k] = ls * (m * par[PAR_GRAVITY + k] + l * par[PAR_F_DIST + k] + nl[NL_F_DEAD + k]);
   if (has_follower(nl + NL_F_FOLLOWER)) {
     double Rf[3];
-    W->arg[0] = y + i_p(host(i)); W->arg[1] = nl + NL_F_FOLLOWER;
+    W->arg[0] = y + i_p(r, host(i)); W->arg[1] = nl + NL_F_FOLLOWER;
     W->res[0] = Rf;
     if (rod_rotate(W->arg, W->res, W->iw, W->w, 0)) return -3;
     for (k = 0; k < 3; ++k) f[k] += ls * Rf[k];
@@ -151,7 +206,7 @@ static int segment_torque(const kvrod_rod* r, int i, const double* y, work_t* W,
   for (k = 0; k < 3; ++k) T[k] = ls * sl[SL_M_FOLLOWER + k];
   if (has_follower(sl + SL_M_DEAD)) {
     double RtM[3];
-    W->arg[0] = y + i_p(i); W->arg[1] = sl + SL_M_DEAD;
+    W->arg[0] = y + i_p(r, i); W->arg[1] = sl + SL_M_DEAD;
     W->res[0] = RtM;
     if (rod_rotate_transposed(W->arg, W->res, W->iw, W->w, 0)) return -3;
     for (k = 0; k < 3; ++k) T[k] += ls * RtM[k];
@@ -164,75 +219,117 @@ static int joint_args(const kvrod_rod* r, int j, const double* y, work_t* W) {
   const int N = r->N, has_a = j >= 1, has_b = j + 1 <= N;
   if (j == 0 && !(r->par[PAR_CLAMP_START] > 0.5)) return 0;
   if (j == N && !(r->par[PAR_CLAMP_END] > 0.5)) return 0;
-  W->arg[0] = has_a ? y + i_p(j) : r->par + PAR_P_START;
-  W->arg[1] = has_b ? y + i_p(j + 1) : r->par + PAR_P_END;
-  W->arg[2] = has_a ? y + i_om(j) : r->par + PAR_OMEGA_START;
-  W->arg[3] = has_b ? y + i_om(j + 1) : r->par + PAR_OMEGA_END;
+  W->arg[0] = has_a ? y + i_p(r, j) : r->par + PAR_P_START;
+  W->arg[1] = has_b ? y + i_p(r, j + 1) : r->par + PAR_P_END;
+  W->arg[2] = has_a ? y + i_om(r, j) : r->par + PAR_OMEGA_START;
+  W->arg[3] = has_b ? y + i_om(r, j + 1) : r->par + PAR_OMEGA_END;
   W->arg[4] = jntp(r, j);
   return 1;
 }
 
-int kvrod_n_state(int N) { return CELL0 + CELL * N; }
-int kvrod_kl(void) { return KL; }
-int kvrod_ku(void) { return KU; }
+int kvrod_n_state(int N, int nb) { return CELL0_BASE + CELL0_PER * nb + (CELL_BASE + CELL_PER * nb) * N; }
+int kvrod_kl(int N, int nb) { return KL0 + KL1 * nb - (N == 1 ? 1 : 0); }
+int kvrod_ku(int N, int nb) { return KU0 + KU1 * nb - (N == 1 ? 0 : 0); }
 int kvrod_n_params(void) { return 37; }
+
+/* a rod the assembly can work on: N >= 1, 0 <= nb <= MAX_NB, its band at least the
+ * layout's (a wider band is fine) */
+static int check_rod(const kvrod_rod* rod) {
+  if (rod->N < 1 || rod->nb < 0 || rod->nb > MAX_NB) return -1;
+  if (rod->kl < kvrod_kl(rod->N, rod->nb) || rod->ku < kvrod_ku(rod->N, rod->nb)) return -2;
+  return 0;
+}
+
+/* the relaxation rows of one element: res = q' - (strain - q)/theta for each term
+ * (strain = 0 for an absent clamp joint, whose terms then just decay) */
+static void relax_rows(const kvrod_rod* rod, int q0, const double* strain, const double* y,
+                       const double* yp, double* res) {
+  int b, k;
+  for (b = 0; b < rod->nb; ++b) {
+    const double rate = 1.0 / rod->theta[b];
+    for (k = 0; k < 3; ++k) {
+      const int o = q0 + 3 * b + k;
+      res[o] = yp[o] - rate * ((strain ? strain[k] : 0.0) - y[o]);
+    }
+  }
+}
 
 int kvrod_residual(const kvrod_rod* rod, double t, const double* y, const double* yp,
                    double* res) {
   (void) t;
   const int N = rod->N;
-  if (N < 1) return -1;
+  if (check_rod(rod)) return check_rod(rod);
   work_t W;
-  double Q[9], T[6], f[3], m, held;
+  double Q[9], T[6], f[3], m, held, nq[3], dV[3], dVx[24], G[18];
   int i, j, k;
   /* nodes: kinematics and momentum, or the prescribed position and velocity */
   for (i = 0; i <= N; ++i) {
     m = node_mass(rod, i); held = node_held(rod, i);
     if (node_force(rod, i, y, &W, f)) return -3;
-    W.arg[0] = y + i_phi(i); W.arg[1] = y + i_v(i);
-    W.arg[2] = yp + i_phi(i); W.arg[3] = yp + i_v(i);
+    W.arg[0] = y + i_phi(rod, i); W.arg[1] = y + i_v(rod, i);
+    W.arg[2] = yp + i_phi(rod, i); W.arg[3] = yp + i_v(rod, i);
     W.arg[4] = &m; W.arg[5] = f; W.arg[6] = &held;
     W.arg[7] = i == 0 || i == N ? held_v(rod, i) : kZero3;
-    W.res[0] = res + i_phi(i);
+    W.res[0] = res + i_phi(rod, i);
     if (rod_node_inertia(W.arg, W.res, W.iw, W.w, 0)) return -3;
   }
   /* segments: kinematics, angular momentum, external torques */
   for (i = 1; i <= N; ++i) {
-    W.arg[0] = y + i_p(i); W.arg[1] = y + i_om(i);
-    W.arg[2] = yp + i_p(i); W.arg[3] = yp + i_om(i);
+    W.arg[0] = y + i_p(rod, i); W.arg[1] = y + i_om(rod, i);
+    W.arg[2] = yp + i_p(rod, i); W.arg[3] = yp + i_om(rod, i);
     W.arg[4] = segp(rod, i);
-    W.res[0] = res + i_p(i);
+    W.res[0] = res + i_p(rod, i);
     if (rod_segment_inertia(W.arg, W.res, W.iw, W.w, 0)) return -3;
     if (segment_torque(rod, i, y, &W, T)) return -3;
-    for (k = 0; k < 3; ++k) res[i_om(i) + k] -= T[k];
+    for (k = 0; k < 3; ++k) res[i_om(rod, i) + k] -= T[k];
   }
   /* internal forces of the segments: elastic + viscous (none on a held node's rows) */
   const int free0 = !(node_held(rod, 0) > 0.5), freeN = !(node_held(rod, N) > 0.5);
   for (i = 1; i <= N; ++i) {
-    W.arg[0] = y + i_phi(i - 1); W.arg[1] = y + i_phi(i); W.arg[2] = y + i_p(i);
-    W.arg[3] = y + i_v(i - 1); W.arg[4] = y + i_v(i); W.arg[5] = y + i_om(i);
+    W.arg[0] = y + i_phi(rod, i - 1); W.arg[1] = y + i_phi(rod, i); W.arg[2] = y + i_p(rod, i);
+    W.arg[3] = y + i_v(rod, i - 1); W.arg[4] = y + i_v(rod, i); W.arg[5] = y + i_om(rod, i);
     W.arg[6] = segp(rod, i);
+    seg_nq(rod, i, y, nq);
+    W.arg[7] = nq;
     W.res[0] = Q;
     if (rod_segment_forces(W.arg, W.res, W.iw, W.w, 0)) return -3;
-    double* ra = res + i_v(i - 1);
-    double* rb = res + i_v(i);
-    double* ro = res + i_om(i);
+    if (rod->nb) {
+      W.arg[0] = y + i_phi(rod, i - 1); W.arg[1] = y + i_phi(rod, i);
+      W.arg[2] = y + i_p(rod, i); W.arg[3] = segp(rod, i);
+      W.res[0] = dV; W.res[1] = dVx; W.res[2] = G;
+      if (rod_segment_branch(W.arg, W.res, W.iw, W.w, 0)) return -3;
+      relax_rows(rod, i_qs(rod, i), dV, y, yp, res);
+    }
+    double* ra = res + i_v(rod, i - 1);
+    double* rb = res + i_v(rod, i);
+    double* ro = res + i_om(rod, i);
     if (i - 1 > 0 || free0) for (k = 0; k < 3; ++k) ra[k] -= Q[k];
     if (i < N || freeN) for (k = 0; k < 3; ++k) rb[k] -= Q[3 + k];
     for (k = 0; k < 3; ++k) ro[k] -= Q[6 + k];
   }
   /* internal torques of the joints (and the clamp joints against the end frames) */
   for (j = 0; j <= N; ++j) {
-    if (!joint_args(rod, j, y, &W)) continue;
+    if (!joint_args(rod, j, y, &W)) {
+      relax_rows(rod, i_qj(rod, j), 0, y, yp, res);
+      continue;
+    }
+    jnt_mq(rod, j, y, nq);
+    W.arg[5] = nq;
     W.res[0] = T;
     if (rod_joint_torques(W.arg, W.res, W.iw, W.w, 0)) return -3;
-    if (j >= 1) for (k = 0; k < 3; ++k) res[i_om(j) + k] -= T[k];
-    if (j + 1 <= N) for (k = 0; k < 3; ++k) res[i_om(j + 1) + k] -= T[3 + k];
+    if (j >= 1) for (k = 0; k < 3; ++k) res[i_om(rod, j) + k] -= T[k];
+    if (j + 1 <= N) for (k = 0; k < 3; ++k) res[i_om(rod, j + 1) + k] -= T[3 + k];
+    if (rod->nb) {
+      W.arg[2] = jntp(rod, j);       /* (p_a, p_b) are still in arg[0], arg[1] */
+      W.res[0] = dV; W.res[1] = dVx; W.res[2] = G;
+      if (rod_joint_branch(W.arg, W.res, W.iw, W.w, 0)) return -3;
+      relax_rows(rod, i_qj(rod, j), dV, y, yp, res);
+    }
   }
   return 0;
 }
 
-#define AB(r, c) ab[(size_t)(KL + KU + (r) - (c)) + (size_t)(c) * (size_t)ldab]
+#define AB(r, c) ab[(size_t)(rod->kl + rod->ku + (r) - (c)) + (size_t)(c) * (size_t)ldab]
 
 /* the contributions of one element to cy dF/dy + cj dF/dy' (band storage) */
 static int jac_node(const kvrod_rod* rod, int i, const double* y, const double* yp,
@@ -241,25 +338,25 @@ static int jac_node(const kvrod_rod* rod, int i, const double* y, const double* 
   double m = node_mass(rod, i), held = node_held(rod, i), f[3];
   int r, c;
   if (node_force(rod, i, y, W, f)) return -3;
-  W->arg[0] = y + i_phi(i); W->arg[1] = y + i_v(i);
-  W->arg[2] = yp + i_phi(i); W->arg[3] = yp + i_v(i);
+  W->arg[0] = y + i_phi(rod, i); W->arg[1] = y + i_v(rod, i);
+  W->arg[2] = yp + i_phi(rod, i); W->arg[3] = yp + i_v(rod, i);
   W->arg[4] = &m; W->arg[5] = f; W->arg[6] = &held;
   W->arg[7] = i == 0 || i == N ? held_v(rod, i) : kZero3;
   W->arg[8] = &cy; W->arg[9] = &cj;
   W->res[0] = J;
   if (rod_node_inertia_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
-  const int o = i_phi(i);
+  const int o = i_phi(rod, i);
   for (c = 0; c < 6; ++c) for (r = 0; r < 6; ++r) AB(o + r, o + c) += J[r + 6 * c];
   /* follower force: R(p_host) f depends on the host segment's quaternion */
   const double* nl = nlp(rod, i);
   if (cy != 0.0 && !(held > 0.5) && has_follower(nl + NL_F_FOLLOWER)) {
     const double s = cy * rod->par[PAR_LOAD_SCALE];
-    const int op = i_p(host(i));
+    const int op = i_p(rod, host(i));
     W->arg[0] = y + op; W->arg[1] = nl + NL_F_FOLLOWER;
     W->res[0] = J;
     if (rod_rotate_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
     for (c = 0; c < 4; ++c)
-      for (r = 0; r < 3; ++r) AB(i_v(i) + r, op + c) -= s * J[r + 3 * c];
+      for (r = 0; r < 3; ++r) AB(i_v(rod, i) + r, op + c) -= s * J[r + 3 * c];
   }
   return 0;
 }
@@ -268,49 +365,53 @@ static int jac_segment_inertia(const kvrod_rod* rod, int i, const double* y,
                                const double* yp, double cy, double cj, int ldab, double* ab,
                                work_t* W, double* J) {
   int r, c;
-  W->arg[0] = y + i_p(i); W->arg[1] = y + i_om(i);
-  W->arg[2] = yp + i_p(i); W->arg[3] = yp + i_om(i);
+  W->arg[0] = y + i_p(rod, i); W->arg[1] = y + i_om(rod, i);
+  W->arg[2] = yp + i_p(rod, i); W->arg[3] = yp + i_om(rod, i);
   W->arg[4] = segp(rod, i); W->arg[5] = &cy; W->arg[6] = &cj;
   W->res[0] = J;
   if (rod_segment_inertia_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
-  const int o = i_p(i);
+  const int o = i_p(rod, i);
   for (c = 0; c < 7; ++c) for (r = 0; r < 7; ++r) AB(o + r, o + c) += J[r + 7 * c];
   const double* sl = slp(rod, i);
   if (cy != 0.0 && has_follower(sl + SL_M_DEAD)) {
     /* dead moment: the material torque R(p)^T M depends on p */
     const double s = cy * rod->par[PAR_LOAD_SCALE];
-    W->arg[0] = y + i_p(i); W->arg[1] = sl + SL_M_DEAD;
+    W->arg[0] = y + i_p(rod, i); W->arg[1] = sl + SL_M_DEAD;
     W->res[0] = J;
     if (rod_rotate_transposed_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
     for (c = 0; c < 4; ++c)
-      for (r = 0; r < 3; ++r) AB(i_om(i) + r, o + c) -= s * J[r + 3 * c];
+      for (r = 0; r < 3; ++r) AB(i_om(rod, i) + r, o + c) -= s * J[r + 3 * c];
   }
   return 0;
 }
 
 /* reduced segment Jacobian (6 x 13): rows (force on node b, torque), columns
  * (phi_b, p, v_b, Omega); force on node a = -force on node b and the phi_a, v_a columns
- * are the negated phi_b, v_b columns. */
-static int jac_segment(const kvrod_rod* rod, int i, const double* y, double cy, int ldab,
-                       double* ab, work_t* W, double* J) {
+ * are the negated phi_b, v_b columns. With relaxation terms also the coupling of the
+ * forces to the segment's internal strains q_b (through n_q = -sum C_b q_b) and the
+ * relaxation rows q_b' - (dV - q_b)/theta_b. */
+static int jac_segment(const kvrod_rod* rod, int i, const double* y, double cy, double cj,
+                       int ldab, double* ab, work_t* W, double* J) {
   const int N = rod->N;
-  int rb[6], ra[3], cb[13], cpart[13], r, c;
-  W->arg[0] = y + i_phi(i - 1); W->arg[1] = y + i_phi(i); W->arg[2] = y + i_p(i);
-  W->arg[3] = y + i_v(i - 1); W->arg[4] = y + i_v(i); W->arg[5] = y + i_om(i);
-  W->arg[6] = segp(rod, i);
+  int rb[6], ra[3], cb[13], cpart[13], r, c, b, k;
+  double nq[3];
+  seg_nq(rod, i, y, nq);
+  W->arg[0] = y + i_phi(rod, i - 1); W->arg[1] = y + i_phi(rod, i); W->arg[2] = y + i_p(rod, i);
+  W->arg[3] = y + i_v(rod, i - 1); W->arg[4] = y + i_v(rod, i); W->arg[5] = y + i_om(rod, i);
+  W->arg[6] = segp(rod, i); W->arg[7] = nq;
   W->res[0] = J;
   if (rod_segment_forces_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
   const int use_a = (i - 1 > 0 || !(node_held(rod, 0) > 0.5));
   const int use_b = (i < N || !(node_held(rod, N) > 0.5));
   for (r = 0; r < 3; ++r) {
-    rb[r] = use_b ? i_v(i) + r : -1;
-    rb[3 + r] = i_om(i) + r;
-    ra[r] = use_a ? i_v(i - 1) + r : -1;
-    cb[r] = i_phi(i) + r; cpart[r] = i_phi(i - 1) + r;
-    cb[7 + r] = i_v(i) + r; cpart[7 + r] = i_v(i - 1) + r;
-    cb[10 + r] = i_om(i) + r; cpart[10 + r] = -1;
+    rb[r] = use_b ? i_v(rod, i) + r : -1;
+    rb[3 + r] = i_om(rod, i) + r;
+    ra[r] = use_a ? i_v(rod, i - 1) + r : -1;
+    cb[r] = i_phi(rod, i) + r; cpart[r] = i_phi(rod, i - 1) + r;
+    cb[7 + r] = i_v(rod, i) + r; cpart[7 + r] = i_v(rod, i - 1) + r;
+    cb[10 + r] = i_om(rod, i) + r; cpart[10 + r] = -1;
   }
-  for (r = 0; r < 4; ++r) { cb[3 + r] = i_p(i) + r; cpart[3 + r] = -1; }
+  for (r = 0; r < 4; ++r) { cb[3 + r] = i_p(rod, i) + r; cpart[3 + r] = -1; }
   for (c = 0; c < 13; ++c) {
     const int c2 = cpart[c];
     for (r = 0; r < 6; ++r) {
@@ -325,64 +426,139 @@ static int jac_segment(const kvrod_rod* rod, int i, const double* y, double cy, 
       }
     }
   }
+  if (!rod->nb) return 0;
+  double dV[3], dVx[21], G[18];
+  W->arg[0] = y + i_phi(rod, i - 1); W->arg[1] = y + i_phi(rod, i);
+  W->arg[2] = y + i_p(rod, i); W->arg[3] = segp(rod, i);
+  W->res[0] = dV; W->res[1] = dVx; W->res[2] = G;
+  if (rod_segment_branch(W->arg, W->res, W->iw, W->w, 0)) return -3;
+  for (b = 0; b < rod->nb; ++b) {
+    const double* C = segb(rod, i, b);
+    const double rate = 1.0 / rod->theta[b];
+    const int q0 = i_qs(rod, i) + 3 * b;
+    for (k = 0; k < 3; ++k) {
+      /* forces on the q columns: res -= Q, dQ/dq_bk = -C_bk G[:, k] */
+      for (r = 0; r < 6; ++r) {
+        const double val = cy * C[k] * G[r + 6 * k];
+        if (rb[r] >= 0) AB(rb[r], q0 + k) += val;
+        if (r < 3 && ra[r] >= 0) AB(ra[r], q0 + k) -= val;
+      }
+      /* relaxation row: d/dq = rate, d/dq' = 1, d/d(phi_b, p) = -rate d dV/d(phi_b, p) */
+      AB(q0 + k, q0 + k) += cy * rate + cj;
+      for (c = 0; c < 7; ++c) {
+        const double val = -cy * rate * dVx[k + 3 * c];
+        AB(q0 + k, c < 3 ? i_phi(rod, i) + c : i_p(rod, i) + c - 3) += val;
+        if (c < 3) AB(q0 + k, i_phi(rod, i - 1) + c) -= val;
+      }
+    }
+  }
   return 0;
 }
 
 /* joint j sits at node j: between segments j and j+1, or a clamp frame and a segment */
-static int jac_joint(const kvrod_rod* rod, int j, const double* y, double cy, int ldab,
-                     double* ab, work_t* W, double* J) {
+static int jac_joint(const kvrod_rod* rod, int j, const double* y, double cy, double cj,
+                     int ldab, double* ab, work_t* W, double* J) {
   const int N = rod->N, has_a = j >= 1, has_b = j + 1 <= N;
-  int jrows[6], jcols[14], r, c;
-  if (!joint_args(rod, j, y, W)) return 0;
+  int jrows[6], jcols[14], r, c, b, k;
+  double mq[3];
+  if (!joint_args(rod, j, y, W)) {          /* absent clamp joint: its terms only decay */
+    for (b = 0; b < rod->nb; ++b)
+      for (k = 0; k < 3; ++k) {
+        const int o = i_qj(rod, j) + 3 * b + k;
+        AB(o, o) += cy / rod->theta[b] + cj;
+      }
+    return 0;
+  }
+  jnt_mq(rod, j, y, mq);
+  W->arg[5] = mq;
   W->res[0] = J;
   if (rod_joint_torques_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
   for (r = 0; r < 3; ++r) {
-    jrows[r] = has_a ? i_om(j) + r : -1;
-    jrows[3 + r] = has_b ? i_om(j + 1) + r : -1;
-    jcols[8 + r] = has_a ? i_om(j) + r : -1;
-    jcols[11 + r] = has_b ? i_om(j + 1) + r : -1;
+    jrows[r] = has_a ? i_om(rod, j) + r : -1;
+    jrows[3 + r] = has_b ? i_om(rod, j + 1) + r : -1;
+    jcols[8 + r] = has_a ? i_om(rod, j) + r : -1;
+    jcols[11 + r] = has_b ? i_om(rod, j + 1) + r : -1;
   }
   for (r = 0; r < 4; ++r) {
-    jcols[r] = has_a ? i_p(j) + r : -1;
-    jcols[4 + r] = has_b ? i_p(j + 1) + r : -1;
+    jcols[r] = has_a ? i_p(rod, j) + r : -1;
+    jcols[4 + r] = has_b ? i_p(rod, j + 1) + r : -1;
   }
   for (c = 0; c < 14; ++c) {
     if (jcols[c] < 0) continue;
     for (r = 0; r < 6; ++r)
       if (jrows[r] >= 0) AB(jrows[r], jcols[c]) -= cy * J[r + 6 * c];
   }
+  if (!rod->nb) return 0;
+  double dU[3], dUx[24], G[18];
+  W->arg[2] = jntp(rod, j);                 /* (p_a, p_b) are still in arg[0], arg[1] */
+  W->res[0] = dU; W->res[1] = dUx; W->res[2] = G;
+  if (rod_joint_branch(W->arg, W->res, W->iw, W->w, 0)) return -3;
+  for (b = 0; b < rod->nb; ++b) {
+    const double* C = jntb(rod, j, b);
+    const double rate = 1.0 / rod->theta[b];
+    const int q0 = i_qj(rod, j) + 3 * b;
+    for (k = 0; k < 3; ++k) {
+      for (r = 0; r < 6; ++r)
+        if (jrows[r] >= 0) AB(jrows[r], q0 + k) += cy * C[k] * G[r + 6 * k];
+      AB(q0 + k, q0 + k) += cy * rate + cj;
+      for (c = 0; c < 8; ++c)
+        if (jcols[c] >= 0) AB(q0 + k, jcols[c]) -= cy * rate * dUx[k + 3 * c];
+    }
+  }
   return 0;
 }
 
-static void zero_cell(int i, int ldab, double* ab) {
-  const int c0 = cs(i), c1 = i == 0 ? CELL0 : c0 + CELL;
+static void zero_cell(const kvrod_rod* rod, int i, int ldab, double* ab) {
+  const int c0 = cs(rod, i), c1 = i == 0 ? c0size(rod) : c0 + csize(rod);
   int c;
-  /* band rows KL .. 2KL+KU only; rows 0 .. KL-1 are dgbtrf workspace */
+  /* band rows kl .. 2kl+ku only; rows 0 .. kl-1 are dgbtrf workspace */
   for (c = c0; c < c1; ++c)
-    memset(ab + (size_t)c * (size_t)ldab + KL, 0, sizeof(double) * (KL + KU + 1));
+    memset(ab + (size_t)c * (size_t)ldab + rod->kl, 0, sizeof(double) * (rod->kl + rod->ku + 1));
 }
 
 int kvrod_jacobian_band(const kvrod_rod* rod, double t, const double* y, const double* yp,
                         double cy, double cj, int ldab, double* ab) {
   (void) t;
   const int N = rod->N;
-  if (N < 1) return -1;
-  if (ldab < 2 * KL + KU + 1) return -2;
+  if (check_rod(rod)) return check_rod(rod);
+  if (ldab < 2 * rod->kl + rod->ku + 1) return -2;
   work_t W;
   double J[84];
-  int i;
+  int i, b, k;
   /* one sweep over the cells; the columns of cell i+1 are zeroed just before the
    * elements of cell i (which reach one cell ahead) are added: cache friendly */
-  zero_cell(0, ldab, ab);
+  zero_cell(rod, 0, ldab, ab);
   for (i = 0; i <= N; ++i) {
-    if (i + 1 <= N) zero_cell(i + 1, ldab, ab);
+    if (i + 1 <= N) zero_cell(rod, i + 1, ldab, ab);
     if (jac_node(rod, i, y, yp, cy, cj, ldab, ab, &W, J)) return -3;
     if (i >= 1 && jac_segment_inertia(rod, i, y, yp, cy, cj, ldab, ab, &W, J)) return -3;
-    if (cy == 0.0) continue;
-    if (i >= 1 && jac_segment(rod, i, y, cy, ldab, ab, &W, J)) return -3;
-    if (jac_joint(rod, i, y, cy, ldab, ab, &W, J)) return -3;
+    if (cy == 0.0) {            /* dF/dy' only: the relaxation rows' identity */
+      for (b = 0; b < 3 * rod->nb; ++b) {
+        if (i >= 1) { k = i_qs(rod, i) + b; AB(k, k) += cj; }
+        k = i_qj(rod, i) + b; AB(k, k) += cj;
+      }
+      continue;
+    }
+    if (i >= 1 && jac_segment(rod, i, y, cy, cj, ldab, ab, &W, J)) return -3;
+    if (jac_joint(rod, i, y, cy, cj, ldab, ab, &W, J)) return -3;
   }
   return 0;
+}
+
+/* the stored energy and twice the dissipation rate of the relaxation terms of one
+ * element beyond what its kernel reports (the kernel has W = l/2 dV^T C_F dV with the
+ * instantaneous C_F = C_inf + sum C_b): l/2 C_b ((dV - q)^2 - dV^2) and l C_b/theta (dV - q)^2 */
+static void relax_energy(const kvrod_rod* rod, const double* C0, size_t stride, double l,
+                         const double* dV, const double* q, double* e) {
+  int b, k;
+  for (b = 0; b < rod->nb; ++b) {
+    const double* C = C0 + stride * (size_t)b;
+    for (k = 0; k < 3; ++k) {
+      const double x = dV[k] - q[3 * b + k];
+      e[1] += 0.5 * l * C[k] * (x * x - dV[k] * dV[k]);
+      e[2] += l * C[k] / rod->theta[b] * x * x;
+    }
+  }
 }
 
 /* energies and powers of one state; per-element strains and resultants if out_el != 0
@@ -390,7 +566,8 @@ int kvrod_jacobian_band(const kvrod_rod* rod, double t, const double* y, const d
 static int energies_one(const kvrod_rod* rod, const double* y, const double* yp,
                         double* e, double* out_el, work_t* W) {
   const int N = rod->N;
-  double Tk, Wel, Dd, S3[3], R3[3], Q[9], T6[6], f[3], m, Fint[2][3] = {{0, 0, 0}, {0, 0, 0}};
+  double Tk, Wel, Dd, S3[3], R3[3], Q[9], T6[6], f[3], m, nq[3], dX[3];
+  double Fint[2][3] = {{0, 0, 0}, {0, 0, 0}};
   double* oV = out_el;
   double* oF = out_el ? oV + 3 * N : 0;
   double* oU = out_el ? oF + 3 * N : 0;
@@ -399,26 +576,31 @@ static int energies_one(const kvrod_rod* rod, const double* y, const double* yp,
   for (k = 0; k < NDIAG; ++k) e[k] = 0.0;
   for (i = 0; i <= N; ++i) {            /* kinetic energy and power of the nodes' loads */
     m = node_mass(rod, i);
-    W->arg[0] = y + i_v(i); W->arg[1] = &m;
+    W->arg[0] = y + i_v(rod, i); W->arg[1] = &m;
     W->res[0] = &Tk;
     if (rod_node_kinetic(W->arg, W->res, W->iw, W->w, 0)) return -3;
     e[0] += Tk;
     if (node_force(rod, i, y, W, f)) return -3;
-    for (k = 0; k < 3; ++k) e[3] += f[k] * y[i_v(i) + k];
+    for (k = 0; k < 3; ++k) e[3] += f[k] * y[i_v(rod, i) + k];
   }
   for (i = 1; i <= N; ++i) {
-    W->arg[0] = y + i_om(i); W->arg[1] = segp(rod, i);
+    W->arg[0] = y + i_om(rod, i); W->arg[1] = segp(rod, i);
     W->res[0] = &Tk;
     if (rod_segment_kinetic(W->arg, W->res, W->iw, W->w, 0)) return -3;
     e[0] += Tk;
     if (segment_torque(rod, i, y, W, S3)) return -3;
-    for (k = 0; k < 3; ++k) e[3] += S3[k] * y[i_om(i) + k];
-    W->arg[0] = y + i_phi(i - 1); W->arg[1] = y + i_phi(i); W->arg[2] = y + i_p(i);
-    W->arg[3] = y + i_v(i - 1); W->arg[4] = y + i_v(i); W->arg[5] = y + i_om(i);
-    W->arg[6] = segp(rod, i);
+    for (k = 0; k < 3; ++k) e[3] += S3[k] * y[i_om(rod, i) + k];
+    seg_nq(rod, i, y, nq);
+    W->arg[0] = y + i_phi(rod, i - 1); W->arg[1] = y + i_phi(rod, i); W->arg[2] = y + i_p(rod, i);
+    W->arg[3] = y + i_v(rod, i - 1); W->arg[4] = y + i_v(rod, i); W->arg[5] = y + i_om(rod, i);
+    W->arg[6] = segp(rod, i); W->arg[7] = nq;
     W->res[0] = &Wel; W->res[1] = &Dd; W->res[2] = S3; W->res[3] = R3;
     if (rod_segment_diagnostics(W->arg, W->res, W->iw, W->w, 0)) return -3;
     e[1] += Wel; e[2] += 2.0 * Dd;
+    if (rod->nb) {
+      for (k = 0; k < 3; ++k) dX[k] = S3[k] - segp(rod, i)[SEG_V0 + k];
+      relax_energy(rod, segb(rod, i, 0), 3, segp(rod, i)[SEG_H], dX, y + i_qs(rod, i), e);
+    }
     if (out_el)
       for (k = 0; k < 3; ++k) { oV[3 * (i - 1) + k] = S3[k]; oF[3 * (i - 1) + k] = R3[k]; }
     if (i == 1 || i == N) {             /* internal forces on the end nodes (reactions) */
@@ -432,12 +614,17 @@ static int energies_one(const kvrod_rod* rod, const double* y, const double* yp,
   }
   for (j = 0; j <= N; ++j) {
     if (!joint_args(rod, j, y, W)) continue;
+    jnt_mq(rod, j, y, nq);
+    W->arg[5] = nq;
     W->res[0] = &Wel; W->res[1] = &Dd; W->res[2] = S3; W->res[3] = R3;
     if (rod_joint_diagnostics(W->arg, W->res, W->iw, W->w, 0)) return -3;
     e[1] += Wel; e[2] += 2.0 * Dd;
+    if (rod->nb) {
+      for (k = 0; k < 3; ++k) dX[k] = S3[k] - jntp(rod, j)[JNT_U0 + k];
+      relax_energy(rod, jntb(rod, j, 0), 3, jntp(rod, j)[JNT_H], dX, y + i_qj(rod, j), e);
+    }
     if (out_el) for (k = 0; k < 3; ++k) { oU[3 * j + k] = S3[k]; oM[3 * j + k] = R3[k]; }
     if (j == 0 || j == N) {             /* power of the clamp frames' prescribed rotation */
-      if (!joint_args(rod, j, y, W)) continue;
       W->res[0] = T6;
       if (rod_joint_torques(W->arg, W->res, W->iw, W->w, 0)) return -3;
       const double* om = rod->par + (j == 0 ? PAR_OMEGA_START : PAR_OMEGA_END);
@@ -451,7 +638,7 @@ static int energies_one(const kvrod_rod* rod, const double* y, const double* yp,
     m = node_mass(rod, i);
     if (node_force(rod, i, y, W, f)) return -3;
     for (k = 0; k < 3; ++k)
-      e[4] += (m * yp[i_v(i) + k] - f[k] - Fint[j][k]) * y[i_v(i) + k];
+      e[4] += (m * yp[i_v(rod, i) + k] - f[k] - Fint[j][k]) * y[i_v(rod, i) + k];
   }
   return 0;
 }
@@ -460,7 +647,7 @@ int kvrod_diagnostics(const kvrod_rod* rod, double t, const double* y, const dou
                       double* out) {
   (void) t;
   const int N = rod->N;
-  if (N < 1) return -1;
+  if (check_rod(rod)) return check_rod(rod);
   work_t W;
   memset(out, 0, sizeof(double) * (size_t)(NDIAG + 6 * N + 6 * (N + 1)));
   return energies_one(rod, y, yp, out, out + NDIAG, &W);
@@ -469,9 +656,8 @@ int kvrod_diagnostics(const kvrod_rod* rod, double t, const double* y, const dou
 int kvrod_energies(const kvrod_rod* rod, int m, const double* ts, const double* ys,
                    const double* yps, double* out) {
   (void) ts;
-  const int N = rod->N;
-  const size_t n = (size_t) kvrod_n_state(N);
-  if (N < 1) return -1;
+  if (check_rod(rod)) return check_rod(rod);
+  const size_t n = (size_t) kvrod_n_state(rod->N, rod->nb);
   work_t W;
   int k;
   for (k = 0; k < m; ++k)

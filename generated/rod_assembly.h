@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_assembly.h.jinja
 // derivation step: discrete_rod
-// inputs sha256: 5eb4624893bbddc81cbe78ad775337c1fd835888a85063dfea0fa6d3bc88240e
+// inputs sha256: b7910751acb4ada90ba35e5a08c0f40ec5a4f909c75f02ad99c14a2593580970
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*
@@ -10,11 +10,15 @@
  * A rod is described by kvrod_rod: N elements, the global parameter vector (PARAMS), the
  * per-segment parameters (N rows of SEGMENT_PARAMS), the per-joint parameters (N+1 rows of
  * JOINT_PARAMS, joint j at node j), the node loads (N+1 rows of NODE_LOADS) and the
- * segment loads (N rows of SEGMENT_LOADS), all row-major.
- * y, yp: state and its time derivative (length kvrod_n_state(N)); res: the residual
- * F(t, y, y') (same length). Band storage is LAPACK dgbtrf's: ab has ldab >= 2*KL+KU+1
- * rows and n columns (Fortran order), element (i, j) at ab[KL + KU + i - j + j*ldab].
- * Return value 0 on success, negative on error.
+ * segment loads (N rows of SEGMENT_LOADS), all row-major; for a generalized Maxwell rod
+ * also nb relaxation terms: their times theta (nb) and moduli C_b of every segment
+ * (N x nb x 3) and joint ((N+1) x nb x 3); nb = 0 for Kelvin-Voigt (the pointers unused).
+ * y, yp: state and its time derivative (length kvrod_n_state(N, nb)); res: the residual
+ * F(t, y, y') (same length). Band storage is LAPACK dgbtrf's with the rod's kl, ku
+ * (at least kvrod_kl(N, nb), kvrod_ku(N, nb)): ab has ldab >= 2*kl+ku+1 rows and n
+ * columns (Fortran order), element (i, j) at ab[kl + ku + i - j + j*ldab].
+ * Return value 0 on success, negative on error (-1: N < 1 or nb outside 0..24,
+ * -2: band too narrow, -3: kernel failure).
  */
 #ifndef KVROD_ROD_ASSEMBLY_H
 #define KVROD_ROD_ASSEMBLY_H
@@ -24,16 +28,21 @@ extern "C" {
 
 typedef struct {
   int N;                  /* number of elements (segments) */
+  int nb;                 /* number of relaxation terms (0: Kelvin-Voigt) */
+  int kl, ku;             /* band widths of the caller's band storage */
   const double* par;      /* global parameters: 37 values */
   const double* seg;      /* N x 14 segment parameters */
   const double* jnt;      /* (N+1) x 10 joint parameters */
   const double* nload;    /* (N+1) x 6 node loads */
   const double* sload;    /* N x 6 segment loads */
+  const double* theta;    /* nb relaxation times (s) */
+  const double* segb;     /* N x nb x 3 moduli of the relaxation terms on segments (N) */
+  const double* jntb;     /* (N+1) x nb x 3 moduli on joints (N m^2) */
 } kvrod_rod;
 
-int kvrod_n_state(int N);
-int kvrod_kl(void);
-int kvrod_ku(void);
+int kvrod_n_state(int N, int nb);
+int kvrod_kl(int N, int nb);
+int kvrod_ku(int N, int nb);
 int kvrod_n_params(void);
 
 /* F(t, y, y') = 0 in IDA form */

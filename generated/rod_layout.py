@@ -1,7 +1,7 @@
 # GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 # source: derive/templates/rod_layout.py.jinja
 # derivation step: discrete_rod
-# inputs sha256: 0f62e261d72d6dd5acec7a27442619f4bb1270ae4bb46366fd2d724fa3ea5ce2
+# inputs sha256: 30e9ec1af995a43b4149613cd63ce2926c3bae20a201ae53c5c74846cdf57ae6
 # tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 """State, parameter and diagnostics layout of the discrete rod (the one place that owns it).
@@ -10,32 +10,37 @@ Rendered from ``derive/discrete_rod.py``; imports only the standard library.
 
 Quaternions are stored with the SCALAR PART FIRST: p = (p0, p1, p2, p3).
 
-State vector y (and y'), cell by cell, n = CELL0_SIZE + CELL_SIZE * N:
+State vector y (and y'), cell by cell, for a rod with B rod-level relaxation terms
+(generalized Maxwell; B = 0 for Kelvin-Voigt), n = n_state(N, B):
 
-* cell 0 (node 0): phi(3) v(3)
-* cell i = 1..N (segment i between nodes i-1 and i, then node i):
-  p(4) Omega(3) phi(3) v(3)
+* cell 0 (node 0, joint 0): phi(3) v(3) q_joint(3B)
+* cell i = 1..N (segment i between nodes i-1 and i, node i, joint i):
+  p(4) Omega(3) q_segment(3B) phi(3) v(3) q_joint(3B)
 
 phi: node position (m), v: node velocity (m/s), p: segment quaternion, Omega: material
-angular velocity of the segment (rad/s). Residual rows use the same layout: the rows of a
-field hold its equation (p: kinematics p' - 1/2 p*(0,Omega); Omega: angular momentum
-balance; phi: phi' - v; v: linear momentum balance, or v - r'(t) for a held node, whose
-position starts at r(0)).
+angular velocity of the segment (rad/s), q_segment / q_joint: the internal strains of the
+relaxation terms (term b at 3b: the shear/extension strain of the segment, the curvature
+and twist of the joint toward which the term relaxes). Residual rows use the same
+layout: the rows of a field hold its equation (p: kinematics p' - 1/2 p*(0,Omega);
+Omega: angular momentum balance; q: q' - (strain - q)/theta_b; phi: phi' - v; v: linear
+momentum balance, or v - r'(t) for a held node, whose position starts at r(0)). The
+constants CELL0_SIZE, CELL_SIZE and the offsets below are those of B = 0; every index
+function takes ``branches`` = B.
 
 Per-element data (row-major arrays, one row per element): SEGMENT_PARAMS for segments
 1..N, JOINT_PARAMS for joints 0..N (joint j at node j), NODE_LOADS for nodes 0..N,
 SEGMENT_LOADS for segments 1..N; global PARAMS.
 
-The Jacobian dF/dy + c dF/dy' is banded with KL sub- and KU super-diagonals for
-N >= 2 (see :func:`bandwidths` for N = 1); LAPACK band storage (dgbtrf) has 2*KL+KU+1
-rows, element (i, j) at ab[KL + KU + i - j, j].
+The Jacobian dF/dy + c dF/dy' is banded with kl sub- and ku super-diagonals,
+:func:`bandwidths` (KL, KU for B = 0 and N >= 2); LAPACK band storage (dgbtrf) has
+2 kl + ku + 1 rows, element (i, j) at ab[kl + ku + i - j, j].
 
 Static problem (reduced coordinates, rows = force/torque balance):
 cell 0: phi(3); cell i: theta(3) phi(3)
 (theta: rotation increment, p <- p*exp(theta/2)); bandwidths STATIC_KL, STATIC_KU.
 
 C API (generated/rod_assembly.h): kvrod_residual, kvrod_jacobian_band, kvrod_diagnostics,
-kvrod_energies, each on a kvrod_rod struct (N and pointers to the arrays above);
+kvrod_energies, each on a kvrod_rod struct (N, B, the band and pointers to the arrays);
 per-element CasADi kernels in generated/rod_kernels.c and generated/rod_<kernel>.casadi.
 """
 
@@ -51,7 +56,15 @@ OFF_V = 10
 
 KL = 19
 KU = 15
-_BANDWIDTHS_SMALL = {1: (18, 15)}
+
+#: cells for B relaxation terms: (name, size, size per term), in order
+CELL0_FIELDS_B = (('phi', 3, 0), ('v', 3, 0), ('q_joint', 0, 3))
+CELL_FIELDS_B = (('p', 4, 0), ('Omega', 3, 0), ('q_segment', 0, 3), ('phi', 3, 0), ('v', 3, 0), ('q_joint', 0, 3))
+MAX_BRANCHES = 24
+#: band widths kl = KL_FORMULA[0][0] + KL_FORMULA[0][1] B (ku likewise) for N >= 2;
+#: N = 1 is narrower by N1_DELTA
+KL_FORMULA = ((19, 6), (15, 6))
+N1_DELTA = (1, 0)
 
 STATIC_CELL0_SIZE = 3
 STATIC_CELL_SIZE = 6
@@ -122,12 +135,37 @@ SEGMENT_LOAD_OFFSETS = {'m_dead': 0, 'm_follower': 3}
 DIAG_SCALARS = ('kinetic', 'elastic', 'dissipation_rate', 'external_power', 'boundary_power')
 
 #: per-element CasADi kernels (names, inputs, outputs)
-KERNELS = {'rod_segment_forces': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'seg': [14, 1]}, 'outputs': {'Q': [9, 1]}}, 'rod_segment_forces_jac': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'seg': [14, 1]}, 'outputs': {'dQb_dxb': [6, 13]}}, 'rod_joint_torques': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1]}, 'outputs': {'T': [6, 1]}}, 'rod_joint_torques_jac': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1]}, 'outputs': {'dT_dx': [6, 14]}}, 'rod_segment_inertia': {'inputs': {'p': [4, 1], 'Omega': [3, 1], 'p_dot': [4, 1], 'Omega_dot': [3, 1], 'seg': [14, 1]}, 'outputs': {'r': [7, 1]}}, 'rod_segment_inertia_jac': {'inputs': {'p': [4, 1], 'Omega': [3, 1], 'p_dot': [4, 1], 'Omega_dot': [3, 1], 'seg': [14, 1], 'c_y': [1, 1], 'c_j': [1, 1]}, 'outputs': {'J': [7, 7]}}, 'rod_node_inertia': {'inputs': {'phi': [3, 1], 'v': [3, 1], 'phi_dot': [3, 1], 'v_dot': [3, 1], 'm': [1, 1], 'f': [3, 1], 'held': [1, 1], 'v_held': [3, 1]}, 'outputs': {'r': [6, 1]}}, 'rod_node_inertia_jac': {'inputs': {'phi': [3, 1], 'v': [3, 1], 'phi_dot': [3, 1], 'v_dot': [3, 1], 'm': [1, 1], 'f': [3, 1], 'held': [1, 1], 'v_held': [3, 1], 'c_y': [1, 1], 'c_j': [1, 1]}, 'outputs': {'J': [6, 6]}}, 'rod_rotate': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'Rx': [3, 1]}}, 'rod_rotate_jac': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'dRx_dp': [3, 4]}}, 'rod_rotate_transposed': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'RTx': [3, 1]}}, 'rod_rotate_transposed_jac': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'dRTx_dp': [3, 4]}}, 'rod_segment_diagnostics': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'seg': [14, 1]}, 'outputs': {'W': [1, 1], 'D': [1, 1], 'V': [3, 1], 'F': [3, 1]}}, 'rod_joint_diagnostics': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1]}, 'outputs': {'W': [1, 1], 'D': [1, 1], 'U': [3, 1], 'M': [3, 1]}}, 'rod_segment_kinetic': {'inputs': {'Omega': [3, 1], 'seg': [14, 1]}, 'outputs': {'T': [1, 1]}}, 'rod_node_kinetic': {'inputs': {'v': [3, 1], 'm': [1, 1]}, 'outputs': {'T': [1, 1]}}}
+KERNELS = {'rod_segment_forces': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'seg': [14, 1], 'n_q': [3, 1]}, 'outputs': {'Q': [9, 1]}}, 'rod_segment_forces_jac': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'seg': [14, 1], 'n_q': [3, 1]}, 'outputs': {'dQb_dxb': [6, 13]}}, 'rod_joint_torques': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1], 'm_q': [3, 1]}, 'outputs': {'T': [6, 1]}}, 'rod_joint_torques_jac': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1], 'm_q': [3, 1]}, 'outputs': {'dT_dx': [6, 14]}}, 'rod_segment_inertia': {'inputs': {'p': [4, 1], 'Omega': [3, 1], 'p_dot': [4, 1], 'Omega_dot': [3, 1], 'seg': [14, 1]}, 'outputs': {'r': [7, 1]}}, 'rod_segment_inertia_jac': {'inputs': {'p': [4, 1], 'Omega': [3, 1], 'p_dot': [4, 1], 'Omega_dot': [3, 1], 'seg': [14, 1], 'c_y': [1, 1], 'c_j': [1, 1]}, 'outputs': {'J': [7, 7]}}, 'rod_node_inertia': {'inputs': {'phi': [3, 1], 'v': [3, 1], 'phi_dot': [3, 1], 'v_dot': [3, 1], 'm': [1, 1], 'f': [3, 1], 'held': [1, 1], 'v_held': [3, 1]}, 'outputs': {'r': [6, 1]}}, 'rod_node_inertia_jac': {'inputs': {'phi': [3, 1], 'v': [3, 1], 'phi_dot': [3, 1], 'v_dot': [3, 1], 'm': [1, 1], 'f': [3, 1], 'held': [1, 1], 'v_held': [3, 1], 'c_y': [1, 1], 'c_j': [1, 1]}, 'outputs': {'J': [6, 6]}}, 'rod_rotate': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'Rx': [3, 1]}}, 'rod_rotate_jac': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'dRx_dp': [3, 4]}}, 'rod_rotate_transposed': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'RTx': [3, 1]}}, 'rod_rotate_transposed_jac': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'dRTx_dp': [3, 4]}}, 'rod_segment_diagnostics': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'seg': [14, 1], 'n_q': [3, 1]}, 'outputs': {'W': [1, 1], 'D': [1, 1], 'V': [3, 1], 'F': [3, 1]}}, 'rod_joint_diagnostics': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1], 'm_q': [3, 1]}, 'outputs': {'W': [1, 1], 'D': [1, 1], 'U': [3, 1], 'M': [3, 1]}}, 'rod_segment_kinetic': {'inputs': {'Omega': [3, 1], 'seg': [14, 1]}, 'outputs': {'T': [1, 1]}}, 'rod_node_kinetic': {'inputs': {'v': [3, 1], 'm': [1, 1]}, 'outputs': {'T': [1, 1]}}, 'rod_segment_branch': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'seg': [14, 1]}, 'outputs': {'dV': [3, 1], 'dV_dx': [3, 7], 'G': [6, 3]}}, 'rod_joint_branch': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'jnt': [10, 1]}, 'outputs': {'dU': [3, 1], 'dU_dx': [3, 8], 'G': [6, 3]}}}
 
 
-def n_state(n_elements: int) -> int:
-    """Length of y for N elements."""
-    return CELL0_SIZE + CELL_SIZE * n_elements
+def _check_branches(branches: int) -> int:
+    if not 0 <= branches <= MAX_BRANCHES:
+        raise ValueError(f"branches = {branches!r} is outside the allowed range: "
+                         f"0..{MAX_BRANCHES}")
+    return branches
+
+
+def cell_offsets(branches: int = 0, first: bool = False) -> dict[str, int]:
+    """Offsets of the fields of a cell (``first``: cell 0) for B = ``branches`` terms."""
+    B = _check_branches(branches)
+    out, k = {}, 0
+    for name, size, per in (CELL0_FIELDS_B if first else CELL_FIELDS_B):
+        out[name] = k
+        k += size + per * B
+    return out
+
+
+def cell_sizes(branches: int = 0) -> tuple[int, int]:
+    """(size of cell 0, size of cell i >= 1) for B = ``branches`` terms."""
+    B = _check_branches(branches)
+    return (sum(a + b * B for _, a, b in CELL0_FIELDS_B),
+            sum(a + b * B for _, a, b in CELL_FIELDS_B))
+
+
+def n_state(n_elements: int, branches: int = 0) -> int:
+    """Length of y for N elements and B relaxation terms."""
+    c0, c = cell_sizes(branches)
+    return c0 + c * n_elements
 
 
 def n_static(n_elements: int) -> int:
@@ -135,46 +173,62 @@ def n_static(n_elements: int) -> int:
     return STATIC_CELL0_SIZE + STATIC_CELL_SIZE * n_elements
 
 
-def cell_start(i: int) -> int:
+def cell_start(i: int, branches: int = 0) -> int:
     """Index of the first unknown of cell i in y."""
-    return 0 if i == 0 else CELL0_SIZE + CELL_SIZE * (i - 1)
+    c0, c = cell_sizes(branches)
+    return 0 if i == 0 else c0 + c * (i - 1)
 
 
-def node_phi(i: int) -> int:
+def _at(i: int, name: str, branches: int) -> int:
+    return cell_start(i, branches) + cell_offsets(branches, first=i == 0)[name]
+
+
+def node_phi(i: int, branches: int = 0) -> int:
     """Index of node i's position phi (3) in y."""
-    return CELL0_OFFSETS["phi"] if i == 0 else cell_start(i) + CELL_OFFSETS["phi"]
+    return _at(i, "phi", branches)
 
 
-def node_v(i: int) -> int:
+def node_v(i: int, branches: int = 0) -> int:
     """Index of node i's velocity v (3) in y."""
-    return CELL0_OFFSETS["v"] if i == 0 else cell_start(i) + CELL_OFFSETS["v"]
+    return _at(i, "v", branches)
 
 
-def segment_p(i: int) -> int:
+def segment_p(i: int, branches: int = 0) -> int:
     """Index of segment i's quaternion p (4) in y (i = 1..N)."""
-    return cell_start(i) + CELL_OFFSETS["p"]
+    return _at(i, "p", branches)
 
 
-def segment_omega(i: int) -> int:
+def segment_omega(i: int, branches: int = 0) -> int:
     """Index of segment i's angular velocity Omega (3) in y (i = 1..N)."""
-    return cell_start(i) + CELL_OFFSETS["Omega"]
+    return _at(i, "Omega", branches)
 
 
-def describe_index(n_elements: int, index: int) -> str:
+def segment_q(i: int, branches: int) -> int:
+    """Index of segment i's internal strains (3B, term b at 3b) in y (i = 1..N)."""
+    return _at(i, "q_segment", branches)
+
+
+def joint_q(j: int, branches: int) -> int:
+    """Index of joint j's internal strains (3B, term b at 3b) in y (j = 0..N)."""
+    return _at(j, "q_joint", branches)
+
+
+def describe_index(n_elements: int, index: int, branches: int = 0) -> str:
     """Human-readable name of state/residual component ``index`` (e.g. for failures)."""
-    if index < 0 or index >= n_state(n_elements):
+    if index < 0 or index >= n_state(n_elements, branches):
         return f"state index {index}"
-    if index < CELL0_SIZE:
-        for name, start in sorted(CELL0_OFFSETS.items(), key=lambda kv: -kv[1]):
-            if index >= start:
-                return f"node 0 {name}[{index - start}] (state index {index})"
-    cell, local = divmod(index - CELL0_SIZE, CELL_SIZE)
-    cell += 1
-    for name, start in sorted(CELL_OFFSETS.items(), key=lambda kv: -kv[1]):
+    c0, c = cell_sizes(branches)
+    if index < c0:
+        cell, local, offs = 0, index, cell_offsets(branches, first=True)
+    else:
+        cell, local = divmod(index - c0, c)
+        cell, offs = cell + 1, cell_offsets(branches)
+    for name, start in sorted(offs.items(), key=lambda kv: -kv[1]):
         if local >= start:
-            where = "segment" if name in ("p", "Omega") else "node"
+            where = {"p": "segment", "Omega": "segment", "q_segment": "segment",
+                     "q_joint": "joint"}.get(name, "node")
             return f"{where} {cell} {name}[{local - start}] (state index {index})"
-    return f"state index {index}"
+    return f"state index {index}"  # pragma: no cover
 
 
 def static_cell_start(i: int) -> int:
@@ -192,9 +246,14 @@ def static_phi(i: int) -> int:
     return 0 if i == 0 else static_cell_start(i) + STATIC_CELL_OFFSETS["phi"]
 
 
-def bandwidths(n_elements: int) -> tuple[int, int]:
-    """Exact (kl, ku) of the dynamic Jacobian for N elements."""
-    return _BANDWIDTHS_SMALL.get(n_elements, (KL, KU))
+def bandwidths(n_elements: int, branches: int = 0) -> tuple[int, int]:
+    """Exact (kl, ku) of the dynamic Jacobian for N elements and B relaxation terms."""
+    B = _check_branches(branches)
+    (kl0, kl1), (ku0, ku1) = KL_FORMULA
+    kl, ku = kl0 + kl1 * B, ku0 + ku1 * B
+    if n_elements == 1:
+        return kl - N1_DELTA[0], ku - N1_DELTA[1]
+    return kl, ku
 
 
 def diagnostics_size(n_elements: int) -> int:

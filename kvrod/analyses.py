@@ -1,6 +1,7 @@
-"""The work behind `kvrod modes` and `kvrod compare-damping` (modal analysis with continuum
-references, mode-shape plots, the comparison tables and files), shared by those commands
-and `kvrod notes-beyond`. Nothing here prints."""
+"""The work behind `kvrod modes`, `kvrod compare-damping` and `kvrod calibrate --dma`
+(modal analysis with continuum references, mode-shape plots, the comparison tables and
+files, the DMA fit's files), shared by those commands and the notes commands. Nothing
+here prints."""
 
 from __future__ import annotations
 
@@ -149,3 +150,19 @@ def write_compare(result, out: Path) -> list[Path]:
 
     paths.append(write_text(out / "compare_damping.md", compare_markdown(result)))
     return paths + plot_compare(result, out)
+
+
+def write_dma_fit(fit, table: dict, out: Path, command: str) -> list[Path]:
+    """Write a DMA fit as `kvrod calibrate --dma` does: ``dma.json`` (series, uncertainty,
+    doubts), ``material.toml`` (``table``, a ``[material]`` for a problem file, headed by
+    ``command``) and ``dma.png``."""
+    import tomli_w
+
+    from runtime.analysis import dma
+    from runtime.io.atomic import write_text
+    from runtime.io.results import write_json
+
+    write_json(out / "dma.json", {"command": command, **fit.summary(), "material": table})
+    write_text(out / "material.toml", f"# {command}: paste into a problem file\n"
+               + tomli_w.dumps({"material": table}))
+    return [out / "dma.json", out / "material.toml", dma.plot_dma(fit, out / "dma.png")]

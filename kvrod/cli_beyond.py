@@ -1,5 +1,5 @@
 """Beyond the paper: `kvrod modes`, `calibrate`, `compare-damping`, `notes-beyond`,
-`notes-examples`.
+`notes-examples`, `notes-maxwell`.
 
 Wired into `kvrod/cli.py` by ``add_commands(subparsers, parser_class)``. Heavy imports
 happen inside the commands; library code never prints, these commands do.
@@ -51,8 +51,7 @@ def _modes_into(args, problem, out: Path) -> int:
     modes = res["modes"]
     m = problem.material
     state = "pre-deformed by its static loads" if args.deformed else "straight, unloaded"
-    print(f"{problem.name}: N = {problem.rod.elements}, tau_S = {m.tau_S} s, tau_B = "
-          f"{m.tau_B} s (tau_E = {m.tau_E:.6g} s), {state}")
+    print(f"{problem.name}: N = {problem.rod.elements}, {m.describe()}, {state}")
     if res["static_tip"] is not None:
         print(f"static tip [m]: {[round(float(v), 6) for v in res['static_tip']]}")
     print(modes_table(modes))
@@ -70,11 +69,56 @@ def _modes_into(args, problem, out: Path) -> int:
 # --------------------------------------------------------------------------------------
 
 
+def _cmd_calibrate_dma(args) -> int:
+    """`kvrod calibrate --dma FILE --nu NU`: a Prony series from storage and loss moduli;
+    everything is checked before the folder is locked."""
+    from kvrod.analyses import write_dma_fit
+    from kvrod.outputs import results_folder
+    from runtime.analysis import dma
+    from runtime.problem.materials import material_from_mapping
+
+    if args.nu is None:
+        raise _cli_error("kvrod calibrate: --dma needs --nu (Poisson's ratio of the "
+                         "material: a uniaxial DMA test does not measure it)")
+    if not (-1.0 < args.nu < 0.5):
+        raise _cli_error(f"kvrod calibrate: --nu = {args.nu} is outside the allowed range: "
+                         "-1 < nu < 1/2")
+    if not (math.isfinite(args.per_decade) and 0 < args.per_decade <= 8):
+        raise _cli_error(f"kvrod calibrate: --per-decade = {args.per_decade} is outside the "
+                         "allowed range: 0 < per-decade <= 8")
+    if not (math.isfinite(args.density) and args.density > 0):
+        raise _cli_error(f"kvrod calibrate: --density = {args.density} must be > 0 kg/m^3")
+    try:
+        data = dma.load_dma(args.dma)
+    except ValueError as exc:
+        raise _cli_error(f"kvrod calibrate: {exc}") from None
+    fit = dma.fit_prony(*data, poisson_ratio=args.nu, per_decade=args.per_decade)
+    table = fit.material(args.density)
+    material_from_mapping(table)          # a material kvrod accepts, before writing it
+    out = Path(args.out)
+    with results_folder(out, "calibrate", markers=("dma.json",), overwrite=args.overwrite,
+                        names=("dma.json", "dma.png", "material.toml")):
+        write_dma_fit(fit, table, out, f"kvrod calibrate --dma {args.dma} --nu {args.nu}")
+    print(f"{fit.omega.size} frequencies, {fit.theta_grid.size} relaxation times tried, "
+          f"{fit.theta.size} kept; E_inf = {fit.E_inf:.6g} Pa (+- {fit.std_E_inf:.2g})")
+    for t, e, sd in zip(fit.theta, fit.E, fit.std_E, strict=True):
+        print(f"  tau = {t:.4g} s: E = {e:.6g} Pa (+- {sd:.2g})")
+    print(f"relative RMS residual {fit.rel_rms:.3g}; wrote {out}/dma.json, material.toml, "
+          "dma.png")
+    if not fit.accepted:
+        print(f"kvrod calibrate: fit rejected: {'; '.join(fit.doubts)}", file=sys.stderr)
+        return 1
+    return 0
+
+
 def _cmd_calibrate(args) -> int:
     """Validate the data and the model first, then lock the folder and fit."""
     from kvrod.outputs import results_folder
     from runtime.analysis import calibration as cal
     from runtime.problem.registry import load_problem
+
+    if args.dma is not None:
+        return _cmd_calibrate_dma(args)
 
     if args.tau0 is not None and not (math.isfinite(args.tau0) and args.tau0 > 0):
         raise _cli_error(f"kvrod calibrate: --tau0 = {args.tau0} must be a finite time > 0 s")
@@ -187,14 +231,28 @@ def _cmd_notes_examples(args) -> int:
     return 0
 
 
+def _cmd_notes_maxwell(args) -> int:
+    from kvrod.maxwell_notes import write_maxwell_notes
+    from kvrod.outputs import check_file_argument, results_folder
+
+    check_file_argument(Path(args.out_notes), "--out-notes")
+    with results_folder(Path(args.out), "notes-maxwell",
+                        markers=("simulate-mx/summary.json", "dma/fit/dma.json"),
+                        overwrite=args.overwrite,
+                        names=("modes-kv", "modes-mx", "simulate-kv", "simulate-mx", "dma")):
+        path = write_maxwell_notes(Path(args.out_notes), Path(args.out))
+    print(f"wrote {path} (results under {args.out}/)")
+    return 0
+
+
 # --------------------------------------------------------------------------------------
 # wiring
 # --------------------------------------------------------------------------------------
 
 
 def add_commands(sub, parser_class) -> None:
-    """Add `modes`, `calibrate`, `compare-damping`, `notes-beyond` and `notes-examples`
-    to ``sub``.
+    """Add `modes`, `calibrate`, `compare-damping`, `notes-beyond`, `notes-examples` and
+    `notes-maxwell` to ``sub``.
 
     parser_class is the one-line-error parser the caller created ``sub`` with (kept for
     symmetry with the other command modules; argparse passes it on to the subparsers).
@@ -214,10 +272,23 @@ def add_commands(sub, parser_class) -> None:
     m.set_defaults(func=_cmd_modes)
 
     c = sub.add_parser("calibrate", help="fit tau (= tau_S = tau_B) of the cantilever to "
-                                         "measured decay")
-    c.add_argument("--data", required=True,
-                   help="CSV: columns t, x (signal: time [s] since release, tip x [m]) "
-                        "or a column delta (log decrements)")
+                                         "measured decay, or a Prony series to DMA data")
+    src = c.add_mutually_exclusive_group(required=True)
+    src.add_argument("--data",
+                     help="CSV: columns t, x (signal: time [s] since release, tip x [m]) "
+                          "or a column delta (log decrements)")
+    src.add_argument("--dma",
+                     help="CSV of a DMA test: columns frequency_hz (Hz) or omega (rad/s), "
+                          "storage and loss (Pa): fits a generalized Maxwell (Prony) series "
+                          "and writes material.toml for a problem file")
+    c.add_argument("--nu", type=float, default=None,
+                   help="with --dma: Poisson's ratio of the material (every branch; "
+                        "uniaxial DMA does not measure it)")
+    c.add_argument("--per-decade", dest="per_decade", type=float, default=3.0,
+                   help="with --dma: relaxation times per decade of frequency (default 3; "
+                        "two leave a few %% of error on a single Debye peak)")
+    c.add_argument("--density", type=float, default=1000.0,
+                   help="with --dma: density [kg/m^3] written into material.toml")
     c.add_argument("--mode", choices=("signal", "decrements"), default="signal",
                    help="signal: simulate the problem; decrements: linear modal model")
     c.add_argument("--problem", default="cantilever",
@@ -266,3 +337,6 @@ def add_commands(sub, parser_class) -> None:
                      "reference and write notes/examples.md", "notes/examples.md",
                      "results/examples")
     x.set_defaults(func=_cmd_notes_examples)
+    notes_parser("notes-maxwell", "the generalized Maxwell rod: derivation, Kelvin-Voigt "
+                 "against Maxwell cantilever, a DMA fit; writes notes/maxwell.md",
+                 "notes/maxwell.md", "results/maxwell").set_defaults(func=_cmd_notes_maxwell)

@@ -19,7 +19,8 @@ def _print_summary(s: dict, out: Path, vtk: bool, plots: bool) -> None:
         print(f"maxima: {len(s['peaks'])}, damping ratios: {[round(v, 4) for v in z]}")
     lp = s.get("linear_prediction")
     if lp:
-        print(f"linear prediction zeta_1 = omega_1 tau/2 = {lp['zeta_1']:.4f}")
+        print(f"linear prediction zeta_1 = {lp.get('formula', 'omega_1 tau / 2')} = "
+              f"{lp['zeta_1']:.4f}")
     eb = s["energy_balance_max_rel"]
     print(f"energy balance max rel. error: {eb:.2e}" if eb is not None
           else f"energy balance: not applicable ({s['energy_audit']['note']})")

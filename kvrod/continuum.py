@@ -41,12 +41,47 @@ def applies(problem) -> bool:
             and problem.material.youngs_modulus_end is None)
 
 
+def _maxwell_solid(m):
+    """The reference's 3-D generalized Maxwell solid of a material's plain numbers."""
+    from references.viscoelastic_material import GeneralizedMaxwell, shear_bulk_from_E_nu
+
+    G, K = (float(np.real(x)) for x in shear_bulk_from_E_nu(m.youngs_modulus,
+                                                            m.poisson_ratio))
+    return GeneralizedMaxwell(G, K, [b.shear_modulus for b in m.branches],
+                              [b.bulk_modulus for b in m.branches],
+                              [b.tau for b in m.branches])
+
+
+def _maxwell_frequencies(problem, sec, family: str, n: int) -> np.ndarray:
+    """|lambda| of the first n complex eigenvalues of the continuum with the complex
+    moduli E(s), G(s) of the generalized Maxwell solid (correspondence principle)."""
+    from references import viscoelastic_beam as vb
+
+    solid = _maxwell_solid(problem.material)
+    L, rho = problem.rod.length, problem.material.density
+    if family in ("bending-1", "bending-2"):
+        I, kappa = (sec.I1, sec.kappa_2) if family == "bending-1" else (sec.I2, sec.kappa_1)
+        lam = vb.timoshenko_eigenvalues(n, L=L, rho=rho, A=sec.A, I=I, kappa=kappa,
+                                        E=solid.E, G=solid.G_s)
+    elif family == "axial":
+        lam = vb.axial_eigenvalues(n, L=L, rho=rho, E=solid.E)
+    elif family == "torsion":
+        lam = vb.torsion_eigenvalues(n, L=L, rho=rho, G=solid.G_s, J_T=sec.J_T, I3=sec.I3)
+    else:
+        return np.full(n, math.nan)
+    return np.abs(np.asarray(lam))
+
+
 def frequencies(problem, family: str, n: int) -> np.ndarray:
-    """First n continuum angular frequencies (rad/s) of a family (NaN where unknown)."""
+    """First n continuum angular frequencies (rad/s) of a family (NaN where unknown); for
+    a generalized Maxwell material the natural frequencies |lambda| of the complex-modulus
+    continuum."""
     sec = _section(problem)
     if sec is None or n < 1:
         return np.full(max(n, 0), math.nan)
     m = problem.material
+    if getattr(m, "model", "") == "generalized_maxwell":
+        return _maxwell_frequencies(problem, sec, family, n)
     E, rho = m.youngs_modulus, m.density
     G = E / (2 * (1 + m.poisson_ratio))
     L = problem.rod.length

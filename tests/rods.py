@@ -66,3 +66,42 @@ def residual(m: RodModel, y: np.ndarray, yp: np.ndarray, t: float = 0.0) -> np.n
     r = np.empty(m.n)
     m.residual(t, y, yp, r)
     return r
+
+
+#: a generalized Maxwell material for rod_mapping(..., tau=None, **MAXWELL): two branches
+#: with their own Poisson ratios (so extension gets 2 extra relaxation times: B = 4)
+MAXWELL: dict[str, Any] = {
+    "model": "generalized_maxwell",
+    "branches": [{"youngs_modulus": 2e6, "poisson_ratio": 0.45, "tau": 0.01},
+                 {"shear_modulus": 3e5, "bulk_modulus": 1e6, "tau": 0.2}],
+}
+
+
+def with_internal_strains(m: RodModel, y: np.ndarray, rng, amp: float = 1e-2) -> np.ndarray:
+    """y with random internal strains of the relaxation terms (a copy)."""
+    y = np.array(y, dtype=float)
+    y[m.q_segment_index] = amp * rng.standard_normal(m.q_segment_index.shape)
+    y[m.q_joint_index] = 10 * amp * rng.standard_normal(m.q_joint_index.shape)
+    return y
+
+
+def energy_rate_function(m: RodModel):
+    """CasADi function ``dE(y, d, par)``: the directional derivative of T + W (kinetic plus
+    stored energy) along the state direction ``d``, with the clamp frames turning with
+    ``Omega_start``/``Omega_end`` (``p' = 1/2 p*(0, Omega)`` enters dW/dt too)."""
+    import casadi as ca
+
+    from generated import rod_layout as L
+    from runtime.model.casadi_rod import CasadiRod
+
+    cr = CasadiRod(m.arrays)
+    ys, ds = ca.MX.sym("y", m.n), ca.MX.sym("d", m.n)
+    ps = ca.MX.sym("par", m.arrays.par.size)
+    out = cr.energies(0.0, ys, ds, ps, *CasadiRod.args(m.arrays)[1:])
+    dpar = np.zeros(m.arrays.par.size)
+    for name in ("start", "end"):
+        k = L.PARAM_OFFSETS["p_" + name]
+        p = m.arrays.param("p_" + name)
+        dpar[k:k + 4] = 0.5 * quat_mul(p, np.r_[0.0, m.arrays.param("Omega_" + name)])
+    return ca.Function("dE", [ys, ds, ps], [ca.jtimes(out[0] + out[1], ca.vertcat(ys, ps),
+                                                       ca.vertcat(ds, ca.DM(dpar)))])

@@ -248,8 +248,9 @@ def maxwell_material(maxwell_limit_: Step, dissipation: Step) -> Step:
         notes=(
             "Each branch relaxes as dQv/dt = (Q - Qv)/tau_j; in the Laplace domain "
             "Qv = Q/(1 + s tau_j), so the branch adds G_j s tau_j/(1 + s tau_j) to G(s) and "
-            "K_j s tau_j/(1 + s tau_j) to K(s): G(s) = s L[G(t)](s) with the Prony relaxation "
-            "function G(t) = G_inf + sum_j G_j exp(-t/tau_j) of Sect. 4.4.",
+            "K_j s tau_j/(1 + s tau_j) to K(s): G(s) = s times the Laplace transform of "
+            "G(t), with the Prony relaxation function "
+            "G(t) = G_inf + sum_j G_j exp(-t/tau_j) of Sect. 4.4.",
             "On the imaginary axis G(i omega) is the paper's complex modulus (step maxwell_limit).",
             "Kelvin-Voigt limit: G_j s tau_j/(1 + s tau_j) = eta_j s/(1 + s tau_j) -> eta_j s, "
             "so G(s) -> G_inf + s eta and K(s) -> K_inf + s zeta with eta = sum eta_j, "

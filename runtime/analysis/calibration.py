@@ -85,7 +85,7 @@ class CalibrationResult:
 
     @property
     def accepted(self) -> bool:
-        """The fit converged and passed its self-checks (:func:`fit_doubts`)."""
+        """The fit converged and passed its self-checks (``fit_doubts``)."""
         return self.success and not self.doubts
 
     def summary(self) -> dict:
@@ -168,7 +168,7 @@ def validate_signal(t: Sequence[float], x: Sequence[float],
 
     Needs: equal lengths, at least ``min_samples`` samples, finite values, strictly
     increasing time, t >= 0 (time since release), and at least two positive maxima
-    (:func:`signal_maxima`; the start counts when the signal starts at a maximum).
+    (``signal_maxima``; the start counts when the signal starts at a maximum).
     """
     t, x = np.asarray(t, dtype=float).ravel(), np.asarray(x, dtype=float).ravel()
     if t.size != x.size:

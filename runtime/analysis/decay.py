@@ -23,8 +23,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.interpolate import CubicSpline
-from scipy.optimize import brentq, minimize_scalar
 
 __all__ = [
     "BETA1_L",
@@ -98,6 +96,8 @@ def _refine_dense(sol: Dense, dsol: Dense | None, a: float, b: float, tb: float)
     if dsol is not None:
         da, db = float(dsol(a)), float(dsol(b))
         if da > 0.0 > db:
+            from scipy.optimize import brentq
+
             return brentq(
                 lambda s: float(dsol(s)),
                 a,
@@ -106,6 +106,8 @@ def _refine_dense(sol: Dense, dsol: Dense | None, a: float, b: float, tb: float)
                 rtol=4 * np.finfo(float).eps,
                 maxiter=200,
             )
+    from scipy.optimize import minimize_scalar
+
     res = minimize_scalar(
         lambda s: -float(sol(s)),
         bounds=(a, b),
@@ -156,6 +158,8 @@ def find_maxima(
     if dsol is not None and sol is None:
         raise ValueError("dsol needs sol (the dense signal) as well")
     if sol is None and method == "spline":
+        from scipy.interpolate import CubicSpline
+
         spline = CubicSpline(t, x)
         deriv = spline.derivative()
         sol, dsol = (lambda s: float(spline(s))), (lambda s: float(deriv(s)))

@@ -4,7 +4,7 @@ Linearisation
 -------------
 The rod's IDA residual ``F(t, y, y') = 0`` (``runtime/model/rod.py``) is linearised at an
 equilibrium ``y_eq`` at rest (the straight reference or a pre-deformed static state from
-:func:`runtime.solvers.statics.solve_static`, loads kept on). The quaternions carry one redundant
+``runtime.solvers.statics.solve_static``, loads kept on). The quaternions carry one redundant
 coordinate each (their norm, which the strains ignore), so the linearisation is written in
 reduced coordinates, in the layout of the static problem (``generated/rod_layout.py``):
 
@@ -60,6 +60,10 @@ import scipy.sparse.linalg as spla
 
 from runtime.model.rod import RodModel
 from runtime.model.statics import RodStatics
+
+#: largest first-order system (positions, velocities, internal strains) of a generalized
+#: Maxwell rod solved (dense eigenvalues)
+MAXWELL_DENSE_MAX = 3000
 
 __all__ = [
     "FAMILIES",
@@ -148,8 +152,9 @@ def linearize(model: RodModel, y_eq: np.ndarray | None = None,
     solve is linearised under its load. Raises ValueError if ``y_eq`` is not an
     equilibrium (max static residual above ``equilibrium_rtol`` times the load scale).
     """
-    with model.statics():
-        return _linearize(model, y_eq, equilibrium_rtol)
+    with model.statics(relaxed=False):
+        y = None if y_eq is None else model.relaxed(np.asarray(y_eq, dtype=float))
+        return _linearize(model, y, equilibrium_rtol)
 
 
 def _linearize(model: RodModel, y_eq: np.ndarray | None, equilibrium_rtol: float
@@ -195,6 +200,16 @@ def _linearize(model: RodModel, y_eq: np.ndarray | None, equilibrium_rtol: float
     Akin_w = (Pk @ Fy @ Sk).tocsc()
     E = sp.bmat([[Ekin, (Pk @ Fp @ Sk)], [Mq, M]]).tocsc()
     A = sp.bmat([[Akin_q, Akin_w], [K, C]]).tocsc()
+    if model.branches:
+        # generalized Maxwell: the internal strains z join the state, x = (q, w, z); their
+        # rows z' = (strain(q) - z)/theta and their resultants' coupling into the momentum
+        z = np.concatenate([model.q_segment_index.ravel(), model.q_joint_index.ravel()])
+        Kz = Fm[:, z]
+        Zq, Zw, Zz = (Fy[z] @ Tk).tocsc(), (Fy[z] @ Sk).tocsc(), Fy[z][:, z].tocsc()
+        nz = z.size
+        E = sp.bmat([[E, None], [None, Fp[z][:, z]]]).tocsc()
+        A = sp.bmat([[A, sp.vstack([sp.csc_matrix((keep.size, nz)), Kz])],
+                     [sp.hstack([Zq, Zw]), Zz]]).tocsc()
     for m in (M, C, K, E, A):
         m.eliminate_zeros()
     return Linearization(model=model, y_eq=y0, dofs=keep, M=M, C=C, K=K, E=E, A=A, T=T,
@@ -529,10 +544,20 @@ def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int =
     lin = linearize(model, y_eq)
     if count > lin.nq:
         raise ValueError(f"count = {count} exceeds the {lin.nq} degrees of freedom")
-    if lin.nq <= dense_max:
+    maxwell = model.branches > 0
+    if maxwell and lin.E.shape[0] > MAXWELL_DENSE_MAX:
+        raise ValueError(f"the linearised generalized Maxwell rod has {lin.E.shape[0]} "
+                         f"unknowns (internal strains included); at most {MAXWELL_DENSE_MAX} "
+                         "are solved (dense): use fewer elements")
+    if lin.nq <= dense_max or maxwell:
         w2, Phi, lam, Xq = _dense_modes(lin)
     else:
         w2, Phi, lam, Xq = _sparse_modes(lin, count)
+    if maxwell:
+        # the real eigenvalues are the relaxation of the internal strains (and overdamped
+        # motion, not identified here): the modes are the oscillatory pairs
+        osc = np.abs(lam.imag) > 0
+        lam, Xq = lam[osc], Xq[:, osc]
     omega = np.sqrt(np.maximum(w2, 0.0))
     Phi = _separate_degenerate(lin, omega, Phi, lin.M)
     # participation of the undamped modes in every damped eigenvector (M-weighted)
@@ -552,9 +577,11 @@ def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int =
         fam = _classify(fr)
         family_count[fam] = family_count.get(fam, 0) + 1
         l1, l2 = _finish_pair(pairs[k])
-        _, zeta = _pair_zeta(l1, l2)
+        wn, zeta = _pair_zeta(l1, l2)
         phi = Phi[:, k]
         zm = float(phi @ (Cd @ phi)) / (2 * omega[k]) if omega[k] > 0 else math.inf
+        if maxwell:   # frequency-dependent moduli: the natural frequency is |lambda|, and
+            omega[k], zm = wn, math.nan        # there is no constant damping matrix
         dx = lin.expand(phi)
         disp = dx[lin.statics.phi_cols].T
         rot = dx[lin.statics.theta_cols].T

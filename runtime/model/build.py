@@ -167,7 +167,7 @@ def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
     for name in ("kvrod_residual", "kvrod_jacobian_band", "kvrod_diagnostics",
                  "kvrod_energies", "kvrod_n_state"):
         getattr(lib, name).restype = i
-    lib.kvrod_n_state.argtypes = [i]
+    lib.kvrod_n_state.argtypes = [i, i]
     return lib
 
 

@@ -48,7 +48,8 @@ class CasadiRod:
 
     def __init__(self, arrays: RodArrays, kernels: dict[str, ca.Function] | None = None):
         self.N = N = arrays.N
-        self.n = L.n_state(N)
+        self.B = B = arrays.branches
+        self.n = L.n_state(N, B)
         self.held = (arrays.held("start"), arrays.held("end"))
         self.clamped = (arrays.clamped("start"), arrays.clamped("end"))
         k = self.k = kernels or load_kernels()
@@ -59,8 +60,12 @@ class CasadiRod:
         jnt = ca.MX.sym("jnt", L.N_JOINT, N + 1)
         nl = ca.MX.sym("nload", L.N_NODE_LOAD, N + 1)
         sl = ca.MX.sym("sload", L.N_SEGMENT_LOAD, N)
-        self._inputs = [t, y, yp, par, seg, jnt, nl, sl]
-        self._names = ["t", "y", "yp", "par", "seg", "jnt", "nload", "sload"]
+        theta = ca.MX.sym("theta", B)
+        segb = ca.MX.sym("segb", 3 * B, N)          # term b's moduli in rows 3b..3b+2
+        jntb = ca.MX.sym("jntb", 3 * B, N + 1)
+        self._inputs = [t, y, yp, par, seg, jnt, nl, sl, theta, segb, jntb]
+        self._names = ["t", "y", "yp", "par", "seg", "jnt", "nload", "sload", "theta",
+                       "segb", "jntb"]
 
         def P(name):
             return par[_r(L.PARAM_OFFSETS[name], L.PARAM_SIZES[name])]
@@ -71,13 +76,29 @@ class CasadiRod:
             idx = [s + j for s in starts for j in range(size)]
             return ca.reshape(vec[idx], size, len(starts))
 
-        phi_i = [L.node_phi(i) for i in nodes]
-        v_i = [L.node_v(i) for i in nodes]
-        p_i = [L.segment_p(i) for i in segs]
-        om_i = [L.segment_omega(i) for i in segs]
+        phi_i = [L.node_phi(i, B) for i in nodes]
+        v_i = [L.node_v(i, B) for i in nodes]
+        p_i = [L.segment_p(i, B) for i in segs]
+        om_i = [L.segment_omega(i, B) for i in segs]
+        qs_i = [L.segment_q(i, B) for i in segs]
+        qj_i = [L.joint_q(j, B) for j in nodes]
         Y = {"phi": g(y, phi_i, 3), "v": g(y, v_i, 3), "p": g(y, p_i, 4), "Om": g(y, om_i, 3)}
         YP = {"phi": g(yp, phi_i, 3), "v": g(yp, v_i, 3), "p": g(yp, p_i, 4),
               "Om": g(yp, om_i, 3)}
+        # relaxation terms (generalized Maxwell): internal strains (3B, elements), their
+        # resultants -sum_b C_b q_b (3, elements) and 1/theta per row (3B, 1)
+        rate = ca.kron(1.0 / theta, ca.DM.ones(3, 1)) if B else ca.MX.zeros(0, 1)
+
+        def q_resultant(C, q, K):
+            out = ca.MX.zeros(3, K)
+            for b in range(B):
+                out -= C[3 * b:3 * b + 3, :] * q[3 * b:3 * b + 3, :]
+            return out
+
+        QS, QJ = g(y, qs_i, 3 * B), g(y, qj_i, 3 * B)
+        QSd, QJd = g(yp, qs_i, 3 * B), g(yp, qj_i, 3 * B)
+        n_q = q_resultant(segb, QS, N)
+        m_q = q_resultant(jntb, QJ, N + 1)
         ls = P("load_scale")
         so = L.SEGMENT_OFFSETS
         h = seg[so["h"], :]
@@ -101,7 +122,7 @@ class CasadiRod:
         t_dead = k["rod_rotate_transposed"].map(N)(Y["p"], sl[_r(lo["m_dead"], 3), :])
         t_ext = ls * (t_dead + sl[_r(lo["m_follower"], 3), :])
         Q = k["rod_segment_forces"].map(N)(Y["phi"][:, :N], Y["phi"][:, 1:], Y["p"],
-                                           Y["v"][:, :N], Y["v"][:, 1:], Y["Om"], seg)
+                                           Y["v"][:, :N], Y["v"][:, 1:], Y["Om"], seg, n_q)
         wa = np.ones((3, N))
         wb = np.ones((3, N))
         if self.held[0]:
@@ -124,19 +145,38 @@ class CasadiRod:
         if N > 1:
             hj = jnt[:, 1:N]
             T = k["rod_joint_torques"].map(N - 1)(Y["p"][:, :-1], Y["p"][:, 1:],
-                                                  Y["Om"][:, :-1], Y["Om"][:, 1:], hj)
+                                                  Y["Om"][:, :-1], Y["Om"][:, 1:], hj,
+                                                  m_q[:, 1:N])
             put(om_i[:-1], 3, -T[0:3, :])
             put(om_i[1:], 3, -T[3:6, :])
         jt = k["rod_joint_torques"]
         self._clamp_T = []
         if self.clamped[0]:
-            T0 = jt(P("p_start"), Y["p"][:, 0], P("Omega_start"), Y["Om"][:, 0], jnt[:, 0])
+            T0 = jt(P("p_start"), Y["p"][:, 0], P("Omega_start"), Y["Om"][:, 0], jnt[:, 0],
+                    m_q[:, 0])
             put(om_i[:1], 3, -T0[3:6])
             self._clamp_T.append((T0[0:3], P("Omega_start")))
         if self.clamped[1]:
-            TN = jt(Y["p"][:, N - 1], P("p_end"), Y["Om"][:, N - 1], P("Omega_end"), jnt[:, N])
+            TN = jt(Y["p"][:, N - 1], P("p_end"), Y["Om"][:, N - 1], P("Omega_end"), jnt[:, N],
+                    m_q[:, N])
             put(om_i[-1:], 3, -TN[0:3])
             self._clamp_T.append((TN[3:6], P("Omega_end")))
+        # relaxation rows q' - (strain - q)/theta (strain 0 at an absent clamp joint)
+        dV = dU = None
+        if B:
+            dV = k["rod_segment_branch"].map(N)(Y["phi"][:, :N], Y["phi"][:, 1:], Y["p"],
+                                                seg)[0]
+            put(qs_i, 3 * B, QSd - rate * (ca.repmat(dV, B, 1) - QS))
+            cols = []
+            jb = k["rod_joint_branch"]
+            for j in nodes:
+                a = Y["p"][:, j - 1] if j >= 1 else P("p_start")
+                b = Y["p"][:, j] if j + 1 <= N else P("p_end")
+                active = (1 <= j <= N - 1) or (j == 0 and self.clamped[0]) or (
+                    j == N and self.clamped[1])
+                cols.append(jb(a, b, jnt[:, j])[0] if active else ca.MX.zeros(3, 1))
+            dU = ca.horzcat(*cols)
+            put(qj_i, 3 * B, QJd - rate * (ca.repmat(dU, B, 1) - QJ))
         ridx = np.concatenate(rows)
         S = sp.csc_matrix((np.ones(ridx.size), (ridx, np.arange(ridx.size))),
                           shape=(self.n, ridx.size))
@@ -154,24 +194,34 @@ class CasadiRod:
             k["rod_segment_kinetic"].map(N)(Y["Om"], seg))
         Ws, Ds, V, Fs = k["rod_segment_diagnostics"].map(N)(
             Y["phi"][:, :N], Y["phi"][:, 1:], Y["p"], Y["v"][:, :N], Y["v"][:, 1:], Y["Om"],
-            seg)
+            seg, n_q)
         el, dis = ca.sum2(Ws), 2 * ca.sum2(Ds)
+        if B:      # stored energy and dissipation of the terms beyond the kernels' W
+            active = np.ones((1, N + 1))          # joints 0 and N exist at a clamp only
+            active[0, 0], active[0, N] = float(self.clamped[0]), float(self.clamped[1])
+            hj_all = jnt[L.JOINT_OFFSETS["h"], :] * ca.DM(active)
+            for C, q, d, hh in ((segb, QS, dV, h), (jntb, QJ, dU, hj_all)):
+                for b in range(B):
+                    x = d - q[3 * b:3 * b + 3, :]
+                    Cb = C[3 * b:3 * b + 3, :]
+                    el += ca.sum2(0.5 * hh * ca.sum1(Cb * (x * x - d * d)))
+                    dis += ca.sum2(hh / theta[b] * ca.sum1(Cb * x * x))
         U = [ca.MX.zeros(3, 1) for _ in range(N + 1)]
         M = [ca.MX.zeros(3, 1) for _ in range(N + 1)]
         jd = k["rod_joint_diagnostics"]
         if N > 1:
             Wj, Dj, Uj, Mj = jd.map(N - 1)(Y["p"][:, :-1], Y["p"][:, 1:], Y["Om"][:, :-1],
-                                           Y["Om"][:, 1:], jnt[:, 1:N])
+                                           Y["Om"][:, 1:], jnt[:, 1:N], m_q[:, 1:N])
             el, dis = el + ca.sum2(Wj), dis + 2 * ca.sum2(Dj)
             for j in range(1, N):
                 U[j], M[j] = Uj[:, j - 1], Mj[:, j - 1]
         if self.clamped[0]:
             Wj, Dj, U[0], M[0] = jd(P("p_start"), Y["p"][:, 0], P("Omega_start"),
-                                    Y["Om"][:, 0], jnt[:, 0])
+                                    Y["Om"][:, 0], jnt[:, 0], m_q[:, 0])
             el, dis = el + Wj, dis + 2 * Dj
         if self.clamped[1]:
             Wj, Dj, U[N], M[N] = jd(Y["p"][:, N - 1], P("p_end"), Y["Om"][:, N - 1],
-                                    P("Omega_end"), jnt[:, N])
+                                    P("Omega_end"), jnt[:, N], m_q[:, N])
             el, dis = el + Wj, dis + 2 * Dj
         pext = ca.sum2(ca.sum1(f_ext * Y["v"])) + ca.sum2(ca.sum1(t_ext * Y["Om"]))
         pbc = ca.MX.zeros(1, 1)
@@ -190,4 +240,7 @@ class CasadiRod:
     @staticmethod
     def args(arrays: RodArrays) -> list[np.ndarray]:
         """Numeric inputs after (t, y, yp): par and the transposed element arrays."""
-        return [arrays.par, arrays.seg.T, arrays.jnt.T, arrays.nload.T, arrays.sload.T]
+        B = arrays.branches
+        return [arrays.par, arrays.seg.T, arrays.jnt.T, arrays.nload.T, arrays.sload.T,
+                arrays.theta, arrays.segb.reshape(arrays.N, 3 * B).T,
+                arrays.jntb.reshape(arrays.N + 1, 3 * B).T]

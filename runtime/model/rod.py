@@ -4,9 +4,9 @@
 ``F(t, y, y') = 0`` of the discrete rod (``derive/discrete_rod.py``; layout in
 ``generated/rod_layout.py``), its banded iteration matrix ``cy dF/dy + cj dF/dy'`` in
 LAPACK band storage, energies and powers, strains and stress resultants. It evaluates
-the compiled C assembly through ctypes (:mod:`runtime.model.build`) or, without a C
-compiler, the CasADi MX assembly (:mod:`runtime.model.casadi_rod`) with the same numbers
-up to rounding. The rod's numbers live in a :class:`~runtime.model.arrays.RodArrays`;
+the compiled C assembly through ctypes (``runtime.model.build``) or, without a C
+compiler, the CasADi MX assembly (``runtime.model.casadi_rod``) with the same numbers
+up to rounding. The rod's numbers live in a ``runtime.model.arrays.RodArrays``;
 a :class:`Drive` (loads with time functions, moving ends) updates them when the time or
 the load factor changes, so the model knows nothing about any particular problem.
 """
@@ -16,10 +16,12 @@ from __future__ import annotations
 import contextlib
 import math
 from collections.abc import Iterator
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
-import scipy.sparse as sp
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
 
 from generated import rod_layout as L
 from runtime.errors import GeneratedCodeError, ParameterError
@@ -89,18 +91,20 @@ class RodModel:
 
     def __init__(self, arrays: RodArrays, reference: np.ndarray, drive: Drive | None = None,
                  backend: str = "auto") -> None:
+
         if backend not in ("auto", "c", "casadi"):
             raise ParameterError("backend", backend, "'auto', 'c' or 'casadi'")
         N = self.N = arrays.N
         if N < 1:
             raise ParameterError("n_elements", N, "integer >= 1")
         self.arrays = arrays
-        self.n = L.n_state(N)
+        self.branches = B = arrays.branches
+        self.n = L.n_state(N, B)
         self.reference = np.array(reference, dtype=float)
         if self.reference.shape != (self.n,):
             raise ValueError(f"reference state has shape {self.reference.shape}, "
                              f"expected ({self.n},)")
-        self.kl, self.ku = L.bandwidths(N)
+        self.kl, self.ku = L.bandwidths(N, B)
         self.ldab = 2 * self.kl + self.ku + 1
         self.drive = drive
         self._key: tuple = ()       # (time, statics?, load factor) the arrays were driven to
@@ -112,7 +116,7 @@ class RodModel:
             raise GeneratedCodeError("compiled backend requested but no library could be "
                                      "built (see the warning above)")
         self._lib = lib
-        self._struct = arrays.struct()
+        self._struct = arrays.struct(self.kl, self.ku)
         self._sp = None
         self._casadi = None
         if lib is None:
@@ -125,10 +129,16 @@ class RodModel:
         self._diag = np.zeros(L.diagnostics_size(N))
         self._energy = np.zeros(len(L.DIAG_SCALARS))
         nodes, segs = np.arange(N + 1), np.arange(1, N + 1)
-        self.phi_index = np.array([L.node_phi(i) for i in nodes])[:, None] + np.arange(3)
-        self.v_index = np.array([L.node_v(i) for i in nodes])[:, None] + np.arange(3)
-        self.p_index = np.array([L.segment_p(i) for i in segs])[:, None] + np.arange(4)
-        self.omega_index = np.array([L.segment_omega(i) for i in segs])[:, None] + np.arange(3)
+        self.phi_index = np.array([L.node_phi(i, B) for i in nodes])[:, None] + np.arange(3)
+        self.v_index = np.array([L.node_v(i, B) for i in nodes])[:, None] + np.arange(3)
+        self.p_index = np.array([L.segment_p(i, B) for i in segs])[:, None] + np.arange(4)
+        self.omega_index = (np.array([L.segment_omega(i, B) for i in segs])[:, None]
+                            + np.arange(3))
+        #: state indices of the internal strains of the relaxation terms, (N, B, 3) and (N+1, B, 3)
+        self.q_segment_index = (np.array([L.segment_q(i, B) for i in segs], dtype=int)
+                                .reshape(N, 1, 1) + np.arange(3 * B).reshape(1, B, 3))
+        self.q_joint_index = (np.array([L.joint_q(j, B) for j in nodes], dtype=int)
+                              .reshape(N + 1, 1, 1) + np.arange(3 * B).reshape(1, B, 3))
         self.velocity_mask = np.zeros(self.n, dtype=bool)
         self.velocity_mask[self.v_index.ravel()] = True
         self.velocity_mask[self.omega_index.ravel()] = True
@@ -181,19 +191,52 @@ class RodModel:
     _time = at
 
     @contextlib.contextmanager
-    def statics(self, t: float = 0.0) -> Iterator[None]:
+    def statics(self, t: float = 0.0, relaxed: bool = True) -> Iterator[None]:
         """Within this block the rod is driven as in statics: loads at ``t-`` (their limit
         from the left, e.g. a load released at t = 0 is on), ends at rest, prescribed end
-        displacements and rotations scaled by the load factor."""
+        displacements and rotations scaled by the load factor. A generalized Maxwell rod
+        is in its relaxed state: a load held long enough has let every relaxation term
+        relax (q_b = strain), so statics sees the equilibrium stiffness C_inf (the
+        instantaneous C_F minus the terms' moduli, which are set to zero meanwhile);
+        ``relaxed=False`` keeps the terms (linearised dynamics about a static state)."""
         previous = self._static
         self._static = True
         self._key = ()
+        a = self.arrays
+        saved = None
+        if self.branches and relaxed and not previous:
+            saved = (a.seg_field("C_F").copy(), a.jnt_field("C_M").copy(), a.segb.copy(),
+                     a.jntb.copy())
+            a.seg_field("C_F")[:] -= a.segb.sum(axis=1)
+            a.jnt_field("C_M")[:] -= a.jntb.sum(axis=1)
+            a.segb[:] = 0.0
+            a.jntb[:] = 0.0
         try:
             self.at(t)
             yield
         finally:
+            if saved is not None:
+                a.seg_field("C_F")[:], a.jnt_field("C_M")[:] = saved[0], saved[1]
+                a.segb[:], a.jntb[:] = saved[2], saved[3]
             self._static = previous
             self._key = ()
+
+    def relaxed(self, y: np.ndarray, t: float = 0.0) -> np.ndarray:
+        """y with every relaxation term relaxed to its element's strain (q_b = V - V0 on
+        segments, U - U0 on joints; absent clamp joints keep 0): the state after a load
+        held long enough (a copy; y itself for a Kelvin-Voigt rod)."""
+        if not self.branches:
+            return y
+        y = np.array(y, dtype=float)
+        d = self.diagnostics(t, y)
+        a = self.arrays
+        dV = (d["strains"]["V"].T - a.seg_field("V0"))[:, None, :]
+        active = np.ones(self.N + 1, dtype=bool)     # joints 0 and N exist at a clamp only
+        active[0], active[-1] = a.clamped("start"), a.clamped("end")
+        dU = np.where(active[:, None], d["strains"]["U"].T - a.jnt_field("U0"), 0.0)
+        y[self.q_segment_index] = np.broadcast_to(dV, self.q_segment_index.shape)
+        y[self.q_joint_index] = np.broadcast_to(dU[:, None, :], self.q_joint_index.shape)
+        return y
 
     # -- states -------------------------------------------------------------------------
     def initial_state(self, t: float = 0.0) -> np.ndarray:
@@ -234,7 +277,7 @@ class RodModel:
 
     def describe_dof(self, index: int) -> str:
         """Human-readable name of state/residual component ``index``."""
-        return L.describe_index(self.N, index)
+        return L.describe_index(self.N, index, self.branches)
 
     # -- IDA residual and Jacobian ------------------------------------------------------
     @property
@@ -279,6 +322,8 @@ class RodModel:
             if rc:
                 raise GeneratedCodeError(f"kvrod_jacobian_band failed (code {rc})")
         else:
+            import scipy.sparse as sp  # on use: it costs 0.15 s of import
+
             J = sp.csc_matrix(self._casadi.jacobian(*self._cargs(t, y, yp), cy, cj))
             out_ab[self.kl:] = 0.0
             c = J.tocoo()
@@ -291,6 +336,8 @@ class RodModel:
 
     def band_to_csc(self, ab: np.ndarray, kl: int, ku: int) -> sp.csc_matrix:
         """The matrix held in rows kl: of LAPACK band storage, as CSC (zeros dropped)."""
+        import scipy.sparse as sp
+
         n = ab.shape[1]
         offsets = ku - np.arange(kl + ku + 1)
         m = sp.dia_matrix((ab[kl:], offsets), shape=(n, n)).tocsc()
@@ -340,6 +387,7 @@ class RodModel:
     def jacobian_sparse(self, t: float, y: np.ndarray, yp: np.ndarray,
                         cj: float) -> sp.csc_matrix:
         """dF/dy + cj dF/dy' as CSC with the fixed pattern of :meth:`sparsity`."""
+
         return self._sparse(t, y, yp, 1.0, cj)
 
     def dF_dy_sparse(self, t: float, y: np.ndarray, yp: np.ndarray) -> sp.csc_matrix:

@@ -11,8 +11,12 @@ also scaling prescribed end motion).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-import scipy.sparse as sp
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
 
 from generated import rod_layout as L
 from runtime.model.quaternion import quat_exp, quat_mul
@@ -41,8 +45,7 @@ class RodStatics:
             if m.arrays.held(end):
                 fixed += list(self.phi_cols[i])
         self.fixed_cols = np.array(fixed, dtype=int)
-        self._fixed = sp.csr_matrix((np.ones(len(fixed)), (fixed, fixed)),
-                                    shape=(self.n_static, self.n_static))
+        self._fixed_matrix = None     # built on first use (scipy.sparse imports slowly)
         self._rowmask = np.ones(self.n_static, dtype=bool)
         self._rowmask[self.fixed_cols] = False
         # solve_static moves held nodes to their targets when the load factor changes;
@@ -79,6 +82,8 @@ class RodStatics:
         out[~self._rowmask] = 0.0
 
     def jacobian_csr(self, y: np.ndarray) -> sp.csr_matrix:
+        import scipy.sparse as sp
+
         m = self.model
         y0 = self.at_rest(y)
         ab = np.zeros((m.ldab, m.n), order="F")
@@ -86,10 +91,16 @@ class RodStatics:
         Jd = m.band_to_csc(ab, m.kl, m.ku).tocsr()[self.static_rows]
         J = (Jd @ self.tangent(y0)).tocsr()
         keep = sp.diags(self._rowmask.astype(float))
-        return (keep @ J).tocsr() + self._fixed
+        if self._fixed_matrix is None:
+            f = self.fixed_cols
+            self._fixed_matrix = sp.csr_matrix((np.ones(f.size), (f, f)),
+                                               shape=(self.n_static, self.n_static))
+        return (keep @ J).tocsr() + self._fixed_matrix
 
     def tangent(self, y: np.ndarray) -> sp.csc_matrix:
         """T (n x n_static): dy = T dx; dphi -> phi (identity), dtheta -> dp = 1/2 L(p) [0; I]."""
+        import scipy.sparse as sp
+
         m, N = self.model, self.N
         p = y[m.p_index]  # (N, 4)
         p0, q = p[:, 0], p[:, 1:]

@@ -123,8 +123,8 @@ def reference_arrays(problem: Problem) -> tuple[RodArrays, np.ndarray, np.ndarra
 
     N = problem.rod.elements
     disc = discretize(problem.rod.geometry, N)
-    a = RodArrays.zeros(N)
     mats = problem.segment_matrices()
+    a = RodArrays.zeros(N, len(mats.get("theta", ())))
     h = disc.h
     p_seg = quat_from_matrix(disc.frames)                        # (N, 4)
     p_start = quat_from_matrix(disc.start_frame)
@@ -157,6 +157,10 @@ def reference_arrays(problem: Problem) -> tuple[RodArrays, np.ndarray, np.ndarra
     a.jnt_field("h")[:, 0] = hj
     a.jnt_field("C_M")[:] = joint_average(mats["C_M"])
     a.jnt_field("V_M")[:] = joint_average(mats["V_M"])
+    if a.branches:            # generalized Maxwell: the rod's relaxation terms
+        a.theta[:] = mats["theta"]
+        a.segb[:] = mats["segb"]
+        a.jntb[:] = joint_average(mats["jntb"])
     U0 = np.zeros((N + 1, 3))
     if N > 1:
         U0[1:-1] = cayley_curvature(p_seg[:-1], p_seg[1:], hj[1:-1])
@@ -171,11 +175,12 @@ def reference_arrays(problem: Problem) -> tuple[RodArrays, np.ndarray, np.ndarra
     a.set_param("r_end", disc.nodes[-1])
     a.set_param("p_start", p_start)
     a.set_param("p_end", p_end)
-    y = np.zeros(L.n_state(N))
+    B = a.branches
+    y = np.zeros(L.n_state(N, B))         # at rest, stress free: internal strains 0
     for i in range(N + 1):
-        y[L.node_phi(i):L.node_phi(i) + 3] = disc.nodes[i]
+        y[L.node_phi(i, B):L.node_phi(i, B) + 3] = disc.nodes[i]
     for i in range(1, N + 1):
-        y[L.segment_p(i):L.segment_p(i) + 4] = p_seg[i - 1]
+        y[L.segment_p(i, B):L.segment_p(i, B) + 4] = p_seg[i - 1]
     return a, y, np.array([disc.nodes[0], disc.nodes[-1]]), np.array([p_start, p_end])
 
 

@@ -1,5 +1,7 @@
 """Materials of a rod problem and the rod's stiffness and damping they give.
 
+Two models (TOML ``[material] model = ...``):
+
 ``kelvin_voigt`` (the paper): ``density`` (kg/m^3), ``youngs_modulus`` E (Pa),
 ``poisson_ratio`` nu, and the viscosity as retardation times ``tau_S`` (shear) and
 ``tau_B`` (bulk) in s, or ``tau`` (the paper's convention tau_S = tau_B = tau), or the
@@ -8,10 +10,22 @@ viscosities ``eta`` (shear, Pa s) and ``zeta`` (bulk, Pa s); ``damping = "consis
 route's eta~_E). ``density_end`` and ``youngs_modulus_end`` make them vary linearly along
 the rod. The rod's matrices C_F, C_M (eq. (7)) and V_F, V_M (eq. (9)) come from
 ``generated/constitutive.py``.
+
+``generalized_maxwell`` (the paper's future work, Sect. 6): the 3-D solid of an equilibrium
+spring (``youngs_modulus``, ``poisson_ratio``: E_inf, nu_inf) and M Maxwell branches
+``[[material.branches]]``, each with ``tau`` (s) and either ``youngs_modulus`` and
+``poisson_ratio`` or ``shear_modulus`` and ``bulk_modulus`` (Pa). Extension and bending
+of the rod carry the uniaxial relaxation function of that solid, shear and torsion its
+shear relaxation function; both are Prony series with up to 2M terms (derivation step
+``maxwell_rod``; ``generated/constitutive.py``, ``maxwell_rod_prony``), which become the
+rod's relaxation terms: per term b a relaxation time theta_b and moduli on every segment
+and joint, each carrying an internal strain (``generated/rod_layout.py``). The section's
+shear factors use the equilibrium nu. ``density_end`` varies the density linearly.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -67,6 +81,11 @@ class KelvinVoigt:
                                                       self.poisson_ratio))
         return float(c.retardation_time_extension_naive(self.tau_B, self.tau_S))
 
+    def describe(self) -> str:
+        """One line for reports: the retardation times."""
+        return (f"Kelvin-Voigt, tau_S = {self.tau_S} s, tau_B = {self.tau_B} s "
+                f"(tau_E = {self.tau_E:.6g} s, {self.damping})")
+
     def at(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(density, E) at the fractions ``x`` of the length."""
         x = np.asarray(x, dtype=float)
@@ -119,8 +138,185 @@ class KelvinVoigt:
         return out
 
 
-Material = KelvinVoigt
-MODELS = ("kelvin_voigt",)
+@dataclass(frozen=True)
+class Branch:
+    """One Maxwell branch of the 3-D solid: shear and bulk moduli (Pa), relaxation time (s)."""
+
+    shear_modulus: float
+    bulk_modulus: float
+    tau: float
+
+    def to_mapping(self) -> dict[str, Any]:
+        return {"shear_modulus": self.shear_modulus, "bulk_modulus": self.bulk_modulus,
+                "tau": self.tau}
+
+
+@dataclass(frozen=True)
+class RodRelaxation:
+    """The rod-level Prony series of a generalized Maxwell material: relaxation times
+    ``theta`` (B,) in s and, per term, the uniaxial ``E`` and shear ``G`` moduli (B,) in
+    Pa (0 where the term does not act), with the equilibrium ``E_inf``, ``G_inf``."""
+
+    E_inf: float
+    G_inf: float
+    theta: np.ndarray
+    E: np.ndarray
+    G: np.ndarray
+
+
+@dataclass(frozen=True)
+class GeneralizedMaxwell:
+    """Generalized Maxwell (Prony series) material (see the module docstring); SI units."""
+
+    density: float = 1000.0
+    youngs_modulus: float = 1.0e6
+    poisson_ratio: float = 0.3
+    branches: tuple[Branch, ...] = ()
+    density_end: float | None = None
+    model: str = "generalized_maxwell"
+
+    def __post_init__(self) -> None:
+        C.positive("material.density", self.density)
+        C.nonnegative("material.youngs_modulus", self.youngs_modulus)
+        C.number("material.poisson_ratio", self.poisson_ratio, low=-1.0, high=0.5,
+                 low_incl=False, high_incl=False, allowed="-1 < nu < 1/2 (the equilibrium "
+                 "bulk modulus must be finite)")
+        if self.density_end is not None:
+            C.positive("material.density_end", self.density_end)
+        if not self.branches:
+            raise ParameterError("material.branches", [], "at least one branch "
+                                 "[[material.branches]] (without: model = \"kelvin_voigt\")")
+        if self.youngs_modulus == 0.0 and not any(b.shear_modulus > 0 for b in self.branches):
+            raise ParameterError("material.youngs_modulus", 0.0, "> 0, or a branch with "
+                                 "shear stiffness (the rod would have no stiffness)")
+        if len(self.branches) > 12:
+            raise ParameterError("material.branches", len(self.branches),
+                                 "at most 12 branches (24 rod-level relaxation terms)")
+
+    # the Kelvin-Voigt attributes other parts of kvrod read
+    tau_S = tau_B = 0.0
+    damping = "consistent"
+    youngs_modulus_end = None
+
+    @property
+    def moduli(self) -> tuple[float, float, np.ndarray, np.ndarray, np.ndarray]:
+        """(G_inf, K_inf, G_j, K_j, tau_j) of the 3-D solid (Pa, s)."""
+        c = _constitutive()
+        E, nu = self.youngs_modulus, self.poisson_ratio
+        return (float(c.shear_modulus(E, nu)), float(c.bulk_modulus(E, nu)),
+                np.array([b.shear_modulus for b in self.branches]),
+                np.array([b.bulk_modulus for b in self.branches]),
+                np.array([b.tau for b in self.branches]))
+
+    def rod_relaxation(self) -> RodRelaxation:
+        """The rod's Prony series on the union of the extension and shear times."""
+        pr = _constitutive().maxwell_rod_prony(*self.moduli)
+        E_k, th_E = pr["extension"]
+        G_k, th_G = pr["shear"]
+        theta = np.union1d(th_E, th_G)
+        E = np.zeros(theta.size)
+        G = np.zeros(theta.size)
+        E[np.searchsorted(theta, th_E)] = E_k
+        G[np.searchsorted(theta, th_G)] = G_k
+        return RodRelaxation(float(pr["E_inf"]), float(pr["G_inf"]), theta, E, G)
+
+    def complex_moduli(self, omega: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+        """(E*(i omega), G*(i omega)) (Pa): the uniaxial and shear complex moduli."""
+        G, _, E = _constitutive().maxwell_moduli_laplace(1j * np.asarray(omega, dtype=float),
+                                                         *self.moduli)
+        return E, G
+
+    @property
+    def tau_E(self) -> float:
+        """Low-frequency equivalent retardation time of extension in s, sum_k E_k theta_k
+        / E_inf (the Kelvin-Voigt limit; inf without an equilibrium spring)."""
+        r = self.rod_relaxation()
+        eta = float(np.sum(r.E * r.theta))
+        return eta / r.E_inf if r.E_inf > 0 else math.inf
+
+    def describe(self) -> str:
+        """One line for reports: the branches and the low-frequency equivalent tau_E."""
+        times = ", ".join(f"{b.tau:.4g}" for b in self.branches)
+        return (f"generalized Maxwell, {len(self.branches)} branches (tau = {times} s; "
+                f"low-frequency tau_E = {self.tau_E:.6g} s)")
+
+    def at(self, x: np.ndarray) -> np.ndarray:
+        """Density at the fractions ``x`` of the length."""
+        x = np.asarray(x, dtype=float)
+        rho_b = self.density if self.density_end is None else self.density_end
+        return self.density + (rho_b - self.density) * x
+
+    def rod_matrices(self, section: Section, x: np.ndarray) -> dict[str, np.ndarray]:
+        """As :meth:`KelvinVoigt.rod_matrices`, with C_F, C_M the instantaneous
+        stiffnesses (equilibrium plus every term), V_F = V_M = 0, and the terms:
+        ``theta`` (B,), ``segb`` (n, B, 3), ``jntb`` (n, B, 3) (N and N m^2)."""
+        if isinstance(section, GivenStiffness):
+            raise ParameterError("section.kind", "stiffness", "a shape (rectangle, ellipse, "
+                                 "circle, tube) for a generalized_maxwell material: its "
+                                 "moduli scale the section's constants")
+        x = np.atleast_1d(np.asarray(x, dtype=float))
+        k = section.constants(self.poisson_ratio, x)
+        r = self.rod_relaxation()
+        A, I1, I2, I3 = k["A"], k["I1"], k["I2"], k["I3"]
+        kA1, kA2, kI3 = k["kappa_1"] * A, k["kappa_2"] * A, k["kappa_3"] * I3
+
+        def seg(E, G):
+            return np.stack([np.multiply.outer(kA1, G), np.multiply.outer(kA2, G),
+                             np.multiply.outer(A, E)], axis=-1)
+
+        def jnt(E, G):
+            return np.stack([np.multiply.outer(I1, E), np.multiply.outer(I2, E),
+                             np.multiply.outer(kI3, G)], axis=-1)
+
+        segb, jntb = seg(r.E, r.G), jnt(r.E, r.G)               # (n, B, 3)
+        CF = seg(np.array([r.E_inf]), np.array([r.G_inf]))[:, 0] + segb.sum(axis=1)
+        CM = jnt(np.array([r.E_inf]), np.array([r.G_inf]))[:, 0] + jntb.sum(axis=1)
+        rho = self.at(x)
+        return {"C_F": CF, "C_M": CM, "V_F": np.zeros_like(CF), "V_M": np.zeros_like(CM),
+                "rhoA": rho * A,
+                "rhoI": rho[:, None] * np.column_stack([I1, I2, I3]),
+                "theta": r.theta, "segb": segb, "jntb": jntb}
+
+    def to_mapping(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"model": "generalized_maxwell", "density": self.density,
+                               "youngs_modulus": self.youngs_modulus,
+                               "poisson_ratio": self.poisson_ratio,
+                               "branches": [b.to_mapping() for b in self.branches]}
+        if self.density_end is not None:
+            out["density_end"] = self.density_end
+        return out
+
+
+Material = KelvinVoigt | GeneralizedMaxwell
+MODELS = ("kelvin_voigt", "generalized_maxwell")
+_GM_KEYS = ("model", "density", "youngs_modulus", "poisson_ratio", "branches", "density_end")
+_BRANCH_KEYS = ("tau", "youngs_modulus", "poisson_ratio", "shear_modulus", "bulk_modulus")
+
+
+def _branch_from_mapping(path: str, m: Any) -> Branch:
+    m = C.table(path, m)
+    C.no_unknown_keys(path, m, _BRANCH_KEYS)
+    C.exclusive(path, m, ("youngs_modulus", "poisson_ratio"),
+                ("shear_modulus", "bulk_modulus"))
+    if "tau" not in m:
+        raise ParameterError(f"{path}.tau", None, "a relaxation time in s (> 0)")
+    tau = C.positive(f"{path}.tau", m["tau"])
+    if "shear_modulus" in m or "bulk_modulus" in m:
+        G = C.nonnegative(f"{path}.shear_modulus", m.get("shear_modulus", 0.0))
+        K = C.nonnegative(f"{path}.bulk_modulus", m.get("bulk_modulus", 0.0))
+    else:
+        if "youngs_modulus" not in m or "poisson_ratio" not in m:
+            raise ParameterError(f"{path}.youngs_modulus", m.get("youngs_modulus"),
+                                 "youngs_modulus and poisson_ratio, or shear_modulus and "
+                                 "bulk_modulus (Pa)")
+        E = C.nonnegative(f"{path}.youngs_modulus", m["youngs_modulus"])
+        nu = C.number(f"{path}.poisson_ratio", m["poisson_ratio"], low=-1.0, high=0.5,
+                      low_incl=False, high_incl=False, allowed="-1 < nu < 1/2")
+        Gj, Kj = _constitutive().maxwell_branch_moduli(E, nu)
+        G, K = float(Gj), float(Kj)
+    if G == 0.0 and K == 0.0:
+        raise ParameterError(f"{path}.shear_modulus", 0.0, "a branch with stiffness (> 0)")
+    return Branch(G, K, tau)
 _KV_KEYS = ("model", "density", "youngs_modulus", "poisson_ratio", "tau", "tau_S", "tau_B",
             "eta", "zeta", "damping", "density_end", "youngs_modulus_end")
 
@@ -129,6 +325,17 @@ def material_from_mapping(m: Mapping[str, Any] | None) -> Material:
     """A material from ``[material]`` (see the module docstring)."""
     m = dict(C.table("material", m if m is not None else {}))
     model = C.choice("material.model", m.get("model", "kelvin_voigt"), MODELS)
+    if model == "generalized_maxwell":
+        C.no_unknown_keys("material", m, _GM_KEYS)
+        br = m.get("branches", [])
+        if not isinstance(br, list):
+            raise ParameterError("material.branches", br, "an array of tables "
+                                 "[[material.branches]]")
+        kw = {key: C.number(f"material.{key}", m[key]) for key in
+              ("density", "youngs_modulus", "poisson_ratio", "density_end") if key in m}
+        return GeneralizedMaxwell(branches=tuple(
+            _branch_from_mapping(f"material.branches[{i}]", b) for i, b in enumerate(br)),
+            **kw)
     C.no_unknown_keys("material", m, _KV_KEYS)
     C.exclusive("material", m, ("tau",), ("tau_S", "tau_B"), ("eta", "zeta"))
     kw: dict[str, Any] = {}

@@ -5,7 +5,7 @@ A :class:`Problem` is a frozen tree of dataclasses::
     name, description
     rod         Rod(geometry, elements)             [rod], [rod.geometry]
     section     Shape | GivenStiffness              [section]
-    material    KelvinVoigt                         [material]
+    material    KelvinVoigt | GeneralizedMaxwell    [material]
     start, end  End(kind, motion)                   [start], [end]
     loads       tuple[Load, ...]                    [[loads]]
     simulation  Simulation(t_end, rtol, atol, ...)  [simulation]
@@ -17,7 +17,7 @@ error naming its key, value and allowed range), :meth:`Problem.to_mapping` write
 (the resolved problem in a results folder), :meth:`Problem.with_overrides` applies
 ``{"material.tau": 0.02, "rod.elements": 30}`` (dotted paths, or the short
 :data:`ALIASES` of the command line and of sweeps) through the same checks. The problem
-file reference lists every key: ``kvrod problem keys``.
+file reference lists every key: ``kvrod problem-keys`` (:mod:`runtime.problem.keys`).
 """
 
 from __future__ import annotations
@@ -35,14 +35,14 @@ from runtime.errors import ParameterError
 from runtime.problem import coerce as C
 from runtime.problem.geometry import Curve, Geometry, Straight, geometry_from_mapping
 from runtime.problem.loads import End, Load, end_from_mapping, load_from_mapping
-from runtime.problem.materials import Material, material_from_mapping
+from runtime.problem.materials import GeneralizedMaxwell, Material, material_from_mapping
 from runtime.problem.sections import GivenStiffness, Section, section_from_mapping
 
 #: guards against runs that cannot finish on one machine
 MAX_ELEMENTS = 200_000          # ~1 GiB of band storage and work arrays
 MAX_SAMPLES = 10_000_000        # output samples t_end / output_step
 MAX_PERIODS = 1e6               # first-mode periods in t_end (~50 steps each)
-#: accepted tolerance ranges: below them the error test works on round-off
+#: smallest accepted tolerances (below them the error test works on round-off)
 RTOL_MIN = 100 * float(np.finfo(float).eps)
 ATOL_MIN = 1e-20
 #: first root of 1 + cos(x) cosh(x) = 0 (clamped-free Euler-Bernoulli beam)
@@ -71,13 +71,13 @@ class Rod:
 class Simulation:
     """The dynamic run: end time (s), tolerances, output sampling (s), BDF settings and
     the initial state ("static": equilibrium under the loads at t = 0-; "reference": the
-    stress-free reference at rest)."""
+    stress-free reference at rest). ``max_order`` None: :meth:`Problem.bdf_max_order`."""
 
     t_end: float = 10.0
     rtol: float = 1e-6
     atol: float | None = None
     output_step: float = 0.005
-    max_order: int = 5
+    max_order: int | None = None
     min_step: float = 0.0
     initial: str = "static"
 
@@ -91,7 +91,8 @@ class Simulation:
             raise ParameterError("simulation.output_step", self.output_step,
                                  f">= t_end/{MAX_SAMPLES:.0e} = {self.t_end / MAX_SAMPLES:.3g} s "
                                  "(at most 1e7 samples)")
-        C.integer("simulation.max_order", self.max_order, low=1, high=5)
+        if self.max_order is not None:
+            C.integer("simulation.max_order", self.max_order, low=1, high=5)
         C.number("simulation.min_step", self.min_step, low=0.0, high=self.t_end)
         C.choice("simulation.initial", self.initial, ("static", "reference"))
 
@@ -172,6 +173,20 @@ class Problem:
                 f"would need more than {50 * periods:.2g} steps")
 
     # -- derived figures ---------------------------------------------------------------
+    def bdf_max_order(self) -> int:
+        """The highest BDF order of a run: ``simulation.max_order`` if given, else 5, and 2
+        for a generalized Maxwell material.
+
+        Why 2 there: a Maxwell rod's glassy high-frequency modes are lightly damped
+        (zeta ~ E_k / (2 E' omega tau_k)); BDF3-5 are not A-stable, and near the imaginary
+        axis their error control holds the step at those modes' periods, while BDF2 is
+        A-stable. Measured on examples/maxwell_cantilever.toml (N = 50, 10 s): 157694
+        steps and 35 s at order 5, 26816 steps and 11 s at order 2, same decrements.
+        """
+        if self.simulation.max_order is not None:
+            return self.simulation.max_order
+        return 2 if isinstance(self.material, GeneralizedMaxwell) else 5
+
     def segment_matrices(self) -> dict[str, np.ndarray]:
         """Per segment: C_F, C_M, V_F, V_M diagonals (N, 3), rhoA (N,), rhoI (N, 3)."""
         N = self.rod.elements
@@ -193,8 +208,9 @@ class Problem:
     def linear_prediction(self) -> dict[str, float] | None:
         """For a straight, uniform, clamped-free rod whose end maxima are analysed: the
         Euler-Bernoulli first mode in the direction of the maxima and the Kelvin-Voigt
-        damping ratio omega_1 tau/2 (tau = tau_E, or tau~_E on the naive route); else
-        None."""
+        damping ratio omega_1 tau/2 (tau = tau_E, or tau~_E on the naive route); for a
+        generalized Maxwell material the mode with the complex modulus E*(i omega_1) at
+        its own frequency and zeta = Im E* / (2 Re E*); else None."""
         if not (isinstance(self.rod.geometry, Straight) and self.start.kind == "clamped"
                 and self.start.motion is None and self.end.kind == "free"
                 and self.analysis.maxima and self.analysis.maxima.startswith("end")
@@ -206,11 +222,31 @@ class Problem:
         # a displacement along d1 bends about d2 (E I2), along d2 about d1 (E I1)
         along_d1 = abs(float(e @ basis[:, 0])) >= abs(float(e @ basis[:, 1]))
         EI = float(m["C_M"][0, 1] if along_d1 else m["C_M"][0, 0])
-        tau = float(m["V_M"][0, 1] / m["C_M"][0, 1] if along_d1 else
-                    m["V_M"][0, 0] / m["C_M"][0, 0])
-        omega = BETA1_L**2 * math.sqrt(EI / (float(m["rhoA"][0]) * self.rod.length**4))
-        zeta = omega * tau / 2.0
-        return {"omega_1": omega, "period_1": 2 * math.pi / omega, "tau": tau, "zeta_1": zeta,
+        rhoAL4 = float(m["rhoA"][0]) * self.rod.length**4
+        if isinstance(self.material, GeneralizedMaxwell):
+            # the complex modulus at the mode's frequency (fixed point on omega):
+            # zeta = Im E*(i w) / (2 Re E*(i w)); tau: the equivalent 2 zeta / omega
+            r = self.material.rod_relaxation()
+            E_g = r.E_inf + float(r.E.sum())          # C_M holds the instantaneous E I
+            EI_over_E = EI / E_g if E_g > 0 else 0.0
+            omega = BETA1_L**2 * math.sqrt(EI / rhoAL4)
+            for _ in range(50):
+                Es = complex(self.material.complex_moduli(omega)[0])
+                new = BETA1_L**2 * math.sqrt(max(Es.real, 0.0) * EI_over_E / rhoAL4)
+                if abs(new - omega) <= 1e-12 * omega:
+                    break
+                omega = new
+            zeta = Es.imag / (2 * Es.real) if Es.real > 0 else math.inf
+            tau = 2 * zeta / omega if omega > 0 else math.inf
+            formula = "Im E*(i omega_1) / (2 Re E*(i omega_1))"
+        else:
+            tau = float(m["V_M"][0, 1] / m["C_M"][0, 1] if along_d1 else
+                        m["V_M"][0, 0] / m["C_M"][0, 0])
+            omega = BETA1_L**2 * math.sqrt(EI / rhoAL4)
+            zeta = omega * tau / 2.0
+            formula = "omega_1 tau / 2"
+        return {"formula": formula, "omega_1": omega, "period_1": 2 * math.pi / omega,
+                "tau": tau, "zeta_1": zeta,
                 "log_decrement_1": 2 * math.pi * zeta / math.sqrt(1 - zeta**2)
                 if zeta < 1 else math.inf}
 

@@ -21,6 +21,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from runtime.solvers.roots import bracketed_root
+
 #: Gauss-Legendre nodes/weights on [0, 1] for the per-step energy quadrature
 GL_X = (np.polynomial.legendre.leggauss(3)[0] + 1.0) / 2.0
 GL_W = np.polynomial.legendre.leggauss(3)[1] / 2.0
@@ -48,33 +50,51 @@ class EnergyModel(Protocol):
 class EnergyIntegrator:
     """Running integrals of the dissipated power 2D and the external power P over the run.
 
-    Each accepted step is integrated on its interpolant by 3-point Gauss-Legendre;
-    ``partial(dense, t0, t)`` gives the integrals from the step's start to ``t`` (for
-    outputs inside the step). ``dissipated`` and ``external_work`` hold the integrals up to
-    the last accepted step (J). The external power includes the power of prescribed end
-    motion when the model reports it (a fifth scalar).
+    Each accepted step is integrated on its interpolant by 3-point Gauss-Legendre (one
+    kernel call for the three nodes). ``partial(dense, t0, t1, t)`` gives the integrals
+    from the step's start to a ``t`` inside it (for outputs) from the same three values:
+    the integral of their quadratic interpolant, which equals the Gauss-Legendre sum at
+    ``t = t1`` (so outputs and the running totals agree at step ends) and is accurate to
+    O(h^3) of the step inside it. ``dissipated`` and ``external_work`` hold the integrals
+    up to the last accepted step (J). The external power includes the power of prescribed
+    end motion when the model reports it (a fifth scalar).
     """
 
     name = "energy"
+    #: maps the values at the Gauss nodes to the coefficients of their quadratic in
+    #: x = (t - t0) / h: (c0, c1, c2) = _FIT @ values
+    _FIT = np.linalg.inv(np.vander(GL_X, 3, increasing=True))
 
     def __init__(self, model: EnergyModel) -> None:
         self.model = model
         self.dissipated = 0.0
         self.external_work = 0.0
+        self._key: tuple[float, float] | None = None
+        self._coef = np.zeros((3, 2))
 
-    def partial(self, dense, t0: float, t1: float) -> tuple[float, float]:
-        """(int 2D dt, int P dt) over [t0, t1] inside the current step."""
+    def _step_values(self, dense, t0: float, t1: float) -> np.ndarray:
+        """Coefficients (3, 2) of 2D and P as quadratics in x on the step [t0, t1]."""
+        if self._key != (t0, t1):
+            tq = t0 + (t1 - t0) * GL_X
+            ys, yps = dense.values(tq)                # (3, n) each: one interpolation
+            e = self.model.energies(tq, ys, yps)      # one kernel call for the 3 nodes
+            power = e[:, 3] + (e[:, 4] if e.shape[1] > 4 else 0.0)
+            self._coef = self._FIT @ np.column_stack([e[:, 2], power])
+            self._key = (t0, t1)
+        return self._coef
+
+    def partial(self, dense, t0: float, t1: float, t: float) -> tuple[float, float]:
+        """(int 2D dt, int P dt) over [t0, t] inside the accepted step [t0, t1]."""
         h = t1 - t0
-        if h == 0.0:
+        if h == 0.0 or t == t0:
             return 0.0, 0.0
-        tq = t0 + h * GL_X
-        ys, yps = dense.values(tq)                 # (3, n) each: one interpolation
-        e = self.model.energies(tq, ys, yps)       # one call for the three nodes
-        power = e[:, 3] + (e[:, 4] if e.shape[1] > 4 else 0.0)
-        return float(GL_W @ e[:, 2]) * h, float(GL_W @ power) * h
+        c = self._step_values(dense, t0, t1)
+        x = (t - t0) / h
+        d, w = (c[0] * x + c[1] * x * x / 2.0 + c[2] * x ** 3 / 3.0) * h
+        return float(d), float(w)
 
     def step(self, run: Run, dense, t0: float, t1: float) -> None:
-        d, w = self.partial(dense, t0, t1)
+        d, w = self.partial(dense, t0, t1, t1)
         self.dissipated += d
         self.external_work += w
 
@@ -104,33 +124,40 @@ class Sampler:
         self.rec: dict[str, list] = {"t": [], "tip": [], "start": [], "T": [], "W": [],
                                      "D": [], "P": []}
 
-    def _record(self, tq: float, y: np.ndarray, yp: np.ndarray, diss: float,
+    def _record(self, tq: float, y: np.ndarray, T: float, W: float, diss: float,
                 work: float) -> None:
-        e = self.model.energy_scalars(tq, y, yp)
         r = self.rec
         r["t"].append(tq)
         r["tip"].append(y[self.i_tip].copy())
         r["start"].append(y[self.i_start].copy())
-        r["T"].append(e[0])
-        r["W"].append(e[1])
+        r["T"].append(T)
+        r["W"].append(W)
         r["D"].append(diss)
         r["P"].append(work)
 
     def begin(self, run: Run) -> None:
         if self.k_out == 0 and self.t_out.size and self.t_out[0] <= run.t:
-            self._record(run.t, run.y, run.yp, 0.0, 0.0)
+            e = self.model.energy_scalars(run.t, run.y, run.yp)
+            self._record(run.t, run.y, e[0], e[1], 0.0, 0.0)
             self.k_out = 1
 
     def step(self, run: Run, dense, t0: float, t1: float) -> None:
         # called before the energy integrator adds this step: its totals end at t0
+        k0, k = self.k_out, self.k_out
+        slack = 1e-12 * max(1.0, abs(t1))
+        while k < self.t_out.size and self.t_out[k] <= t1 + slack:
+            k += 1
+        if k == k0:
+            return
+        ts = np.minimum(self.t_out[k0:k], t1)
+        ys, yps = dense.values(ts)                        # all outputs of the step at once
+        en = self.model.energies(ts, ys, yps)             # one kernel call
         e = self.energy
-        while self.k_out < self.t_out.size and self.t_out[self.k_out] <= t1 + 1e-12 * max(
-                1.0, abs(t1)):
-            tq = min(self.t_out[self.k_out], t1)
-            dd, ww = e.partial(dense, t0, tq)
-            y, yp = dense.values(np.array([tq]))
-            self._record(tq, y[0], yp[0], e.dissipated + dd, e.external_work + ww)
-            self.k_out += 1
+        for j, tq in enumerate(ts):
+            dd, ww = e.partial(dense, t0, t1, float(tq))
+            self._record(float(tq), ys[j], float(en[j, 0]), float(en[j, 1]),
+                         e.dissipated + dd, e.external_work + ww)
+        self.k_out = k
 
     def arrays(self) -> dict[str, np.ndarray]:
         r = self.rec
@@ -191,12 +218,11 @@ class Maxima:
             self.x.append(x0)
 
     def step(self, run: Run, dense, t0: float, t1: float) -> None:
-        from scipy.optimize import brentq
-
         v_new = float(run.y[self.iv])
         if self._v_old > 0.0 >= v_new and t1 > t0:
-            tk = t1 if v_new == 0.0 else brentq(
-                lambda s: dense(s)[self.iv], t0, t1, xtol=1e-14, rtol=1e-13)
+            tk = t1 if v_new == 0.0 else bracketed_root(
+                lambda s: float(dense(s)[self.iv]), t0, t1, self._v_old, v_new,
+                xtol=1e-14)
             xk = float(dense(tk)[self.ix]) - self.offset
             if self._keep(xk):
                 self.t.append(tk)

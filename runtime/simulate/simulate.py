@@ -2,7 +2,7 @@
 
 Static equilibrium under the loads at ``t = 0-`` (Newton with load stepping; or the
 stress-free reference at rest when ``simulation.initial = "reference"``), consistent
-initial values, then the run loop (:mod:`runtime.simulate.loop`) with its observers:
+initial values, then the run loop (``runtime.simulate.loop``) with its observers:
 output samples of both ends and of the energies, the running integrals of the dissipated
 power and the external power (prescribed end motion included) for the energy audit,
 maxima of one end coordinate (``analysis.maxima``), VTK snapshots, progress and
@@ -102,7 +102,7 @@ class SimulationResult:
         return None if self.static is None else self.static.tip
 
     def audit(self):
-        """The energy audit (:func:`runtime.analysis.audit.audit_run`)."""
+        """The energy audit (``runtime.analysis.audit.audit_run``)."""
         floor = self.model.energy_floor() if self.model is not None else 0.0
         return audit_run(self.kinetic, self.elastic, self.dissipated, self.external_work,
                          floor)
@@ -168,6 +168,7 @@ class SimulationResult:
             "parameters": self.problem.to_mapping(),
             "tau_E": float(self.problem.material.tau_E),
             "linear_prediction": self.problem.linear_prediction(),
+            "bdf_max_order": self.problem.bdf_max_order(),
             "static": {
                 "tip": None if st is None else [float(v) for v in st.tip],
                 "newton_iterations": 0 if st is None else int(st.iterations),
@@ -266,8 +267,11 @@ def default_atol(problem: Problem, model: RodModel, y0: np.ndarray) -> np.ndarra
     ``atol_i = max(ATOL_FRACTION * rtol * scale_i, floor_i)``: positions by the motion's
     displacement scale d (:func:`motion_scale`), velocities by d omega, quaternions by its
     rotation scale theta, angular velocities by theta omega (omega: the rod's first
-    bending frequency, :meth:`Problem.characteristic_frequency`); floors ``ATOL_FLOOR``
-    times L, 1, L omega, omega keep the tolerances above round-off of the coordinates.
+    bending frequency,
+    :meth:`~runtime.problem.schema.Problem.characteristic_frequency`), the internal
+    strains of a generalized Maxwell rod by d/L (segments) and theta/L (joints); floors
+    ``ATOL_FLOOR`` times L, 1, L omega, omega (1 and 1/L) keep the tolerances above
+    round-off of the coordinates.
 
     Why per field: a single atol in "the state's units" must be tiny for the velocities
     near a clamp (axial speeds ~1e-4 of the transverse ones), and with atol = 1e-4 rtol
@@ -285,6 +289,9 @@ def default_atol(problem: Problem, model: RodModel, y0: np.ndarray) -> np.ndarra
     atol[model.v_index] = max(a * d * omega, f * Lr * omega)
     atol[model.p_index] = max(a * theta, f)
     atol[model.omega_index] = max(a * theta * omega, f * omega)
+    # internal strains of the relaxation terms: strains of the motion's size
+    atol[model.q_segment_index] = max(a * d / Lr, f)
+    atol[model.q_joint_index] = max(a * theta / Lr, f / Lr)
     return atol
 
 
@@ -355,7 +362,7 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
                 res.y_last = exc.y
                 res.wall_time_s = time.perf_counter() - wall0
                 return res
-            y0 = res.static.y
+            y0 = model.relaxed(res.static.y)   # a held load has let every term relax
         else:
             y0 = model.initial_state(0.0)
         model.at(0.0)
@@ -390,7 +397,7 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
         checkpoint(state)
 
     out = run_loop(model, t_start, y0, yp0, sim.t_end, rtol=sim.rtol, atol=atol,
-                   observers=observers, min_step=sim.min_step, max_order=sim.max_order,
+                   observers=observers, min_step=sim.min_step, max_order=problem.bdf_max_order(),
                    max_steps=max_steps, checkpoint=on_checkpoint if checkpoint else None,
                    checkpoint_every=checkpoint_every, counters0=counters0,
                    describe_dof=model.describe_dof)

@@ -46,12 +46,15 @@ class IntegrationError(RuntimeError):
 
     Attributes
     ----------
-    t, y, yp : time and state (copies) of the last accepted step.
-    h : the step size last attempted.
-    residual_norm : max-norm of the residual at the last attempted iterate (inf if
-        non-finite).
-    worst_index : index of the component that caused the failure: the first non-finite
-        residual entry, else the largest weighted Newton correction or local error.
+    t, y, yp : float, ndarray, ndarray
+        Time and state (copies) of the last accepted step.
+    h : float
+        The step size last attempted.
+    residual_norm : float
+        Max-norm of the residual at the last attempted iterate (inf if non-finite).
+    worst_index : int
+        Index of the component that caused the failure: the first non-finite residual
+        entry, else the largest weighted Newton correction or local error.
     """
 
     def __init__(
@@ -157,21 +160,34 @@ class BDF:
 
     Parameters
     ----------
-    problem : a :class:`~runtime.solvers.protocols.ResidualProblem`.
-    t0, y0, yp0 : consistent initial values (see ``consistent_initial``).
-    t_bound : end of the integration; the last step lands on it exactly.
-    rtol, atol : tolerances; weights ``1/(rtol |y_i| + atol_i)``, ``atol`` scalar or (n,).
-    max_order : highest BDF order, 1..5.
-    first_step : initial step size (default: IDA's choice from ``|y'|``).
-    max_step : largest step size magnitude.
-    suppress_alg : exclude algebraic components from the local error test.
-    fixed_step : if given, take steps of exactly this size without error control (order
-        rises by one per step up to ``max_order``; ``max_step`` is ignored); for
-        convergence studies.
-    max_nonlinear_iter : Newton iterations per attempt (IDA: 4).
-    max_conv_fails, max_error_fails : consecutive failures on one step before giving up.
-    min_step : smallest step size magnitude allowed (besides round-off at ``t``).
+    problem : ResidualProblem
+        Residual, Jacobian and layout (``runtime.solvers.protocols.ResidualProblem``).
+    t0, y0, yp0 : float, ndarray, ndarray
+        Consistent initial values (see ``consistent_initial``).
+    t_bound : float
+        End of the integration; the last step lands on it exactly.
+    rtol, atol : float or ndarray
+        Tolerances; weights ``1/(rtol |y_i| + atol_i)``, ``atol`` scalar or (n,).
+    max_order : int
+        Highest BDF order, 1 ... 5.
+    first_step : float, optional
+        Initial step size (default: IDA's choice from ``|y'|``).
+    max_step : float
+        Largest step size magnitude.
+    suppress_alg : bool
+        Exclude algebraic components from the local error test.
+    fixed_step : float, optional
+        Take steps of exactly this size without error control (the order rises by one
+        per step up to ``max_order``; ``max_step`` is ignored); for convergence studies.
+    max_nonlinear_iter : int
+        Newton iterations per attempt (IDA: 4).
+    max_conv_fails, max_error_fails : int
+        Consecutive failures on one step before giving up.
+    min_step : float
+        Smallest step size magnitude allowed (besides round-off at ``t``).
 
+    Notes
+    -----
     Counters: ``nstep``, ``nfev`` (residual calls), ``njev`` (Jacobian calls), ``nlu``
     (factorisations), ``nni`` (Newton iterations), ``netf`` (error-test failures),
     ``ncfn`` (Newton convergence failures).

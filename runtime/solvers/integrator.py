@@ -1,9 +1,10 @@
 """Driver for the BDF solver: ``solve`` (outputs, dense solution, events) and
 ``consistent_initial`` (IDA's ``IDA_YA_YDP_INIT``).
 
-The stepping itself lives in :mod:`runtime.solvers.bdf`; this module re-exports its public names.
+The stepping itself lives in :mod:`runtime.solvers.bdf`; this module re-exports its public
+names.
 
-Example (``rod`` implements :class:`~runtime.solvers.protocols.ResidualProblem`)::
+Example (``rod`` implements ``runtime.solvers.protocols.ResidualProblem``)::
 
     y0, yp0 = consistent_initial(rod, 0.0, y_static, np.zeros(rod.n))
     def tip_vx(t, y, yp):  # maxima of the tip x: its velocity crosses zero downwards
@@ -23,9 +24,9 @@ from typing import Any
 
 import numpy as np
 from scipy.linalg.lapack import dgbtrf, dgbtrs
-from scipy.optimize import brentq
 
 from runtime.solvers.protocols import ResidualProblem, band_storage
+from runtime.solvers.roots import bracketed_root
 
 from .bdf import BDF, BDFDenseOutput, IntegrationError
 
@@ -83,13 +84,23 @@ class BDFSolution:
 class SolveResult:
     """Output of :func:`solve`.
 
-    t : (m,) output times; y, yp : (n, m) states and derivatives there.
-    sol : :class:`BDFSolution` over the run if ``dense_output`` was requested, else None.
-    t_events : per event, an array of event times; y_events / yp_events : per event,
-        arrays of shape (k, n).
-    status : 0 reached the end, 1 stopped at a terminal event, -1 failed.
-    error : the :class:`IntegrationError` on failure (its state is the last good one).
-    counters : solver counters (nstep, nfev, njev, nlu, nni, netf, ncfn).
+    Attributes
+    ----------
+    t : ndarray
+        (m,) output times.
+    y, yp : ndarray
+        (n, m) states and derivatives there.
+    sol : BDFSolution or None
+        The dense solution over the run if ``dense_output`` was requested.
+    t_events : list of ndarray or None
+        Per event, the event times; ``y_events``, ``yp_events``: per event, arrays of
+        shape (k, n).
+    status : int
+        0 reached the end, 1 stopped at a terminal event, -1 failed.
+    error : IntegrationError or None
+        The exception on failure (its state is the last good one).
+    counters : dict
+        Solver counters (nstep, nfev, njev, nlu, nni, netf, ncfn).
     """
 
     t: np.ndarray
@@ -142,26 +153,41 @@ def solve(
     max_steps: int = 1_000_000,
     **options: Any,
 ) -> SolveResult:
-    """Integrate ``F(t, y, y') = 0`` over ``t_span`` with :class:`BDF`.
+    """Integrate ``F(t, y, y') = 0`` over ``t_span`` with :class:`~runtime.solvers.bdf.BDF`.
 
     Parameters
     ----------
-    problem, t_span, y0, yp0 : the problem and initial values; if ``yp0`` is None, a
-        consistent ``(y0, yp0)`` is computed by :func:`consistent_initial` from y'=0.
-    rtol, atol : tolerances (see :class:`BDF`).
-    t_eval : output times (sorted in the direction of integration); default: every step.
-    events : callables ``g(t, y, yp) -> float`` with optional attributes ``terminal``
-        (bool or count) and ``direction`` (like ``solve_ivp``); roots are located with
-        Brent's method on the step's interpolant.  An exact zero of ``g`` at ``t0`` is
-        not reported (as in IDA).
-    dense_output : keep every step's interpolant and return ``sol``.
-    progress : called as ``progress(t)`` after every accepted step (e.g. a progress bar).
-    max_steps : give up (status -1) after this many steps.
-    options : passed to :class:`BDF` (``max_order``, ``max_step``, ``first_step``,
-        ``suppress_alg``, ``fixed_step``, ...).
+    problem : ResidualProblem
+        The residual, its Jacobian and their layout.
+    t_span : tuple of float
+        ``(t0, t_end)`` in s.
+    y0, yp0 : ndarray
+        Initial values; if ``yp0`` is None, a consistent ``(y0, yp0)`` is computed by
+        :func:`consistent_initial` from ``y' = 0``.
+    rtol, atol : float or ndarray
+        Tolerances (see :class:`~runtime.solvers.bdf.BDF`).
+    t_eval : ndarray, optional
+        Output times, sorted in the direction of integration; default: every step.
+    events : callable or sequence of callables, optional
+        ``g(t, y, yp) -> float`` with optional attributes ``terminal`` (bool or count)
+        and ``direction`` (as in ``solve_ivp``); roots are located on the step's
+        interpolant to round-off (``runtime.solvers.roots.bracketed_root``). An exact
+        zero of ``g`` at ``t0`` is not reported (as in IDA).
+    dense_output : bool
+        Keep every step's interpolant and return ``sol``.
+    progress : callable, optional
+        Called as ``progress(t)`` after every accepted step (e.g. a progress bar).
+    max_steps : int
+        Give up (status -1) after this many steps.
+    **options
+        Passed to :class:`~runtime.solvers.bdf.BDF` (``max_order``, ``max_step``,
+        ``first_step``, ``suppress_alg``, ``fixed_step``, ...).
 
-    Failures of the integrator do not raise here: the result has ``status = -1``,
-    the outputs computed so far, and the exception in ``error``.
+    Returns
+    -------
+    SolveResult
+        Failures of the integrator do not raise here: the result has ``status = -1``,
+        the outputs computed so far, and the exception in ``error``.
     """
     t0, tf = float(t_span[0]), float(t_span[1])
     y0 = np.asarray(y0, dtype=float)
@@ -324,14 +350,14 @@ def solve(
 
 
 def _locate(gi: Callable[[float], float], a: float, b: float, ga: float, gb: float) -> float:
-    """Root of ``gi`` in [a, b] given the sign change ga -> gb (Brent, to round-off)."""
+    """Root of ``gi`` in [a, b] given the sign change ga -> gb (to round-off)."""
     if ga == 0.0:
         return a
     if gb == 0.0:
         return b
     lo, hi = (a, b) if a < b else (b, a)
     xtol = 4.0 * np.finfo(float).eps * max(abs(lo), abs(hi), 1e-300)
-    # Re-evaluate at the ends on the interpolant so brentq sees a consistent bracket.
+    # Re-evaluate at the ends on the interpolant so the root finder sees a consistent bracket.
     glo, ghi = gi(lo), gi(hi)
     if glo == 0.0:
         return lo
@@ -340,7 +366,7 @@ def _locate(gi: Callable[[float], float], a: float, b: float, ga: float, gb: flo
     if math.copysign(1.0, glo) == math.copysign(1.0, ghi):
         # The interpolant misses the sign change at round-off level: take the end with |g| min.
         return lo if abs(glo) < abs(ghi) else hi
-    return brentq(gi, lo, hi, xtol=xtol, rtol=4.0 * np.finfo(float).eps)
+    return bracketed_root(gi, lo, hi, glo, ghi, xtol=xtol)
 
 
 def consistent_initial(

@@ -76,19 +76,27 @@ def test_kernel_closed_forms_equal_casadi_ad_of_the_functionals():
     Qad, Tad = dr.segment_forces_ad(s), dr.joint_torques_ad(s)
     xs = ca.vertcat(s.phi_b, s.p, s.v_b, s.omega)
     xj = ca.vertcat(s.p, s.p_b, s.omega, s.omega_b)
-    ins = [s.phi_a, s.phi_b, s.p, s.v_a, s.v_b, s.omega, s.p_b, s.omega_b, s.sp, s.jp]
+    br = dr.branch_quantities(s)
+    ins = [s.phi_a, s.phi_b, s.p, s.v_a, s.v_b, s.omega, s.p_b, s.omega_b, s.sp, s.jp,
+           s.n_q, s.m_q]
     pairs = [(seg["Vdot"], sf["Vdot"]), (seg["W"], sf["W"]), (seg["D"], sf["D"]),
              (seg["Q"], Qad), (jnt["Udot"], jf["Udot"]), (jnt["W"], jf["W"]),
              (jnt["D"], jf["D"]), (jnt["T"], Tad),
              (dr.segment_jacobian(s), ca.jacobian(Qad[3:9], xs)),
-             (dr.joint_jacobian(s), ca.jacobian(Tad, xj))]
+             (dr.joint_jacobian(s), ca.jacobian(Tad, xj)),
+             # what the relaxation terms use: strain derivatives, forces per resultant
+             (br["dV_dx"], ca.jacobian(sf["V"], ca.vertcat(s.phi_b, s.p))),
+             (br["dU_dx"], ca.jacobian(jf["U"], ca.vertcat(s.p, s.p_b))),
+             (br["G_seg"], ca.jacobian(Qad[3:9], s.n_q)),
+             (br["G_jnt"], ca.jacobian(Tad, s.m_q))]
     f = ca.Function("f", ins, [x for pair in pairs for x in pair])
     rng = np.random.default_rng(0)
     for _ in range(5):
         args = [rng.standard_normal(k) for k in (3, 3, 4, 3, 3, 3, 4, 3)]
         args[6] = args[2] * 1.2 + 0.3 * rng.standard_normal(4)
         args += [np.abs(rng.standard_normal(dr.N_SEGMENT)) + 0.1,
-                 np.abs(rng.standard_normal(dr.N_JOINT)) + 0.1]
+                 np.abs(rng.standard_normal(dr.N_JOINT)) + 0.1,
+                 rng.standard_normal(3), rng.standard_normal(3)]
         out = f(*args)
         for k in range(0, len(out), 2):
             assert _rel(out[k], out[k + 1]) < 1e-11, k

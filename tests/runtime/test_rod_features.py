@@ -6,15 +6,13 @@ from __future__ import annotations
 
 import math
 
-import casadi as ca
 import numpy as np
 import pytest
 
 from derive import discrete_rod as dr
-from runtime.model.casadi_rod import CasadiRod
 from runtime.model.quaternion import quat_exp, quat_mul, quat_rotation
 from runtime.problem.assemble import build_model
-from tests.rods import random_state, residual, rod_model, rod_problem
+from tests.rods import energy_rate_function, random_state, residual, rod_model, rod_problem
 
 FOLLOWER = [
     {"kind": "force", "at": "end", "vector": [0.01, 0.02, -0.03], "frame": "follower"},
@@ -92,23 +90,10 @@ def test_follower_loads_and_moving_ends_jacobians_match_finite_differences(start
 def test_energy_balance_includes_the_power_of_prescribed_motion(start, end):
     """d/dt (T + W) = -2D + P_ext + P_bc along the flow, with moving held ends (their
     velocity and the clamp frames' angular velocity prescribed) and follower loads."""
-    from generated import rod_layout as L
 
     rng = np.random.default_rng(5)
     m = _moving(start, end, geometry=HELIX)
-    cr = CasadiRod(m.arrays)
-    ys, ds = ca.MX.sym("y", m.n), ca.MX.sym("d", m.n)
-    ps = ca.MX.sym("par", m.arrays.par.size)
-    args = CasadiRod.args(m.arrays)
-    out = cr.energies(0.0, ys, ds, ps, *args[1:])
-    # the clamp frames turn with Omega_start/end: p' = 1/2 p*(0, Omega) enters dW/dt too
-    dpar = np.zeros(m.arrays.par.size)
-    for name in ("start", "end"):
-        k = L.PARAM_OFFSETS["p_" + name]
-        p = m.arrays.param("p_" + name)
-        dpar[k:k + 4] = 0.5 * quat_mul(p, np.r_[0.0, m.arrays.param("Omega_" + name)])
-    dE = ca.Function("dE", [ys, ds, ps], [ca.jtimes(out[0] + out[1], ca.vertcat(ys, ps),
-                                                     ca.vertcat(ds, ca.DM(dpar)))])
+    dE = energy_rate_function(m)
     d = m.differential
     for _ in range(3):
         y = random_state(m, rng)
