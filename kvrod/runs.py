@@ -10,7 +10,9 @@ from pathlib import Path
 
 def progress_bar(t_end: float, desc: str):
     """A tqdm bar over simulated time, redrawn at most every 0.2 s; returns (callback,
-    close). Not shown when stderr is not a terminal."""
+    close). Not shown (and tqdm not even imported) when stderr is not a terminal."""
+    if not sys.stderr.isatty():
+        return (lambda t: None), (lambda: None)
     from tqdm import tqdm
 
     bar = tqdm(total=round(t_end, 6), desc=desc, unit="s sim", leave=False, mininterval=0.2,

@@ -180,6 +180,19 @@ class RodModel:
             self._steady = ((-math.inf, -math.inf) if self._static or not
                             self.drive.time_dependent else self.drive.steady_interval(t))
 
+    def _steady_for(self, ts: np.ndarray) -> bool:
+        """Drive the arrays to ``ts[0]`` and say whether they hold for every time of ``ts``
+        (the interval cached by :meth:`at` first: this runs for every step)."""
+        t0 = float(ts[0])
+        self._time(t0)
+        if self.drive is None or not self.drive.time_dependent:
+            return True
+        lo, hi = self._steady
+        t_lo, t_hi = (t0, t0) if ts.size == 1 else (float(ts.min()), float(ts.max()))
+        if lo <= t_lo and t_hi < hi:
+            return True
+        return self.steady_over(t_lo, t_hi)
+
     def steady_over(self, t0: float, t1: float) -> bool:
         """True when the loads and end motion are constant on [t0, t1] (so one set of
         arrays serves every time in it)."""
@@ -429,8 +442,7 @@ class RodModel:
         ts = np.ascontiguousarray(ts, dtype=float)
         m = ys.shape[0]
         out = np.empty((m, len(L.DIAG_SCALARS)))
-        if self._lib is not None and self.steady_over(float(ts.min()), float(ts.max())):
-            self._time(float(ts[0]))
+        if self._lib is not None and self._steady_for(ts):
             rc = self._lib.kvrod_energies(self._struct_ptr(), m, ts.ctypes.data, ys.ctypes.data,
                                           yps.ctypes.data, out.ctypes.data)
             if rc:

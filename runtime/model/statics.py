@@ -48,6 +48,7 @@ class RodStatics:
         self._fixed_matrix = None     # built on first use (scipy.sparse imports slowly)
         self._rowmask = np.ones(self.n_static, dtype=bool)
         self._rowmask[self.fixed_cols] = False
+        self._plan: tuple[np.ndarray, ...] | None = None   # static_jacobian_band's gather
         # solve_static moves held nodes to their targets when the load factor changes;
         # only needed when an end moves (a fixed end stays where the reference put it)
         moving = bool(getattr(m.drive, "moving_ends", False))
@@ -123,16 +124,73 @@ class RodStatics:
         """d(static residual)/d(dphi, dtheta) at dx = 0 (CSC)."""
         return self.jacobian_csr(y).tocsc()
 
+    def _gather_plan(self) -> tuple[np.ndarray, ...]:
+        """Where each entry of the static band comes from: J_s = S J T (S: the static rows,
+        T: :meth:`tangent`, identity on positions, 1/2 L(p) on rotations), entry by entry.
+        Per contribution: the flat index into the full band (F order), the index of its
+        weight in ``[1, Lm.ravel()...]`` and the flat index into the static band; plus the
+        identity entries of held nodes. Built once; NumPy only (why not scipy.sparse
+        products, as :meth:`jacobian_csr`: its import alone costs 0.1 s of every run)."""
+        m, N = self.model, self.N
+        kl, ku, ldab = m.kl, m.ku, m.ldab
+        kls, kus = self.kl_static, self.ku_static
+        ld_s = 2 * kls + kus + 1
+        row_s = np.full(m.n, -1)
+        row_s[self.static_rows] = np.arange(self.n_static)
+        row_s[self.static_rows[~self._rowmask]] = -1          # held rows: identities
+        # (full column, static column, weight index) of T's entries
+        cols = [(m.phi_index.ravel(), self.phi_cols.ravel(), np.zeros(m.phi_index.size, int))]
+        b, a = np.meshgrid(np.arange(4), np.arange(3), indexing="ij")   # Lm[i, b, a]
+        for i in range(N):
+            cols.append((m.p_index[i][b.ravel()], self.theta_cols[i][a.ravel()],
+                         1 + 12 * i + 3 * b.ravel() + a.ravel()))
+        j, cs, w = (np.concatenate(x) for x in zip(*cols, strict=True))
+        offs = np.arange(-ku, kl + 1)                           # rows r = j + off
+        r = j[:, None] + offs
+        ok = (r >= 0) & (r < m.n)
+        r = np.where(ok, r, 0)
+        rs = row_s[r]
+        ok &= rs >= 0
+        jj, cc, ww = (np.broadcast_to(x[:, None], r.shape)[ok] for x in (j, cs, w))
+        r, rs = r[ok], rs[ok]
+        dband = kls + kus + rs - cc
+        # the full band's stored entries beyond the static band are structural zeros of
+        # J_s (kvrod's stencil; tests/runtime/test_statics_band.py compares with the
+        # sparse product on random states)
+        inside = (dband >= kls) & (dband < ld_s)
+        r, jj, cc, ww, dband = r[inside], jj[inside], cc[inside], ww[inside], dband[inside]
+        src = (kl + ku + r - jj) + jj * ldab
+        dst = dband + cc * ld_s
+        f = self.fixed_cols
+        return src, ww, dst, (kls + kus) + f * ld_s
+
     def static_jacobian_band(self, y: np.ndarray, out_ab: np.ndarray) -> None:
-        """Static Jacobian in LAPACK band storage (2 kl_static + ku_static + 1, n_static)."""
+        """Static Jacobian in LAPACK band storage (2 kl_static + ku_static + 1, n_static):
+        the band of :meth:`jacobian_csr`, gathered from the rod's band Jacobian."""
         kl, ku = self.kl_static, self.ku_static
         if out_ab.shape != (2 * kl + ku + 1, self.n_static):
             raise TypeError(f"out_ab must have shape {(2 * kl + ku + 1, self.n_static)}")
-        c = self.jacobian_csr(y).tocoo()
-        out_ab[:] = 0.0
-        if c.nnz and (np.max(c.row - c.col) > kl or np.max(c.col - c.row) > ku):
-            raise RuntimeError("static Jacobian outside its band")  # pragma: no cover
-        np.add.at(out_ab, (kl + ku + c.row - c.col, c.col), c.data)
+        if self._plan is None:
+            self._plan = self._gather_plan()
+        src, widx, dst, fixed = self._plan
+        m = self.model
+        y0 = self.at_rest(y)
+        ab = np.zeros((m.ldab, m.n), order="F")
+        m.jacobian_band2(0.0, y0, m._zeros, 1.0, 0.0, ab)
+        p = y0[m.p_index]
+        Lm = np.empty((self.N, 4, 3))                    # 1/2 L(p) [0; I], as in tangent()
+        p0, q = p[:, 0], p[:, 1:]
+        Lm[:, 0, :] = -q
+        Lm[:, 1:, :] = p0[:, None, None] * np.eye(3)
+        Lm[:, 1:, :] += np.stack([np.stack([0 * p0, -q[:, 2], q[:, 1]], -1),
+                                  np.stack([q[:, 2], 0 * p0, -q[:, 0]], -1),
+                                  np.stack([-q[:, 1], q[:, 0], 0 * p0], -1)], 1)
+        Lm *= 0.5
+        weights = np.concatenate([[1.0], Lm.ravel()])
+        vals = ab.ravel(order="F")[src] * weights[widx]
+        flat = np.bincount(dst, weights=vals, minlength=out_ab.size)
+        flat[fixed] += 1.0
+        out_ab[:] = flat.reshape(out_ab.shape, order="F")
 
     def static_retract(self, y: np.ndarray, dx: np.ndarray) -> np.ndarray:
         """New state: phi += dphi, p <- p*exp(dtheta/2) renormalised; velocities kept."""

@@ -72,26 +72,39 @@ class EnergyIntegrator:
         self._key: tuple[float, float] | None = None
         self._coef = np.zeros((3, 2))
 
-    def _step_values(self, dense, t0: float, t1: float) -> np.ndarray:
-        """Coefficients (3, 2) of 2D and P as quadratics in x on the step [t0, t1]."""
+    def evaluate(self, dense, t0: float, t1: float, ts: np.ndarray | None = None
+                 ) -> tuple[np.ndarray, np.ndarray] | None:
+        """Prepare the step [t0, t1] (its Gauss-node values) and, if ``ts`` is given,
+        return ``(ys, energies)`` there (rows per time) from the same interpolation and
+        the same kernel call as the nodes: one of each per step, outputs included."""
+        if self._key == (t0, t1) and ts is None:
+            return None
+        tq = t0 + (t1 - t0) * GL_X
+        if ts is not None:
+            tq = np.concatenate([tq, ts])
+        ys, yps = dense.values(tq)                    # (3 + k, n) each
+        e = self.model.energies(tq, ys, yps)          # one kernel call
         if self._key != (t0, t1):
-            tq = t0 + (t1 - t0) * GL_X
-            ys, yps = dense.values(tq)                # (3, n) each: one interpolation
-            e = self.model.energies(tq, ys, yps)      # one kernel call for the 3 nodes
-            power = e[:, 3] + (e[:, 4] if e.shape[1] > 4 else 0.0)
-            self._coef = self._FIT @ np.column_stack([e[:, 2], power])
+            g = e[:3]
+            power = g[:, 3] + (g[:, 4] if g.shape[1] > 4 else 0.0)
+            self._coef = self._FIT @ np.column_stack([g[:, 2], power])
             self._key = (t0, t1)
-        return self._coef
+        return (ys[3:], e[3:]) if ts is not None else None
 
-    def partial(self, dense, t0: float, t1: float, t: float) -> tuple[float, float]:
-        """(int 2D dt, int P dt) over [t0, t] inside the accepted step [t0, t1]."""
+    def partial(self, dense, t0: float, t1: float, t):
+        """(int 2D dt, int P dt) over [t0, t] inside the accepted step [t0, t1]; ``t`` a
+        float (floats returned) or an array (two arrays)."""
         h = t1 - t0
-        if h == 0.0 or t == t0:
-            return 0.0, 0.0
-        c = self._step_values(dense, t0, t1)
-        x = (t - t0) / h
-        d, w = (c[0] * x + c[1] * x * x / 2.0 + c[2] * x ** 3 / 3.0) * h
-        return float(d), float(w)
+        if h == 0.0:
+            z = np.zeros_like(np.asarray(t, dtype=float))
+            return (0.0, 0.0) if np.ndim(t) == 0 else (z, z)
+        self.evaluate(dense, t0, t1)
+        c = self._coef
+        x = (np.asarray(t, dtype=float) - t0) / h
+        x2 = x * x
+        d = (c[0, 0] * x + c[1, 0] * x2 / 2.0 + c[2, 0] * x2 * x / 3.0) * h
+        w = (c[0, 1] * x + c[1, 1] * x2 / 2.0 + c[2, 1] * x2 * x / 3.0) * h
+        return (float(d), float(w)) if np.ndim(t) == 0 else (d, w)
 
     def step(self, run: Run, dense, t0: float, t1: float) -> None:
         d, w = self.partial(dense, t0, t1, t1)
@@ -110,10 +123,13 @@ class Sampler:
 
     Records per output time ``t``: ``tip`` (3,) the position of node N (the s = L end),
     ``start`` (3,) of node 0, kinetic ``T`` and elastic ``W`` energy (J), dissipated
-    energy ``int 2D`` and external work ``int P`` (J) since the start.
+    energy ``int 2D`` and external work ``int P`` (J) since the start. The outputs of a
+    step are evaluated together with the step's energy quadrature
+    (:meth:`EnergyIntegrator.evaluate`) and kept as arrays per step.
     """
 
     name = "sampler"
+    KEYS = ("t", "tip", "start", "T", "W", "D", "P")
 
     def __init__(self, model, energy: EnergyIntegrator, t_out: np.ndarray,
                  tip_index: np.ndarray, start_index: np.ndarray) -> None:
@@ -121,51 +137,49 @@ class Sampler:
         self.t_out = np.asarray(t_out, dtype=float)
         self.i_tip, self.i_start = np.asarray(tip_index), np.asarray(start_index)
         self.k_out = 0
-        self.rec: dict[str, list] = {"t": [], "tip": [], "start": [], "T": [], "W": [],
-                                     "D": [], "P": []}
+        self.rec: dict[str, list[np.ndarray]] = {k: [] for k in self.KEYS}
 
-    def _record(self, tq: float, y: np.ndarray, T: float, W: float, diss: float,
-                work: float) -> None:
+    def _record(self, ts: np.ndarray, ys: np.ndarray, T: np.ndarray, W: np.ndarray,
+                diss: np.ndarray, work: np.ndarray) -> None:
         r = self.rec
-        r["t"].append(tq)
-        r["tip"].append(y[self.i_tip].copy())
-        r["start"].append(y[self.i_start].copy())
-        r["T"].append(T)
-        r["W"].append(W)
-        r["D"].append(diss)
-        r["P"].append(work)
+        r["t"].append(np.asarray(ts, dtype=float))
+        r["tip"].append(ys[:, self.i_tip])
+        r["start"].append(ys[:, self.i_start])
+        for key, v in (("T", T), ("W", W), ("D", diss), ("P", work)):
+            r[key].append(np.asarray(v, dtype=float))
 
     def begin(self, run: Run) -> None:
         if self.k_out == 0 and self.t_out.size and self.t_out[0] <= run.t:
             e = self.model.energy_scalars(run.t, run.y, run.yp)
-            self._record(run.t, run.y, e[0], e[1], 0.0, 0.0)
+            self._record(np.array([run.t]), run.y[None, :], np.array([e[0]]),
+                         np.array([e[1]]), np.zeros(1), np.zeros(1))
             self.k_out = 1
 
     def step(self, run: Run, dense, t0: float, t1: float) -> None:
         # called before the energy integrator adds this step: its totals end at t0
-        k0, k = self.k_out, self.k_out
+        k0 = self.k_out
         slack = 1e-12 * max(1.0, abs(t1))
-        while k < self.t_out.size and self.t_out[k] <= t1 + slack:
-            k += 1
-        if k == k0:
+        k = int(np.searchsorted(self.t_out, t1 + slack, side="right"))
+        if k <= k0:
             return
         ts = np.minimum(self.t_out[k0:k], t1)
-        ys, yps = dense.values(ts)                        # all outputs of the step at once
-        en = self.model.energies(ts, ys, yps)             # one kernel call
         e = self.energy
-        for j, tq in enumerate(ts):
-            dd, ww = e.partial(dense, t0, t1, float(tq))
-            self._record(float(tq), ys[j], float(en[j, 0]), float(en[j, 1]),
-                         e.dissipated + dd, e.external_work + ww)
+        ys, en = e.evaluate(dense, t0, t1, ts)        # with the step's quadrature nodes
+        dd, ww = e.partial(dense, t0, t1, ts)
+        self._record(ts, ys, en[:, 0], en[:, 1], e.dissipated + dd, e.external_work + ww)
         self.k_out = k
 
     def arrays(self) -> dict[str, np.ndarray]:
         r = self.rec
-        return {"t": np.array(r["t"]),
-                "tip": np.array(r["tip"]).T if r["tip"] else np.zeros((3, 0)),
-                "start": np.array(r["start"]).T if r["start"] else np.zeros((3, 0)),
-                "kinetic": np.array(r["T"]), "elastic": np.array(r["W"]),
-                "dissipated": np.array(r["D"]), "external_work": np.array(r["P"])}
+
+        def cat(key: str, width: int = 0) -> np.ndarray:
+            if r[key]:
+                return np.concatenate(r[key])
+            return np.zeros((0, width)) if width else np.zeros(0)
+
+        return {"t": cat("t"), "tip": cat("tip", 3).T, "start": cat("start", 3).T,
+                "kinetic": cat("T"), "elastic": cat("W"), "dissipated": cat("D"),
+                "external_work": cat("P")}
 
     def state(self) -> dict[str, Any]:
         a = self.arrays()
@@ -178,11 +192,11 @@ class Sampler:
         r = self.rec
         for key, src in (("t", "rec_t"), ("T", "rec_T"), ("W", "rec_W"), ("D", "rec_D"),
                          ("P", "rec_P")):
-            r[key] = [float(v) for v in st[src]]
-        r["tip"] = [np.array(v) for v in st["rec_tip"]]
+            r[key] = [np.asarray(st[src], dtype=float)]
+        r["tip"] = [np.asarray(st["rec_tip"], dtype=float).reshape(-1, 3)]
         start = st.get("rec_start")
-        r["start"] = ([np.array(v) for v in start] if start is not None and len(start)
-                      else [np.full(3, math.nan) for _ in r["t"]])
+        r["start"] = [np.asarray(start, dtype=float).reshape(-1, 3) if start is not None
+                      and len(start) else np.full((r["t"][0].size, 3), math.nan)]
 
 
 class Maxima:

@@ -18,7 +18,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.linalg.lapack import dgbtrf, dgbtrs
 
 from runtime.errors import ParameterError
 from runtime.solvers.protocols import ResidualProblem, band_storage
@@ -121,13 +120,15 @@ class BDFDenseOutput:
     ``derivative(t)`` gives ``y'(t)`` in the same shapes.
     """
 
-    def __init__(self, t_old: float, t: float, phi: np.ndarray, psi: np.ndarray) -> None:
+    def __init__(self, t_old: float, t: float, phi: np.ndarray, psi: np.ndarray,
+                 clib=None) -> None:
         self.t_old = t_old
         self.t = t
         self.t_min, self.t_max = min(t_old, t), max(t_old, t)
-        self._phi = phi  # (k+1, n)
+        self._phi = phi  # (k+1, n), C order
         self._psi = psi  # (k,) at least
         self._k = phi.shape[0] - 1
+        self._c = clib   # compiled helpers (kv_interp) or None
 
     def _eval(self, t: float | np.ndarray, deriv: bool) -> np.ndarray:
         ta = np.atleast_1d(np.asarray(t, dtype=float))
@@ -139,9 +140,17 @@ class BDFDenseOutput:
                out_yp: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """``(y(t), y'(t))`` for times ``t`` of shape (m,), each of shape (m, n) (one row
         per time; note the order), written into ``out_y``/``out_yp`` if given."""
-        ta = np.asarray(t, dtype=float)
-        c, d = _interp_coefficients(ta, self.t, self._psi, self._k)
+        ta = np.ascontiguousarray(t, dtype=float)
         phi = self._phi  # (k+1, n), C order: c.T @ phi runs over contiguous rows
+        if self._c is not None and phi.flags.c_contiguous:
+            m, n = ta.size, phi.shape[1]
+            y = out_y if out_y is not None else np.empty((m, n))
+            yp = out_yp if out_yp is not None else np.empty((m, n))
+            psi = np.ascontiguousarray(self._psi, dtype=float)
+            self._c.kv_interp(self._k, n, m, self.t, psi.ctypes.data, phi.ctypes.data,
+                              ta.ctypes.data, y.ctypes.data, yp.ctypes.data)
+            return y, yp
+        c, d = _interp_coefficients(ta, self.t, self._psi, self._k)
         return np.matmul(c.T, phi, out=out_y), np.matmul(d.T, phi, out=out_yp)
 
     def __call__(self, t: float | np.ndarray) -> np.ndarray:
@@ -403,8 +412,8 @@ class BDF:
             raise RuntimeError("dense_output() is available after the first step")
         k = max(self._kused, 1)
         return BDFDenseOutput(
-            self.t_old, self.t, self._phi[: k + 1].copy(), np.array(self._psi[: k + 1])
-        )
+            self.t_old, self.t, self._phi[: k + 1].copy(), np.array(self._psi[: k + 1]),
+            self._c)
 
     # ------------------------------------------------------------------ internals
     def _wrms(self, v: np.ndarray, w: np.ndarray) -> float:
@@ -495,9 +504,11 @@ class BDF:
         self.problem.jacobian_band(t, self._yy, self._ypw, self._cj, ab)
         self.njev += 1
         if self._c is not None:
-            info = self._c.kv_gbtrf(_bdf_c.DGBTRF, self.n, self.kl, self.ku, self._p_ab,
+            info = self._c.kv_gbtrf(self.n, self.kl, self.ku, self._p_ab,
                                     ab.shape[0], self._p_ipiv, self._p_prof)
-        else:
+        else:  # the NumPy path (no C compiler): SciPy's LAPACK, imported on use
+            from scipy.linalg.lapack import dgbtrf
+
             self._ipiv = None  # free the old pivots first (dgbtrf allocates new ones)
             _, ipiv, info = dgbtrf(ab, self.kl, self.ku, overwrite_ab=1)
             self._ipiv = ipiv
@@ -555,6 +566,8 @@ class BDF:
                     delnrm = clib.kv_newton(n, kl, ku, p_ab, ldab, p_ipiv, p_prof, p_res,
                                             scale, p_ewt, p_ee, self._p_yy, self._p_ypw, cj)
                 else:
+                    from scipy.linalg.lapack import dgbtrs
+
                     dgbtrs(ab, kl, ku, res, ipiv, overwrite_b=1)
                     if scale != 1.0:
                         res *= scale

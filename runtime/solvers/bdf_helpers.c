@@ -10,21 +10,72 @@
 #define FTZ_OFF
 #endif
 
-typedef void (*dgbtrf_t)(int *m, int *n, int *kl, int *ku, double *ab, int *ldab,
-                         int *ipiv, int *info);
+/* LU with partial pivoting of a band matrix in LAPACK band storage: LAPACK's unblocked
+   dgbtf2, which is what dgbtrf runs for kvrod's bands (kl < 32, its block size), with the
+   same storage, pivots (1-based) and info. Written here, not called from SciPy, so that
+   a run does not import scipy.linalg (0.18-0.27 s of every process start). A(i, j)
+   (0-based) is ab[kv + i - j + j ldab], kv = kl + ku; rows 0..kl-1 of the storage hold
+   the fill-in of the row interchanges. */
+#define A_(i, j) ab[(size_t)(kv + (i) - (j)) + (size_t)(j) * (size_t)ldab]
+static int gbtf2(int n, int kl, int ku, double *ab, int ldab, int *ipiv)
+{
+    const int kv = kl + ku;
+    int info = 0, ju = 0;
+    /* fill-in room of columns ku+1 .. kv-1 that the loop below does not clear */
+    for (int j = ku + 1; j < (kv < n ? kv : n); ++j)
+        for (int i = kv - j; i < kl; ++i)
+            ab[(size_t)i + (size_t)j * ldab] = 0.0;
+    for (int j = 0; j < n; ++j) {
+        if (j + kv < n)
+            for (int i = 0; i < kl; ++i) ab[(size_t)i + (size_t)(j + kv) * ldab] = 0.0;
+        const int km = kl < n - 1 - j ? kl : n - 1 - j;
+        int p = 0;
+        double big = fabs(A_(j, j));
+        for (int i = 1; i <= km; ++i) {
+            double v = fabs(A_(j + i, j));
+            if (v > big) { big = v; p = i; }
+        }
+        ipiv[j] = j + p + 1;
+        if (A_(j + p, j) == 0.0) {
+            if (info == 0) info = j + 1;
+            continue;
+        }
+        int last = j + ku + p < n - 1 ? j + ku + p : n - 1;
+        if (last > ju) ju = last;
+        if (p != 0)
+            for (int c = j; c <= ju; ++c) {
+                double t = A_(j + p, c);
+                A_(j + p, c) = A_(j, c);
+                A_(j, c) = t;
+            }
+        if (km > 0) {
+            const double r = 1.0 / A_(j, j);
+            double *l = &A_(j + 1, j);
+            for (int i = 0; i < km; ++i) l[i] *= r;
+            for (int c = j + 1; c <= ju; ++c) {
+                const double t = A_(j, c);
+                if (t != 0.0) {
+                    double *col = &A_(j + 1, c);
+                    for (int i = 0; i < km; ++i) col[i] -= l[i] * t;
+                }
+            }
+        }
+    }
+    return info;
+}
+#undef A_
 
-/* LU of the band matrix in LAPACK storage by SciPy's dgbtrf; returns LAPACK's info.
+/* LU of the band matrix in LAPACK storage (gbtf2 above); returns LAPACK's info.
    Then the nonzero profile of the factors per column j: prof[2j] = first stored row
    holding a nonzero of U (rows above are fill-in room left empty when pivoting does
    not use it), prof[2j+1] = number of multipliers of L up to the last nonzero. The
    solves read only the profile: less memory traffic at large n, where they are
    memory bound (the factors of N = 2000 are 11 MB). */
-int kv_gbtrf(void *f, int n, int kl, int ku, double *ab, int ldab, int *ipiv, int *prof)
+int kv_gbtrf(int n, int kl, int ku, double *ab, int ldab, int *ipiv, int *prof)
 {
-    int info = 0, m = n;
     const int kv = kl + ku;
     FTZ_ON
-    ((dgbtrf_t)f)(&m, &n, &kl, &ku, ab, &ldab, ipiv, &info);
+    int info = gbtf2(n, kl, ku, ab, ldab, ipiv);
     FTZ_OFF
     for (int j = 0; j < n; ++j) {
         const double *c = ab + (size_t)j * ldab;
@@ -66,6 +117,15 @@ static void gbtrs(int n, int kl, int ku, const double *ab, int ldab, const int *
     }
 }
 
+/* b <- A^-1 b (LAPACK dgbtrs) with kv_gbtrf's factors and profile. */
+void kv_gbtrs(int n, int kl, int ku, const double *ab, int ldab, const int *ipiv,
+              const int *prof, double *b)
+{
+    FTZ_ON
+    gbtrs(n, kl, ku, ab, ldab, ipiv, prof, b);
+    FTZ_OFF
+}
+
 /* One simplified-Newton update (IDA's corrector): d = scale * J^-1 res (in res),
    ee -= d, yy -= d, ypw -= cj d; returns the weighted RMS norm of d (ewt weights). */
 double kv_newton(int n, int kl, int ku, const double *ab, int ldab, const int *ipiv,
@@ -101,4 +161,34 @@ double kv_wrms(int n, const double *v, const double *a, const double *w)
     }
     FTZ_OFF
     return n > 0 ? sqrt(s / n) : 0.0;
+}
+
+/* IDA's interpolant of one step at m times (BDFDenseOutput.values): y(t_i) = sum_j
+   c_j(t_i) phi_j and y'(t_i) = sum_j d_j(t_i) phi_j, phi (k+1, n) C order, out_y and
+   out_yp (m, n) C order. The coefficients are IDA's recurrences (bdf.py's
+   _interp_coefficients); one call replaces about twenty NumPy calls per step. */
+void kv_interp(int k, int n, int m, double tn, const double *psi, const double *phi,
+               const double *ts, double *out_y, double *out_yp)
+{
+    double c[6], d[6];
+    for (int i = 0; i < m; ++i) {
+        const double delt = ts[i] - tn;
+        double cs = 1.0, ds = 0.0, gs = delt / psi[0];
+        c[0] = 1.0;
+        d[0] = 0.0;
+        for (int j = 1; j <= k; ++j) {
+            ds = ds * gs + cs / psi[j - 1];
+            cs = cs * gs;
+            if (j < k) gs = (delt + psi[j - 1]) / psi[j];
+            c[j] = cs;
+            d[j] = ds;
+        }
+        double *y = out_y + (size_t)i * n, *yp = out_yp + (size_t)i * n;
+        for (int q = 0; q < n; ++q) { y[q] = phi[q]; yp[q] = 0.0; }
+        for (int j = 1; j <= k; ++j) {
+            const double *pj = phi + (size_t)j * n;
+            const double cj = c[j], dj = d[j];
+            for (int q = 0; q < n; ++q) { y[q] += cj * pj[q]; yp[q] += dj * pj[q]; }
+        }
+    }
 }

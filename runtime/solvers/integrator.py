@@ -23,11 +23,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.linalg.lapack import dgbtrf, dgbtrs
 
 from runtime.solvers.protocols import ResidualProblem, band_storage
 from runtime.solvers.roots import bracketed_root
 
+from . import _bdf_c
 from .bdf import BDF, BDFDenseOutput, IntegrationError
 
 __all__ = [
@@ -417,10 +417,9 @@ def consistent_initial(
         problem.jacobian_band(t0, y, yp, 1.0, ab1)  # dF/dy + dF/dy'
         ab1 -= ab  # dF/dy'
         ab[:, diff] = ab1[:, diff]
-        _, ipiv, info = dgbtrf(ab, kl, ku, overwrite_ab=1)
+        du, info = _bdf_c.band_solve(ab, kl, ku, f)
         if info != 0:
             break
-        du, info = dgbtrs(ab, kl, ku, f, ipiv)
         lam = 1.0
         while lam >= 1.0 / 1024:
             yt, ypt = y.copy(), yp.copy()

@@ -16,9 +16,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg.lapack import dgbtrf, dgbtrs
 
 from runtime.errors import ParameterError
+from runtime.solvers._bdf_c import BandLU
 from runtime.solvers.protocols import StaticProblem, band_storage
 
 __all__ = ["StaticResult", "StaticSolveError", "solve_static"]
@@ -206,11 +206,10 @@ def solve_static(
             f = res.copy()
             ab.fill(0.0)
             problem.static_jacobian_band(y, ab)
-            _, ipiv, info = dgbtrf(ab, kl, ku, overwrite_ab=1)
-            if info != 0:
+            lu = BandLU(ab, kl, ku)
+            if lu.info != 0:
                 raise _NewtonFailure("singular Jacobian", r)
-            dx, info = dgbtrs(ab, kl, ku, f, ipiv)
-            dx = -dx
+            dx = -lu.solve(f)
             if not np.all(np.isfinite(dx)):
                 raise _NewtonFailure("non-finite Newton step", r)
             it += 1
@@ -246,8 +245,7 @@ def solve_static(
                     # Deuflhard's natural monotonicity test on the simplified Newton
                     # correction J(y)^-1 R(y_try) (same LU); affine invariant, so badly
                     # scaled rows (stiff axial forces next to bending moments) matter less.
-                    dxbar, _ = dgbtrs(ab, kl, ku, res, ipiv)
-                    dxbar = -dxbar
+                    dxbar = -lu.solve(res)
                     if math.sqrt(float(np.dot(dxbar, dxbar)) / n) <= (1.0 - 0.25 * alpha) * ndx:
                         break
                     w = dxbar - (1.0 - alpha) * dx
