@@ -145,6 +145,13 @@ def _cmd_bench(args) -> int:
     return 0
 
 
+def _cmd_problem_keys(args) -> int:
+    from runtime.problem import keys
+
+    print(keys.markdown() if args.markdown else keys.text())
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="kvrod", description=__doc__.splitlines()[0] if __doc__ else None)
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -165,6 +172,11 @@ def build_parser() -> argparse.ArgumentParser:
     dn = dsub.add_parser("notes", help="write notes/derivation.md")
     dn.add_argument("--out", default="notes/derivation.md")
     dn.set_defaults(func=_cmd_derive_notes)
+
+    k = sub.add_parser("problem-keys", help="every key of a problem file: unit, default, "
+                                            "allowed range, meaning")
+    k.add_argument("--markdown", action="store_true", help="Markdown tables")
+    k.set_defaults(func=_cmd_problem_keys)
 
     g = sub.add_parser("generate", help="regenerate generated/ (or --check it)")
     g.add_argument("--check", action="store_true", help="fail if generated/ is stale")

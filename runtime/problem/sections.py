@@ -59,12 +59,12 @@ class Shape:
             if n not in got:
                 raise ParameterError(f"section.{n}", None, f"a length in m (> 0) for a "
                                      f"{self.kind}")
-        for d in (got, dict(self.dims_end)):
+        for d, suffix in ((got, ""), (dict(self.dims_end), "_end")):
             for n, v in d.items():
                 if self.kind == "tube" and n == "inner_radius":
-                    C.nonnegative(f"section.{n}", v)
+                    C.nonnegative(f"section.{n}{suffix}", v)
                 else:
-                    C.positive(f"section.{n}", v)
+                    C.positive(f"section.{n}{suffix}", v)
         if self.kind == "tube":
             for d, suffix in ((got, ""), ({**got, **dict(self.dims_end)}, "_end")):
                 if d["inner_radius"] >= d["outer_radius"]:

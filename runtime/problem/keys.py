@@ -1,0 +1,275 @@
+"""Every key of a problem file: table, meaning, unit, default and allowed range.
+
+This catalogue is what ``kvrod problem-keys`` prints and what the documentation's problem
+file reference is rendered from. It cannot drift from the parsers unnoticed:
+``tests/runtime/test_problem_keys.py`` records the keys every parser accepts
+(``coerce.no_unknown_keys``) over problems of every kind and requires the catalogue to
+list exactly those, and feeds each key's ``invalid`` value to the parser, which must
+refuse it naming the key. Time-function keys are listed once under ``<time>``: they apply
+to every ``time`` of a load and to ``translation_time``/``rotation_time`` of a motion.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+
+@dataclass(frozen=True)
+class Key:
+    """One key: ``table`` (dotted, ``[[loads]]`` as ``loads``), ``name``, the ``kinds``
+    of its table it applies to (empty: all), its ``unit``, ``default`` (a string; "required"
+    or "-" for none), ``allowed`` range or choices, ``doc``, and an ``invalid`` value the
+    parser must refuse (None: no value is out of range, e.g. a free text)."""
+
+    table: str
+    name: str
+    kinds: tuple[str, ...]
+    unit: str
+    default: str
+    allowed: str
+    doc: str
+    invalid: Any = None
+
+    @property
+    def path(self) -> str:
+        return f"{self.table}.{self.name}" if self.table else self.name
+
+
+def _k(table: str, name: str, unit: str, default: str, allowed: str, doc: str,
+       invalid: Any = None, kinds: tuple[str, ...] = ()) -> Key:
+    return Key(table, name, kinds, unit, default, allowed, doc, invalid)
+
+
+_SHAPES = {"rectangle": (("width", "along d1"), ("height", "along d2")),
+           "ellipse": (("a", "half axis along d2"), ("b", "half axis along d1")),
+           "circle": (("radius", "radius"),),
+           "tube": (("outer_radius", "outer radius"), ("inner_radius", "inner radius (>= 0)"))}
+_STIFF = {"EA": ("N", "axial stiffness"), "GA1": ("N", "shear stiffness along d1"),
+          "GA2": ("N", "shear stiffness along d2"), "EI1": ("N m^2", "bending stiffness about d1"),
+          "EI2": ("N m^2", "bending stiffness about d2"), "GJ": ("N m^2", "torsional stiffness"),
+          "rhoA": ("kg/m", "mass per length"), "rhoI1": ("kg m", "rotary inertia about d1"),
+          "rhoI2": ("kg m", "rotary inertia about d2"),
+          "rhoI3": ("kg m", "polar rotary inertia")}
+_VEC = "3 numbers"
+_UNIT_VEC = "3 numbers, not all 0"
+
+KEYS: tuple[Key, ...] = (
+    # -- top level ----------------------------------------------------------------------
+    _k("", "name", "-", "file name", "text", "the problem's name (results folder default)"),
+    _k("", "description", "-", '""', "text", "one line shown in reports"),
+    # -- [rod] --------------------------------------------------------------------------
+    _k("rod", "length", "m", "required (straight)", "> 0; for other geometries their "
+       "length, or left out", "arc length L of the rod", invalid=-1.0),
+    _k("rod", "elements", "-", "50", "1 ... 200000", "number of elements N", invalid=0),
+    _k("rod", "geometry", "-", "straight", "a table", "the reference centreline and frames "
+       "(below)"),
+    # -- [rod.geometry] -----------------------------------------------------------------
+    _k("rod.geometry", "kind", "-", '"straight"', "straight, arc, helix, points",
+       "shape of the stress-free centreline", invalid="spiral"),
+    _k("rod.geometry", "direction", "-", "[0, 0, 1] (arc: [1, 0, 0])", _UNIT_VEC,
+       "initial tangent", invalid=[0, 0, 0], kinds=("straight", "arc")),
+    _k("rod.geometry", "normal", "-", "[1, 0, 0]", _UNIT_VEC + ", not along the tangent",
+       "first director d1 (the width direction of a rectangle)", invalid=[0, 0, 0],
+       kinds=("straight", "points")),
+    _k("rod.geometry", "twist", "rad/m", "0", "a number", "uniform twist of the directors "
+       "about the tangent", invalid="fast"),
+    _k("rod.geometry", "origin", "m", "[0, 0, 0]", _VEC, "position of the start s = 0",
+       invalid=[0, 0]),
+    _k("rod.geometry", "radius", "m", "1.0", "> 0", "radius of the arc", invalid=0.0,
+       kinds=("arc",)),
+    _k("rod.geometry", "angle", "deg", "90", "0 < angle <= 360", "angle the arc subtends",
+       invalid=400.0, kinds=("arc",)),
+    _k("rod.geometry", "toward", "-", "[0, 1, 0]", _UNIT_VEC + ", not along direction",
+       "the arc curves toward this direction", invalid=[0, 0, 0], kinds=("arc",)),
+    _k("rod.geometry", "first_director", "-", '"normal"', "normal, binormal",
+       "d1 toward the centre of curvature or out of the plane", invalid="up",
+       kinds=("arc",)),
+    _k("rod.geometry", "coil_radius", "m", "0.01", "> 0", "radius of the helix",
+       invalid=0.0, kinds=("helix",)),
+    _k("rod.geometry", "pitch", "m", "0.005", ">= 0", "rise per turn", invalid=-1.0,
+       kinds=("helix",)),
+    _k("rod.geometry", "turns", "-", "5", "> 0", "number of turns", invalid=0.0,
+       kinds=("helix",)),
+    _k("rod.geometry", "handedness", "-", '"right"', "right, left", "sense of the helix",
+       invalid="up", kinds=("helix",)),
+    _k("rod.geometry", "axis", "-", "[0, 0, 1]", _UNIT_VEC, "axis of the helix",
+       invalid=[0, 0, 0], kinds=("helix",)),
+    _k("rod.geometry", "radial", "-", "[1, 0, 0]", _UNIT_VEC + ", not along the axis",
+       "direction from the axis to the start", invalid=[0, 0, 0], kinds=("helix",)),
+    _k("rod.geometry", "points", "m", "required (or file)", "at least 2 [x, y, z] rows",
+       "polyline through which a smooth curve is drawn", invalid=[[0, 0, 0]],
+       kinds=("points",)),
+    _k("rod.geometry", "file", "-", "-", "a CSV file with columns x, y, z (relative to "
+       "the problem file)", "the points from a file", invalid="missing.csv",
+       kinds=("points",)),
+    # -- [section] ----------------------------------------------------------------------
+    _k("section", "kind", "-", '"rectangle"', "rectangle, ellipse, circle, tube, stiffness",
+       "shape of the cross-section, or stiffnesses given directly", invalid="hexagon"),
+    *(_k("section", n, "m", "required", "> 0" if n != "inner_radius" else
+         ">= 0, < outer_radius", f"{kind}: {what}", invalid=-0.01, kinds=(kind,))
+      for kind, dims in _SHAPES.items() for n, what in dims),
+    *(_k("section", f"{n}_end", "m", "= the start value", "as the start value",
+         f"{kind}: {what} at s = L (linear taper)", invalid=-0.01, kinds=(kind,))
+      for kind, dims in _SHAPES.items() for n, what in dims),
+    _k("section", "shear_correction", "-", "true", "true, false", "shear factors of the "
+       "shape (eq. (7)); false: all factors 1 (eq. (2))", invalid="yes",
+       kinds=tuple(_SHAPES)),
+    *(_k("section", n, u, "required", "> 0", what, invalid=0.0, kinds=("stiffness",))
+      for n, (u, what) in _STIFF.items()),
+    # -- [material] ---------------------------------------------------------------------
+    _k("material", "model", "-", '"kelvin_voigt"', "kelvin_voigt, generalized_maxwell",
+       "constitutive model", invalid="elastic"),
+    _k("material", "density", "kg/m^3", "1000", "> 0", "mass density rho", invalid=0.0),
+    _k("material", "density_end", "kg/m^3", "= density", "> 0", "density at s = L "
+       "(linear variation)", invalid=0.0),
+    _k("material", "youngs_modulus", "Pa", "1e6", "> 0 (Maxwell: >= 0, the equilibrium "
+       "spring E_inf)", "Young's modulus E", invalid=-1.0),
+    _k("material", "youngs_modulus_end", "Pa", "= youngs_modulus", "> 0", "E at s = L "
+       "(linear variation)", invalid=0.0, kinds=("kelvin_voigt",)),
+    _k("material", "poisson_ratio", "-", "0.3", "-1 < nu <= 1/2 (Maxwell: < 1/2)",
+       "Poisson's ratio nu", invalid=0.7),
+    _k("material", "tau", "s", "0", ">= 0; not with tau_S/tau_B or eta/zeta",
+       "retardation time tau_S = tau_B = tau (the paper's choice, tau_E = tau)",
+       invalid=-0.01, kinds=("kelvin_voigt",)),
+    _k("material", "tau_S", "s", "0", ">= 0", "shear retardation time (eta = G tau_S)",
+       invalid=-0.01, kinds=("kelvin_voigt",)),
+    _k("material", "tau_B", "s", "0", ">= 0", "bulk retardation time (zeta = K tau_B)",
+       invalid=-0.01, kinds=("kelvin_voigt",)),
+    _k("material", "eta", "Pa s", "0", ">= 0; not with tau, tau_S, tau_B",
+       "shear viscosity (instead of tau_S)", invalid=-1.0, kinds=("kelvin_voigt",)),
+    _k("material", "zeta", "Pa s", "0", ">= 0 (0 if nu = 1/2)", "bulk viscosity (instead "
+       "of tau_B)", invalid=-1.0, kinds=("kelvin_voigt",)),
+    _k("material", "damping", "-", '"consistent"', "consistent, naive", "extensional "
+       "viscosity eta_E from the dissipation function (eq. (5)) or the naive eta~_E",
+       invalid="viscous", kinds=("kelvin_voigt",)),
+    _k("material", "branches", "-", "required", "1 ... 12 tables [[material.branches]]",
+       "the Maxwell branches (below)", invalid=[], kinds=("generalized_maxwell",)),
+    # -- [[material.branches]] ----------------------------------------------------------
+    _k("material.branches", "tau", "s", "required", "> 0", "relaxation time of the branch",
+       invalid=0.0),
+    _k("material.branches", "youngs_modulus", "Pa", "-", ">= 0; with poisson_ratio, not "
+       "with shear/bulk_modulus", "the branch's spring as E", invalid=-1.0),
+    _k("material.branches", "poisson_ratio", "-", "-", "-1 < nu < 1/2", "the branch's "
+       "spring's nu", invalid=0.5),
+    _k("material.branches", "shear_modulus", "Pa", "-", ">= 0; with bulk_modulus",
+       "the branch's spring as G", invalid=-1.0),
+    _k("material.branches", "bulk_modulus", "Pa", "-", ">= 0; with shear_modulus",
+       "the branch's spring as K", invalid=-1.0),
+    # -- [start], [end] -----------------------------------------------------------------
+    *(_k(end, "kind", "-", '"clamped"' if end == "start" else '"free"', "free, clamped, "
+         "pinned", "what holds the end: nothing, position and frame, position",
+         invalid="welded") for end in ("start", "end")),
+    *(_k(end, "motion", "-", "none", "a table (held ends)", "prescribed motion of a held "
+         "end (below)", invalid=3) for end in ("start", "end")),
+    *(k for end in ("start", "end") for k in (
+        _k(f"{end}.motion", "translation", "m", "[0, 0, 0]", _VEC, "displacement of the "
+           "end (spatial), times translation_time", invalid=[1, 2]),
+        _k(f"{end}.motion", "translation_time", "-", "constant 1", "a time function "
+           "(<time>), continuous", "scales translation", invalid={"kind": "step"}),
+        _k(f"{end}.motion", "rotation_axis", "-", "[0, 0, 1]", _UNIT_VEC, "fixed spatial "
+           "axis of the clamp's rotation", invalid=[0, 0, 0]),
+        _k(f"{end}.motion", "rotation_angle", "deg", "0", "a number (clamped ends)",
+           "rotation of the clamp frame, times rotation_time", invalid="quarter"),
+        _k(f"{end}.motion", "rotation_time", "-", "constant 1", "a time function "
+           "(<time>), continuous", "scales rotation_angle", invalid={"kind": "release"}))),
+    # -- [[loads]] ----------------------------------------------------------------------
+    _k("loads", "kind", "-", '"force"', "gravity, distributed, force, moment",
+       "gravity (m/s^2), dead force per length (N/m), point force (N), point moment (N m)",
+       invalid="torque"),
+    _k("loads", "vector", "see kind", "required", _VEC, "the load's vector (spatial, or in "
+       "the node's reference frame for a follower)", invalid=[1, 0]),
+    _k("loads", "time", "-", "constant 1", "a time function (<time>)", "scales the load "
+       "in time", invalid={"kind": "sometimes"}),
+    _k("loads", "at", "-", '"end"', 'start, end, or a node 0 ... N', "where a point load "
+       "acts", invalid="middle", kinds=("force", "moment")),
+    _k("loads", "s", "m", "-", "0 ... L", "where a point load acts, as an arc length "
+       "(nearest node)", invalid=-1.0, kinds=("force", "moment")),
+    _k("loads", "frame", "-", '"dead"', "dead, follower", "fixed in space or turning with "
+       "the node's frame", invalid="moving", kinds=("force", "moment")),
+    # -- time functions -----------------------------------------------------------------
+    _k("<time>", "kind", "-", '"constant"', "constant, ramp, smooth_ramp, step, release, "
+       "harmonic, table", "the function's shape (a number instead of a table: constant)",
+       invalid="sawtooth"),
+    _k("<time>", "value", "-", "1", "a number", "the constant value", invalid="one",
+       kinds=("constant",)),
+    _k("<time>", "start", "s", "0", "a number", "ramp, step: 0 before start; release: 1 "
+       "before start, 0 after", invalid="now",
+       kinds=("ramp", "smooth_ramp", "step", "release")),
+    _k("<time>", "duration", "s", "required", "> 0", "duration of the (smooth) ramp to 1",
+       invalid=0.0, kinds=("ramp", "smooth_ramp")),
+    _k("<time>", "amplitude", "-", "1", "a number", "offset + amplitude sin(2 pi f t + "
+       "phase)", invalid="big", kinds=("harmonic",)),
+    _k("<time>", "frequency", "Hz", "0", ">= 0", "frequency f of the harmonic",
+       invalid=-1.0, kinds=("harmonic",)),
+    _k("<time>", "phase", "rad", "0", "a number", "phase of the harmonic", invalid="late",
+       kinds=("harmonic",)),
+    _k("<time>", "offset", "-", "0", "a number", "offset of the harmonic", invalid="x",
+       kinds=("harmonic",)),
+    _k("<time>", "points", "s, -", "required (or file)", ">= 2 [t, value] pairs, t "
+       "increasing", "piecewise linear, held constant outside", invalid=[[0, 1]],
+       kinds=("table",)),
+    _k("<time>", "file", "-", "-", "a CSV file with columns t, value", "the points from a "
+       "file", invalid="missing.csv", kinds=("table",)),
+    # -- [simulation] -------------------------------------------------------------------
+    _k("simulation", "t_end", "s", "10", "> 0 (at most 1e6 first-mode periods)",
+       "end time of the run", invalid=0.0),
+    _k("simulation", "rtol", "-", "1e-6", "2.2e-14 ... < 1", "relative tolerance of the "
+       "BDF integrator", invalid=1e-16),
+    _k("simulation", "atol", "state units", "scaled to the rod (see kvrod simulate "
+       "--help)", "1e-20 ... < 1", "absolute tolerance", invalid=0.0),
+    _k("simulation", "output_step", "s", "0.005", "> 0, at most 1e7 samples",
+       "sampling of the series", invalid=0.0),
+    _k("simulation", "max_order", "-", "5 (generalized Maxwell: 2)", "1 ... 5",
+       "highest BDF order", invalid=6),
+    _k("simulation", "min_step", "s", "0", "0 ... t_end", "smallest step before the run "
+       "is declared failed", invalid=-1.0),
+    _k("simulation", "initial", "-", '"static"', "static, reference", "start from the "
+       "static equilibrium under the loads at t = 0-, or from the reference at rest",
+       invalid="rest"),
+    # -- [statics], [analysis] ----------------------------------------------------------
+    _k("statics", "load_steps", "-", "10", "1 ... 10000", "initial load increments of "
+       "the Newton continuation", invalid=0),
+    _k("statics", "report", "-", "[]", "load factors in (0, 1)", "load factors at which "
+       "the end positions are recorded on the way", invalid=[1.5]),
+    _k("analysis", "maxima", "-", "none", "end.x, end.y, end.z, start.x, start.y, start.z",
+       "the coordinate whose maxima give log decrements and damping ratios",
+       invalid="tip"),
+)
+
+
+def by_table() -> dict[str, list[Key]]:
+    """The catalogue grouped by table, in file order."""
+    out: dict[str, list[Key]] = {}
+    for k in KEYS:
+        out.setdefault(k.table, []).append(k)
+    return out
+
+
+def markdown() -> str:
+    """The reference as Markdown tables, one per table (what the documentation shows)."""
+    lines = []
+    for table, keys in by_table().items():
+        head = ("top level" if not table else "time functions (`time = {...}` of a load, "
+                "`translation_time`/`rotation_time` of a motion)" if table == "<time>"
+                else f"`[[{table}]]`" if table in ("loads", "material.branches")
+                else f"`[{table}]`")
+        lines += [f"### {head}", "", "| key | kinds | unit | default | allowed | meaning |",
+                  "|---|---|---|---|---|---|"]
+        for k in keys:
+            cells = (f"`{k.name}`", ", ".join(k.kinds) or "all", k.unit, k.default,
+                     k.allowed, k.doc)
+            lines.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def text() -> str:
+    """The reference as plain text (``kvrod problem-keys``): one key per entry."""
+    out = []
+    for k in KEYS:
+        path = f"<time>.{k.name}" if k.table == "<time>" else k.path
+        kinds = f" [{', '.join(k.kinds)}]" if k.kinds else ""
+        out.append(f"{path}{kinds}  unit: {k.unit}; default: {k.default}; allowed: "
+                   f"{k.allowed}\n    {k.doc}")
+    return "\n".join(out)
