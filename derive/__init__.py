@@ -15,7 +15,14 @@ from derive.step import Step
 
 
 def steps() -> dict[str, Step]:
-    """All step records by name, in pipeline order."""
+    """All step records by name, in pipeline order.
+
+    Returns
+    -------
+    dict of str to Step
+        Each :class:`~derive.step.Step` with its assumptions, derived results and the
+        comparison with the paper's stated forms (``kvrod derive list``).
+    """
     return run()
 
 

@@ -79,7 +79,14 @@ def tidy(expr: sp.Basic) -> sp.Basic:
 
 
 def formulas() -> dict[str, sp.Basic]:
-    """Name -> SymPy expression (3x3 Matrix for C_F, C_M, V_F, V_M and their variants)."""
+    """The derived results the generated code is rendered from.
+
+    Returns
+    -------
+    dict of str to sympy.Basic
+        Name -> SymPy expression (a 3x3 Matrix for C_F, C_M, V_F, V_M and their
+        variants), e.g. ``"eta_E"`` (eq. (5)), ``"tau_E"`` (eq. (6)), ``"eta_E_naive"``.
+    """
     steps = run()
     moduli, energy = steps["isotropic_moduli"], steps["stored_energy"]
     diss, naive = steps["dissipation"], steps["naive_resultants"]

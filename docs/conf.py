@@ -55,8 +55,9 @@ nitpick_ignore_regex = [
     (r"py:.*", r"(numpy|np|scipy|sp|casadi|matplotlib|pathlib|collections|typing|sympy)\..*"),
     (r"py:.*", r"(Path|Any|Callable|Mapping|Sequence|Iterator|Iterable|Expr|ndarray)"),
     # numpydoc type words and types documented in prose (napoleon makes them references)
-    (r"py:class", r"(optional|callable|callables|sequence|array_like|ResidualProblem|"
-                  r"BDFSolution|RodModel|.* of .*)"),
+    (r"py:class", r"(optional|callable|callables|sequence|mapping|array_like|"
+                  r"ResidualProblem|BDFSolution|RodModel|.* of .*|str to .*|"
+                  r"\{?\"[a-z]+\"\}?)"),
 ]
 
 html_theme = "furo"

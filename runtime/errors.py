@@ -29,5 +29,5 @@ class Terminated(BaseException):
     where it stopped, like Ctrl-C (KeyboardInterrupt)."""
 
 
-#: exceptions that interrupt a run: it records "interrupted" and re-raises them
+#: the exceptions that interrupt a run (it records "interrupted" and re-raises them)
 INTERRUPTS: tuple[type[BaseException], ...] = (KeyboardInterrupt, Terminated)

@@ -398,9 +398,19 @@ def calibrate_decrements(delta: Sequence[float], problem=None,
                          tau0: float | None = None) -> CalibrationResult:
     """Fit tau (s) to measured log decrements with the linear modal prediction.
 
-    delta: decrements (-), at least 2; problem: the rod (geometry, material,
-    n_elements of the modal model; default the paper's at N = 16); tau0: start (default
-    from the mean decrement and the modal frequency).
+    Parameters
+    ----------
+    delta : sequence of float
+        Logarithmic decrements (-), at least 2.
+    problem : Problem, optional
+        The rod (geometry, material, elements of the modal model); default the
+        paper's at N = 16.
+    tau0 : float, optional
+        Starting value (s); default from the mean decrement and the modal frequency.
+
+    Returns
+    -------
+    CalibrationResult
     """
     d = validate_decrements(delta)
     model = decrement_model(problem)
@@ -428,10 +438,28 @@ def calibrate_signal(t: Sequence[float], x: Sequence[float], problem=None,
                      output_step: float = 0.002) -> CalibrationResult:
     """Fit tau (s) to a measured tip signal x(t) (m) by simulations of the cantilever.
 
-    problem: the rod that was released (geometry, material, tip force; default
-    the paper's); its n_elements is replaced by ``n_elements`` (coarse, for speed) and
-    t_end by the end of the data. tau0: start (default: from the first log decrement of
-    the data and the linear prediction of the problem).
+    Parameters
+    ----------
+    t, x : sequence of float
+        Time since release (s) and tip x (m); checked (finite, increasing, sampled
+        finely enough for the rod's first period).
+    problem : Problem, optional
+        The rod that was released (geometry, material, tip force); default the paper's.
+        Its ``rod.elements`` is replaced by ``n_elements`` (coarse, for speed) and its
+        t_end by the end of the data.
+    tau0 : float, optional
+        Starting value (s); default from the first log decrement of the data and the
+        linear prediction of the problem.
+    n_elements : int
+        Elements of the model simulated in the fit.
+    output_step : float
+        Sampling (s) of the model's signal.
+
+    Returns
+    -------
+    CalibrationResult
+        tau with its standard error and 95 % interval, residual, fit curve, and
+        ``accepted`` (False with the reasons when the fit is doubtful).
     """
     t, x = validate_signal(t, x)
     sc = _problem(problem, n_elements=n_elements, output_step=output_step)

@@ -88,8 +88,25 @@ class DmaFit:
 
 
 def load_dma(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(omega rad/s, storage Pa, loss Pa) of a DMA CSV with a header naming
-    ``frequency_hz`` (Hz) or ``omega`` (rad/s), ``storage`` and ``loss`` (Pa); checked."""
+    """Read and check a DMA CSV.
+
+    Parameters
+    ----------
+    path : str or Path
+        CSV with a header naming ``frequency_hz`` (Hz) or ``omega`` (rad/s), ``storage``
+        and ``loss`` (Pa).
+
+    Returns
+    -------
+    omega, storage, loss : ndarray
+        rad/s, Pa, Pa; frequencies strictly increasing, moduli finite (storage > 0,
+        loss >= 0).
+
+    Raises
+    ------
+    ValueError
+        The message names the file, the row and the column of the first bad value.
+    """
     path = Path(path)
     head = load_csv(path, ())  # existence, encoding and emptiness checks
     del head
@@ -122,7 +139,23 @@ def load_dma(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def fit_prony(omega: np.ndarray, storage: np.ndarray, loss: np.ndarray, *,
               poisson_ratio: float, per_decade: float = 3.0) -> DmaFit:
-    """Fit the series (see the module docstring) to E'(omega), E''(omega)."""
+    """Fit the Prony series (see the module docstring) to E'(omega), E''(omega).
+
+    Parameters
+    ----------
+    omega, storage, loss : ndarray
+        Angular frequencies (rad/s) and the storage and loss moduli there (Pa).
+    poisson_ratio : float
+        Poisson's ratio of every branch (a uniaxial test does not measure it).
+    per_decade : float
+        Relaxation times per decade of the grid.
+
+    Returns
+    -------
+    DmaFit
+        E_inf and the terms kept with their standard errors, the relative RMS residual
+        and ``doubts`` (``accepted`` is False when there are any).
+    """
     from scipy.optimize import nnls
 
     omega = np.asarray(omega, dtype=float)

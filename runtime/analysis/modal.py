@@ -533,11 +533,24 @@ def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int =
                    dense_max: int = 300) -> list[Mode]:
     """The ``count`` lowest modes of the rod linearised at ``y_eq`` (see module docstring).
 
-    model: the rod (its loads, as in statics, apply at ``y_eq``); y_eq: equilibrium state
-    (n,), default the reference; count: number of modes (>= 1); dense_max: largest reduced
-    size ``nq`` solved with dense LAPACK (above: sparse shift-invert ARPACK).
-    Returns the modes sorted by undamped natural frequency. (Continuum reference values
-    are attached by the command line from the independent ``references`` package.)
+    Parameters
+    ----------
+    model : RodModel
+        The rod; its loads (as in statics) apply at ``y_eq``.
+    y_eq : ndarray, optional
+        Equilibrium state (n,); default the reference.
+    count : int
+        Number of modes (>= 1).
+    dense_max : int
+        Largest reduced size ``nq`` solved with dense LAPACK (above: sparse shift-invert
+        ARPACK). A generalized Maxwell rod (internal strains in the state) is solved dense.
+
+    Returns
+    -------
+    list of Mode
+        Sorted by undamped natural frequency: omega (rad/s), damping ratio zeta of the
+        eigenvalue pair, family, mode shape. Continuum reference values are attached by
+        the command line from the independent ``references`` package.
     """
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
         raise ValueError(f"count = {count!r} must be an integer >= 1")

@@ -185,7 +185,23 @@ def reference_arrays(problem: Problem) -> tuple[RodArrays, np.ndarray, np.ndarra
 
 
 def build_model(problem: Problem, backend: str = "auto") -> RodModel:
-    """The :class:`RodModel` of a problem (see the module docstring)."""
+    """The discrete rod of a problem, over the compiled kernels (see the module docstring).
+
+    Parameters
+    ----------
+    problem : Problem
+        The rod problem.
+    backend : {"auto", "c", "casadi"}
+        ``"c"``: the generated C assembly through ctypes (compiled on first use, cached);
+        ``"casadi"``: the CasADi MX assembly (no compiler needed); ``"auto"``: C when a
+        compiler is available.
+
+    Returns
+    -------
+    RodModel
+        Residual, band Jacobian, energies and diagnostics of the rod, driven by the
+        problem's loads and end motion.
+    """
     arrays, y_ref, r_ends, p_ends = reference_arrays(problem)
     drive = ProblemDrive(problem, arrays.N, r_ends, p_ends)
     return RodModel(arrays, y_ref, drive=drive, backend=backend)

@@ -322,7 +322,23 @@ _KV_KEYS = ("model", "density", "youngs_modulus", "poisson_ratio", "tau", "tau_S
 
 
 def material_from_mapping(m: Mapping[str, Any] | None) -> Material:
-    """A material from ``[material]`` (see the module docstring)."""
+    """A material from a ``[material]`` table (see the module docstring).
+
+    Parameters
+    ----------
+    m : mapping or None
+        The table; ``model`` selects ``kelvin_voigt`` (default) or
+        ``generalized_maxwell``; None gives the default Kelvin-Voigt material.
+
+    Returns
+    -------
+    KelvinVoigt or GeneralizedMaxwell
+
+    Raises
+    ------
+    ParameterError
+        A key is unknown or a value outside its range (the message names it).
+    """
     m = dict(C.table("material", m if m is not None else {}))
     model = C.choice("material.model", m.get("model", "kelvin_voigt"), MODELS)
     if model == "generalized_maxwell":

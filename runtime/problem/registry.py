@@ -79,7 +79,28 @@ def problem_path(spec: str | Path) -> Path:
 
 def load_problem(spec: str | Path | Problem,
                  overrides: Mapping[str, Any] | None = None) -> Problem:
-    """A problem by file, built-in name or object, with overrides applied (all checked)."""
+    """A problem by file, built-in name or object, with overrides applied (all checked).
+
+    Parameters
+    ----------
+    spec : str, Path or Problem
+        A problem file (TOML), the name of a built-in problem (``examples/NAME.toml``,
+        e.g. ``"cantilever"``) or a :class:`~runtime.problem.schema.Problem`.
+    overrides : mapping, optional
+        ``{"material.tau": 0.02, "rod.elements": 30}``: dotted paths or the command
+        line's short names (:data:`~runtime.problem.schema.ALIASES`).
+
+    Returns
+    -------
+    Problem
+
+    Raises
+    ------
+    ProblemFileError
+        The file is missing, unreadable, not TOML or not a problem.
+    ParameterError
+        A value is outside its allowed range (the message names the key and the file).
+    """
     if isinstance(spec, Problem):
         return spec.with_overrides(overrides or {})
     path = problem_path(spec)

@@ -297,7 +297,25 @@ def default_atol(problem: Problem, model: RodModel, y0: np.ndarray) -> np.ndarra
 
 def static_equilibrium(problem: Problem, model: RodModel) -> StaticOutcome:
     """Equilibrium under the loads at t = 0- (ends at their t = 0 positions), by Newton
-    with load stepping. Raises StaticSolveError (with the last converged state)."""
+    with load stepping (``problem.statics``).
+
+    Parameters
+    ----------
+    problem : Problem
+        The rod problem.
+    model : RodModel
+        Its model (:func:`~runtime.problem.assemble.build_model`).
+
+    Returns
+    -------
+    StaticOutcome
+        State ``y``, end position ``tip`` (m), Newton iterations, the load path.
+
+    Raises
+    ------
+    StaticSolveError
+        No equilibrium found; it carries the last converged state and the load path.
+    """
     wall0 = time.perf_counter()
     st = RodStatics(model)
     path: list[tuple[float, np.ndarray]] = []
@@ -322,14 +340,41 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
              snapshot_every: float | None = None,
              snapshot_sink: Callable[[float, np.ndarray], object] | None = None,
              max_steps: int = 2_000_000, backend: str = "auto") -> SimulationResult:
-    """Run a problem (see the module docstring).
+    """Run a problem: static equilibrium (if ``simulation.initial = "static"``), then the
+    BDF integration with energy audit, outputs and maxima (see the module docstring).
 
-    progress(t) after every accepted step; checkpoint(state) every ``checkpoint_every``
-    simulated seconds with a dict that :func:`simulate` accepts back as ``resume`` (the
-    multistep history restarts at order 1 there, so a resumed run agrees with an
-    uninterrupted one to the integrator tolerance, not bit for bit); snapshots of the full
-    state every ``snapshot_every`` seconds go to ``snapshot_sink(t, y)`` (default: kept in
-    ``result.snapshots``).
+    Parameters
+    ----------
+    problem : Problem
+        The rod problem (``problem.simulation`` holds t_end, tolerances, outputs).
+    progress : callable, optional
+        Called as ``progress(t)`` after every accepted step.
+    checkpoint : callable, optional
+        Called as ``checkpoint(state)`` every ``checkpoint_every`` simulated seconds (s)
+        with a dict that :func:`simulate` accepts back as ``resume``. The multistep
+        history restarts at order 1 there, so a resumed run agrees with an uninterrupted
+        one to the integrator tolerance, not bit for bit.
+    checkpoint_every : float
+        Simulated seconds between checkpoints.
+    resume : dict, optional
+        A checkpoint's state to continue from.
+    snapshot_every : float, optional
+        Full states every this many seconds, handed to ``snapshot_sink(t, y)`` (default:
+        kept in ``result.snapshots``).
+    snapshot_sink : callable, optional
+        Receives the snapshots.
+    max_steps : int
+        Give up after this many steps.
+    backend : {"auto", "c", "casadi"}
+        As in :func:`~runtime.problem.assemble.build_model`.
+
+    Returns
+    -------
+    SimulationResult
+        Series, maxima, counters and status (``"finished"``, ``"failed"`` with the
+        reason, or ``"interrupted"``); a failed run keeps everything computed up to the
+        failure. ``result.summary()`` is what ``summary.json`` holds, energy audit
+        included.
     """
     sim = problem.simulation
     res = SimulationResult(problem=problem)

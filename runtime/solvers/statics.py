@@ -29,10 +29,14 @@ class StaticSolveError(RuntimeError):
 
     Attributes
     ----------
-    y : last converged state (at ``load_scale``).
-    load_scale : load factor of ``y`` (0 if not even the unloaded state converged).
-    iterations : Newton iterations of every converged load step so far.
-    residual_norm : scaled residual norm of the last failed attempt.
+    y : ndarray
+        Last converged state (at ``load_scale``).
+    load_scale : float
+        Load factor of ``y`` (0 if not even the unloaded state converged).
+    iterations : list of int
+        Newton iterations of every converged load step so far.
+    residual_norm : float
+        Scaled residual norm of the last failed attempt.
     """
 
     def __init__(
