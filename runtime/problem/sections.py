@@ -88,7 +88,15 @@ class Shape:
               "ellipse": lambda d: c.ellipse_section(d["a"], d["b"], nu),
               "circle": lambda d: c.circle_section(d["radius"], nu),
               "tube": lambda d: _tube(c, d, nu)}[self.kind]
-        rows = [fn({k: float(v[i]) for k, v in dims.items()}) for i in range(np.size(x))]
+        # once per distinct dimension set: a uniform rod evaluates the formulas once (the
+        # rectangle's torsion series costs 0.5 ms, 0.5 s per run at N = 1000 before)
+        cache: dict[tuple, dict] = {}
+        rows = []
+        for i in range(np.size(x)):
+            key = tuple(float(v[i]) for v in dims.values())
+            if key not in cache:
+                cache[key] = fn(dict(zip(dims, key, strict=True)))
+            rows.append(cache[key])
         out = {k: np.array([float(r[k]) for r in rows]) for k in CONSTANTS}
         if not self.shear_correction:
             out.update(kappa_1=np.ones_like(out["A"]), kappa_2=np.ones_like(out["A"]),
