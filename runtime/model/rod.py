@@ -288,6 +288,22 @@ class RodModel:
         """Position of node 0, the s = 0 end (3,) in m."""
         return y[self.phi_index[0]].copy()
 
+    def condensation_blocks(self) -> list[tuple[int, int, int, int, int]]:
+        """The kinematic blocks a Newton solve may eliminate (``runtime.solvers._bdf_c.
+        CondensedNewton``): per node, the rows phi' = v eliminate v (kept: phi); per
+        segment, the rows p' = 1/2 p*(0, Omega) eliminate p (kept: Omega). Each as
+        ``(e_off, e_size, r_off, k_off, k_size)`` of contiguous state ranges."""
+        blocks = []
+        for i in range(self.N + 1):
+            phi, v = self.phi_index[i], self.v_index[i]
+            blocks.append((int(v[0]), 3, int(phi[0]), int(phi[0]), 3))
+        for i in range(self.N):
+            p, om = self.p_index[i], self.omega_index[i]
+            blocks.append((int(p[0]), 4, int(p[0]), int(om[0]), 3))
+        for e0, es, r0, k0, ks in blocks:    # the layout keeps each field contiguous
+            assert e0 >= 0 and r0 >= 0 and k0 >= 0 and es <= 4 and ks <= 4
+        return blocks
+
     def describe_dof(self, index: int) -> str:
         """Human-readable name of state/residual component ``index``."""
         return L.describe_index(self.N, index, self.branches)

@@ -88,6 +88,12 @@ def load() -> ctypes.CDLL | None:
     lib.kv_newton.restype = D
     lib.kv_interp.argtypes = [I, I, I, D, P, P, P, P, P]
     lib.kv_interp.restype = None
+    lib.kv_cond_factor.argtypes = [P, P]
+    lib.kv_cond_factor.restype = I
+    lib.kv_cond_solve.argtypes = [P, P, P]
+    lib.kv_cond_solve.restype = None
+    lib.kv_cond_newton.argtypes = [P, P, P, D, P, P, P, P, D]
+    lib.kv_cond_newton.restype = D
     lib.kv_wrms.argtypes = [I, P, P, P]
     lib.kv_wrms.restype = D
     _lib = lib
@@ -144,3 +150,126 @@ def band_solve(ab, kl: int, ku: int, b):
 
     lu = BandLU(ab, kl, ku)
     return (lu.solve(b) if lu.info == 0 else np.array(b, dtype=float)), lu.info
+
+
+class _CondStruct(ctypes.Structure):
+    """Mirror of ``kv_cond`` in bdf_helpers.c."""
+
+    _fields_ = [(name, ctypes.c_int) for name in
+                ("n", "kl", "ku", "ldab", "nc", "klc", "kuc", "ldc", "nb")] + [
+        (name, ctypes.c_void_p) for name in
+        ("e_off", "e_sz", "r_off", "k_off", "k_sz", "keep_row", "keep_col", "row2c",
+         "col2c", "G", "Minv", "g", "abc", "ipiv", "prof", "rc", "w_off", "w_r0", "w_nr",
+         "W")]
+
+
+class CondensedNewton:
+    """The Newton systems of a BDF step, condensed by eliminating kinematic blocks (see
+    ``kv_cond`` in bdf_helpers.c): ``factor(ab)`` condenses and factorises the full band
+    J (which it leaves intact), ``newton(...)`` is ``kv_newton`` through those factors.
+
+    ``blocks`` are ``(e_off, e_size, r_off, k_off, k_size)``: rows r_off..+e_size involve
+    only the columns e_off..+e_size (eliminated) and k_off..+k_size (kept), e_size <= 4,
+    k_size <= 4. Every other row and column is kept; kept rows pair with kept columns in
+    index order. Built once per solver; None from :meth:`build` without the C helpers.
+    """
+
+    def __init__(self, lib, n: int, kl: int, ku: int, ldab: int,
+                 blocks: list[tuple[int, int, int, int, int]]) -> None:
+        import numpy as np
+
+        b = np.asarray(blocks, dtype=np.int32).reshape(-1, 5)
+        if b.size and (b[:, 1].max() > 4 or b[:, 4].max() > 4):
+            raise ValueError("CondensedNewton: blocks of at most 4 unknowns")
+        elim_rows = np.zeros(n, bool)
+        elim_cols = np.zeros(n, bool)
+        for e0, es, r0, _k0, _ks in b:
+            elim_cols[e0:e0 + es] = True
+            elim_rows[r0:r0 + es] = True
+        keep_row = np.flatnonzero(~elim_rows).astype(np.int32)
+        keep_col = np.flatnonzero(~elim_cols).astype(np.int32)
+        if keep_row.size != keep_col.size:
+            raise ValueError("CondensedNewton: eliminated rows and columns differ in number")
+        nc = keep_row.size
+        row2c = np.full(n, -1, np.int32)
+        row2c[keep_row] = np.arange(nc, dtype=np.int32)
+        col2c = np.full(n, -1, np.int32)
+        col2c[keep_col] = np.arange(nc, dtype=np.int32)
+        # condensed bandwidths from the structure (conservative: every stored position)
+        lo = hi = 0
+        offs = np.arange(-ku, kl + 1)
+        for cols, targets in ((keep_col, None), *(((np.arange(e0, e0 + es)),
+                                                   np.arange(k0, k0 + ks))
+                                                  for e0, es, _r, k0, ks in b)):
+            rows = cols[:, None] + offs
+            ok = (rows >= 0) & (rows < n)
+            rc = row2c[np.where(ok, rows, 0)]
+            ok &= rc >= 0
+            if not ok.any():
+                continue
+            rcs = rc[ok]
+            ccs = (col2c[cols] if targets is None else None)
+            if targets is None:
+                d = rcs - np.broadcast_to(ccs[:, None], rows.shape)[ok]
+                lo, hi = max(lo, int(d.max())), max(hi, int(-d.min()))
+            else:
+                tc = col2c[targets]
+                lo = max(lo, int(rcs.max() - tc.min()))
+                hi = max(hi, int(tc.max() - rcs.min()))
+        self.nc, self.klc, self.kuc = nc, lo, hi
+        ldc = 2 * lo + hi + 1
+        # the kept rows in the band of each block's eliminated columns: a contiguous
+        # range of condensed rows (kept rows keep their order)
+        w_r0, w_nr = np.zeros(len(b), np.int32), np.zeros(len(b), np.int32)
+        for k, (e0, es, _r, _k0, _ks) in enumerate(b):
+            rows = row2c[max(0, e0 - ku):min(n, e0 + es + kl)]
+            rows = rows[rows >= 0]
+            if rows.size:
+                w_r0[k], w_nr[k] = rows[0], rows[-1] - rows[0] + 1
+        w_off = np.zeros(len(b), np.int32)
+        if len(b):
+            w_off[1:] = np.cumsum(w_nr[:-1] * b[:-1, 1])
+        self._keep = dict(
+            e_off=np.ascontiguousarray(b[:, 0]), e_sz=np.ascontiguousarray(b[:, 1]),
+            r_off=np.ascontiguousarray(b[:, 2]), k_off=np.ascontiguousarray(b[:, 3]),
+            k_sz=np.ascontiguousarray(b[:, 4]), keep_row=keep_row, keep_col=keep_col,
+            row2c=row2c, col2c=col2c, G=np.zeros(16 * max(len(b), 1)),
+            Minv=np.zeros(16 * max(len(b), 1)), g=np.zeros(4 * max(len(b), 1)),
+            abc=np.zeros((ldc, max(nc, 1)), order="F"),
+            ipiv=np.zeros(max(nc, 1), np.int32), prof=np.zeros(2 * max(nc, 1), np.int32),
+            rc=np.zeros(max(nc, 1)), w_off=w_off, w_r0=w_r0, w_nr=w_nr,
+            W=np.zeros(max(int((w_nr * b[:, 1]).sum()) if len(b) else 0, 1)))
+        s = _CondStruct(n, kl, ku, ldab, nc, lo, hi, ldc, len(b),
+                        *(self._keep[k].ctypes.data for k in (
+                            "e_off", "e_sz", "r_off", "k_off", "k_sz", "keep_row",
+                            "keep_col", "row2c", "col2c", "G", "Minv", "g", "abc", "ipiv",
+                            "prof", "rc", "w_off", "w_r0", "w_nr", "W")))
+        self._struct = s
+        self.ptr = ctypes.addressof(s)
+        self._lib = lib
+
+    @classmethod
+    def build(cls, problem, n: int, kl: int, ku: int, ldab: int):
+        """For a problem that describes its kinematic blocks (``condensation_blocks()``),
+        with the C helpers available; else None."""
+        lib = load()
+        get = getattr(problem, "condensation_blocks", None)
+        if lib is None or get is None:
+            return None
+        blocks = get()
+        if not blocks:
+            return None
+        return cls(lib, n, kl, ku, ldab, blocks)
+
+    def factor(self, ab) -> int:
+        """Condense J (band ``ab``, unchanged) and factorise: LAPACK's info (-1: a
+        kinematic block is singular)."""
+        return int(self._lib.kv_cond_factor(self.ptr, ab.ctypes.data))
+
+    def solve(self, ab, b):
+        """``J^-1 b`` (a new array) through the condensed factors."""
+        import numpy as np
+
+        x = np.array(b, dtype=float)
+        self._lib.kv_cond_solve(self.ptr, ab.ctypes.data, x.ctypes.data)
+        return x

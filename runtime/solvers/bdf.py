@@ -194,6 +194,9 @@ class BDF:
         Consecutive failures on one step before giving up.
     min_step : float
         Smallest step size magnitude allowed (besides round-off at ``t``).
+    condense : bool
+        Solve the Newton systems condensed when the problem names kinematic blocks
+        (``condensation_blocks()``) and the C helpers are available.
 
     Notes
     -----
@@ -221,6 +224,7 @@ class BDF:
         max_conv_fails: int = 10,
         max_error_fails: int = 10,
         min_step: float = 0.0,
+        condense: bool = True,
     ) -> None:
         n = int(problem.n)
         y0 = np.asarray(y0, dtype=float)
@@ -295,6 +299,12 @@ class BDF:
             self._p_y, self._p_yp = self._y.ctypes.data, self._yp.ctypes.data
             self._ptrs = {id(a): a.ctypes.data
                           for a in (self._ee, self._res, self._ewt, self._ewt_err)}
+        # Condensed Newton systems when the problem names its kinematic blocks (the rod:
+        # phi' = v, p' = 1/2 p*(0, Omega)): the LU and the solves work on about half the
+        # unknowns and a narrower band, 3.8x fewer bytes (see _bdf_c.CondensedNewton).
+        self._cond = (_bdf_c.CondensedNewton.build(problem, n, self.kl, self.ku,
+                                                   self._ab.shape[0])
+                      if self._c is not None and condense else None)
 
         # IDA's scalar state; coefficient lists are Python floats (fast scalar loops).
         self._psi = [0.0] * (mo + 2)
@@ -503,7 +513,9 @@ class BDF:
         ab.fill(0.0)
         self.problem.jacobian_band(t, self._yy, self._ypw, self._cj, ab)
         self.njev += 1
-        if self._c is not None:
+        if self._cond is not None:
+            info = self._cond.factor(ab)      # J stays in ab: the solves read it
+        elif self._c is not None:
             info = self._c.kv_gbtrf(self.n, self.kl, self.ku, self._p_ab,
                                     ab.shape[0], self._p_ipiv, self._p_prof)
         else:  # the NumPy path (no C compiler): SciPy's LAPACK, imported on use
@@ -539,6 +551,8 @@ class BDF:
         inv_n = 1.0 / self.n
         maxcor = self.max_nonlinear_iter
         clib, n = self._c, self.n
+        cond = self._cond
+        cond_ptr = cond.ptr if cond is not None else None
         if clib is not None:
             p_ab, ldab, p_ipiv, p_prof = self._p_ab, ab.shape[0], self._p_ipiv, self._p_prof
             p_res, p_ewt, p_ee = self._p_res, self._p_ewt, self._p_ee
@@ -562,7 +576,10 @@ class BDF:
             ipiv = self._ipiv
             m = 0
             while True:
-                if clib is not None:
+                if cond is not None:
+                    delnrm = clib.kv_cond_newton(cond_ptr, p_ab, p_res, scale, p_ewt, p_ee,
+                                                 self._p_yy, self._p_ypw, cj)
+                elif clib is not None:
                     delnrm = clib.kv_newton(n, kl, ku, p_ab, ldab, p_ipiv, p_prof, p_res,
                                             scale, p_ewt, p_ee, self._p_yy, self._p_ypw, cj)
                 else:

@@ -1,6 +1,7 @@
 /* C helpers of runtime/bdf.py; see runtime/_bdf_c.py for why they exist and what they
    measurably gain. Compiled on first use into the kvrod cache (runtime/build.py). */
 #include <math.h>
+#include <string.h>
 #if defined(__x86_64__) || defined(__SSE2__)
 #include <xmmintrin.h>
 #define FTZ_ON unsigned int csr_ = _mm_getcsr(); _mm_setcsr(csr_ | 0x8040u);
@@ -191,4 +192,174 @@ void kv_interp(int k, int n, int m, double tn, const double *psi, const double *
             for (int q = 0; q < n; ++q) { y[q] += cj * pj[q]; yp[q] += dj * pj[q]; }
         }
     }
+}
+
+/* ---- Condensed Newton systems -------------------------------------------------------
+   Kinematic rows eliminate unknowns: a block b of rows R_b involves only the columns
+   e_b (eliminated, as many as the rows) and k_b (kept), M_b = J[R_b, e_b],
+   K_b = J[R_b, k_b]; so d_e = M_b^-1 (res_R - K_b d_k) = g_b - G_b d_k. The kept rows
+   and columns form the condensed matrix Jc = J[kept, kept] - sum_b J[kept, e_b] G_b
+   (on the k_b columns), whose band is narrower and whose size is about half: for the
+   rod, phi' = v and p' = 1/2 p*(0, Omega) eliminate v and p, leaving phi and Omega
+   (6 unknowns per cell instead of 13). Its LU and solves read ~3-4x fewer bytes, which
+   is what limits the Newton solves of long rods (memory bound). */
+typedef struct {
+    int n, kl, ku, ldab;             /* full band (J is read, never overwritten) */
+    int nc, klc, kuc, ldc;           /* condensed band */
+    int nb;                          /* eliminated blocks */
+    const int *e_off, *e_sz, *r_off, *k_off, *k_sz;   /* per block, contiguous ranges */
+    const int *keep_row, *keep_col;  /* nc: full row / column of a condensed index */
+    const int *row2c, *col2c;        /* n: condensed index of a full row / column, or -1 */
+    double *G, *Minv, *g;            /* per block: e x k, e x e, e (offsets 16 b, 16 b, 4 b) */
+    double *abc; int *ipiv; int *prof;
+    double *rc;                      /* nc */
+    /* J[kept rows, e_b] per block, dense (w_nr[b] x e_sz[b], row-major) over the
+       contiguous condensed rows w_r0[b] .. w_r0[b] + w_nr[b] - 1: the solves read these
+       instead of the full band's columns (fewer bytes per Newton iteration) */
+    const int *w_off, *w_r0, *w_nr;
+    double *W;
+} kv_cond;
+
+#define J_(i, j) ab[(size_t)(kv + (i) - (j)) + (size_t)(j) * (size_t)c->ldab]
+#define JC_(i, j) abc[(size_t)(kvc + (i) - (j)) + (size_t)(j) * (size_t)c->ldc]
+
+static int inv_small(int m, const double *a, double *out)   /* m <= 4, Gauss-Jordan */
+{
+    double w[4][8];
+    for (int i = 0; i < m; ++i)
+        for (int j = 0; j < 2 * m; ++j)
+            w[i][j] = j < m ? a[i * m + j] : (j - m == i ? 1.0 : 0.0);
+    for (int col = 0; col < m; ++col) {
+        int p = col;
+        for (int i = col + 1; i < m; ++i) if (fabs(w[i][col]) > fabs(w[p][col])) p = i;
+        if (w[p][col] == 0.0) return 1;
+        if (p != col) for (int j = 0; j < 2 * m; ++j) { double t = w[p][j]; w[p][j] = w[col][j]; w[col][j] = t; }
+        double d = 1.0 / w[col][col];
+        for (int j = 0; j < 2 * m; ++j) w[col][j] *= d;
+        for (int i = 0; i < m; ++i) if (i != col) {
+            double f = w[i][col];
+            if (f != 0.0) for (int j = 0; j < 2 * m; ++j) w[i][j] -= f * w[col][j];
+        }
+    }
+    for (int i = 0; i < m; ++i) for (int j = 0; j < m; ++j) out[i * m + j] = w[i][j + m];
+    return 0;
+}
+
+/* Condense the full band J (ab) and factorise; returns LAPACK's info of the condensed
+   LU, or -1 when a block M_b is singular. */
+int kv_cond_factor(kv_cond *c, const double *ab)
+{
+    const int kv = c->kl + c->ku, kvc = c->klc + c->kuc;
+    double *abc = c->abc;
+    FTZ_ON
+    memset(abc, 0, sizeof(double) * (size_t)c->ldc * (size_t)c->nc);
+    for (int cc = 0; cc < c->nc; ++cc) {               /* J[kept, kept] */
+        const int j = c->keep_col[cc];
+        const int i0 = j - c->ku < 0 ? 0 : j - c->ku;
+        const int i1 = j + c->kl > c->n - 1 ? c->n - 1 : j + c->kl;
+        for (int i = i0; i <= i1; ++i) {
+            const int rc = c->row2c[i];
+            if (rc >= 0) JC_(rc, cc) = J_(i, j);
+        }
+    }
+    for (int b = 0; b < c->nb; ++b) {                   /* - J[kept, e_b] G_b */
+        const int es = c->e_sz[b], ks = c->k_sz[b], e0 = c->e_off[b], r0 = c->r_off[b],
+                  k0 = c->k_off[b];
+        double M[16], K[16], *Mi = c->Minv + 16 * b, *G = c->G + 16 * b;
+        for (int i = 0; i < es; ++i) {
+            for (int m = 0; m < es; ++m) M[i * es + m] = J_(r0 + i, e0 + m);
+            for (int m = 0; m < ks; ++m) K[i * ks + m] = J_(r0 + i, k0 + m);
+        }
+        if (inv_small(es, M, Mi)) { FTZ_OFF return -1; }
+        for (int i = 0; i < es; ++i)
+            for (int m = 0; m < ks; ++m) {
+                double s = 0.0;
+                for (int q = 0; q < es; ++q) s += Mi[i * es + q] * K[q * ks + m];
+                G[i * ks + m] = s;
+            }
+        double *W = c->W + c->w_off[b];
+        const int nr = c->w_nr[b], rc0 = c->w_r0[b];
+        for (int r = 0; r < nr; ++r) {
+            const int i = c->keep_row[rc0 + r];
+            for (int q = 0; q < es; ++q) {
+                const int j = e0 + q;
+                W[r * es + q] = (i - j > c->kl || j - i > c->ku) ? 0.0 : J_(i, j);
+            }
+            for (int m = 0; m < ks; ++m) {
+                double s = 0.0;
+                for (int q = 0; q < es; ++q) s += W[r * es + q] * G[q * ks + m];
+                if (s != 0.0) JC_(rc0 + r, c->col2c[k0 + m]) -= s;
+            }
+        }
+    }
+    FTZ_OFF
+    return kv_gbtrf(c->nc, c->klc, c->kuc, abc, c->ldc, c->ipiv, c->prof);
+}
+
+/* res <- J^-1 res through the condensed factors (J from ab, as factorised). */
+static void cond_solve(kv_cond *c, const double *ab, double *res)
+{
+    (void)ab;
+    for (int b = 0; b < c->nb; ++b) {                   /* g_b = M_b^-1 res[R_b] */
+        const int es = c->e_sz[b], r0 = c->r_off[b];
+        const double *Mi = c->Minv + 16 * b;
+        double *g = c->g + 4 * b;
+        for (int i = 0; i < es; ++i) {
+            double s = 0.0;
+            for (int q = 0; q < es; ++q) s += Mi[i * es + q] * res[r0 + q];
+            g[i] = s;
+        }
+    }
+    for (int cc = 0; cc < c->nc; ++cc) c->rc[cc] = res[c->keep_row[cc]];
+    for (int b = 0; b < c->nb; ++b) {                   /* rc -= J[kept, e_b] g_b */
+        const int es = c->e_sz[b], nr = c->w_nr[b];
+        const double *g = c->g + 4 * b, *W = c->W + c->w_off[b];
+        double *rc = c->rc + c->w_r0[b];
+        for (int r = 0; r < nr; ++r) {
+            double s = 0.0;
+            for (int q = 0; q < es; ++q) s += W[r * es + q] * g[q];
+            rc[r] -= s;
+        }
+    }
+    gbtrs(c->nc, c->klc, c->kuc, c->abc, c->ldc, c->ipiv, c->prof, c->rc);
+    for (int cc = 0; cc < c->nc; ++cc) res[c->keep_col[cc]] = c->rc[cc];
+    for (int b = 0; b < c->nb; ++b) {                   /* d_e = g_b - G_b d_k */
+        const int es = c->e_sz[b], ks = c->k_sz[b], e0 = c->e_off[b], k0 = c->k_off[b];
+        const double *G = c->G + 16 * b, *g = c->g + 4 * b;
+        for (int i = 0; i < es; ++i) {
+            double s = g[i];
+            for (int m = 0; m < ks; ++m) s -= G[i * ks + m] * res[k0 + m];
+            res[e0 + i] = s;
+        }
+    }
+}
+#undef J_
+#undef JC_
+
+void kv_cond_solve(kv_cond *c, const double *ab, double *res)
+{
+    FTZ_ON
+    cond_solve(c, ab, res);
+    FTZ_OFF
+}
+
+/* kv_newton on the condensed factors. */
+double kv_cond_newton(kv_cond *c, const double *ab, double *res, double scale,
+                      const double *ewt, double *ee, double *yy, double *ypw, double cj)
+{
+    const int n = c->n;
+    double s = 0.0;
+    FTZ_ON
+    cond_solve(c, ab, res);
+    for (int i = 0; i < n; ++i) {
+        double d = res[i] * scale;
+        double w = d * ewt[i];
+        res[i] = d;
+        s += w * w;
+        ee[i] -= d;
+        yy[i] -= d;
+        ypw[i] -= cj * d;
+    }
+    FTZ_OFF
+    return n > 0 ? sqrt(s / n) : 0.0;
 }
