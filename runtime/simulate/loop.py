@@ -109,7 +109,7 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
                                        y=dense(t_old), yp=dense.derivative(t_old),
                                        h=t1 - t_old, residual_norm=math.inf,
                                        worst_index=int(np.argmin(np.isfinite(solver.y))))
-            dense = solver.dense_output()
+            dense = solver.dense_output(copy=False)   # used by the observers right away
             run.t, run.y, run.yp = t1, solver.y, solver.yp
             for f in hooks["step"]:
                 f(run, dense, t_old, t1)
