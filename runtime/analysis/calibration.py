@@ -44,6 +44,7 @@ __all__ = [
     "decrement_model",
     "load_csv",
     "plot_calibration",
+    "signal_maxima",
     "validate_decrements",
     "validate_signal",
 ]
