@@ -112,7 +112,9 @@ def load_csv(path: str | Path, columns: Sequence[str]) -> list[np.ndarray]:
     """
     path = Path(path)
     if not path.is_file():
-        raise ValueError(f"data file {str(path)!r} does not exist")
+        raise ValueError(f"data file {str(path)!r} "
+                         + ("is a directory, not a CSV file" if path.is_dir()
+                            else "does not exist"))
     try:
         with path.open(newline="", encoding="utf-8") as fh:
             rows = [r for r in csv.reader(line for line in fh

@@ -23,6 +23,20 @@ from runtime.model.quaternion import quat_exp, quat_mul
 from runtime.model.rod import RodModel
 
 
+def _half_L(p: np.ndarray) -> np.ndarray:
+    """dp/dtheta = 1/2 L(p) [0; I] per segment, (N, 4, 3), for quaternions p (N, 4)
+    (``p <- p*exp(dtheta/2)``): the rotation block of :meth:`RodStatics.tangent`."""
+    p0, q = p[:, 0], p[:, 1:]
+    z = np.zeros(p.shape[0])
+    qx = np.stack([np.stack([z, -q[:, 2], q[:, 1]], -1),
+                   np.stack([q[:, 2], z, -q[:, 0]], -1),
+                   np.stack([-q[:, 1], q[:, 0], z], -1)], 1)  # [q]x, (N, 3, 3)
+    Lm = np.empty((p.shape[0], 4, 3))
+    Lm[:, 0, :] = -q
+    Lm[:, 1:, :] = p0[:, None, None] * np.eye(3) + qx
+    return 0.5 * Lm
+
+
 class RodStatics:
     """:class:`~runtime.solvers.protocols.StaticProblem` of a :class:`RodModel`.
 
@@ -103,16 +117,7 @@ class RodStatics:
         import scipy.sparse as sp
 
         m, N = self.model, self.N
-        p = y[m.p_index]  # (N, 4)
-        p0, q = p[:, 0], p[:, 1:]
-        z = np.zeros(N)
-        qx = np.stack([np.stack([z, -q[:, 2], q[:, 1]], -1),
-                       np.stack([q[:, 2], z, -q[:, 0]], -1),
-                       np.stack([-q[:, 1], q[:, 0], z], -1)], 1)  # [q]x, (N, 3, 3)
-        Lm = np.empty((N, 4, 3))
-        Lm[:, 0, :] = -q
-        Lm[:, 1:, :] = p0[:, None, None] * np.eye(3) + qx
-        Lm *= 0.5
+        Lm = _half_L(y[m.p_index])
         rows_p = np.broadcast_to(m.p_index[:, :, None], (N, 4, 3))
         cols_p = np.broadcast_to(self.theta_cols[:, None, :], (N, 4, 3))
         rows = np.concatenate([m.phi_index.ravel(), rows_p.ravel()])
@@ -177,15 +182,7 @@ class RodStatics:
         y0 = self.at_rest(y)
         ab = np.zeros((m.ldab, m.n), order="F")
         m.jacobian_band2(0.0, y0, m._zeros, 1.0, 0.0, ab)
-        p = y0[m.p_index]
-        Lm = np.empty((self.N, 4, 3))                    # 1/2 L(p) [0; I], as in tangent()
-        p0, q = p[:, 0], p[:, 1:]
-        Lm[:, 0, :] = -q
-        Lm[:, 1:, :] = p0[:, None, None] * np.eye(3)
-        Lm[:, 1:, :] += np.stack([np.stack([0 * p0, -q[:, 2], q[:, 1]], -1),
-                                  np.stack([q[:, 2], 0 * p0, -q[:, 0]], -1),
-                                  np.stack([-q[:, 1], q[:, 0], 0 * p0], -1)], 1)
-        Lm *= 0.5
+        Lm = _half_L(y0[m.p_index])
         weights = np.concatenate([[1.0], Lm.ravel()])
         vals = ab.ravel(order="F")[src] * weights[widx]
         flat = np.bincount(dst, weights=vals, minlength=out_ab.size)

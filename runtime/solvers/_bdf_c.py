@@ -195,29 +195,6 @@ class CondensedNewton:
         row2c[keep_row] = np.arange(nc, dtype=np.int32)
         col2c = np.full(n, -1, np.int32)
         col2c[keep_col] = np.arange(nc, dtype=np.int32)
-        # condensed bandwidths from the structure (conservative: every stored position)
-        lo = hi = 0
-        offs = np.arange(-ku, kl + 1)
-        for cols, targets in ((keep_col, None), *(((np.arange(e0, e0 + es)),
-                                                   np.arange(k0, k0 + ks))
-                                                  for e0, es, _r, k0, ks in b)):
-            rows = cols[:, None] + offs
-            ok = (rows >= 0) & (rows < n)
-            rc = row2c[np.where(ok, rows, 0)]
-            ok &= rc >= 0
-            if not ok.any():
-                continue
-            rcs = rc[ok]
-            ccs = (col2c[cols] if targets is None else None)
-            if targets is None:
-                d = rcs - np.broadcast_to(ccs[:, None], rows.shape)[ok]
-                lo, hi = max(lo, int(d.max())), max(hi, int(-d.min()))
-            else:
-                tc = col2c[targets]
-                lo = max(lo, int(rcs.max() - tc.min()))
-                hi = max(hi, int(tc.max() - rcs.min()))
-        self.nc, self.klc, self.kuc = nc, lo, hi
-        ldc = 2 * lo + hi + 1
         # the kept rows in the band of each block's eliminated columns: a contiguous
         # range of condensed rows (kept rows keep their order)
         w_r0, w_nr = np.zeros(len(b), np.int32), np.zeros(len(b), np.int32)
@@ -226,6 +203,23 @@ class CondensedNewton:
             rows = rows[rows >= 0]
             if rows.size:
                 w_r0[k], w_nr[k] = rows[0], rows[-1] - rows[0] + 1
+        # condensed bandwidths from the structure (conservative: every stored position)
+        # of J[kept, kept] ...
+        rows = keep_col[:, None] + np.arange(-ku, kl + 1)
+        ok = (rows >= 0) & (rows < n)
+        rc = row2c[np.where(ok, rows, 0)]
+        ok &= rc >= 0
+        d = (rc - np.arange(nc)[:, None])[ok]
+        lo, hi = (int(d.max()), int(-d.min())) if d.size else (0, 0)
+        # ... and of the fill J[kept, e_b] G_b on the columns k_b
+        for k, (_e0, _es, _r, k0, ks) in enumerate(b):
+            if w_nr[k]:
+                tc = col2c[k0:k0 + ks]
+                lo = max(lo, int(w_r0[k] + w_nr[k] - 1 - tc.min()))
+                hi = max(hi, int(tc.max() - w_r0[k]))
+        lo, hi = max(lo, 0), max(hi, 0)
+        self.nc, self.klc, self.kuc = nc, lo, hi
+        ldc = 2 * lo + hi + 1
         w_off = np.zeros(len(b), np.int32)
         if len(b):
             w_off[1:] = np.cumsum(w_nr[:-1] * b[:-1, 1])

@@ -127,15 +127,12 @@ void kv_gbtrs(int n, int kl, int ku, const double *ab, int ldab, const int *ipiv
     FTZ_OFF
 }
 
-/* One simplified-Newton update (IDA's corrector): d = scale * J^-1 res (in res),
-   ee -= d, yy -= d, ypw -= cj d; returns the weighted RMS norm of d (ewt weights). */
-double kv_newton(int n, int kl, int ku, const double *ab, int ldab, const int *ipiv,
-                 const int *prof, double *res, double scale, const double *ewt,
-                 double *ee, double *yy, double *ypw, double cj)
+/* The corrector update after a solve: d = scale * res (in res), ee -= d, yy -= d,
+   ypw -= cj d; returns the sum of (d ewt)^2. */
+static double newton_update(int n, double *res, double scale, const double *ewt,
+                            double *ee, double *yy, double *ypw, double cj)
 {
     double s = 0.0;
-    FTZ_ON
-    gbtrs(n, kl, ku, ab, ldab, ipiv, prof, res);
     for (int i = 0; i < n; ++i) {
         double d = res[i] * scale;
         double w = d * ewt[i];
@@ -145,6 +142,18 @@ double kv_newton(int n, int kl, int ku, const double *ab, int ldab, const int *i
         yy[i] -= d;
         ypw[i] -= cj * d;
     }
+    return s;
+}
+
+/* One simplified-Newton update (IDA's corrector): d = scale * J^-1 res (in res),
+   ee -= d, yy -= d, ypw -= cj d; returns the weighted RMS norm of d (ewt weights). */
+double kv_newton(int n, int kl, int ku, const double *ab, int ldab, const int *ipiv,
+                 const int *prof, double *res, double scale, const double *ewt,
+                 double *ee, double *yy, double *ypw, double cj)
+{
+    FTZ_ON
+    gbtrs(n, kl, ku, ab, ldab, ipiv, prof, res);
+    double s = newton_update(n, res, scale, ewt, ee, yy, ypw, cj);
     FTZ_OFF
     return n > 0 ? sqrt(s / n) : 0.0;
 }
@@ -348,18 +357,9 @@ double kv_cond_newton(kv_cond *c, const double *ab, double *res, double scale,
                       const double *ewt, double *ee, double *yy, double *ypw, double cj)
 {
     const int n = c->n;
-    double s = 0.0;
     FTZ_ON
     cond_solve(c, ab, res);
-    for (int i = 0; i < n; ++i) {
-        double d = res[i] * scale;
-        double w = d * ewt[i];
-        res[i] = d;
-        s += w * w;
-        ee[i] -= d;
-        yy[i] -= d;
-        ypw[i] -= cj * d;
-    }
+    double s = newton_update(n, res, scale, ewt, ee, yy, ypw, cj);
     FTZ_OFF
     return n > 0 ? sqrt(s / n) : 0.0;
 }

@@ -11,10 +11,10 @@ import pytest
 
 from derive import discrete_rod as dr
 from generated import rod_layout as L
-from runtime.model.quaternion import quat_exp, quat_mul
 from tests.rods import (
     MAXWELL,
     energy_rate_function,
+    move_held_ends,
     random_state,
     residual,
     rod_model,
@@ -27,18 +27,8 @@ FOLLOWER = [{"kind": "force", "at": "end", "vector": [0.0, 0.02, 0.01], "frame":
 
 
 def _maxwell(start="clamped", end="free", backend="auto", **kw):
-    m = rod_model(6, start, end, tau=None, loads=FOLLOWER, backend=backend, **MAXWELL, **kw)
-    a = m.arrays
-    rng = np.random.default_rng(11)
-    for name in ("start", "end"):
-        if a.held(name):
-            a.set_param("v_" + name, rng.standard_normal(3))
-        if a.clamped(name):
-            a.set_param("Omega_" + name, rng.standard_normal(3))
-            a.set_param("p_" + name, quat_mul(a.param("p_" + name),
-                                              quat_exp(0.3 * rng.standard_normal(3))))
-    m.drive = None
-    return m
+    return move_held_ends(rod_model(6, start, end, tau=None, loads=FOLLOWER,
+                                    backend=backend, **MAXWELL, **kw))
 
 
 def test_layout_of_the_relaxation_terms():

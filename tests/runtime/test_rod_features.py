@@ -12,7 +12,14 @@ import pytest
 from derive import discrete_rod as dr
 from runtime.model.quaternion import quat_exp, quat_mul, quat_rotation
 from runtime.problem.assemble import build_model
-from tests.rods import energy_rate_function, random_state, residual, rod_model, rod_problem
+from tests.rods import (
+    energy_rate_function,
+    move_held_ends,
+    random_state,
+    residual,
+    rod_model,
+    rod_problem,
+)
 
 FOLLOWER = [
     {"kind": "force", "at": "end", "vector": [0.01, 0.02, -0.03], "frame": "follower"},
@@ -28,18 +35,7 @@ HELIX = {"kind": "helix", "coil_radius": 0.02, "pitch": 0.01, "turns": 1.5}
 
 
 def _moving(start="clamped", end="free", **kw):
-    m = rod_model(6, start, end, loads=FOLLOWER, **kw)
-    a = m.arrays
-    rng = np.random.default_rng(11)
-    for name in ("start", "end"):
-        if a.held(name):
-            a.set_param("v_" + name, rng.standard_normal(3))
-        if a.clamped(name):
-            a.set_param("Omega_" + name, rng.standard_normal(3))
-            p = quat_mul(a.param("p_" + name), quat_exp(0.3 * rng.standard_normal(3)))
-            a.set_param("p_" + name, p)
-    m.drive = None          # keep the hand-set ends
-    return m
+    return move_held_ends(rod_model(6, start, end, loads=FOLLOWER, **kw))
 
 
 @pytest.mark.parametrize("geometry", [None, ARC, HELIX])
