@@ -329,6 +329,33 @@ class RodModel:
         else:
             out[:] = np.asarray(self._casadi.residual(*self._cargs(t, y, yp))).ravel()
 
+    def c_kernels(self):
+        """The compiled residual, Jacobian and energies for the C step loop
+        (:class:`runtime.solvers.bdf_core.CKernels`), with the drive as a callback that
+        reports the interval on which the loads stay constant; None on the CasADi
+        backend."""
+        if self._lib is None:
+            return None
+        import ctypes
+
+        from runtime.solvers.bdf_core import CKernels
+
+        def address(fn) -> int:
+            return ctypes.cast(fn, ctypes.c_void_p).value
+
+        drive = None
+        if self.drive is not None:
+            def drive(t: float) -> tuple[float, float]:
+                self.at(t)
+                if not self.drive.time_dependent:
+                    return -math.inf, math.inf
+                return self._steady
+
+        lib = self._lib
+        return CKernels(address(lib.kvrod_residual), address(lib.kvrod_jacobian_band),
+                        address(lib.kvrod_energies), ctypes.addressof(self._struct),
+                        drive=drive, keep=self)
+
     def _struct_ptr(self):
         import ctypes
 

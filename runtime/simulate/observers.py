@@ -11,6 +11,19 @@ An observer implements any of
 
 They are called in the order given, so an observer may use the results of earlier ones
 (:class:`Sampler` reads the running integrals of :class:`EnergyIntegrator`).
+
+With the compiled step loop (``runtime/solvers/bdf_core.c``) the run loop lets many steps
+pass between two calls of Python code. An observer that does not need every step says so
+with ``sparse = True`` and tells the loop when it must be called:
+
+* ``attach(solver) -> bool``: move its per-step work into the compiled loop (the energy
+  quadrature and the output samples); its ``step`` then only collects the results. If
+  it returns False, the observer is called after every step, as without the loop;
+* ``next_time() -> float``: the loop stops at the step that reaches this time;
+* ``watches() -> list[(index, direction)]``: the loop stops at a step in which
+  ``y[index]`` changes sign in ``direction`` (< 0: downwards).
+
+``step`` of a sparse observer may be called for any step, not only those it asked for.
 """
 
 from __future__ import annotations
@@ -65,12 +78,28 @@ class EnergyIntegrator:
     #: x = (t - t0) / h: (c0, c1, c2) = _FIT @ values
     _FIT = np.linalg.inv(np.vander(GL_X, 3, increasing=True))
 
+    sparse = True
+
     def __init__(self, model: EnergyModel) -> None:
         self.model = model
         self.dissipated = 0.0
         self.external_work = 0.0
         self._key: tuple[float, float] | None = None
         self._coef = np.zeros((3, 2))
+        self._core = None        # the compiled loop doing this observer's work, if any
+
+    def attach(self, solver) -> bool:
+        """Integrate in the compiled step loop (same nodes, weights and fit; True if it
+        can: the solver runs compiled and the model has compiled energies)."""
+        core = getattr(solver, "core", None)
+        if self._core is None and core is not None and core.enable_audit(
+                GL_X, self._FIT, self.dissipated, self.external_work):
+            self._core = core
+        return self._core is not None
+
+    def _collect(self) -> None:
+        s = self._core.s
+        self.dissipated, self.external_work = s.dissipated, s.external_work
 
     def evaluate(self, dense, t0: float, t1: float, ts: np.ndarray | None = None
                  ) -> tuple[np.ndarray, np.ndarray] | None:
@@ -107,6 +136,9 @@ class EnergyIntegrator:
         return (float(d), float(w)) if np.ndim(t) == 0 else (d, w)
 
     def step(self, run: Run, dense, t0: float, t1: float) -> None:
+        if self._core is not None:
+            self._collect()
+            return
         h = t1 - t0
         if h == 0.0:
             return
@@ -114,6 +146,10 @@ class EnergyIntegrator:
         c = self._coef
         self.dissipated += float(c[0, 0] + c[1, 0] / 2.0 + c[2, 0] / 3.0) * h
         self.external_work += float(c[0, 1] + c[1, 1] / 2.0 + c[2, 1] / 3.0) * h
+
+    def end(self, run: Run) -> None:
+        if self._core is not None:
+            self._collect()
 
     def state(self) -> dict[str, Any]:
         return {"diss": self.dissipated, "work": self.external_work}
@@ -134,6 +170,7 @@ class Sampler:
 
     name = "sampler"
     KEYS = ("t", "tip", "start", "T", "W", "D", "P")
+    sparse = True
 
     def __init__(self, model, energy: EnergyIntegrator, t_out: np.ndarray,
                  tip_index: np.ndarray, start_index: np.ndarray) -> None:
@@ -142,24 +179,51 @@ class Sampler:
         self.i_tip, self.i_start = np.asarray(tip_index), np.asarray(start_index)
         self.k_out = 0
         self.rec: dict[str, list[np.ndarray]] = {k: [] for k in self.KEYS}
+        self._core = None
 
-    def _record(self, ts: np.ndarray, ys: np.ndarray, T: np.ndarray, W: np.ndarray,
-                diss: np.ndarray, work: np.ndarray) -> None:
+    def _record(self, ts: np.ndarray, tip: np.ndarray, start: np.ndarray, T: np.ndarray,
+                W: np.ndarray, diss: np.ndarray, work: np.ndarray) -> None:
         r = self.rec
         r["t"].append(np.asarray(ts, dtype=float))
-        r["tip"].append(ys[:, self.i_tip])
-        r["start"].append(ys[:, self.i_start])
+        r["tip"].append(tip)
+        r["start"].append(start)
         for key, v in (("T", T), ("W", W), ("D", diss), ("P", work)):
             r[key].append(np.asarray(v, dtype=float))
+
+    def attach(self, solver) -> bool:
+        """Sample in the compiled step loop (with the energy integrator there too)."""
+        if self._core is None and self.energy.attach(solver):
+            core = solver.core
+            if core.enable_sampling(self.t_out, self.k_out,
+                                    np.concatenate([self.i_tip, self.i_start])):
+                self._core = core
+        return self._core is not None
+
+    def _collect(self) -> None:
+        k0, k1 = self.k_out, self._core.s.k_out
+        if k1 > k0:
+            rows = self._core.rec[k0:k1]
+            a, b = 1 + self.i_tip.size, 1 + self.i_tip.size + self.i_start.size
+            self._record(rows[:, 0].copy(), rows[:, 1:a].copy(), rows[:, a:b].copy(),
+                         rows[:, b].copy(), rows[:, b + 1].copy(), rows[:, b + 2].copy(),
+                         rows[:, b + 3].copy())
+            self.k_out = k1
+
+    def end(self, run: Run) -> None:
+        if self._core is not None:
+            self._collect()
 
     def begin(self, run: Run) -> None:
         if self.k_out == 0 and self.t_out.size and self.t_out[0] <= run.t:
             e = self.model.energy_scalars(run.t, run.y, run.yp)
-            self._record(np.array([run.t]), run.y[None, :], np.array([e[0]]),
-                         np.array([e[1]]), np.zeros(1), np.zeros(1))
+            self._record(np.array([run.t]), run.y[None, self.i_tip], run.y[None, self.i_start],
+                         np.array([e[0]]), np.array([e[1]]), np.zeros(1), np.zeros(1))
             self.k_out = 1
 
     def step(self, run: Run, dense, t0: float, t1: float) -> None:
+        if self._core is not None:
+            self._collect()
+            return
         # called before the energy integrator adds this step: its totals end at t0
         k0 = self.k_out
         slack = 1e-12 * max(1.0, abs(t1))
@@ -170,7 +234,8 @@ class Sampler:
         e = self.energy
         ys, en = e.evaluate(dense, t0, t1, ts)        # with the step's quadrature nodes
         dd, ww = e.partial(dense, t0, t1, ts)
-        self._record(ts, ys, en[:, 0], en[:, 1], e.dissipated + dd, e.external_work + ww)
+        self._record(ts, ys[:, self.i_tip], ys[:, self.i_start], en[:, 0], en[:, 1],
+                     e.dissipated + dd, e.external_work + ww)
         self.k_out = k
 
     def arrays(self) -> dict[str, np.ndarray]:
@@ -214,6 +279,7 @@ class Maxima:
     """
 
     name = "maxima"
+    sparse = True
 
     def __init__(self, position_index: int, velocity_index: int, *,
                  positive_only: bool = True, initial: bool = True,
@@ -223,29 +289,32 @@ class Maxima:
         self.positive_only, self.initial = positive_only, initial
         self.t: list[float] = []
         self.x: list[float] = []
-        self._v_old = 0.0
 
     def _keep(self, x: float) -> bool:
         return x > 0 or not self.positive_only
 
     def begin(self, run: Run) -> None:
-        self._v_old = float(run.y[self.iv])
         x0 = float(run.y[self.ix]) - self.offset
         if self.initial and not self.t and x0 > 0 and self._keep(x0):
             self.t.append(run.t)
             self.x.append(x0)
 
+    def watches(self) -> list[tuple[int, float]]:
+        return [(self.iv, -1.0)]
+
     def step(self, run: Run, dense, t0: float, t1: float) -> None:
         v_new = float(run.y[self.iv])
-        if self._v_old > 0.0 >= v_new and t1 > t0:
+        # the velocity at the step's start, from the step's own interpolant: the previous
+        # call may lie many steps back in the compiled loop
+        v_old = float(dense(t0)[self.iv]) if v_new <= 0.0 and t1 > t0 else 0.0
+        if v_old > 0.0 >= v_new:
             tk = t1 if v_new == 0.0 else bracketed_root(
-                lambda s: float(dense(s)[self.iv]), t0, t1, self._v_old, v_new,
+                lambda s: float(dense(s)[self.iv]), t0, t1, v_old, v_new,
                 xtol=1e-14)
             xk = float(dense(tk)[self.ix]) - self.offset
             if self._keep(xk):
                 self.t.append(tk)
                 self.x.append(xk)
-        self._v_old = v_new
 
     def state(self) -> dict[str, Any]:
         return {"peaks_t": np.array(self.t), "peaks_x": np.array(self.x)}
@@ -259,6 +328,7 @@ class Snapshots:
     """Full states every ``every`` seconds (for VTK), handed to ``sink(t, y)`` at once."""
 
     name = "snapshots"
+    sparse = True
 
     def __init__(self, every: float, sink: Callable[[float, np.ndarray], object]) -> None:
         self.every, self.sink = float(every), sink
@@ -268,6 +338,9 @@ class Snapshots:
         if not math.isfinite(self.next):
             self.sink(run.t, run.y.copy())
             self.next = run.t + self.every
+
+    def next_time(self) -> float:
+        return self.next if math.isfinite(self.next) else math.inf
 
     def step(self, run: Run, dense, t0: float, t1: float) -> None:
         while self.next <= t1:
@@ -282,9 +355,13 @@ class Snapshots:
 
 
 class Progress:
-    """Calls ``callback(t)`` after every accepted step (a progress bar)."""
+    """Calls ``callback(t)`` after accepted steps (a progress bar): after every step
+    without the compiled loop, else at its stops (at least every ``1/ticks`` of the
+    run)."""
 
     name = "progress"
+    sparse = True
+    ticks = 100
 
     def __init__(self, callback: Callable[[float], object]) -> None:
         self.callback = callback

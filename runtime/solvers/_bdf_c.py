@@ -41,10 +41,15 @@ import subprocess
 import tempfile
 from pathlib import Path
 
-#: the C source, kept as a file beside this module
-SOURCE = (Path(__file__).with_name("bdf_helpers.c")).read_text()
+#: the C sources, kept as files beside this module: bdf_core.c (the step loop) includes
+#: bdf_helpers.c (band LU, condensed Newton systems, norms, interpolation), one unit
+FILES = ("bdf_core.c", "bdf_helpers.c")
+SOURCES = {name: Path(__file__).with_name(name).read_text() for name in FILES}
+SOURCE = "".join(SOURCES.values())
 
-_CFLAGS = ("-O2", "-fPIC", "-shared", "-std=c99")
+# -ffp-contract=off: no fused multiply-adds, so that the C step loop rounds like the
+# NumPy path of bdf.py (the two are compared step by step in the tests)
+_CFLAGS = ("-O2", "-fPIC", "-shared", "-std=c99", "-ffp-contract=off")
 _lib: ctypes.CDLL | None = None
 _tried = False
 
@@ -52,11 +57,11 @@ _tried = False
 def _compile(cc: str, dest: Path) -> None:
     dest.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(dir=dest.parent) as tmp:
-        src = Path(tmp) / "kvrod_bdf.c"
-        src.write_text(SOURCE)
+        for name, text in SOURCES.items():
+            (Path(tmp) / name).write_text(text)
         out = Path(tmp) / dest.name
-        subprocess.run([cc, *_CFLAGS, str(src), "-o", str(out), "-lm"], check=True,
-                       capture_output=True)
+        subprocess.run([cc, *_CFLAGS, str(Path(tmp) / FILES[0]), "-o", str(out), "-lm"],
+                       check=True, capture_output=True)
         os.replace(out, dest)
 
 
@@ -79,6 +84,11 @@ def load() -> ctypes.CDLL | None:
         lib = ctypes.CDLL(str(path))
     except (OSError, subprocess.SubprocessError):
         return None
+    return _declare(lib)
+
+
+def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
+    global _lib
     P, I, D = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
     lib.kv_gbtrf.argtypes = [I, I, I, P, I, P, P]
     lib.kv_gbtrf.restype = I
@@ -96,6 +106,17 @@ def load() -> ctypes.CDLL | None:
     lib.kv_cond_newton.restype = D
     lib.kv_wrms.argtypes = [I, P, P, P]
     lib.kv_wrms.restype = D
+    lib.kv_ida_sizeof.argtypes = []
+    lib.kv_ida_sizeof.restype = ctypes.c_size_t
+    lib.kv_ida_advance.argtypes = [P, D, ctypes.c_longlong]
+    lib.kv_ida_advance.restype = I
+    lib.kv_ida_weights.argtypes = [P]
+    lib.kv_ida_weights.restype = None
+    lib.kv_ida_watch_reset.argtypes = [P]
+    lib.kv_ida_watch_reset.restype = None
+    if lib.kv_ida_sizeof() != ctypes.sizeof(CoreStruct):
+        raise RuntimeError("kv_ida (bdf_core.c) and CoreStruct (_bdf_c.py) differ in size: "
+                           "the mirror is out of date")
     _lib = lib
     return lib
 
@@ -267,3 +288,56 @@ class CondensedNewton:
         x = np.array(b, dtype=float)
         self._lib.kv_cond_solve(self.ptr, ab.ctypes.data, x.ctypes.data)
         return x
+
+
+# ---- the C step loop (bdf_core.c) ------------------------------------------------------
+#: return codes of kv_ida_advance
+TSTOP, WATCH, FINISHED, MAXSTEPS = 0, 1, 2, 3
+FAIL_CONV, FAIL_ERR, FAIL_STALL, FAIL_HMIN, FAIL_FIXED, CALLBACK, NONFINITE = range(-1, -8, -1)
+MAXWATCH = 8
+NH = 7          # history rows: max order 5 + 2
+
+RES_FN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_double, ctypes.c_void_p,
+                          ctypes.c_void_p, ctypes.c_void_p)
+JAC_FN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_double, ctypes.c_void_p,
+                          ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_int,
+                          ctypes.c_void_p)
+DRIVE_FN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_double)
+
+
+def _fields(kind, *names):
+    return [(name, kind) for name in names]
+
+
+class CoreStruct(ctypes.Structure):
+    """Mirror of ``kv_ida`` in bdf_core.c (field for field; the size is checked at load)."""
+
+    _I, _P, _D, _L = ctypes.c_int, ctypes.c_void_p, ctypes.c_double, ctypes.c_longlong
+    _fields_ = (
+        _fields(_I, "n", "kl", "ku", "ldab")
+        + _fields(_P, "res", "jac", "en", "ctx", "drive")
+        + _fields(_D, "drive_lo", "drive_hi", "drive_t")
+        + _fields(_P, "cond", "phi", "y", "yp", "yy", "ypw", "ee", "res_v", "tmp", "ewt",
+                  "ewt_err", "errmask", "atol", "ab", "ipiv", "prof")
+        + _fields(_D, "rtol", "t_bound", "direction", "hmax_inv", "min_step", "fixed_step")
+        + _fields(_I, "max_order", "maxcor", "max_conv_fails", "max_error_fails")
+        + _fields(_D * NH, "psi", "alpha", "beta", "sigma", "gamma")
+        + _fields(_I, "kk", "kused", "knew", "ns", "phase", "have_lu")
+        + _fields(_D, "hh", "hused", "cj", "cjold", "cjlast", "cjratio", "ss", "oldnrm",
+                  "rr", "t", "t_old")
+        + _fields(_I, "started")
+        + _fields(_L, "nstep", "nfev", "njev", "nlu", "nni", "netf", "ncfn")
+        + _fields(_I, "fail_index", "fail_count", "fail_nflag")
+        + _fields(_D, "fail_t")
+        + _fields(_I, "nwatch")
+        + _fields(_I * MAXWATCH, "watch_idx")
+        + _fields(_D * MAXWATCH, "watch_dir", "watch_old")
+        + _fields(_I, "watch_hit", "audit")
+        + _fields(_D * 3, "gl_x")
+        + _fields(_D * 9, "fit")
+        + _fields(_D, "dissipated", "external_work")
+        + _fields(_D * 6, "coef")
+        + _fields(_P, "wy", "wyp")
+        + _fields(_I, "nsamp", "m_out", "k_out", "rec_w")
+        + _fields(_P, "samp_idx", "t_out", "rec", "sy", "syp")
+    )

@@ -23,6 +23,7 @@ from runtime.errors import ParameterError
 from runtime.solvers.protocols import ResidualProblem, band_storage
 
 from . import _bdf_c
+from .bdf_core import CoreLink
 
 __all__ = ["BDF", "BDFDenseOutput", "IntegrationError"]
 
@@ -197,6 +198,11 @@ class BDF:
     condense : bool
         Solve the Newton systems condensed when the problem names kinematic blocks
         (``condensation_blocks()``) and the C helpers are available.
+    compiled_loop : bool
+        Take the steps in C (``bdf_core.c``: the same algorithm, statement for
+        statement) when the C helpers are available; else, or with False, in Python.
+        The problem's compiled kernels (``c_kernels()``) are then called from C, other
+        problems through callbacks.
 
     Notes
     -----
@@ -225,6 +231,7 @@ class BDF:
         max_error_fails: int = 10,
         min_step: float = 0.0,
         condense: bool = True,
+        compiled_loop: bool = True,
     ) -> None:
         n = int(problem.n)
         y0 = np.asarray(y0, dtype=float)
@@ -312,8 +319,6 @@ class BDF:
         self._beta = [0.0] * (mo + 2)
         self._sigma = [0.0] * (mo + 2)
         self._gamma = [0.0] * (mo + 2)
-        self._gamma_arr = np.zeros(mo + 2)  # numpy copy of gamma for the predictor
-        self._ones = np.ones(mo + 2)
         self._kk = 1
         self._kused = 0
         self._knew = 1
@@ -361,6 +366,9 @@ class BDF:
         np.multiply(self._yp, self._hh, out=self._phi[1])
         self._psi[0] = self._hh
         self._cj = 1.0 / self._hh
+        # The compiled step loop (runtime/solvers/bdf_core.c), from this state on.
+        self._core = (CoreLink(self._c, self)
+                      if self._c is not None and compiled_loop and n > 0 else None)
 
     # ------------------------------------------------------------------ public API
     @property
@@ -407,14 +415,90 @@ class BDF:
             self.t = self.t_bound
             self.status = "finished"
             return None
-        try:
-            self._step_impl()
-        except IntegrationError:
-            self.status = "failed"
-            raise
+        if self._core is not None:
+            self._advance_core(self.t_bound, 1)
+        else:
+            try:
+                self._step_impl()
+            except IntegrationError:
+                self.status = "failed"
+                raise
         if self.direction * (self.t - self.t_bound) >= 0.0:
             self.status = "finished"
         return None
+
+    def advance(self, t_stop: float, max_steps: int = 2**62) -> str:
+        """Take steps until ``t`` reaches ``t_stop`` (the step that reaches it is
+        completed, so ``t`` may pass it: interpolate back with :meth:`dense_output`), a
+        watched sign change (:meth:`watch`), ``max_steps`` steps or the end.
+
+        Returns ``"tstop"``, ``"watch"``, ``"max_steps"`` or ``"finished"``. Without the
+        compiled step loop, one step per call (``"max_steps"`` unless another applies).
+        Raises :class:`IntegrationError` on failure, as :meth:`step`.
+        """
+        if self.status != "running":
+            raise RuntimeError("Attempt to step on a failed or finished solver.")
+        if self._core is None or self.n == 0 or self.t == self.t_bound:
+            self.step()
+            code = _bdf_c.MAXSTEPS
+        else:
+            code = self._advance_core(t_stop, max(int(max_steps), 1))
+        if self.direction * (self.t - self.t_bound) >= 0.0:
+            self.status = "finished"
+            return "finished"
+        if code == _bdf_c.WATCH:
+            return "watch"
+        if self.direction * (self.t - t_stop) >= 0.0:
+            return "tstop"
+        return "max_steps"
+
+    @property
+    def compiled(self) -> bool:
+        """True when the steps run in the compiled loop (``bdf_core.c``)."""
+        return self._core is not None
+
+    @property
+    def core(self) -> CoreLink | None:
+        """The compiled loop (energy audit and output samples can run inside it), or
+        None."""
+        return self._core
+
+    def watch(self, watches: list[tuple[int, float]]) -> None:
+        """Make :meth:`advance` stop after a step in which ``y[index]`` changes sign in
+        ``direction`` (< 0: from > 0 to <= 0, > 0: from < 0 to >= 0); at most 8. No
+        effect without the compiled loop (which stops after every step anyway)."""
+        if self._core is not None:
+            self._core.set_watches(watches)
+
+    def _advance_core(self, t_stop: float, max_steps: int) -> int:
+        core = self._core
+        try:
+            code = core.advance(t_stop, max_steps)
+        except BaseException:
+            self.status = "failed"
+            raise
+        core.pull(self)
+        if code >= 0:
+            return code
+        self.status = "failed"
+        s = core.s
+        if code == _bdf_c.NONFINITE:
+            self._raise_nonfinite(s.fail_t, self._yy, self._ypw, self._hh)
+        if code == _bdf_c.FAIL_STALL:
+            self._raise_failure(self._stall_reason(), at_accepted=True)
+        if code == _bdf_c.CALLBACK:
+            self._raise_failure("a compiled function of the problem (residual, Jacobian or "
+                                "energies) returned an error code")
+        reasons = {
+            _bdf_c.FAIL_CONV: f"the Newton iteration failed to converge {s.fail_count} "
+                              "times in a row",
+            _bdf_c.FAIL_ERR: f"the local error test failed {s.fail_count} times in a row",
+            _bdf_c.FAIL_FIXED: "the Newton iteration failed at the fixed step size",
+            _bdf_c.FAIL_HMIN: self._hmin_reason(_CONV_FAIL if s.fail_nflag == _CONV_FAIL
+                                                else _ERR_FAIL),
+        }
+        self._raise_failure(reasons[code])
+        raise AssertionError("unreachable")
 
     def dense_output(self, copy: bool = True) -> BDFDenseOutput:
         """Interpolant of the last accepted step (y and y'), valid on ``[t_old, t]``.
@@ -479,7 +563,6 @@ class BDF:
                 sigma[i] = i * sigma[i - 1] * alpha[i]
                 gamma[i] = gamma[i - 1] + alpha[i - 1] / hh
             psi[kk] = temp1
-            self._gamma_arr[: kk + 1] = gamma[: kk + 1]
         alphas = 0.0
         alpha0 = 0.0
         for i in range(kk):
@@ -496,10 +579,17 @@ class BDF:
 
     def _predict(self) -> None:
         kk = self._kk
-        phi = self._phi
+        phi, yy, ypw, tmp = self._phi, self._yy, self._ypw, self._tmp
         # Straight into the Newton iterates (the corrector starts from the prediction).
-        np.dot(self._ones[: kk + 1], phi[: kk + 1], out=self._yy)
-        np.dot(self._gamma_arr[1 : kk + 1], phi[1 : kk + 1], out=self._ypw)
+        # Summed term by term in order (not np.dot, whose BLAS kernels sum in another
+        # order and fuse multiply-adds) so that this path rounds like bdf_core.c.
+        np.copyto(yy, phi[0])
+        ypw.fill(0.0)
+        gamma = self._gamma
+        for j in range(1, kk + 1):
+            yy += phi[j]
+            np.multiply(phi[j], gamma[j], out=tmp)
+            ypw += tmp
 
     def _restore(self) -> None:
         """IDARestore: undo the phi* scaling and the psi update of a failed attempt."""
@@ -670,11 +760,7 @@ class BDF:
             hh = self._hh
             if abs(hh) < self._hmin():
                 # The error estimate drove h below round-off at t (t + h == t): stalled.
-                self._raise_failure(
-                    f"the step size {abs(hh):.3g} chosen by error control is below the "
-                    f"minimum {self._hmin():.3g} (t + h no longer advances t)",
-                    at_accepted=True,
-                )
+                self._raise_failure(self._stall_reason(), at_accepted=True)
             ck = self._set_coeffs()
             tnew = tn + hh
             if hh == remaining:
@@ -725,10 +811,15 @@ class BDF:
                 self._raise_failure(f"the local error test failed {nef} times in a row")
         self._hh *= self._rr
         if abs(self._hh) < self._hmin():
-            what = "Newton convergence" if nflag == _CONV_FAIL else "the local error test"
-            self._raise_failure(
-                f"the step size fell below the minimum {self._hmin():.3g} after failures of {what}"
-            )
+            self._raise_failure(self._hmin_reason(nflag))
+
+    def _stall_reason(self) -> str:
+        return (f"the step size {abs(self._hh):.3g} chosen by error control is below the "
+                f"minimum {self._hmin():.3g} (t + h no longer advances t)")
+
+    def _hmin_reason(self, nflag: int) -> str:
+        what = "Newton convergence" if nflag == _CONV_FAIL else "the local error test"
+        return f"the step size fell below the minimum {self._hmin():.3g} after failures of {what}"
 
     def _complete_step(self, tnew: float, err_k: float, err_km1: float) -> None:
         """IDACompleteStep: accept, choose the next order and step, update phi."""

@@ -176,7 +176,8 @@ def solve(
     dense_output : bool
         Keep every step's interpolant and return ``sol``.
     progress : callable, optional
-        Called as ``progress(t)`` after every accepted step (e.g. a progress bar).
+        Called as ``progress(t)`` after every accepted step, or only at output times
+        when the compiled loop integrates between them (e.g. a progress bar).
     max_steps : int
         Give up (status -1) after this many steps.
     **options
@@ -241,12 +242,19 @@ def solve(
     message = ""
     error: IntegrationError | None = None
 
+    # With the compiled loop and nothing to do at every step (outputs on a grid, no
+    # events, no dense solution), C integrates from one output time to the next.
+    skip = solver.compiled and t_eval is not None and events is None and not dense_output
     while status is None:
         if solver.nstep >= max_steps:
             status, message = -1, f"Reached max_steps = {max_steps} at t = {solver.t:.9g}."
             break
         try:
-            solver.step()
+            if skip:
+                t_next = t_eval[t_eval_i] if t_eval_i < t_eval.size else tf
+                solver.advance(t_next, max_steps - solver.nstep)
+            else:
+                solver.step()
         except IntegrationError as exc:
             status, message, error = -1, str(exc), exc
             break

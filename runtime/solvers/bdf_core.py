@@ -1,0 +1,236 @@
+"""The link between :class:`runtime.solvers.bdf.BDF` and its compiled step loop.
+
+``bdf_core.c`` runs IDA's step (the algorithm of ``bdf.py``, statement for statement) on a
+struct that holds the solver's scalar state and the addresses of its NumPy arrays
+(``CoreStruct`` in ``runtime/solvers/_bdf_c.py``). :class:`CoreLink` builds that struct from a
+solver, gives the C code the problem's functions and runs ``kv_ida_advance``:
+
+* a problem with compiled kernels (``problem.c_kernels()``, the rod's C assembly) is called
+  directly from C, its time-dependent loads through one Python callback that runs only when
+  t leaves the interval on which they are constant;
+* any other problem (``residual``/``jacobian_band`` in Python) through ctypes callbacks.
+
+An exception raised inside a callback is kept and raised again once the C call returns
+(KeyboardInterrupt included): C code cannot unwind Python frames.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from . import _bdf_c
+
+if TYPE_CHECKING:
+    from .bdf import BDF
+
+
+class CKernels:
+    """Compiled functions of a problem for the C step loop: addresses of the residual, the
+    banded Jacobian and (optional, 0 if none) the energies (signatures of
+    ``kvrod_residual``, ``kvrod_jacobian_band``, ``kvrod_energies`` in
+    ``generated/rod_assembly.h``) and of their first argument ``ctx``; ``drive(t)``
+    (optional) makes the functions valid at time t and returns the interval ``[lo, hi)``
+    on which they then stay valid; ``keep`` holds whatever must outlive the solver."""
+
+    def __init__(self, residual: int, jacobian: int, energies: int, ctx: int,
+                 drive=None, keep: Any = None) -> None:
+        self.residual, self.jacobian, self.energies, self.ctx = residual, jacobian, energies, ctx
+        self.drive = drive
+        self.keep = keep
+
+
+class CoreLink:
+    """The compiled step loop of one :class:`~runtime.solvers.bdf.BDF` (see the module
+    docstring). Built by the solver when the C helpers are available."""
+
+    def __init__(self, lib: ctypes.CDLL, solver: BDF) -> None:
+        self._lib = lib
+        self._solver = solver
+        s = _bdf_c.CoreStruct()
+        self.s = s
+        self.ptr = ctypes.addressof(s)
+        self._error: BaseException | None = None
+        self._keep: list[Any] = []
+        n = solver.n
+        # every buffer the C code may hand to a callback, by address
+        self._arrays: dict[int, np.ndarray] = {}
+        for a in (solver._y, solver._yp, solver._yy, solver._ypw, solver._res, solver._tmp,
+                  solver._ee):
+            self._arrays[a.ctypes.data] = a
+        s.n, s.kl, s.ku, s.ldab = n, solver.kl, solver.ku, solver._ab.shape[0]
+        problem = solver.problem
+        get = getattr(problem, "c_kernels", None)
+        kern: CKernels | None = get() if get is not None else None
+        if kern is not None:
+            s.res, s.jac, s.en, s.ctx = kern.residual, kern.jacobian, kern.energies, kern.ctx
+            self._keep.append(kern.keep)
+            self.has_energies = bool(kern.energies)
+            if kern.drive is not None:
+                self._set_drive(kern.drive)
+            else:
+                s.drive_lo, s.drive_hi = -math.inf, math.inf
+        else:
+            self._python_functions(problem)
+            self.has_energies = False
+        s.drive_t = math.nan
+        s.cond = solver._cond.ptr if solver._cond is not None else None
+        p = lambda a: a.ctypes.data if a is not None else None  # noqa: E731
+        s.phi = p(solver._phi)
+        s.y, s.yp, s.yy, s.ypw = p(solver._y), p(solver._yp), p(solver._yy), p(solver._ypw)
+        s.ee, s.res_v, s.tmp, s.ewt = p(solver._ee), p(solver._res), p(solver._tmp), p(solver._ewt)
+        s.ewt_err = p(solver._ewt_err)
+        s.errmask = p(solver._errmask)
+        s.atol = p(solver.atol)
+        s.ab, s.ipiv, s.prof = p(solver._ab), p(solver._ipiv), p(solver._prof)
+        s.rtol, s.t_bound, s.direction = solver.rtol, solver.t_bound, solver.direction
+        s.hmax_inv, s.min_step = solver._hmax_inv, solver.min_step
+        s.fixed_step = solver.fixed_step or 0.0
+        s.max_order, s.maxcor = solver.max_order, solver.max_nonlinear_iter
+        s.max_conv_fails, s.max_error_fails = solver.max_conv_fails, solver.max_error_fails
+        self.push(solver)
+
+    # -- problem functions -------------------------------------------------------------
+    def _guard(self, fn):
+        """Run a Python callback for C: 0 on success, 1 after keeping its exception."""
+        def call(*args):
+            try:
+                fn(*args)
+                return 0
+            except BaseException as exc:  # noqa: BLE001 - re-raised after the C call
+                if self._error is None:
+                    self._error = exc
+                return 1
+        return call
+
+    def _set_drive(self, drive) -> None:
+        s = self.s
+
+        def go(t: float) -> None:
+            s.drive_lo, s.drive_hi = drive(t)
+
+        cb = _bdf_c.DRIVE_FN(self._guard(go))
+        self._keep.append(cb)
+        s.drive = ctypes.cast(cb, ctypes.c_void_p).value
+        s.drive_lo = s.drive_hi = math.nan          # nothing is known to hold yet
+
+    def _python_functions(self, problem) -> None:
+        arrays, s = self._arrays, self.s
+        ab = self._solver._ab
+
+        def residual(ctx, t, py, pyp, pout):
+            problem.residual(t, arrays[py], arrays[pyp], arrays[pout])
+
+        def jacobian(ctx, t, py, pyp, cy, cj, ldab, pab):
+            ab.fill(0.0)
+            problem.jacobian_band(t, arrays[py], arrays[pyp], cj, ab)
+
+        r = _bdf_c.RES_FN(self._guard(residual))
+        j = _bdf_c.JAC_FN(self._guard(jacobian))
+        self._keep += [r, j]
+        s.res = ctypes.cast(r, ctypes.c_void_p).value
+        s.jac = ctypes.cast(j, ctypes.c_void_p).value
+        s.en = None
+        s.drive = None
+        s.drive_lo, s.drive_hi = -math.inf, math.inf
+
+    # -- state between Python and C ----------------------------------------------------
+    _SCALARS = ("kk", "kused", "knew", "ns", "phase", "hh", "hused", "cj", "cjold",
+                "cjlast", "cjratio", "ss", "oldnrm", "rr")
+    _COUNTERS = ("nstep", "nfev", "njev", "nlu", "nni", "netf", "ncfn")
+
+    def push(self, solver: BDF) -> None:
+        """Copy the solver's Python-side state into the struct (at construction)."""
+        s = self.s
+        for name in self._SCALARS:
+            setattr(s, name, getattr(solver, "_" + name))
+        s.have_lu = int(solver._have_lu)
+        s.t = solver.t
+        s.started = solver.t_old is not None
+        s.t_old = solver.t_old if solver.t_old is not None else solver.t
+        for name in self._COUNTERS:
+            setattr(s, name, getattr(solver, name))
+        for name in ("psi", "alpha", "beta", "sigma", "gamma"):
+            vals = getattr(solver, "_" + name)
+            arr = getattr(s, name)
+            for k, v in enumerate(vals):
+                arr[k] = v
+
+    def pull(self, solver: BDF) -> None:
+        """Copy the struct's state back into the solver's attributes (after a C call)."""
+        s = self.s
+        solver.t = s.t
+        solver.t_old = s.t_old if s.started else None
+        for name in self._COUNTERS:
+            setattr(solver, name, getattr(s, name))
+        solver._kused, solver._kk, solver._hh = s.kused, s.kk, s.hh
+        solver._psi = list(s.psi)
+        a = self._arrays
+        solver._y, solver._yp, solver._yy, solver._ypw = a[s.y], a[s.yp], a[s.yy], a[s.ypw]
+        solver._fail_index = s.fail_index
+
+    def advance(self, t_stop: float, max_steps: int) -> int:
+        """Run kv_ida_advance; returns its code (``_bdf_c.TSTOP`` ...). Re-raises the
+        exception of a callback."""
+        self._error = None
+        s = self.s
+        if s.drive:
+            # Python code may have driven the loads to another time since the last call
+            # (an observer evaluating the model at an output time): forget what held.
+            s.drive_lo = s.drive_hi = s.drive_t = math.nan
+        code = self._lib.kv_ida_advance(self.ptr, t_stop, max_steps)
+        if self._error is not None:
+            exc, self._error = self._error, None
+            self.pull(self._solver)
+            raise exc
+        return code
+
+    # -- audit, samples, watches --------------------------------------------------------
+    def enable_audit(self, gl_x: np.ndarray, fit: np.ndarray, dissipated: float,
+                     external_work: float) -> bool:
+        """Integrate 2D and P over every step in C (3-point Gauss-Legendre on the step's
+        interpolant, ``runtime.simulate.observers.EnergyIntegrator``); False when the
+        problem has no compiled energies."""
+        if not self.has_energies:
+            return False
+        s, n = self.s, self._solver.n
+        self._wy, self._wyp = np.zeros((3, n)), np.zeros((3, n))
+        s.wy, s.wyp = self._wy.ctypes.data, self._wyp.ctypes.data
+        for k in range(3):
+            s.gl_x[k] = float(gl_x[k])
+        for k, v in enumerate(np.asarray(fit, dtype=float).ravel()):
+            s.fit[k] = v
+        s.dissipated, s.external_work = dissipated, external_work
+        s.audit = 1
+        return True
+
+    def enable_sampling(self, t_out: np.ndarray, k_out: int, indices: np.ndarray) -> bool:
+        """Record rows ``[t, y[indices]..., T, W, int 2D, int P]`` at the output times
+        ``t_out[k_out:]`` (needs the audit)."""
+        s = self.s
+        if not s.audit:
+            return False
+        self._t_out = np.ascontiguousarray(t_out, dtype=float)
+        self._idx = np.ascontiguousarray(indices, dtype=np.int32)
+        self.rec = np.full((self._t_out.size, 5 + self._idx.size), math.nan)
+        self._sy, self._syp = np.zeros(self._solver.n), np.zeros(self._solver.n)
+        s.t_out, s.samp_idx, s.rec = (self._t_out.ctypes.data, self._idx.ctypes.data,
+                                      self.rec.ctypes.data)
+        s.sy, s.syp = self._sy.ctypes.data, self._syp.ctypes.data
+        s.nsamp, s.m_out, s.k_out, s.rec_w = self._idx.size, self._t_out.size, k_out, \
+            self.rec.shape[1]
+        return True
+
+    def set_watches(self, watches: list[tuple[int, float]]) -> None:
+        """Stop after any step in which ``y[index]`` changes sign in ``direction`` (< 0:
+        from > 0 to <= 0; > 0: from < 0 to >= 0)."""
+        if len(watches) > _bdf_c.MAXWATCH:
+            raise ValueError(f"at most {_bdf_c.MAXWATCH} watched components")
+        s = self.s
+        s.nwatch = len(watches)
+        for k, (i, d) in enumerate(watches):
+            s.watch_idx[k], s.watch_dir[k] = int(i), float(d)
+        self._lib.kv_ida_watch_reset(self.ptr)
