@@ -477,89 +477,43 @@ def idas_configs(N: int, T: float, rtol: float, configs=ALL_CONFIGS, repeat: int
 # --------------------------------------------------------------------------------------
 
 
-class _Timer:
-    """Accumulated wall time and calls of the wrapped callables (by name)."""
-
-    def __init__(self) -> None:
-        self.seconds: dict[str, float] = {}
-        self.calls: dict[str, int] = {}
-
-    def wrap(self, name: str, fn):
-        self.seconds.setdefault(name, 0.0)
-        self.calls.setdefault(name, 0)
-        clock = time.perf_counter
-
-        def timed(*args, **kwargs):
-            t0 = clock()
-            out = fn(*args, **kwargs)
-            self.seconds[name] += clock() - t0
-            self.calls[name] += 1
-            return out
-
-        return timed
-
-
-class _TimedProblem:
-    def __init__(self, model, timer: _Timer) -> None:
-        self.n, self.kl, self.ku = model.n, model.kl, model.ku
-        self.differential = model.differential
-        self.residual = timer.wrap("residual", model.residual)
-        self.jacobian_band = timer.wrap("jacobian", model.jacobian_band)
-
-
-class _TimedDrive:
-    def __init__(self, drive, timer: _Timer) -> None:
-        self.time_dependent = drive.time_dependent
-        self.apply = timer.wrap("drive", drive.apply)
-        self._drive = drive
-
-    def __getattr__(self, name):
-        return getattr(self._drive, name)
-
-
-class _TimedLib:
-    def __init__(self, lib, timer: _Timer) -> None:
-        self.kv_gbtrf = timer.wrap("lu", lib.kv_gbtrf)
-        self.kv_newton = timer.wrap("newton_solve_update", lib.kv_newton)
-        self.kv_wrms = timer.wrap("norms", lib.kv_wrms)
-
-
 def breakdown(N: int, T: float, rtol: float) -> dict:
-    """Split kvrod's wall time into residual, Jacobian, the drive (loads re-applied when t
-    changes, inside residual/Jacobian calls), LU, Newton solves (band solve and updates,
-    in C), norms and the rest (the integrator's Python: coefficients, predictor, error
-    test, history update). Output handling is left out (no t_eval)."""
+    """Split kvrod's wall time into residual, Jacobian, LU, Newton solves (condensed band
+    solve and updates), the drive (loads re-applied at a new t) and the integrator's own
+    arithmetic (predictor, coefficients, error test, history, weights, norms, the loop).
+
+    The parts are timed inside the compiled step loop (``timing`` in bdf_core.c: two
+    clock reads per call); output handling is left out (no t_eval). The Python path of
+    the same algorithm (same steps) is timed beside it for comparison."""
+    from runtime.solvers._bdf_c import CoreStruct
     from runtime.solvers.bdf import BDF
 
     r = rod(N, T)
     m = r.model
-    timer = _Timer()
-    prob = _TimedProblem(m, timer)
-    drive = m.drive
-    if drive is not None:
-        m.drive = _TimedDrive(drive, timer)
-    try:
-        t0 = time.perf_counter()
-        s = BDF(prob, 0.0, r.y0, r.yp0, T, rtol=rtol, atol=r.atol(rtol))
-        if s._c is not None:
-            s._c = _TimedLib(s._c, timer)
-        else:
-            timer.seconds["lu"] = timer.seconds["newton_solve_update"] = 0.0
-        while s.status == "running":
-            s.step()
-        total = time.perf_counter() - t0
-    finally:
-        m.drive = drive
-    parts = dict(timer.seconds)
-    parts.setdefault("drive", 0.0)
-    # the drive runs inside residual and Jacobian calls: report it apart
-    inside = parts["residual"] + parts["jacobian"]
-    if inside > 0:
-        for k in ("residual", "jacobian"):
-            parts[k] -= parts["drive"] * parts[k] / inside
-    parts["python_integrator"] = total - sum(parts.values())
-    return {"N": N, "T": T, "rtol": rtol, "total": total, "seconds": parts,
-            "calls": timer.calls, "counters": s.counters,
-            "us_per_step": 1e6 * total / s.counters["nstep"],
-            "note": "timer wrappers add about 0.3 us per call to the totals; the drive's "
-                    "time is split off residual and Jacobian in proportion"}
+    t0 = time.perf_counter()
+    sc = BDF(m, 0.0, r.y0, r.yp0, T, rtol=rtol, atol=r.atol(rtol))
+    if sc.core is None:
+        raise RuntimeError("no compiled step loop (no C compiler)")
+    sc.core.s.timing = 1
+    while sc.status == "running":
+        sc.advance(T)
+    total_c = time.perf_counter() - t0
+    parts = dict(zip(CoreStruct.SECTIONS, sc.core.s.sec, strict=True))
+    parts.pop("energies")
+    parts["integrator"] = max(total_c - sum(parts.values()), 0.0)
+
+    t0 = time.perf_counter()
+    s = BDF(m, 0.0, r.y0, r.yp0, T, rtol=rtol, atol=r.atol(rtol), compiled_loop=False)
+    while s.status == "running":
+        s.step()
+    total_py = time.perf_counter() - t0
+    if s.counters != sc.counters:
+        raise RuntimeError(f"the compiled loop and the Python path took different steps: "
+                           f"{sc.counters} != {s.counters}")
+    return {"N": N, "T": T, "rtol": rtol, "total": total_c, "seconds": parts,
+            "counters": sc.counters, "us_per_step": 1e6 * total_c / sc.counters["nstep"],
+            "python_path": {"total": total_py,
+                            "us_per_step": 1e6 * total_py / s.counters["nstep"]},
+            "note": "parts timed inside the compiled loop (two clock reads per call); "
+                    "integrator = total minus parts: predictor, coefficients, error test, "
+                    "history, weights, norms, the loop itself"}

@@ -47,9 +47,9 @@ FILES = ("bdf_core.c", "bdf_helpers.c")
 SOURCES = {name: Path(__file__).with_name(name).read_text() for name in FILES}
 SOURCE = "".join(SOURCES.values())
 
-# -ffp-contract=off: no fused multiply-adds, so that the C step loop rounds like the
-# NumPy path of bdf.py (the two are compared step by step in the tests)
-_CFLAGS = ("-O2", "-fPIC", "-shared", "-std=c99", "-ffp-contract=off")
+# Flags as for the rod kernels (runtime/model/build.py: -O3, -march=native with the host
+# CPU in the cache key); -ffp-contract=off matters here too: no fused multiply-adds, so
+# the C step loop rounds like the NumPy path of bdf.py (compared step by step in tests).
 _lib: ctypes.CDLL | None = None
 _tried = False
 
@@ -60,8 +60,11 @@ def _compile(cc: str, dest: Path) -> None:
         for name, text in SOURCES.items():
             (Path(tmp) / name).write_text(text)
         out = Path(tmp) / dest.name
-        subprocess.run([cc, *_CFLAGS, str(Path(tmp) / FILES[0]), "-o", str(out), "-lm"],
-                       check=True, capture_output=True)
+        from runtime.model import build
+
+        proc = build.run_compiler([str(Path(tmp) / FILES[0]), "-o", str(out), "-lm"], cc)
+        if proc.returncode != 0:
+            raise subprocess.SubprocessError(proc.stderr)
         os.replace(out, dest)
 
 
@@ -76,7 +79,8 @@ def load() -> ctypes.CDLL | None:
     cc = build.find_compiler()
     if cc is None:
         return None
-    key = hashlib.sha256((SOURCE + cc + " ".join(_CFLAGS)).encode()).hexdigest()[:16]
+    key = hashlib.sha256((SOURCE + " ".join(build.compile_command(cc)) + build.host_id())
+                         .encode()).hexdigest()[:16]
     path = build.cache_dir() / f"kvrod_bdf_{key}.so"
     try:
         if not path.exists():
@@ -340,4 +344,8 @@ class CoreStruct(ctypes.Structure):
         + _fields(_P, "wy", "wyp")
         + _fields(_I, "nsamp", "m_out", "k_out", "rec_w")
         + _fields(_P, "samp_idx", "t_out", "rec", "sy", "syp")
+        + _fields(_I, "timing")
+        + _fields(_D * 6, "sec")
     )
+    #: names of the entries of ``sec`` (seconds per part when ``timing`` is set)
+    SECTIONS = ("residual", "jacobian", "lu", "newton_solve_update", "energies", "drive")

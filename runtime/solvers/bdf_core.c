@@ -14,6 +14,8 @@
    kvrod_jacobian_band, kvrod_energies on a kvrod_rod struct), or ctypes callbacks into
    Python for any other problem. Loads that change with time are re-applied by a
    callback ("drive") only when t leaves the interval on which they are constant. */
+#define _POSIX_C_SOURCE 199309L     /* clock_gettime under -std=c99 */
+#include <time.h>
 #include "bdf_helpers.c"
 
 typedef int (*kv_res_fn)(const void *ctx, double t, const double *y, const double *yp,
@@ -91,7 +93,23 @@ typedef struct {
     const double *t_out;
     double *rec;                /* m_out x rec_w */
     double *sy, *syp;           /* work: n each */
+    /* seconds spent in: residual, Jacobian, LU, Newton solves, energies, drive (when
+       timing is set; for benchmarks: two clock reads per call) */
+    int timing;
+    double sec[6];
 } kv_ida;
+
+enum { SEC_RES, SEC_JAC, SEC_LU, SEC_NEWTON, SEC_EN, SEC_DRIVE };
+
+static double now(const kv_ida *S)
+{
+    if (!S->timing) return 0.0;
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+#define TIC(S) double tic_ = now(S)
+#define TOC(S, k) do { if ((S)->timing) (S)->sec[k] += now(S) - tic_; } while (0)
 
 size_t kv_ida_sizeof(void) { return sizeof(kv_ida); }
 
@@ -111,9 +129,11 @@ static int drive_to(kv_run *R, double t)
 {
     kv_ida *S = R->S;
     if (!S->drive || (t >= S->drive_lo && t < S->drive_hi) || t == S->drive_t) return 0;
+    TIC(S);
     USER_MODE(R);
     int rc = S->drive(t);
     CORE_MODE(R);
+    TOC(S, SEC_DRIVE);
     if (rc == 0) S->drive_t = t;
     return rc;
 }
@@ -122,9 +142,11 @@ static int call_res(kv_run *R, double t, const double *y, const double *yp, doub
 {
     kv_ida *S = R->S;
     if (drive_to(R, t)) return 1;
+    TIC(S);
     USER_MODE(R);
     int rc = S->res(S->ctx, t, y, yp, out);
     CORE_MODE(R);
+    TOC(S, SEC_RES);
     S->nfev++;
     return rc;
 }
@@ -133,9 +155,11 @@ static int call_jac(kv_run *R, double t, double cj)
 {
     kv_ida *S = R->S;
     if (drive_to(R, t)) return 1;
+    TIC(S);
     USER_MODE(R);
     int rc = S->jac(S->ctx, t, S->yy, S->ypw, 1.0, cj, S->ldab, S->ab);
     CORE_MODE(R);
+    TOC(S, SEC_JAC);
     S->njev++;
     return rc;
 }
@@ -154,17 +178,21 @@ static int call_en(kv_run *R, int m, const double *ts, const double *ys, const d
                 steady = 0;
     int rc = 0;
     if (steady) {
+        TIC(S);
         USER_MODE(R);
         rc = S->en(S->ctx, m, ts, ys, yps, out);
         CORE_MODE(R);
+        TOC(S, SEC_EN);
         return rc;
     }
     for (int i = 0; i < m && rc == 0; ++i) {
         if (drive_to(R, ts[i])) return 1;
+        TIC(S);
         USER_MODE(R);
         rc = S->en(S->ctx, 1, ts + i, ys + (size_t)i * S->n, yps + (size_t)i * S->n,
                    out + (size_t)i * KV_NEN);
         CORE_MODE(R);
+        TOC(S, SEC_EN);
     }
     return rc;
 }
@@ -247,15 +275,23 @@ static double set_coeffs(kv_ida *S)     /* IDASetCoeffs; returns ck */
     return ck;
 }
 
-static void predict(kv_ida *S)           /* IDAPredict, into the Newton iterates */
+/* IDAPredict, into the Newton iterates: yy = sum_j phi_j, ypw = sum_j gamma_j phi_j,
+   summed in j order per component (as bdf.py's _predict) in one pass over memory */
+static void predict(kv_ida *S)
 {
     const int n = S->n, kk = S->kk;
-    double *yy = S->yy, *ypw = S->ypw;
-    memcpy(yy, PHI(0), sizeof(double) * (size_t)n);
-    memset(ypw, 0, sizeof(double) * (size_t)n);
-    for (int j = 1; j <= kk; ++j) {
-        const double *p = PHI(j), g = S->gamma[j];
-        for (int q = 0; q < n; ++q) { yy[q] += p[q]; ypw[q] += g * p[q]; }
+    double *restrict yy = S->yy, *restrict ypw = S->ypw;
+    const double *restrict p0 = PHI(0);
+    const double *g = S->gamma;
+    for (int q = 0; q < n; ++q) {
+        double a = p0[q], b = 0.0;
+        for (int j = 1; j <= kk; ++j) {
+            const double v = PHI(j)[q];
+            a += v;
+            b += g[j] * v;
+        }
+        yy[q] = a;
+        ypw[q] = b;
     }
 }
 
@@ -275,8 +311,10 @@ static int setup(kv_run *R, double t)
     kv_ida *S = R->S;
     if (call_jac(R, t, S->cj)) return -1;
     int info;
+    TIC(S);
     if (S->cond) info = kv_cond_factor(S->cond, S->ab);   /* J stays in ab */
     else info = kv_gbtrf(S->n, S->kl, S->ku, S->ab, S->ldab, S->ipiv, S->prof);
+    TOC(S, SEC_LU);
     S->nlu++;
     S->cjold = S->cj;
     S->cjratio = 1.0;
@@ -321,12 +359,14 @@ static int nls(kv_run *R, double tnew)   /* IDANls: simplified Newton for ee */
         int m = 0;
         for (;;) {
             double delnrm;
+            TIC(S);
             if (S->cond)
                 delnrm = kv_cond_newton(S->cond, S->ab, S->res_v, scale, S->ewt, S->ee,
                                         S->yy, S->ypw, cj);
             else
                 delnrm = kv_newton(n, S->kl, S->ku, S->ab, S->ldab, S->ipiv, S->prof,
                                    S->res_v, scale, S->ewt, S->ee, S->yy, S->ypw, cj);
+            TOC(S, SEC_NEWTON);
             if (!isfinite(delnrm)) { S->fail_t = tnew; return NLS_NONFINITE; }
             S->nni++;
             if (m == 0) {
@@ -353,21 +393,32 @@ static int test_error(kv_ida *S, double ck, double *err)
 {
     const int kk = S->kk, n = S->n;
     const double *sigma = S->sigma, *w = S->ewt_err, *ee = S->ee;
-    double enorm_k = wrms(n, ee, w);
+    /* the three weighted norms of ee, phi_k + ee and phi_k-1 + phi_k + ee in one pass
+       (each sum in component order, as kv_wrms) */
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+    {
+        const double *pk = PHI(kk), *pk1 = PHI(kk > 1 ? kk - 1 : kk);
+        for (int q = 0; q < n; ++q) {
+            const double e = ee[q], wq = w[q];
+            double t = e * wq;
+            s0 += t * t;
+            const double d1 = pk[q] + e;
+            t = d1 * wq;
+            s1 += t * t;
+            t = (d1 + pk1[q]) * wq;
+            s2 += t * t;
+        }
+    }
+    double enorm_k = n > 0 ? sqrt(s0 / n) : 0.0;
     err[0] = sigma[kk] * enorm_k;
     double terr_k = (kk + 1) * err[0];
     err[1] = err[2] = 0.0;
     S->knew = kk;
     if (kk > 1) {
-        double *delta = S->res_v;     /* free here: it held the last Newton correction */
-        const double *pk = PHI(kk);
-        for (int q = 0; q < n; ++q) delta[q] = pk[q] + ee[q];
-        err[1] = sigma[kk - 1] * wrms(n, delta, w);
+        err[1] = sigma[kk - 1] * (n > 0 ? sqrt(s1 / n) : 0.0);
         double terr_km1 = kk * err[1];
         if (kk > 2) {
-            const double *pk1 = PHI(kk - 1);
-            for (int q = 0; q < n; ++q) delta[q] += pk1[q];
-            err[2] = sigma[kk - 2] * wrms(n, delta, w);
+            err[2] = sigma[kk - 2] * (n > 0 ? sqrt(s2 / n) : 0.0);
             double terr_km2 = (kk - 1) * err[2];
             if ((terr_km1 > terr_km2 ? terr_km1 : terr_km2) <= terr_k) S->knew = kk - 1;
         } else if (terr_km1 <= 0.5 * terr_k) {
@@ -475,23 +526,29 @@ static void complete_step(kv_ida *S, double tnew, double err_k, double err_km1)
             S->hh = hnew;
         }
     }
+    /* the history update (phi_ku+1 = ee, phi_ku += ee, phi_j += phi_j+1 downwards) and
+       the new weights, in one pass */
     const int ku = S->kused;
-    if (ku < mo) memcpy(PHI(ku + 1), ee, sizeof(double) * (size_t)n);
-    {
-        double *p = PHI(ku);
-        for (int q = 0; q < n; ++q) p[q] += ee[q];
+    double *sw = S->y; S->y = S->yy; S->yy = sw;       /* accept the iterate: swap */
+    sw = S->yp; S->yp = S->ypw; S->ypw = sw;
+    const double *restrict y = S->y, *restrict atol = S->atol, rtol = S->rtol;
+    double *restrict ewt = S->ewt;
+    for (int q = 0; q < n; ++q) {
+        const double e = ee[q];
+        if (ku < mo) PHI(ku + 1)[q] = e;
+        double v = PHI(ku)[q] + e;
+        PHI(ku)[q] = v;
+        for (int j = ku - 1; j >= 0; --j) {
+            v = PHI(j)[q] + v;
+            PHI(j)[q] = v;
+        }
+        ewt[q] = 1.0 / (fabs(y[q]) * rtol + atol[q]);
     }
-    for (int j = ku - 1; j >= 0; --j) {
-        double *p = PHI(j);
-        const double *p1 = PHI(j + 1);
-        for (int q = 0; q < n; ++q) p[q] += p1[q];
-    }
+    if (S->errmask)
+        for (int q = 0; q < n; ++q) S->ewt_err[q] = ewt[q] * S->errmask[q];
     S->t_old = S->t;
     S->t = tnew;
     S->started = 1;
-    double *sw = S->y; S->y = S->yy; S->yy = sw;       /* accept the iterate: swap */
-    sw = S->yp; S->yp = S->ypw; S->ypw = sw;
-    update_weights(S);
 }
 
 /* one accepted step (bdf.py's _step_impl); 0 or a KV_FAIL_ / KV_CALLBACK / KV_NONFINITE */
