@@ -78,6 +78,10 @@ from runtime.solvers.integrator import consistent_initial
 #: bump when the generated functions change for the same inputs (invalidates the cache)
 BUILDER_VERSION = "1"
 CFLAGS = ("-O2", "-march=native", "-fPIC", "-shared")
+#: the kernels build gets the flags kvrod compiles the same kernels with (runtime/model/
+#: build.py): equal functions on both sides (the flat build keeps -O2: straight-line C of
+#: megabytes gains nothing from -O3 and compiles for minutes)
+KERNEL_CFLAGS = ("-O3", "-march=native", "-ffp-contract=off", "-fPIC", "-shared")
 FORMS = ("ode", "dae")
 BUILDS = ("flat", "kernels", "map", "sx", "mx")
 KERNELS_C = Path(__file__).resolve().with_name("idas_kernels.c")
@@ -223,14 +227,15 @@ def _cache_dir(cache_dir: Path | None) -> Path:
                 or build.cache_dir() / "bench-idas")
 
 
-def _compile(cc: str, sources: list[Path], so: Path, include: Path | None = None) -> float:
+def _compile(cc: str, sources: list[Path], so: Path, include: Path | None = None,
+             flags: tuple[str, ...] = CFLAGS) -> float:
     """gcc the sources into ``so`` (atomically: temporary name, then rename); seconds."""
     so.parent.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory(dir=so.parent, prefix="build_") as tmp:
         out = Path(tmp) / so.name
         inc = ["-I", str(include)] if include else []
-        subprocess.run([cc, *CFLAGS, *inc, *map(str, sources), "-o", str(out), "-lm"],
+        subprocess.run([cc, *flags, *inc, *map(str, sources), "-o", str(out), "-lm"],
                        check=True, capture_output=True)
         os.replace(out, so)
     return time.perf_counter() - t0
@@ -247,11 +252,11 @@ def kernels_library(cache_dir: Path | None = None) -> tuple[Path, float, bool]:
     h = hashlib.sha256()
     for f in (*sources, gdir / "rod_kernels.h", gdir / "rod_assembly.h"):
         h.update(f.read_bytes())
-    h.update("\0".join([BUILDER_VERSION, cc, *CFLAGS]).encode())
+    h.update("\0".join([BUILDER_VERSION, cc, *KERNEL_CFLAGS, build.host_id()]).encode())
     so = _cache_dir(cache_dir) / f"rod_ode_kernels_{h.hexdigest()[:32]}.so"
     if so.exists():
         return so, 0.0, True
-    return so, _compile(cc, sources, so, include=gdir), False
+    return so, _compile(cc, sources, so, include=gdir, flags=KERNEL_CFLAGS), False
 
 
 _COPIES: list[str] = []

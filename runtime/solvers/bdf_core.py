@@ -18,14 +18,14 @@ from __future__ import annotations
 
 import ctypes
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from . import _bdf_c
 
-if TYPE_CHECKING:
-    from .bdf import BDF
+#: a runtime.solvers.bdf.BDF (not imported here: bdf.py imports this module)
+BDF = Any
 
 
 class CKernels:
