@@ -147,6 +147,7 @@ class RodModel:
             if arrays.held(end):     # the velocity is prescribed (algebraic row)
                 self.differential[self.v_index[i]] = False
         self._pattern: sp.csc_matrix | None = None
+        self._band_pattern: np.ndarray | None = None
         self._pattern_flat = np.zeros(0, dtype=np.intp)
         self.at(0.0)
 
@@ -304,6 +305,13 @@ class RodModel:
             assert e0 >= 0 and r0 >= 0 and k0 >= 0 and es <= 4 and ks <= 4
         return blocks
 
+    def condensation_cells(self) -> list[int]:
+        """First state index of each cell of the layout (cell 0: node 0 and joint 0; cell
+        i: segment i, node i, joint i). Couplings are nearest-neighbour, so the Newton
+        systems condensed by :meth:`condensation_blocks` are block tridiagonal in these
+        cells (``CondensedNewton`` checks it on :meth:`band_pattern`)."""
+        return [0] + [int(self.p_index[i][0]) for i in range(self.N)]
+
     def describe_dof(self, index: int) -> str:
         """Human-readable name of state/residual component ``index``."""
         return L.describe_index(self.N, index, self.branches)
@@ -400,17 +408,20 @@ class RodModel:
         m.eliminate_zeros()
         return m
 
-    def sparsity(self) -> sp.csc_matrix:
-        """Structural pattern of dF/dy + c dF/dy' (CSC of ones), fixed for this model.
+    def band_pattern(self) -> np.ndarray:
+        """Structural pattern of dF/dy + c dF/dy' in LAPACK band storage ((ldab, n) bool,
+        Fortran order; rows 0..kl-1, the LU's fill-in room, False), fixed for this model.
 
         Found by evaluating the banded Jacobian at two random states (loads with follower
-        parts present keep their entries), so no entry vanishes by accident.
+        parts present keep their entries), so no entry vanishes by accident. No SciPy
+        (unlike :meth:`sparsity`): the integrator's setup uses it.
         """
-        if self._pattern is None:
+        if self._band_pattern is None:
             rng = np.random.default_rng(12345)
             acc = np.zeros((self.ldab, self.n), order="F")
             ab = np.zeros((self.ldab, self.n), order="F")
             saved = self.arrays.copy()
+            driven = (self._key, self._steady)   # what the restored arrays hold
             a = self.arrays
             for name in ("f_follower",):
                 a.node_load(name)[:] = rng.uniform(0.5, 1.5, a.node_load(name).shape)
@@ -425,7 +436,15 @@ class RodModel:
             finally:
                 for name in ("par", "seg", "jnt", "nload", "sload"):
                     getattr(a, name)[...] = getattr(saved, name)
-            m = self.band_to_csc(acc, self.kl, self.ku)
+                self._key, self._steady = driven
+            self._band_pattern = acc != 0.0
+        return self._band_pattern.copy(order="F")
+
+    def sparsity(self) -> sp.csc_matrix:
+        """Structural pattern of dF/dy + c dF/dy' (CSC of ones), fixed for this model
+        (that of :meth:`band_pattern`)."""
+        if self._pattern is None:
+            m = self.band_to_csc(self.band_pattern().astype(float), self.kl, self.ku)
             m.sort_indices()
             m.data[:] = 1.0
             cols = np.repeat(np.arange(self.n), np.diff(m.indptr))

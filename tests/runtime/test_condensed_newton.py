@@ -1,9 +1,13 @@
 """The condensed Newton solve (kinematic rows eliminated: v by phi' = v, p by
 p' = 1/2 p*(0, Omega)) equals the solve with the full band LU, on the rod's own iteration
 matrices J = dF/dy + cj dF/dy' at random states, for several ends, a Maxwell rod and a
-range of cj; and it is smaller."""
+range of cj; and it is smaller. The rod's condensed matrix is block tridiagonal in its
+cells and takes the block LU path (for every end and material); hand-made systems that
+are not block tridiagonal take the band path; singular matrices are reported."""
 
 from __future__ import annotations
+
+import ctypes
 
 import numpy as np
 import pytest
@@ -13,9 +17,22 @@ from tests.rods import MAXWELL, random_state, rod_model, with_internal_strains
 
 pytestmark = pytest.mark.skipif(_bdf_c.load() is None, reason="no C compiler")
 
+ENDS = [dict(), dict(end="clamped"), dict(start="pinned", end="pinned"),
+        dict(start="free", end="clamped"), dict(start="free", end="free")]
 
-@pytest.mark.parametrize("kw", [dict(), dict(end="clamped"), dict(start="pinned", end="pinned"),
-                                dict(start="free", end="clamped"), dict(tau=None, **MAXWELL)])
+
+def _rod_system(kw, cj, seed=2, N=9):
+    rng = np.random.default_rng(seed)
+    m = rod_model(N, **kw)
+    y = random_state(m, rng)
+    if m.branches:
+        y = with_internal_strains(m, y, rng)
+    ab = np.zeros((m.ldab, m.n), order="F")
+    m.jacobian_band(0.0, y, rng.standard_normal(m.n), cj, ab)
+    return m, ab, rng
+
+
+@pytest.mark.parametrize("kw", ENDS + [dict(tau=None, **MAXWELL)])
 def test_condensed_solve_equals_the_full_solve(kw):
     rng = np.random.default_rng(2)
     m = rod_model(9, **kw)
@@ -30,8 +47,221 @@ def test_condensed_solve_equals_the_full_solve(kw):
         ab = np.zeros((m.ldab, m.n), order="F")
         m.jacobian_band(0.0, y, yp, cj, ab)
         b = rng.standard_normal(m.n)
+        full, info = _bdf_c.band_solve(ab.copy(order="F"), m.kl, m.ku, b)
+        ab[:m.kl] = np.nan          # the LU's fill-in room: not part of J, never read
         assert cond.factor(ab) == 0
         x = cond.solve(ab, b)
-        full, info = _bdf_c.band_solve(ab.copy(order="F"), m.kl, m.ku, b)
         assert info == 0
         np.testing.assert_allclose(x, full, rtol=1e-9, atol=1e-11 * np.abs(full).max())
+
+
+@pytest.mark.parametrize("kw", ENDS + [dict(tau=None, **MAXWELL),
+                                       dict(tau=None, start="pinned", end="clamped", **MAXWELL)])
+@pytest.mark.parametrize("N", [1, 2, 9])
+def test_rods_take_the_block_path(kw, N):
+    m = rod_model(N, **kw)
+    cond = _bdf_c.CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
+    assert cond.block_tridiagonal, cond.band_reason
+    assert cond.band_reason is None
+    kv6 = cond._keep["kv6"]
+    assert kv6.size == N + 1
+    # the fixed-size kernels serve the Kelvin-Voigt interior cells (not the ends, whose
+    # neighbours differ, nor the 30-unknown cells of a Maxwell rod with B = 4)
+    assert kv6[2:-1].sum() == (0 if m.branches else N - 2 if N > 2 else 0)
+    assert not kv6[[0, 1, -1]].any()
+    # the kinematic blocks phi' = v are recognised as diagonal
+    assert _bdf_c.CondensedNewton(cond._lib, m.n, m.kl, m.ku, m.ldab,
+                                  m.condensation_blocks()).block_tridiagonal is False
+    diag = cond._keep["diag"]
+    assert diag.sum() == N + 1 and diag[::2].all()    # v blocks (sorted: v0, p1, v1, ...)
+
+
+@pytest.mark.parametrize("kw", [dict(), dict(tau=None, **MAXWELL)])
+def test_block_and_band_paths_agree_at_length(kw):
+    """N = 40: many interior (fixed-size) cells; both paths against the full band LU."""
+    m, ab, rng = _rod_system(kw, 1e2, seed=5, N=40)
+    block = _bdf_c.CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
+    band = _bdf_c.CondensedNewton(block._lib, m.n, m.kl, m.ku, m.ldab, m.condensation_blocks())
+    assert block.block_tridiagonal and not band.block_tridiagonal
+    b = rng.standard_normal(m.n)
+    full, info = _bdf_c.band_solve(ab.copy(order="F"), m.kl, m.ku, b)
+    assert info == 0
+    for cond in (block, band):
+        assert cond.factor(ab) == 0
+        np.testing.assert_allclose(cond.solve(ab, b), full, rtol=1e-9,
+                                   atol=1e-11 * np.abs(full).max())
+
+
+def test_fused_newton_update_matches_solve_then_update():
+    """kv_cond_newton (solve, scaling, weighted norm and updates fused per cell) equals
+    the solve followed by the update in NumPy."""
+    m, ab, rng = _rod_system({}, 3e2, seed=7, N=12)
+    cond = _bdf_c.CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
+    assert cond.factor(ab) == 0
+    res = rng.standard_normal(m.n)
+    ewt = rng.uniform(0.5, 2.0, m.n)
+    ee, yy, ypw = (rng.standard_normal(m.n) for _ in range(3))
+    scale, cj = 0.7, 3e2
+    d = scale * cond.solve(ab, res)
+    want = (np.sqrt(np.mean((d * ewt) ** 2)), d, ee - d, yy - d, ypw - cj * d)
+    r, e, y_, yp_ = res.copy(), ee.copy(), yy.copy(), ypw.copy()
+    P = lambda a: a.ctypes.data  # noqa: E731
+    nrm = cond._lib.kv_cond_newton(cond.ptr, P(ab), P(r), scale, P(ewt), P(e), P(y_),
+                                   P(yp_), cj)
+    np.testing.assert_allclose(nrm, want[0], rtol=1e-12)
+    for got, ref in zip((r, e, y_, yp_), want[1:], strict=True):
+        np.testing.assert_allclose(got, ref, rtol=1e-12, atol=1e-14 * np.abs(ref).max())
+
+
+def test_raw_entry_points_for_an_including_step_loop():
+    """cond_factor_raw / cond_solve_raw (no floating-point mode change) are exported and
+    give what kv_cond_factor / kv_cond_solve give."""
+    m, ab, rng = _rod_system({}, 1e3)
+    cond = _bdf_c.CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
+    lib = cond._lib
+    raw_f, raw_s = lib.cond_factor_raw, lib.cond_solve_raw
+    raw_f.argtypes, raw_f.restype = [ctypes.c_void_p, ctypes.c_void_p], ctypes.c_int
+    raw_s.argtypes, raw_s.restype = [ctypes.c_void_p] * 3, None
+    b = rng.standard_normal(m.n)
+    assert raw_f(cond.ptr, ab.ctypes.data) == 0
+    x = b.copy()
+    raw_s(cond.ptr, ab.ctypes.data, x.ctypes.data)
+    assert cond.factor(ab) == 0
+    np.testing.assert_array_equal(x, cond.solve(ab, b))
+
+
+# ---- hand-made systems ---------------------------------------------------------------
+
+def _cell_system(sizes, rng, far=False):
+    """A random system on cells of the given sizes, each starting with a kinematic block:
+    rows 0..e-1 of a cell involve only its columns 0..e-1 (eliminated) and e..2e-1
+    (kept), e = 2 or 3; every other row couples to the cells next to it (and, with far,
+    one row also to the cell after next). The kept part of each cell's diagonal block is
+    a scaled cyclic permutation (zero diagonal) plus small noise, and that of cell 4 has
+    neither noise nor couplings (its diagonal block in the condensed matrix is the
+    permutation itself): their elimination has to pivot. Returns the dense matrix, its
+    band storage (NaN in the fill-in room, which is not part of the matrix), kl, ku, the
+    blocks, the cells and the pattern."""
+    starts = np.concatenate(([0], np.cumsum(sizes)[:-1]))
+    n = int(np.sum(sizes))
+    A = np.zeros((n, n))
+    blocks = []
+    for c, (s, z) in enumerate(zip(starts, sizes, strict=True)):
+        e = 2 + c % 2
+        lo, hi = starts[max(c - 1, 0)], starts[c + 2] if c + 2 < len(sizes) else n
+        if c != 4:
+            A[s + e:s + z, lo:hi] = 1e-3 * rng.standard_normal((z - e, hi - lo))
+        P = np.roll(np.eye(z - e), 1, axis=1)
+        A[s + e:s + z, s + e:s + z] += 4.0 * P
+        A[s:s + e, s:s + e] = 2.0 * np.eye(e) + 0.3 * rng.standard_normal((e, e))
+        A[s:s + e, s + e:s + 2 * e] = rng.standard_normal((e, e))
+        blocks.append((int(s), e, int(s), int(s + e), e))
+    if far:
+        c = len(sizes) // 2
+        A[starts[c] + sizes[c] - 1, starts[c + 2] + sizes[c + 2] - 1] = 0.5
+    rows, cols = np.nonzero(A)
+    kl, ku = int((rows - cols).max()), int((cols - rows).max())
+    ab = np.zeros((2 * kl + ku + 1, n), order="F")
+    ab[kl + ku + rows - cols, cols] = A[rows, cols]
+    pattern = ab != 0
+    ab[:kl] = np.nan
+    return A, ab, kl, ku, blocks, [int(s) for s in starts], pattern
+
+
+SIZES = [5, 7, 6, 8, 7, 7, 5, 9, 6]
+
+
+@pytest.mark.parametrize("sizes", [SIZES, [8, 9] * 4])
+def test_hand_made_block_tridiagonal_system_takes_the_block_path(sizes):
+    """Cells of various sizes (the generic kernels) with pivoting inside the blocks; and
+    cells of 6 kept unknowns each that are not the rod's (other blocks)."""
+    rng = np.random.default_rng(11)
+    A, ab, kl, ku, blocks, cells, pattern = _cell_system(sizes, rng)
+    lib = _bdf_c.load()
+    cond = _bdf_c.CondensedNewton(lib, A.shape[0], kl, ku, ab.shape[0], blocks, cells=cells,
+                                  pattern=pattern)
+    assert cond.block_tridiagonal, cond.band_reason
+    assert not cond._keep["kv6"].any()
+    b = rng.standard_normal(A.shape[0])
+    assert cond.factor(ab) == 0
+    np.testing.assert_allclose(cond.solve(ab, b), np.linalg.solve(A, b), rtol=1e-10,
+                               atol=1e-12)
+
+
+@pytest.mark.parametrize("case", ["no cells", "far coupling", "no pattern", "cell splits a block"])
+def test_systems_that_are_not_block_tridiagonal_take_the_band_path(case):
+    rng = np.random.default_rng(12)
+    A, ab, kl, ku, blocks, cells, pattern = _cell_system(SIZES, rng, far=case == "far coupling")
+    kw = dict(cells=cells, pattern=pattern)
+    if case == "no cells":
+        kw = dict(pattern=pattern)
+    elif case == "no pattern":            # the band alone spans more than a cell each way
+        kw = dict(cells=cells)
+    elif case == "cell splits a block":
+        kw = dict(cells=[0] + [c + 1 for c in cells[1:]], pattern=pattern)
+    cond = _bdf_c.CondensedNewton(_bdf_c.load(), A.shape[0], kl, ku, ab.shape[0], blocks, **kw)
+    assert not cond.block_tridiagonal
+    assert cond.band_reason
+    b = rng.standard_normal(A.shape[0])
+    assert cond.factor(ab) == 0
+    np.testing.assert_allclose(cond.solve(ab, b), np.linalg.solve(A, b), rtol=1e-10,
+                               atol=1e-12)
+
+
+def test_a_pattern_contradicting_the_blocks_is_refused():
+    rng = np.random.default_rng(13)
+    A, ab, kl, ku, blocks, cells, pattern = _cell_system(SIZES, rng)
+    pattern[kl + ku + 0 - 6, 6] = True           # row 0 (a kinematic row) and column 6
+    with pytest.raises(ValueError, match="outside the block"):
+        _bdf_c.CondensedNewton(_bdf_c.load(), A.shape[0], kl, ku, ab.shape[0], blocks,
+                               cells=cells, pattern=pattern)
+
+
+# ---- singular matrices ---------------------------------------------------------------
+
+@pytest.mark.parametrize("kw", [dict(), dict(tau=None, **MAXWELL)])
+def test_singular_matrices_are_reported(kw):
+    m, ab, _ = _rod_system(kw, 1e3)
+    cond = _bdf_c.CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
+    assert cond.block_tridiagonal
+    cs = cond._keep["cs"]
+    kv = m.kl + m.ku
+    # a kept row of cell 4 (Omega's first row: a momentum balance) vanishes: D_4 singular
+    i = int(m.omega_index[3][0])
+    j = np.arange(max(0, i - m.kl), min(m.n, i + m.ku + 1))
+    bad = ab.copy(order="F")
+    bad[kv + i - j, j] = 0.0
+    info = cond.factor(bad)
+    assert cs[4] < info <= cs[5]
+    # a non-finite entry
+    bad = ab.copy(order="F")
+    bad[kv, int(m.phi_index[5][1])] = np.nan
+    assert cond.factor(bad) != 0
+    # a singular kinematic block: the rows phi' = v lose v
+    bad = ab.copy(order="F")
+    v0 = int(m.v_index[6][0])
+    r0 = int(m.phi_index[6][0])
+    for q in range(3):
+        bad[kv + r0 + np.arange(3) - (v0 + q), v0 + q] = 0.0
+    assert cond.factor(bad) == -1
+    # and a good matrix factorises again afterwards
+    assert cond.factor(ab) == 0
+
+
+def test_singular_hand_made_system_is_reported_on_the_block_path():
+    rng = np.random.default_rng(14)
+    A, ab, kl, ku, blocks, cells, pattern = _cell_system(SIZES, rng)
+    cond = _bdf_c.CondensedNewton(_bdf_c.load(), A.shape[0], kl, ku, ab.shape[0], blocks,
+                                  cells=cells, pattern=pattern)
+    assert cond.block_tridiagonal
+    # a kept row of cell 3 vanishes (and so does its row of the condensed matrix): D_3
+    # is exactly singular (as with LAPACK, only an exactly zero pivot is reported)
+    r = cells[3] + 5
+    bad = ab.copy(order="F")
+    j = np.arange(max(0, r - ku), min(A.shape[0], r + kl + 1))
+    bad[kl + ku + r - j, j] = 0.0
+    cs = cond._keep["cs"]
+    info = cond.factor(bad)
+    assert cs[3] < info <= cs[4]
+    _, band_info = _bdf_c.band_solve(bad.copy(order="F"), kl, ku, np.ones(A.shape[0]))
+    assert band_info > 0
