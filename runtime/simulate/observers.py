@@ -195,19 +195,20 @@ class Sampler:
         if self._core is None and self.energy.attach(solver):
             core = solver.core
             if core.enable_sampling(self.t_out, self.k_out,
-                                    np.concatenate([self.i_tip, self.i_start])):
+                                    np.concatenate([self.i_tip, self.i_start]), self._rows):
                 self._core = core
         return self._core is not None
 
+    def _rows(self, rows: np.ndarray) -> None:
+        """Rows [t, tip, start, T, W, int 2D, int P] from the compiled loop."""
+        a, b = 1 + self.i_tip.size, 1 + self.i_tip.size + self.i_start.size
+        self._record(rows[:, 0].copy(), rows[:, 1:a].copy(), rows[:, a:b].copy(),
+                     rows[:, b].copy(), rows[:, b + 1].copy(), rows[:, b + 2].copy(),
+                     rows[:, b + 3].copy())
+        self.k_out += rows.shape[0]
+
     def _collect(self) -> None:
-        k0, k1 = self.k_out, self._core.s.k_out
-        if k1 > k0:
-            rows = self._core.rec[k0:k1]
-            a, b = 1 + self.i_tip.size, 1 + self.i_tip.size + self.i_start.size
-            self._record(rows[:, 0].copy(), rows[:, 1:a].copy(), rows[:, a:b].copy(),
-                         rows[:, b].copy(), rows[:, b + 1].copy(), rows[:, b + 2].copy(),
-                         rows[:, b + 3].copy())
-            self.k_out = k1
+        self._core.flush_samples()
 
     def end(self, run: Run) -> None:
         if self._core is not None:

@@ -87,11 +87,14 @@ typedef struct {
     double dissipated, external_work;   /* J, up to t */
     double coef[6];             /* the last step's quadratics of 2D and P: c0, c1, c2 each */
     double *wy, *wyp;           /* work: 3 x n each */
-    /* samples on an output grid: rows [t, y[samp_idx]..., T, W, int 2D, int P] */
-    int nsamp, m_out, k_out, rec_w;
+    /* samples on an output grid t_out[0..m_out): rows [t, y[samp_idx]..., T, W, int 2D,
+       int P] for t_out[k_out], ... into a buffer of rec_cap rows, rec_n of them filled;
+       when it is full, flush() hands them to Python (which empties it: rec_n = 0) */
+    int nsamp, m_out, k_out, rec_w, rec_cap, rec_n;
     const int *samp_idx;
     const double *t_out;
-    double *rec;                /* m_out x rec_w */
+    double *rec;                /* rec_cap x rec_w */
+    kv_drive_fn flush;          /* called with t (unused) */
     double *sy, *syp;           /* work: n each */
     /* seconds spent in: residual, Jacobian, LU, Newton solves, energies, drive (when
        timing is set; for benchmarks: two clock reads per call) */
@@ -646,7 +649,13 @@ static int sample_step(kv_run *R)
         interp(S, 1, &ts, S->sy, S->syp);
         if (call_en(R, 1, &ts, S->sy, S->syp, e)) return 1;
         partial(S, ts, &d, &w);
-        double *row = S->rec + (size_t)S->k_out * (size_t)S->rec_w;
+        if (S->rec_n == S->rec_cap) {
+            USER_MODE(R);
+            int rc = S->flush(ts);
+            CORE_MODE(R);
+            if (rc || S->rec_n == S->rec_cap) return 1;
+        }
+        double *row = S->rec + (size_t)S->rec_n++ * (size_t)S->rec_w;
         row[0] = ts;
         for (int i = 0; i < S->nsamp; ++i) row[1 + i] = S->sy[S->samp_idx[i]];
         row[1 + S->nsamp] = e[0];

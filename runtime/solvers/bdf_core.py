@@ -207,22 +207,38 @@ class CoreLink:
         s.audit = 1
         return True
 
-    def enable_sampling(self, t_out: np.ndarray, k_out: int, indices: np.ndarray) -> bool:
+    #: rows of the sample buffer (handed to ``sink`` whenever full, and at every stop)
+    SAMPLE_ROWS = 1024
+
+    def enable_sampling(self, t_out: np.ndarray, k_out: int, indices: np.ndarray,
+                        sink) -> bool:
         """Record rows ``[t, y[indices]..., T, W, int 2D, int P]`` at the output times
-        ``t_out[k_out:]`` (needs the audit)."""
+        ``t_out[k_out:]`` (needs the audit); ``sink(rows)`` receives them (a view: copy
+        what you keep) when the buffer is full and at :meth:`flush_samples`."""
         s = self.s
         if not s.audit:
             return False
         self._t_out = np.ascontiguousarray(t_out, dtype=float)
         self._idx = np.ascontiguousarray(indices, dtype=np.int32)
-        self.rec = np.full((self._t_out.size, 5 + self._idx.size), math.nan)
+        self._rec = np.full((self.SAMPLE_ROWS, 5 + self._idx.size), math.nan)
+        self._sink = sink
         self._sy, self._syp = np.zeros(self._solver.n), np.zeros(self._solver.n)
         s.t_out, s.samp_idx, s.rec = (self._t_out.ctypes.data, self._idx.ctypes.data,
-                                      self.rec.ctypes.data)
+                                      self._rec.ctypes.data)
         s.sy, s.syp = self._sy.ctypes.data, self._syp.ctypes.data
-        s.nsamp, s.m_out, s.k_out, s.rec_w = self._idx.size, self._t_out.size, k_out, \
-            self.rec.shape[1]
+        s.nsamp, s.m_out, s.k_out = self._idx.size, self._t_out.size, k_out
+        s.rec_w, s.rec_cap, s.rec_n = self._rec.shape[1], self.SAMPLE_ROWS, 0
+        cb = _bdf_c.DRIVE_FN(self._guard(lambda t: self.flush_samples()))
+        self._keep.append(cb)
+        s.flush = ctypes.cast(cb, ctypes.c_void_p).value
         return True
+
+    def flush_samples(self) -> None:
+        """Hand the buffered sample rows to the sink and empty the buffer."""
+        s = self.s
+        if s.rec_n:
+            self._sink(self._rec[:s.rec_n])
+            s.rec_n = 0
 
     def set_watches(self, watches: list[tuple[int, float]]) -> None:
         """Stop after any step in which ``y[index]`` changes sign in ``direction`` (< 0:

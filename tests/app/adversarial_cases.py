@@ -794,7 +794,9 @@ def checkpoint_kept(ctx: Ctx, r: Result) -> str | None:
 # custom runs (signals, two processes, repetition)
 # --------------------------------------------------------------------------------------
 
-LONG_SIM = ("simulate", "cantilever", "--n-elements", "4", "--t-end", "1000")
+# "long": runs that a test interrupts must outlast it by far (the compiled step loop
+# integrates the 4-element rod at about 1000 simulated seconds per wall second)
+LONG_SIM = ("simulate", "cantilever", "--n-elements", "4", "--t-end", "20000")
 
 
 def _csv_text(ctx: Ctx) -> str:
@@ -843,20 +845,20 @@ STUDY_LONG = """scenario = "cantilever"
 [fixed]
 n_elements = 4
 [grid]
-t_end = [1000.0, 1001.0]
+t_end = [20000.0, 20001.0]
 """
 
 STUDY_SHORT_THEN_LONG = """scenario = "cantilever"
 [fixed]
 n_elements = 4
 [grid]
-t_end = [0.2, 1000.0]
+t_end = [0.2, 20000.0]
 """
 
 STUDY_DASK_LONG = """scenario = "cantilever"
 [fixed]
 n_elements = 4
-t_end = 1000.0
+t_end = 20000.0
 [grid]
 tau = [0.02, 0.04, 0.06, 0.08]
 """
