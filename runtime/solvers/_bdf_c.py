@@ -544,6 +544,7 @@ class CoreStruct(ctypes.Structure):
         + _fields(_P, "samp_idx", "t_out", "rec", "flush", "sy", "syp")
         + _fields(_I, "timing")
         + _fields(_D * 6, "sec")
+        + _fields(_I, "stop")
     )
     #: names of the entries of ``sec`` (seconds per part when ``timing`` is set)
     SECTIONS = ("residual", "jacobian", "lu", "newton_solve_update", "energies", "drive")

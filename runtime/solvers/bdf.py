@@ -473,11 +473,10 @@ class BDF:
     def _advance_core(self, t_stop: float, max_steps: int) -> int:
         core = self._core
         try:
-            code = core.advance(t_stop, max_steps)
+            code = core.advance(t_stop, max_steps)    # the state is pulled back either way
         except BaseException:
             self.status = "failed"
             raise
-        core.pull(self)
         if code >= 0:
             return code
         self.status = "failed"

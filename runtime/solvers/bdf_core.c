@@ -100,6 +100,7 @@ typedef struct {
        timing is set; for benchmarks: two clock reads per call) */
     int timing;
     double sec[6];
+    int stop;                   /* set by Python (a signal held in a callback): return */
 } kv_ida;
 
 enum { SEC_RES, SEC_JAC, SEC_LU, SEC_NEWTON, SEC_EN, SEC_DRIVE };
@@ -709,6 +710,7 @@ int kv_ida_advance(kv_ida *S, double t_stop, long long max_steps)
         if (S->direction * (S->t - S->t_bound) >= 0.0) { rc = KV_FINISHED; break; }
         if (S->watch_hit) { rc = KV_WATCH; break; }
         if (S->direction * (S->t - t_stop) >= 0.0) { rc = KV_TSTOP; break; }
+        if (S->stop) break;
     }
     USER_MODE(&R);
     return rc;

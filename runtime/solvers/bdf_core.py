@@ -10,14 +10,19 @@ solver, gives the C code the problem's functions and runs ``kv_ida_advance``:
   t leaves the interval on which they are constant;
 * any other problem (``residual``/``jacobian_band`` in Python) through ctypes callbacks.
 
-An exception raised inside a callback is kept and raised again once the C call returns
-(KeyboardInterrupt included): C code cannot unwind Python frames.
+An exception raised inside a callback is kept and raised again once the C call returns:
+C code cannot unwind Python frames. Signals (Ctrl-C, SIGTERM) are held while C runs
+with callbacks and delivered once it has returned: Python raises a signal's exception at
+whatever bytecode runs next, which may be the first line of a callback, before any
+``try`` can catch it; ctypes would print it and drop it.
 """
 
 from __future__ import annotations
 
 import ctypes
 import math
+import signal
+import threading
 from typing import Any
 
 import numpy as np
@@ -26,6 +31,35 @@ from . import _bdf_c
 
 #: a runtime.solvers.bdf.BDF (not imported here: bdf.py imports this module)
 BDF = Any
+
+#: the signals held while the compiled loop may call back into Python
+_HELD = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM") if hasattr(signal, name))
+
+
+def _call_holding_signals(s, fn, *args):
+    """``(fn(*args), signals received meanwhile)``, the signals' handlers not run yet; a
+    signal sets ``s.stop`` so that the compiled loop returns after its current step (only
+    the main thread can set handlers; elsewhere signals are not delivered to Python
+    code anyway)."""
+    if threading.current_thread() is not threading.main_thread():
+        return fn(*args), []
+    pending: list[int] = []
+
+    def hold(signum, frame):
+        pending.append(signum)
+        s.stop = 1
+
+    saved = []
+    try:
+        for sig in _HELD:
+            old = signal.getsignal(sig)
+            if old is not None:                  # None: a handler not set from Python
+                signal.signal(sig, hold)
+                saved.append((sig, old))
+        return fn(*args), pending
+    finally:
+        for sig, old in saved:
+            signal.signal(sig, old)
 
 
 class CKernels:
@@ -55,6 +89,7 @@ class CoreLink:
         self.ptr = ctypes.addressof(s)
         self._error: BaseException | None = None
         self._keep: list[Any] = []
+        self._callbacks = False      # some function is a Python callback (signals held)
         n = solver.n
         # every buffer the C code may hand to a callback, by address
         self._arrays: dict[int, np.ndarray] = {}
@@ -114,6 +149,7 @@ class CoreLink:
 
         cb = _bdf_c.DRIVE_FN(self._guard(go))
         self._keep.append(cb)
+        self._callbacks = True
         s.drive = ctypes.cast(cb, ctypes.c_void_p).value
         s.drive_lo = s.drive_hi = math.nan          # nothing is known to hold yet
 
@@ -131,6 +167,7 @@ class CoreLink:
         r = _bdf_c.RES_FN(self._guard(residual))
         j = _bdf_c.JAC_FN(self._guard(jacobian))
         self._keep += [r, j]
+        self._callbacks = True
         s.res = ctypes.cast(r, ctypes.c_void_p).value
         s.jac = ctypes.cast(j, ctypes.c_void_p).value
         s.en = None
@@ -173,19 +210,29 @@ class CoreLink:
         solver._fail_index = s.fail_index
 
     def advance(self, t_stop: float, max_steps: int) -> int:
-        """Run kv_ida_advance; returns its code (``_bdf_c.TSTOP`` ...). Re-raises the
-        exception of a callback."""
+        """Run kv_ida_advance and copy the state back into the solver; returns the code
+        (``_bdf_c.TSTOP`` ...). Re-raises the exception of a callback, then delivers the
+        signals held meanwhile (their handlers raise KeyboardInterrupt, Terminated)."""
         self._error = None
         s = self.s
         if s.drive:
             # Python code may have driven the loads to another time since the last call
             # (an observer evaluating the model at an output time): forget what held.
             s.drive_lo = s.drive_hi = s.drive_t = math.nan
-        code = self._lib.kv_ida_advance(self.ptr, t_stop, max_steps)
-        if self._error is not None:
-            exc, self._error = self._error, None
-            self.pull(self._solver)
-            raise exc
+        s.stop = 0
+        if self._callbacks:
+            code, held = _call_holding_signals(s, self._lib.kv_ida_advance, self.ptr, t_stop,
+                                               max_steps)
+        else:
+            code, held = self._lib.kv_ida_advance(self.ptr, t_stop, max_steps), ()
+        self.pull(self._solver)
+        try:
+            if self._error is not None:
+                exc, self._error = self._error, None
+                raise exc
+        finally:
+            for sig in held:
+                signal.raise_signal(sig)
         return code
 
     # -- audit, samples, watches --------------------------------------------------------
@@ -230,6 +277,7 @@ class CoreLink:
         s.rec_w, s.rec_cap, s.rec_n = self._rec.shape[1], self.SAMPLE_ROWS, 0
         cb = _bdf_c.DRIVE_FN(self._guard(lambda t: self.flush_samples()))
         self._keep.append(cb)
+        self._callbacks = True
         s.flush = ctypes.cast(cb, ctypes.c_void_p).value
         return True
 
