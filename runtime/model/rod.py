@@ -339,14 +339,14 @@ class RodModel:
 
     def c_kernels(self):
         """The compiled residual, Jacobian and energies for the C step loop
-        (:class:`runtime.solvers.bdf_core.CKernels`), with the drive as a callback that
+        (:class:`runtime.solvers.protocols.CKernels`), with the drive as a callback that
         reports the interval on which the loads stay constant; None on the CasADi
         backend."""
         if self._lib is None:
             return None
         import ctypes
 
-        from runtime.solvers.bdf_core import CKernels
+        from runtime.solvers.protocols import CKernels
 
         def address(fn) -> int:
             return ctypes.cast(fn, ctypes.c_void_p).value

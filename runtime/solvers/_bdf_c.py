@@ -131,8 +131,6 @@ def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
     lib.kv_ida_sizeof.restype = ctypes.c_size_t
     lib.kv_ida_advance.argtypes = [P, D, ctypes.c_longlong]
     lib.kv_ida_advance.restype = I
-    lib.kv_ida_weights.argtypes = [P]
-    lib.kv_ida_weights.restype = None
     lib.kv_ida_watch_reset.argtypes = [P]
     lib.kv_ida_watch_reset.restype = None
     if lib.kv_ida_sizeof() != ctypes.sizeof(CoreStruct):

@@ -220,14 +220,6 @@ static int argmax_abs(int n, const double *v, const double *w)
     return k;
 }
 
-static void update_weights(kv_ida *S)
-{
-    const int n = S->n;
-    for (int i = 0; i < n; ++i) S->ewt[i] = 1.0 / (fabs(S->y[i]) * S->rtol + S->atol[i]);
-    if (S->errmask)
-        for (int i = 0; i < n; ++i) S->ewt_err[i] = S->ewt[i] * S->errmask[i];
-}
-
 static double hmin(const kv_ida *S)
 {
     double a = 16.0 * 2.220446049250313e-16 * fabs(S->t);
@@ -603,11 +595,10 @@ static int step(kv_run *R)
 }
 
 /* ---- after a step: energy audit, output samples, watches --------------------------- */
-static int interp(const kv_ida *S, int m, const double *ts, double *oy, double *oyp)
+static void interp(const kv_ida *S, int m, const double *ts, double *oy, double *oyp)
 {
     const int k = S->kused > 1 ? S->kused : 1;
     kv_interp(k, S->n, m, S->t, S->psi, S->phi, ts, oy, oyp);
-    return 0;
 }
 
 static int audit_step(kv_run *R)
@@ -714,12 +705,6 @@ int kv_ida_advance(kv_ida *S, double t_stop, long long max_steps)
     }
     USER_MODE(&R);
     return rc;
-}
-
-/* IDA's weights for the current y (after y, rtol or atol changed from Python) */
-void kv_ida_weights(kv_ida *S)
-{
-    update_weights(S);
 }
 
 /* the watched components' current values (call after setting the watches) */

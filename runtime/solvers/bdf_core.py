@@ -5,7 +5,8 @@ struct that holds the solver's scalar state and the addresses of its NumPy array
 (``CoreStruct`` in ``runtime/solvers/_bdf_c.py``). :class:`CoreLink` builds that struct from a
 solver, gives the C code the problem's functions and runs ``kv_ida_advance``:
 
-* a problem with compiled kernels (``problem.c_kernels()``, the rod's C assembly) is called
+* a problem with compiled kernels (``problem.c_kernels()``, a
+  :class:`~runtime.solvers.protocols.CKernels`: the rod's C assembly) is called
   directly from C, its time-dependent loads through one Python callback that runs only when
   t leaves the interval on which they are constant;
 * any other problem (``residual``/``jacobian_band`` in Python) through ctypes callbacks.
@@ -28,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from . import _bdf_c
+from .protocols import CKernels
 
 #: a runtime.solvers.bdf.BDF (not imported here: bdf.py imports this module)
 BDF = Any
@@ -60,21 +62,6 @@ def _call_holding_signals(s, fn, *args):
     finally:
         for sig, old in saved:
             signal.signal(sig, old)
-
-
-class CKernels:
-    """Compiled functions of a problem for the C step loop: addresses of the residual, the
-    banded Jacobian and (optional, 0 if none) the energies (signatures of
-    ``kvrod_residual``, ``kvrod_jacobian_band``, ``kvrod_energies`` in
-    ``generated/rod_assembly.h``) and of their first argument ``ctx``; ``drive(t)``
-    (optional) makes the functions valid at time t and returns the interval ``[lo, hi)``
-    on which they then stay valid; ``keep`` holds whatever must outlive the solver."""
-
-    def __init__(self, residual: int, jacobian: int, energies: int, ctx: int,
-                 drive=None, keep: Any = None) -> None:
-        self.residual, self.jacobian, self.energies, self.ctx = residual, jacobian, energies, ctx
-        self.drive = drive
-        self.keep = keep
 
 
 class CoreLink:

@@ -11,7 +11,7 @@ entries inside its band.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -150,3 +150,18 @@ class DenseProblem:
             self._jyp(t, y, yp), dtype=float
         )
         dense_to_band(a, self.kl, self.ku, out_ab)
+
+
+class CKernels:
+    """Compiled functions of a problem for the C step loop: addresses of the residual, the
+    banded Jacobian and (optional, 0 if none) the energies (signatures of
+    ``kvrod_residual``, ``kvrod_jacobian_band``, ``kvrod_energies`` in
+    ``generated/rod_assembly.h``) and of their first argument ``ctx``; ``drive(t)``
+    (optional) makes the functions valid at time t and returns the interval ``[lo, hi)``
+    on which they then stay valid; ``keep`` holds whatever must outlive the solver."""
+
+    def __init__(self, residual: int, jacobian: int, energies: int, ctx: int,
+                 drive=None, keep: Any = None) -> None:
+        self.residual, self.jacobian, self.energies, self.ctx = residual, jacobian, energies, ctx
+        self.drive = drive
+        self.keep = keep
