@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_assembly.c.jinja
 // derivation step: discrete_rod
-// inputs sha256: 33afcbfb6157721f7d230ab4e2e09c1fcd7ff0d774fafb3b902a4f1a3d8360d8
+// inputs sha256: e46e217363c71bb3bd3fc1ec2f95fd423a0a0b7f7532740b570fb615123ee0ae
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*
@@ -10,7 +10,8 @@
  * their size does not depend on the number of elements N.
  *
  * All functions return 0 on success and a negative code on bad arguments
- * (-1: N < 1, -2: ldab too small, -3: kernel failure).
+ * (-1: N < 1, -2: ldab too small, -3: kernel failure, -4: cells outside the rod or
+ * the band storage).
  */
 #include <string.h>
 #include "rod_kernels.h"
@@ -329,11 +330,19 @@ int kvrod_residual(const kvrod_rod* rod, double t, const double* y, const double
   return 0;
 }
 
-#define AB(r, c) ab[(size_t)(rod->kl + rod->ku + (r) - (c)) + (size_t)(c) * (size_t)ldab]
+/* the caller's band storage: columns col0 .. of J from ab (J(i, j) in column j - col0,
+ * row kl + ku + i - j) */
+typedef struct {
+  double* ab;
+  int ldab, col0;
+} band_t;
+
+#define AB(r, c) \
+  B->ab[(size_t)(rod->kl + rod->ku + (r) - (c)) + (size_t)((c) - B->col0) * (size_t)B->ldab]
 
 /* the contributions of one element to cy dF/dy + cj dF/dy' (band storage) */
 static int jac_node(const kvrod_rod* rod, int i, const double* y, const double* yp,
-                    double cy, double cj, int ldab, double* ab, work_t* W, double* J) {
+                    double cy, double cj, const band_t* B, work_t* W, double* J) {
   const int N = rod->N;
   double m = node_mass(rod, i), held = node_held(rod, i), f[3];
   int r, c;
@@ -362,7 +371,7 @@ static int jac_node(const kvrod_rod* rod, int i, const double* y, const double* 
 }
 
 static int jac_segment_inertia(const kvrod_rod* rod, int i, const double* y,
-                               const double* yp, double cy, double cj, int ldab, double* ab,
+                               const double* yp, double cy, double cj, const band_t* B,
                                work_t* W, double* J) {
   int r, c;
   W->arg[0] = y + i_p(rod, i); W->arg[1] = y + i_om(rod, i);
@@ -391,7 +400,7 @@ static int jac_segment_inertia(const kvrod_rod* rod, int i, const double* y,
  * forces to the segment's internal strains q_b (through n_q = -sum C_b q_b) and the
  * relaxation rows q_b' - (dV - q_b)/theta_b. */
 static int jac_segment(const kvrod_rod* rod, int i, const double* y, double cy, double cj,
-                       int ldab, double* ab, work_t* W, double* J) {
+                       const band_t* B, work_t* W, double* J) {
   const int N = rod->N;
   int rb[6], ra[3], cb[13], cpart[13], r, c, b, k;
   double nq[3];
@@ -457,7 +466,7 @@ static int jac_segment(const kvrod_rod* rod, int i, const double* y, double cy, 
 
 /* joint j sits at node j: between segments j and j+1, or a clamp frame and a segment */
 static int jac_joint(const kvrod_rod* rod, int j, const double* y, double cy, double cj,
-                     int ldab, double* ab, work_t* W, double* J) {
+                     const band_t* B, work_t* W, double* J) {
   const int N = rod->N, has_a = j >= 1, has_b = j + 1 <= N;
   int jrows[6], jcols[14], r, c, b, k;
   double mq[3];
@@ -508,30 +517,34 @@ static int jac_joint(const kvrod_rod* rod, int j, const double* y, double cy, do
   return 0;
 }
 
-static void zero_cell(const kvrod_rod* rod, int i, int ldab, double* ab) {
+static void zero_cell(const kvrod_rod* rod, int i, const band_t* B) {
   const int c0 = cs(rod, i), c1 = i == 0 ? c0size(rod) : c0 + csize(rod);
   int c;
   /* band rows kl .. 2kl+ku only; rows 0 .. kl-1 are dgbtrf workspace */
   for (c = c0; c < c1; ++c)
-    memset(ab + (size_t)c * (size_t)ldab + rod->kl, 0, sizeof(double) * (rod->kl + rod->ku + 1));
+    memset(B->ab + (size_t)(c - B->col0) * (size_t)B->ldab + rod->kl, 0,
+           sizeof(double) * (rod->kl + rod->ku + 1));
 }
 
-int kvrod_jacobian_band(const kvrod_rod* rod, double t, const double* y, const double* yp,
-                        double cy, double cj, int ldab, double* ab) {
+int kvrod_jacobian_band_cells(const kvrod_rod* rod, double t, const double* y,
+                              const double* yp, double cy, double cj, int ldab, double* ab,
+                              int col0, int i0, int i1) {
   (void) t;
   const int N = rod->N;
   if (check_rod(rod)) return check_rod(rod);
   if (ldab < 2 * rod->kl + rod->ku + 1) return -2;
+  if (i0 < 0 || i1 > N || col0 < 0 || col0 > cs(rod, i0 > 0 ? i0 - 1 : 0)) return -4;
   work_t W;
   double J[84];
+  const band_t band = {ab, ldab, col0}, *B = &band;
   int i, b, k;
   /* one sweep over the cells; the columns of cell i+1 are zeroed just before the
    * elements of cell i (which reach one cell ahead) are added: cache friendly */
-  zero_cell(rod, 0, ldab, ab);
-  for (i = 0; i <= N; ++i) {
-    if (i + 1 <= N) zero_cell(rod, i + 1, ldab, ab);
-    if (jac_node(rod, i, y, yp, cy, cj, ldab, ab, &W, J)) return -3;
-    if (i >= 1 && jac_segment_inertia(rod, i, y, yp, cy, cj, ldab, ab, &W, J)) return -3;
+  if (i0 == 0) zero_cell(rod, 0, B);
+  for (i = i0; i <= i1; ++i) {
+    if (i + 1 <= N) zero_cell(rod, i + 1, B);
+    if (jac_node(rod, i, y, yp, cy, cj, B, &W, J)) return -3;
+    if (i >= 1 && jac_segment_inertia(rod, i, y, yp, cy, cj, B, &W, J)) return -3;
     if (cy == 0.0) {            /* dF/dy' only: the relaxation rows' identity */
       for (b = 0; b < 3 * rod->nb; ++b) {
         if (i >= 1) { k = i_qs(rod, i) + b; AB(k, k) += cj; }
@@ -539,10 +552,15 @@ int kvrod_jacobian_band(const kvrod_rod* rod, double t, const double* y, const d
       }
       continue;
     }
-    if (i >= 1 && jac_segment(rod, i, y, cy, cj, ldab, ab, &W, J)) return -3;
-    if (jac_joint(rod, i, y, cy, cj, ldab, ab, &W, J)) return -3;
+    if (i >= 1 && jac_segment(rod, i, y, cy, cj, B, &W, J)) return -3;
+    if (jac_joint(rod, i, y, cy, cj, B, &W, J)) return -3;
   }
   return 0;
+}
+
+int kvrod_jacobian_band(const kvrod_rod* rod, double t, const double* y, const double* yp,
+                        double cy, double cj, int ldab, double* ab) {
+  return kvrod_jacobian_band_cells(rod, t, y, yp, cy, cj, ldab, ab, 0, 0, rod->N);
 }
 
 /* the stored energy and twice the dissipation rate of the relaxation terms of one

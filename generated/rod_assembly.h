@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_assembly.h.jinja
 // derivation step: discrete_rod
-// inputs sha256: b7910751acb4ada90ba35e5a08c0f40ec5a4f909c75f02ad99c14a2593580970
+// inputs sha256: c6170561dcce4f6d9191a986baa1b691c3279027e731249a82a289fe3cf150d2
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*
@@ -18,7 +18,7 @@
  * (at least kvrod_kl(N, nb), kvrod_ku(N, nb)): ab has ldab >= 2*kl+ku+1 rows and n
  * columns (Fortran order), element (i, j) at ab[kl + ku + i - j + j*ldab].
  * Return value 0 on success, negative on error (-1: N < 1 or nb outside 0..24,
- * -2: band too narrow, -3: kernel failure).
+ * -2: band too narrow, -3: kernel failure, -4: cells outside the rod or the storage).
  */
 #ifndef KVROD_ROD_ASSEMBLY_H
 #define KVROD_ROD_ASSEMBLY_H
@@ -52,6 +52,18 @@ int kvrod_residual(const kvrod_rod* rod, double t, const double* y, const double
 /* ab <- cy dF/dy + cj dF/dy' */
 int kvrod_jacobian_band(const kvrod_rod* rod, double t, const double* y, const double* yp,
                         double cy, double cj, int ldab, double* ab);
+
+/* The same, element by element: the contributions of elements i0..i1 (element i: node i,
+ * segment i, joint i; cell i of the layout) to cy dF/dy + cj dF/dy', into band storage
+ * that holds columns col0.. of J (J(i, j) at ab[kl + ku + i - j + (j - col0)*ldab]).
+ * Element i adds to the columns of cells i-1..i+1 and zeroes those of cell i+1 first (and
+ * of cell 0 when i0 = 0), so after elements 0..i the columns of cells <= i-1 are final:
+ * a caller can factor cell by cell behind the sweep, holding a few cells of columns
+ * (col0 at most the first column of cell i0-1; -4 otherwise or for i0, i1 outside 0..N).
+ * kvrod_jacobian_band is kvrod_jacobian_band_cells(..., 0, 0, N). */
+int kvrod_jacobian_band_cells(const kvrod_rod* rod, double t, const double* y,
+                              const double* yp, double cy, double cj, int ldab, double* ab,
+                              int col0, int i0, int i1);
 
 /* out <- [kinetic, elastic, 2D, external power, boundary power, V (3N), F (3N),
  *         U (3(N+1)), M (3(N+1))] */

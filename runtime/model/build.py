@@ -205,9 +205,11 @@ def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
     i, d, p = ctypes.c_int, ctypes.c_double, ctypes.c_void_p
     lib.kvrod_residual.argtypes = [p, d, p, p, p]
     lib.kvrod_jacobian_band.argtypes = [p, d, p, p, d, d, i, p]
+    lib.kvrod_jacobian_band_cells.argtypes = [p, d, p, p, d, d, i, p, i, i, i]
     lib.kvrod_diagnostics.argtypes = [p, d, p, p, p]
     lib.kvrod_energies.argtypes = [p, i, p, p, p, p]
-    for name in ("kvrod_residual", "kvrod_jacobian_band", "kvrod_diagnostics",
+    for name in ("kvrod_residual", "kvrod_jacobian_band", "kvrod_jacobian_band_cells",
+                 "kvrod_diagnostics",
                  "kvrod_energies", "kvrod_n_state"):
         getattr(lib, name).restype = i
     lib.kvrod_n_state.argtypes = [i, i]

@@ -362,7 +362,8 @@ class RodModel:
         lib = self._lib
         return CKernels(address(lib.kvrod_residual), address(lib.kvrod_jacobian_band),
                         address(lib.kvrod_energies), ctypes.addressof(self._struct),
-                        drive=drive, keep=self)
+                        drive=drive, keep=self,
+                        jacobian_cells=address(lib.kvrod_jacobian_band_cells))
 
     def _struct_ptr(self):
         import ctypes

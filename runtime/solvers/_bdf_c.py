@@ -49,6 +49,10 @@ import platform
 import subprocess
 import tempfile
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import numpy as np
 
 #: the C sources, kept as files beside this module: bdf_core.c (the step loop) includes
 #: bdf_helpers.c (band LU, condensed Newton systems, norms, interpolation), one unit
@@ -203,7 +207,7 @@ class _CondStruct(ctypes.Structure):
          "W")] + [(name, ctypes.c_int) for name in ("bt", "ncell", "mmax")] + [
         (name, ctypes.c_void_p) for name in
         ("cf", "cs", "cb", "ce", "eo", "fo", "xo", "F", "X", "ge", "T", "rp", "run", "ecol",
-         "kv6", "diag")]
+         "kv6", "diag")] + [("col0", ctypes.c_int)]
 
 
 class CondensedNewton:
@@ -319,6 +323,12 @@ class CondensedNewton:
         self._struct = s
         self.ptr = ctypes.addressof(s)
         self._lib = lib
+
+    @property
+    def cell_starts(self) -> np.ndarray | None:
+        """First state index of each cell and the end (ncell + 1, int32) on the block
+        tridiagonal path; None on the band path."""
+        return self._keep["cf"] if self.block_tridiagonal else None
 
     @classmethod
     def build(cls, problem, n: int, kl: int, ku: int, ldab: int):
@@ -543,6 +553,8 @@ class CoreStruct(ctypes.Structure):
         + _fields(_I, "timing")
         + _fields(_D * 6, "sec")
         + _fields(_I, "stop")
+        + _fields(_P, "jac_cells", "jwin")
+        + _fields(_I, "jwin_cols", "jchunk")
     )
     #: names of the entries of ``sec`` (seconds per part when ``timing`` is set)
     SECTIONS = ("residual", "jacobian", "lu", "newton_solve_update", "energies", "drive")

@@ -22,6 +22,12 @@ typedef int (*kv_res_fn)(const void *ctx, double t, const double *y, const doubl
                          double *res);
 typedef int (*kv_jac_fn)(const void *ctx, double t, const double *y, const double *yp,
                          double cy, double cj, int ldab, double *ab);
+/* kvrod_jacobian_band_cells: the contributions of elements i0..i1 into band storage
+   holding columns col0.. of J; element i adds to the columns of cells i-1..i+1 (the
+   cells of the condensation) and zeroes those of cell i+1 first */
+typedef int (*kv_jac_cells_fn)(const void *ctx, double t, const double *y, const double *yp,
+                               double cy, double cj, int ldab, double *ab, int col0, int i0,
+                               int i1);
 typedef int (*kv_en_fn)(const void *ctx, int m, const double *ts, const double *ys,
                         const double *yps, double *out);
 typedef int (*kv_drive_fn)(double t);
@@ -101,6 +107,13 @@ typedef struct {
     int timing;
     double sec[6];
     int stop;                   /* set by Python (a signal held in a callback): return */
+    /* the Jacobian by cells (NULL: none; used with the condensed block path): J is then
+       evaluated chunk cells at a time into a window of jwin_cols columns (ldab rows) and
+       the cells are factored right behind, while their columns are in cache, instead of
+       writing all of J (21 MB at N = 4000) and reading it back */
+    kv_jac_cells_fn jac_cells;
+    double *jwin;
+    int jwin_cols, jchunk;
 } kv_ida;
 
 enum { SEC_RES, SEC_JAC, SEC_LU, SEC_NEWTON, SEC_EN, SEC_DRIVE };
@@ -263,26 +276,42 @@ static double set_coeffs(kv_ida *S)     /* IDASetCoeffs; returns ck */
     S->cj = -alphas / hh;
     double ck = fabs(alpha[kk] + alphas - alpha0);
     if (alpha[kk] > ck) ck = alpha[kk];
-    const int n = S->n;
-    for (int i = ns; i <= kk; ++i) {
-        double *p = PHI(i), b = beta[i];
-        for (int q = 0; q < n; ++q) p[q] *= b;
-    }
+    /* IDASetCoeffs' rescaling phi_j *= beta_j (j = ns .. kk) is done by predict, in its
+       pass over phi */
     return ck;
 }
 
 /* IDAPredict, into the Newton iterates: yy = sum_j phi_j, ypw = sum_j gamma_j phi_j,
-   summed in j order per component (as bdf.py's _predict) in one pass over memory */
-static void predict(kv_ida *S)
+   summed in j order per component (as bdf.py's _predict) in one pass over memory; with
+   ns <= kk first set_coeffs' rescaling phi_j *= beta_j for j = ns .. kk (the same
+   products as bdf.py's, in the same pass: at N = 1000 the pass over phi, not the
+   arithmetic, is the cost) */
+static void predict_scaled(kv_ida *S, int ns)
 {
     const int n = S->n, kk = S->kk;
     double *restrict yy = S->yy, *restrict ypw = S->ypw;
-    const double *restrict p0 = PHI(0);
-    const double *g = S->gamma;
+    double g[KV_NH], beta[KV_NH];          /* local: the stores to phi cannot alias them */
+    double *ph[KV_NH];
+    for (int j = 0; j <= kk; ++j) { g[j] = S->gamma[j]; beta[j] = S->beta[j]; ph[j] = PHI(j); }
+    if (ns < 1) ns = 1;
+    if (ns > kk) {
+        for (int q = 0; q < n; ++q) {
+            double a = ph[0][q], b = 0.0;
+            for (int j = 1; j <= kk; ++j) {
+                const double v = ph[j][q];
+                a += v;
+                b += g[j] * v;
+            }
+            yy[q] = a;
+            ypw[q] = b;
+        }
+        return;
+    }
     for (int q = 0; q < n; ++q) {
-        double a = p0[q], b = 0.0;
+        double a = ph[0][q], b = 0.0;
         for (int j = 1; j <= kk; ++j) {
-            const double v = PHI(j)[q];
+            double v = ph[j][q];
+            if (j >= ns) { v *= beta[j]; ph[j][q] = v; }
             a += v;
             b += g[j] * v;
         }
@@ -290,6 +319,8 @@ static void predict(kv_ida *S)
         ypw[q] = b;
     }
 }
+
+static void predict(kv_ida *S) { predict_scaled(S, S->kk + 1); }
 
 static void restore(kv_ida *S)           /* IDARestore */
 {
@@ -301,16 +332,68 @@ static void restore(kv_ida *S)           /* IDARestore */
     }
 }
 
+/* J by cells, condensed and factored behind the sweep (kv_ida.jac_cells): the same
+   entries, summed in the same order, and the same factorisation as call_jac then
+   cond_factor_bt (cell k needs the columns of cells k-1..k+1, final once element k+2 is
+   in, and is done then; the window keeps the columns from cell k-1 on, slid to its
+   start by a copy). Returns as cond_factor_raw; -2 after a failed Jacobian call. */
+static int jac_factor_cells(kv_run *R, double t, double cj)
+{
+    kv_ida *S = R->S;
+    kv_cond *c = S->cond;
+    const int ncell = c->ncell, ldab = S->ldab, chunk = S->jchunk;
+    const int *cf = c->cf;
+    int el = 0, fac = 0, lo = 0, info = 0;
+    if (drive_to(R, t)) return -2;
+    while (fac < ncell) {
+        const int i1 = el + chunk - 1 < ncell - 1 ? el + chunk - 1 : ncell - 1;
+        const int hi = i1 + 2 < ncell ? i1 + 2 : ncell;   /* the columns written reach cell i1+1 */
+        if (cf[hi] - cf[lo] > S->jwin_cols) { info = -2; break; }
+        TIC(S);
+        USER_MODE(R);
+        const int rc = S->jac_cells(S->ctx, t, S->yy, S->ypw, 1.0, cj, ldab, S->jwin, cf[lo],
+                                    el, i1);
+        CORE_MODE(R);
+        TOC(S, SEC_JAC);
+        if (rc) { info = -2; break; }
+        el = i1 + 1;
+        const int last = el == ncell ? ncell - 1 : el - 3;
+        if (last >= fac) {
+            TIC(S);
+            c->col0 = cf[lo];
+            info = cond_factor_bt_cells(c, S->jwin, fac, last);
+            c->col0 = 0;
+            TOC(S, SEC_LU);
+            if (info) break;
+            fac = last + 1;
+        }
+        if (el == ncell) break;
+        const int nlo = fac > 0 ? fac - 1 : 0;
+        if (nlo > lo) {
+            memmove(S->jwin, S->jwin + (size_t)(cf[nlo] - cf[lo]) * (size_t)ldab,
+                    sizeof(double) * (size_t)(cf[hi] - cf[nlo]) * (size_t)ldab);
+            lo = nlo;
+        }
+    }
+    S->njev++;
+    return info;
+}
+
 /* evaluate and factorise J at the iterate; 1 ok, 0 singular, -1 callback failure */
 static int setup(kv_run *R, double t)
 {
     kv_ida *S = R->S;
-    if (call_jac(R, t, S->cj)) return -1;
     int info;
-    TIC(S);
-    if (S->cond) info = kv_cond_factor(S->cond, S->ab);   /* J stays in ab */
-    else info = kv_gbtrf(S->n, S->kl, S->ku, S->ab, S->ldab, S->ipiv, S->prof);
-    TOC(S, SEC_LU);
+    if (S->jac_cells && S->cond && S->cond->bt) {
+        info = jac_factor_cells(R, t, S->cj);
+        if (info == -2) return -1;
+    } else {
+        if (call_jac(R, t, S->cj)) return -1;
+        TIC(S);
+        if (S->cond) info = kv_cond_factor(S->cond, S->ab);   /* J stays in ab */
+        else info = kv_gbtrf(S->n, S->kl, S->ku, S->ab, S->ldab, S->ipiv, S->prof);
+        TOC(S, SEC_LU);
+    }
     S->nlu++;
     S->cjold = S->cj;
     S->cjratio = 1.0;
@@ -490,10 +573,13 @@ static void complete_step(kv_ida *S, double tnew, double err_k, double err_km1)
             } else if (kk == mo || kk + 1 >= S->ns || kdiff == 1) {
                 action = 0;
             } else {
-                double *delta = S->res_v;
-                const double *pk1 = PHI(kk + 1);
-                for (int q = 0; q < n; ++q) delta[q] = ee[q] - pk1[q];
-                err_kp1 = wrms(n, delta, S->ewt_err) / (kk + 2);
+                const double *pk1 = PHI(kk + 1), *w = S->ewt_err;
+                double sq = 0.0;        /* wrms(ee - phi_k+1), without storing it */
+                for (int q = 0; q < n; ++q) {
+                    const double t = (ee[q] - pk1[q]) * w[q];
+                    sq += t * t;
+                }
+                err_kp1 = (n > 0 ? sqrt(sq / n) : 0.0) / (kk + 2);
                 double terr_k = (kk + 1) * err_k, terr_kp1 = (kk + 2) * err_kp1;
                 if (kk == 1) {
                     action = terr_kp1 >= 0.5 * terr_k ? 0 : 1;
@@ -572,7 +658,7 @@ static int step(kv_run *R)
         double ck = set_coeffs(S);
         tnew = tn + hh;
         if (hh == remaining) tnew = S->t_bound;
-        predict(S);
+        predict_scaled(S, S->ns);
         int nflag = nls(R, tnew);
         if (nflag == NLS_CALLBACK) return KV_CALLBACK;
         if (nflag == NLS_NONFINITE) return KV_NONFINITE;

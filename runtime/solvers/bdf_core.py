@@ -100,6 +100,9 @@ class CoreLink:
             self.has_energies = False
         s.drive_t = math.nan
         s.cond = solver._cond.ptr if solver._cond is not None else None
+        if kern is not None and kern.jacobian_cells and solver._cond is not None \
+                and solver._cond.block_tridiagonal:
+            self._jacobian_by_cells(kern.jacobian_cells, solver._cond.cell_starts)
         p = lambda a: a.ctypes.data if a is not None else None  # noqa: E731
         s.phi = p(solver._phi)
         s.y, s.yp, s.yy, s.ypw = p(solver._y), p(solver._yp), p(solver._yy), p(solver._ypw)
@@ -114,6 +117,22 @@ class CoreLink:
         s.max_order, s.maxcor = solver.max_order, solver.max_nonlinear_iter
         s.max_conv_fails, s.max_error_fails = solver.max_conv_fails, solver.max_error_fails
         self.push(solver)
+
+    #: cells of the Jacobian evaluated per call when it is factored behind its sweep:
+    #: the window (JAC_CHUNK + 4 cells of band columns, ~120 kB for the rod) stays in L2
+    JAC_CHUNK = 32
+
+    def _jacobian_by_cells(self, jacobian_cells: int, cf: np.ndarray) -> None:
+        """Let C evaluate J by cells and factor each cell behind the sweep (``kv_ida``'s
+        jac_cells: the full band J is never stored)."""
+        s = self.s
+        ncell = len(cf) - 1
+        k = np.arange(ncell)
+        cols = int((cf[np.minimum(k + self.JAC_CHUNK + 4, ncell)] - cf[k]).max())
+        win = np.zeros((s.ldab, cols), order="F")
+        self._keep.append(win)
+        s.jac_cells, s.jwin = jacobian_cells, win.ctypes.data
+        s.jwin_cols, s.jchunk = cols, self.JAC_CHUNK
 
     # -- problem functions -------------------------------------------------------------
     def _guard(self, fn):

@@ -284,6 +284,9 @@ typedef struct {
        rod's phi' = v rows: M = -I, K = cj I) and then block_elim sets 1 when they are
        diagonal in this J (M_b^-1 and G_b diagonal: cheaper products), else 2 */
     int *diag;
+    /* the first column of J held by the ab the block path reads (0: all of J; a window of
+       columns while the C step loop factors cell by cell behind the Jacobian's sweep) */
+    int col0;
 } kv_cond;
 
 #if defined(__GNUC__)
@@ -397,15 +400,18 @@ KV_INLINE void mv_acc(int m, int k, const double *restrict A, const double *rest
 KV_INLINE void gather_cols(const kv_cond *c, const double *ab, int ncol, const int *cols,
                            int nrun, const int *run, int rl, int m, double *restrict t)
 {
-    const size_t st = (size_t)c->ldab - 1;          /* J(i, j) = base[i + j (ldab - 1)] */
+    /* J(i, j) = ab[kl + ku + i - j + (j - col0) ldab] = base[i + j (ldab - 1)] with base
+       = ab + kl + ku - col0 ldab, in size_t arithmetic (wraps, exact for entries in ab) */
+    const size_t st = (size_t)c->ldab - 1;
     const int kl = c->kl, ku = c->ku;
-    const double *base = ab + kl + ku;
+    const size_t base = (size_t)(kl + ku) - (size_t)c->col0 * (size_t)c->ldab;
     if (rl == 3 && nrun == 2) {
         const int i0 = run[0], i1 = run[3];
         const int jlo = i1 + 2 - kl, jhi = i0 + ku;  /* both runs inside the band */
         for (int q = 0; q < ncol; ++q, t += 6) {
             const int j = cols[q];
-            const double *s0 = base + i0 + (size_t)j * st, *s1 = base + i1 + (size_t)j * st;
+            const size_t o = base + (size_t)j * st;
+            const double *s0 = ab + (o + (size_t)i0), *s1 = ab + (o + (size_t)i1);
             double v0, v1, v2, v3, v4, v5;
             if (j >= jlo && j <= jhi) {
                 v0 = s0[0]; v1 = s0[1]; v2 = s0[2]; v3 = s1[0]; v4 = s1[1]; v5 = s1[2];
@@ -424,10 +430,10 @@ KV_INLINE void gather_cols(const kv_cond *c, const double *ab, int ncol, const i
     }
     for (int q = 0; q < ncol; ++q, t += m) {
         const int j = cols[q], lo = j - ku, hi = j + kl;
-        const double *col = base + (size_t)j * st;
+        const size_t col = base + (size_t)j * st;
         for (int u = 0; u < nrun; ++u) {
             const int i0 = run[3 * u], len = rl ? rl : run[3 * u + 2];
-            const double *src = col + i0;
+            const double *src = ab + (col + (size_t)i0);
             double *d = t + run[3 * u + 1];
             if (i0 >= lo && i0 + len - 1 <= hi)
                 for (int r = 0; r < len; ++r) d[r] = src[r];
@@ -437,24 +443,29 @@ KV_INLINE void gather_cols(const kv_cond *c, const double *ab, int ncol, const i
     }
 }
 
+/* the offset in ab of J(r0, j) (inside the band) */
+KV_INLINE size_t kv_col(const kv_cond *c, int j, int r0)
+{
+    return (size_t)(j - c->col0) * (size_t)c->ldab + (size_t)(c->kl + c->ku + r0 - j);
+}
+
 /* Minv_b = M_b^-1 (e x e) and G_b = M_b^-1 K_b (e x k) of block b, column-major, at
    16 b; nonzero when M_b is singular. */
 KV_INLINE int block_elim_n(kv_cond *c, const double *ab, int b, int es, int ks)
 {
-    const int kv = c->kl + c->ku, ldab = c->ldab;
     const int e0 = c->e_off[b], r0 = c->r_off[b], k0 = c->k_off[b];
     double *Mi = c->Minv + 16 * b, *G = c->G + 16 * b, M[16], l[4];
     int piv[8];
     /* the block's rows and columns lie in the band (CondensedNewton checks it) */
     for (int q = 0; q < es; ++q) {
-        const double *col = ab + (size_t)(e0 + q) * ldab + kv - (e0 + q);
-        for (int i = 0; i < es; ++i) M[q * es + i] = col[r0 + i];
+        const double *col = ab + kv_col(c, e0 + q, r0);
+        for (int i = 0; i < es; ++i) M[q * es + i] = col[i];
     }
     if (gj_inverse(es, M, Mi, l, piv)) return 1;
     for (int m = 0; m < ks; ++m) {
-        const double *col = ab + (size_t)(k0 + m) * ldab + kv - (k0 + m);
+        const double *col = ab + kv_col(c, k0 + m, r0);
         double K[4], *g = G + m * es;
-        for (int i = 0; i < es; ++i) { K[i] = col[r0 + i]; g[i] = 0.0; }
+        for (int i = 0; i < es; ++i) { K[i] = col[i]; g[i] = 0.0; }
         for (int q = 0; q < es; ++q)
             for (int i = 0; i < es; ++i) g[i] += Mi[q * es + i] * K[q];
     }
@@ -466,22 +477,21 @@ KV_INLINE int block_elim_n(kv_cond *c, const double *ab, int b, int es, int ks)
    pattern is sampled, not proven), or a diagonal one is zero. */
 static int block_elim_diag(kv_cond *c, const double *ab, int b)
 {
-    const int kv = c->kl + c->ku, ldab = c->ldab, es = c->e_sz[b];
+    const int es = c->e_sz[b];
     const int e0 = c->e_off[b], r0 = c->r_off[b], k0 = c->k_off[b];
     double *Mi = c->Minv + 16 * b, *G = c->G + 16 * b;
     for (int q = 0; q < es; ++q) {
-        const double *cm = ab + (size_t)(e0 + q) * ldab + kv - (e0 + q);
-        const double *ck = ab + (size_t)(k0 + q) * ldab + kv - (k0 + q);
+        const double *cm = ab + kv_col(c, e0 + q, r0), *ck = ab + kv_col(c, k0 + q, r0);
         for (int i = 0; i < es; ++i) {
             if (i == q) continue;
-            if (cm[r0 + i] != 0.0 || ck[r0 + i] != 0.0) return 1;
+            if (cm[i] != 0.0 || ck[i] != 0.0) return 1;
             Mi[q * es + i] = 0.0;
             G[q * es + i] = 0.0;
         }
-        const double d = cm[r0 + q];
+        const double d = cm[q];
         if (!(d != 0.0) || !isfinite(d)) return 1;
         Mi[q * es + q] = 1.0 / d;
-        G[q * es + q] = ck[r0 + q] / d;
+        G[q * es + q] = ck[q] / d;
     }
     return 0;
 }
@@ -701,11 +711,15 @@ KV_INLINE int bt_factor_cell(kv_cond *c, const double *ab, int k, int mp, int m,
     const int ne3 = (c)->ce[(k) + 2 < (c)->ncell ? (k) + 2 : (c)->ncell]                \
                     - (c)->ce[(k) > 0 ? (k) - 1 : 0];
 
-static int cond_factor_bt(kv_cond *c, const double *ab)
+/* The block path's factorisation of cells k0 .. k1, in order (the blocks of cell 0 first
+   when k0 = 0; cells 0 .. k0-1 must be done): it reads the columns of J of cells k0-1 ..
+   k1+1 (from ab's first column, J's column col0). Returns as cond_factor_raw. */
+static int cond_factor_bt_cells(kv_cond *c, const double *ab, int k0, int k1)
 {
-    for (int b = c->cb[0]; b < c->cb[1]; ++b)
-        if (block_elim(c, ab, b)) return -1;
-    for (int k = 0; k < c->ncell; ++k) {
+    if (k0 == 0)
+        for (int b = c->cb[0]; b < c->cb[1]; ++b)
+            if (block_elim(c, ab, b)) return -1;
+    for (int k = k0; k <= k1; ++k) {
         if (k + 1 < c->ncell)
             for (int b = c->cb[k + 1]; b < c->cb[k + 2]; ++b)
                 if (block_elim(c, ab, b)) return -1;
@@ -715,6 +729,11 @@ static int cond_factor_bt(kv_cond *c, const double *ab)
         if (info) return info;
     }
     return 0;
+}
+
+static int cond_factor_bt(kv_cond *c, const double *ab)
+{
+    return cond_factor_bt_cells(c, ab, 0, c->ncell - 1);
 }
 
 /* Forward sweep, cell k: z_k = D_k^-1 (res[kept rows of k] - W_k g - L_k z_{k-1}), in rc

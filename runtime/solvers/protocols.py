@@ -158,10 +158,16 @@ class CKernels:
     ``kvrod_residual``, ``kvrod_jacobian_band``, ``kvrod_energies`` in
     ``generated/rod_assembly.h``) and of their first argument ``ctx``; ``drive(t)``
     (optional) makes the functions valid at time t and returns the interval ``[lo, hi)``
-    on which they then stay valid; ``keep`` holds whatever must outlive the solver."""
+    on which they then stay valid; ``keep`` holds whatever must outlive the solver.
+
+    ``jacobian_cells`` (optional, 0 if none): the Jacobian element by element
+    (``kvrod_jacobian_band_cells``), element i being cell i of the problem's
+    ``condensation_cells()``; with it the step loop factors the condensed Newton
+    matrix cell by cell right behind the Jacobian's sweep."""
 
     def __init__(self, residual: int, jacobian: int, energies: int, ctx: int,
-                 drive=None, keep: Any = None) -> None:
+                 drive=None, keep: Any = None, jacobian_cells: int = 0) -> None:
         self.residual, self.jacobian, self.energies, self.ctx = residual, jacobian, energies, ctx
+        self.jacobian_cells = jacobian_cells
         self.drive = drive
         self.keep = keep

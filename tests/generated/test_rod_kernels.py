@@ -141,3 +141,67 @@ def test_generated_c_size_is_independent_of_N():
     gdir = generated_dir()
     size = sum((gdir / f).stat().st_size for f in ("rod_kernels.c", "rod_assembly.c"))
     assert size < 1_000_000  # per-element kernels: one file for every N
+
+
+@pytest.mark.parametrize("start,end", BCS)
+@pytest.mark.parametrize("chunk", [1, 2, 5])
+def test_jacobian_by_elements_into_a_sliding_window_equals_the_whole_sweep(start, end, chunk):
+    """kvrod_jacobian_band_cells, as the C step loop calls it: elements chunk by chunk
+    into a window of columns slid along the rod; the columns of cells <= i-1 are final
+    after element i, bit for bit those of kvrod_jacobian_band."""
+    import ctypes
+
+    m = _model(7, start, end)
+    m.at(0.0)
+    if m.backend != "c":
+        pytest.skip("no C compiler")
+    y, yp = _state(m, np.random.default_rng(2))
+    full = np.zeros((m.ldab, m.n), order="F")
+    m.jacobian_band2(0.0, y, yp, 1.0, 37.0, full)
+    cf = np.asarray(m.condensation_cells() + [m.n])
+    ncell = len(cf) - 1
+    assert ncell == m.N + 1
+    lib, P = m._lib, ctypes.c_void_p
+    win = np.full((m.ldab, m.n), np.nan, order="F")        # big enough; slid by hand
+    got = np.full((m.ldab, m.n), np.nan, order="F")
+    lo, el = 0, 0
+    while el < ncell:
+        i1 = min(el + chunk - 1, ncell - 1)
+        rc = lib.kvrod_jacobian_band_cells(m._struct_ptr(), 0.0, P(y.ctypes.data),
+                                           P(yp.ctypes.data), 1.0, 37.0, m.ldab,
+                                           P(win.ctypes.data), int(cf[lo]), el, i1)
+        assert rc == 0
+        el = i1 + 1
+        done = ncell if el == ncell else el - 1           # cells < done are final
+        hi = cf[min(el + 1, ncell)]                         # written up to cell el
+        got[:, cf[lo]:cf[done]] = win[:, :cf[done] - cf[lo]]
+        nlo = max(done - 1, 0)                              # keep from cell done-1 on
+        win[:, :hi - cf[nlo]] = win[:, cf[nlo] - cf[lo]:hi - cf[lo]].copy()
+        win[:, hi - cf[nlo]:] = np.nan
+        lo = nlo
+    band = slice(m.kl, None)                                # rows 0..kl-1: LU workspace
+    assert np.array_equal(got[band], full[band])
+
+
+def test_jacobian_by_elements_rejects_cells_outside_the_rod_or_the_window():
+    import ctypes
+
+    m = _model(4, "clamped", "free")
+    m.at(0.0)
+    if m.backend != "c":
+        pytest.skip("no C compiler")
+    y, yp = _state(m, np.random.default_rng(3))
+    ab = np.zeros((m.ldab, m.n), order="F")
+    cf = m.condensation_cells()
+    P = ctypes.c_void_p
+
+    def call(col0, i0, i1, ldab=m.ldab):
+        return m._lib.kvrod_jacobian_band_cells(m._struct_ptr(), 0.0, P(y.ctypes.data),
+                                                P(yp.ctypes.data), 1.0, 1.0, ldab,
+                                                P(ab.ctypes.data), col0, i0, i1)
+
+    assert call(0, 0, m.N) == 0
+    assert call(cf[2], 3, 3) == 0                  # col0 = first column of cell i0 - 1
+    assert call(cf[3], 3, 3) == -4                 # element 3 writes cell 2's columns
+    assert call(0, -1, 2) == -4 and call(0, 0, m.N + 1) == -4
+    assert call(0, 0, m.N, ldab=m.kl + m.ku + 1) == -2

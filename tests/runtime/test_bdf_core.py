@@ -83,10 +83,19 @@ def _released(model):
 
 @pytest.mark.parametrize("kw", [dict(), dict(tau=None, **MAXWELL),
                                 dict(start="pinned", end="clamped")])
-def test_same_steps_on_the_rod_kernels(kw):
+@pytest.mark.parametrize("chunk", [1, 2, None])
+def test_same_steps_on_the_rod_kernels(kw, chunk, monkeypatch):
+    """Also: the compiled loop evaluates J element by element and factors each cell
+    behind the sweep (bdf_core.c's jac_factor_cells), with windows slid after every
+    1 or 2 elements or by the default chunk; the Python path stores the whole J first."""
+    from runtime.solvers.bdf_core import CoreLink
+
+    if chunk is not None:
+        monkeypatch.setattr(CoreLink, "JAC_CHUNK", chunk)
     m = rod_model(8, **kw)          # dead loads at the end and gravity: the rod moves
     y0, yp0 = _released(m)
     py, c = _pair(m, y0, yp0, 0.3, rtol=1e-6, atol=1e-8)
+    assert c.core.s.jac_cells and c.core.s.jchunk == CoreLink.JAC_CHUNK
     _assert_same_steps(py, c)
     assert py.nstep > 50
 
