@@ -248,9 +248,9 @@ def kernels_library(cache_dir: Path | None = None) -> tuple[Path, float, bool]:
     if cc is None:
         raise RuntimeError("no C compiler for the IDAS kernels build")
     gdir = build.generated_dir()
-    sources = [KERNELS_C, gdir / "rod_kernels.c", gdir / "rod_assembly.c"]
+    sources = [KERNELS_C, *(gdir / s for s in build.SOURCES)]
     h = hashlib.sha256()
-    for f in (*sources, gdir / "rod_kernels.h", gdir / "rod_assembly.h"):
+    for f in (*sources, *(gdir / s for s in build.HEADERS)):
         h.update(f.read_bytes())
     h.update("\0".join([BUILDER_VERSION, cc, *KERNEL_CFLAGS, build.host_id()]).encode())
     so = _cache_dir(cache_dir) / f"rod_ode_kernels_{h.hexdigest()[:32]}.so"

@@ -5,6 +5,8 @@ Files (all in ``generated/``):
 
 * ``rod_kernels.c`` / ``rod_kernels.h``: every kernel of :func:`derive.discrete_rod.kernels`
   through one ``casadi.CodeGenerator`` (size independent of N);
+* ``rod_kernels_x4.c`` / ``rod_kernels_x4.h``: the hottest kernels four elements per
+  call (:mod:`derive.codegen_lanes`, from their SX algorithms; bit for bit the scalar ones);
 * ``rod_assembly.c`` / ``rod_assembly.h``: the C API (residual, banded Jacobian,
   diagnostics) rendered from ``templates/rod_assembly.*.jinja``;
 * ``rod_layout.py``: state/parameter layout (``templates/rod_layout.py.jinja``);
@@ -21,6 +23,7 @@ from pathlib import Path
 import casadi as ca
 import jinja2
 
+from derive import codegen_lanes
 from derive import discrete_rod as dr
 from derive.artifact import Artifact, sha256_text
 
@@ -28,6 +31,8 @@ STEP = "discrete_rod"
 TEMPLATES = Path(__file__).resolve().parent / "templates"
 #: CasADi CodeGenerator options (part of every inputs hash)
 CODEGEN_OPTIONS = {"with_header": True, "indent": 2, "casadi_int": "long long int"}
+#: kernels that also get a four-lane variant (``<name>_x4``): the residual's costliest
+X4_KERNELS = ("rod_segment_forces", "rod_joint_torques")
 
 
 def _env() -> jinja2.Environment:
@@ -145,6 +150,14 @@ def artifacts() -> list[Artifact]:
                  + ")", STEP, kernels_hash, {"functions": sigs}),
         Artifact("rod_kernels.h", h_text, "casadi.CodeGenerator (header)", STEP, kernels_hash),
     ]
+    x4 = [f for f in fns if f.name() in X4_KERNELS]
+    x4_hash = sha256_text(Path(codegen_lanes.__file__).read_text(),
+                          *(serial[f.name()] for f in x4))
+    out += [Artifact("rod_kernels_x4.c", codegen_lanes.source(x4),
+                     "derive.codegen_lanes.source(" + ", ".join(X4_KERNELS) + ")", STEP,
+                     x4_hash),
+            Artifact("rod_kernels_x4.h", codegen_lanes.header(x4),
+                     "derive.codegen_lanes.header", STEP, x4_hash)]
     for tpl, path in (("rod_assembly.c.jinja", "rod_assembly.c"),
                       ("rod_assembly.h.jinja", "rod_assembly.h"),
                       ("rod_layout.py.jinja", "rod_layout.py")):

@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_assembly.c.jinja
 // derivation step: discrete_rod
-// inputs sha256: e46e217363c71bb3bd3fc1ec2f95fd423a0a0b7f7532740b570fb615123ee0ae
+// inputs sha256: c9e7267cb05c1a58edc5a6bc9150a2b6efdebc3d021eacf0a1b451eabf457e24
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*
@@ -15,6 +15,7 @@
  */
 #include <string.h>
 #include "rod_kernels.h"
+#include "rod_kernels_x4.h"
 #include "rod_assembly.h"
 
 /* cell sizes and field offsets for nb relaxation terms: base + per * nb */
@@ -261,8 +262,8 @@ int kvrod_residual(const kvrod_rod* rod, double t, const double* y, const double
   const int N = rod->N;
   if (check_rod(rod)) return check_rod(rod);
   work_t W;
-  double Q[9], T[6], f[3], m, held, nq[3], dV[3], dVx[24], G[18];
-  int i, j, k;
+  double T[6], f[3], m, held, dV[3], dVx[24], G[18];
+  int i, j, k, l, nl;
   /* nodes: kinematics and momentum, or the prescribed position and velocity */
   for (i = 0; i <= N; ++i) {
     m = node_mass(rod, i); held = node_held(rod, i);
@@ -284,47 +285,90 @@ int kvrod_residual(const kvrod_rod* rod, double t, const double* y, const double
     if (segment_torque(rod, i, y, &W, T)) return -3;
     for (k = 0; k < 3; ++k) res[i_om(rod, i) + k] -= T[k];
   }
-  /* internal forces of the segments: elastic + viscous (none on a held node's rows) */
+  /* internal forces of the segments: elastic + viscous (none on a held node's rows);
+   * four segments per kernel call (rod_segment_forces_x4: bit for bit the scalar
+   * kernel), then added segment by segment in order */
   const int free0 = !(node_held(rod, 0) > 0.5), freeN = !(node_held(rod, N) > 0.5);
-  for (i = 1; i <= N; ++i) {
-    W.arg[0] = y + i_phi(rod, i - 1); W.arg[1] = y + i_phi(rod, i); W.arg[2] = y + i_p(rod, i);
-    W.arg[3] = y + i_v(rod, i - 1); W.arg[4] = y + i_v(rod, i); W.arg[5] = y + i_om(rod, i);
-    W.arg[6] = segp(rod, i);
-    seg_nq(rod, i, y, nq);
-    W.arg[7] = nq;
-    W.res[0] = Q;
-    if (rod_segment_forces(W.arg, W.res, W.iw, W.w, 0)) return -3;
-    if (rod->nb) {
-      W.arg[0] = y + i_phi(rod, i - 1); W.arg[1] = y + i_phi(rod, i);
-      W.arg[2] = y + i_p(rod, i); W.arg[3] = segp(rod, i);
-      W.res[0] = dV; W.res[1] = dVx; W.res[2] = G;
-      if (rod_segment_branch(W.arg, W.res, W.iw, W.w, 0)) return -3;
-      relax_rows(rod, i_qs(rod, i), dV, y, yp, res);
+  double Q4[4][9], nq4[4][3];
+  const double* a4[4 * 8];
+  double* r4[4];
+  for (i = 1; i <= N; i += nl) {
+    nl = N - i + 1 >= 4 ? 4 : 1;
+    for (l = 0; l < nl; ++l) {
+      const int s = i + l;
+      a4[l] = y + i_phi(rod, s - 1); a4[4 + l] = y + i_phi(rod, s); a4[8 + l] = y + i_p(rod, s);
+      a4[12 + l] = y + i_v(rod, s - 1); a4[16 + l] = y + i_v(rod, s);
+      a4[20 + l] = y + i_om(rod, s); a4[24 + l] = segp(rod, s);
+      seg_nq(rod, s, y, nq4[l]);
+      a4[28 + l] = nq4[l];
+      r4[l] = Q4[l];
     }
-    double* ra = res + i_v(rod, i - 1);
-    double* rb = res + i_v(rod, i);
-    double* ro = res + i_om(rod, i);
-    if (i - 1 > 0 || free0) for (k = 0; k < 3; ++k) ra[k] -= Q[k];
-    if (i < N || freeN) for (k = 0; k < 3; ++k) rb[k] -= Q[3 + k];
-    for (k = 0; k < 3; ++k) ro[k] -= Q[6 + k];
+    if (nl == 4) {
+      if (rod_segment_forces_x4(a4, r4)) return -3;
+    } else {
+      for (k = 0; k < 8; ++k) W.arg[k] = a4[4 * k];
+      W.res[0] = Q4[0];
+      if (rod_segment_forces(W.arg, W.res, W.iw, W.w, 0)) return -3;
+    }
+    for (l = 0; l < nl; ++l) {
+      const int s = i + l;
+      const double* Q = Q4[l];
+      if (rod->nb) {
+        W.arg[0] = y + i_phi(rod, s - 1); W.arg[1] = y + i_phi(rod, s);
+        W.arg[2] = y + i_p(rod, s); W.arg[3] = segp(rod, s);
+        W.res[0] = dV; W.res[1] = dVx; W.res[2] = G;
+        if (rod_segment_branch(W.arg, W.res, W.iw, W.w, 0)) return -3;
+        relax_rows(rod, i_qs(rod, s), dV, y, yp, res);
+      }
+      double* ra = res + i_v(rod, s - 1);
+      double* rb = res + i_v(rod, s);
+      double* ro = res + i_om(rod, s);
+      if (s - 1 > 0 || free0) for (k = 0; k < 3; ++k) ra[k] -= Q[k];
+      if (s < N || freeN) for (k = 0; k < 3; ++k) rb[k] -= Q[3 + k];
+      for (k = 0; k < 3; ++k) ro[k] -= Q[6 + k];
+    }
   }
-  /* internal torques of the joints (and the clamp joints against the end frames) */
-  for (j = 0; j <= N; ++j) {
-    if (!joint_args(rod, j, y, &W)) {
-      relax_rows(rod, i_qj(rod, j), 0, y, yp, res);
-      continue;
+  /* internal torques of the joints (and the clamp joints against the end frames); four
+   * interior joints per kernel call where they come in fours (rod_joint_torques_x4),
+   * then added joint by joint in order */
+  double T4[4][6], mq4[4][3];
+  for (j = 0; j <= N; j += nl) {
+    nl = j >= 1 && j + 3 <= N - 1 ? 4 : 1;
+    if (nl == 4) {
+      for (l = 0; l < 4; ++l) {
+        const int jj = j + l;
+        a4[l] = y + i_p(rod, jj); a4[4 + l] = y + i_p(rod, jj + 1);
+        a4[8 + l] = y + i_om(rod, jj); a4[12 + l] = y + i_om(rod, jj + 1);
+        a4[16 + l] = jntp(rod, jj);
+        jnt_mq(rod, jj, y, mq4[l]);
+        a4[20 + l] = mq4[l];
+        r4[l] = T4[l];
+      }
+      if (rod_joint_torques_x4(a4, r4)) return -3;
+    } else {
+      if (!joint_args(rod, j, y, &W)) {
+        relax_rows(rod, i_qj(rod, j), 0, y, yp, res);
+        continue;
+      }
+      jnt_mq(rod, j, y, mq4[0]);
+      W.arg[5] = mq4[0];
+      W.res[0] = T4[0];
+      if (rod_joint_torques(W.arg, W.res, W.iw, W.w, 0)) return -3;
     }
-    jnt_mq(rod, j, y, nq);
-    W.arg[5] = nq;
-    W.res[0] = T;
-    if (rod_joint_torques(W.arg, W.res, W.iw, W.w, 0)) return -3;
-    if (j >= 1) for (k = 0; k < 3; ++k) res[i_om(rod, j) + k] -= T[k];
-    if (j + 1 <= N) for (k = 0; k < 3; ++k) res[i_om(rod, j + 1) + k] -= T[3 + k];
-    if (rod->nb) {
-      W.arg[2] = jntp(rod, j);       /* (p_a, p_b) are still in arg[0], arg[1] */
-      W.res[0] = dV; W.res[1] = dVx; W.res[2] = G;
-      if (rod_joint_branch(W.arg, W.res, W.iw, W.w, 0)) return -3;
-      relax_rows(rod, i_qj(rod, j), dV, y, yp, res);
+    for (l = 0; l < nl; ++l) {
+      const int jj = j + l;
+      const double* T = T4[l];
+      if (jj >= 1) for (k = 0; k < 3; ++k) res[i_om(rod, jj) + k] -= T[k];
+      if (jj + 1 <= N) for (k = 0; k < 3; ++k) res[i_om(rod, jj + 1) + k] -= T[3 + k];
+      if (rod->nb) {
+        if (nl == 4) {
+          W.arg[0] = y + i_p(rod, jj); W.arg[1] = y + i_p(rod, jj + 1);
+        }                              /* else (p_a, p_b) are still in arg[0], arg[1] */
+        W.arg[2] = jntp(rod, jj);
+        W.res[0] = dV; W.res[1] = dVx; W.res[2] = G;
+        if (rod_joint_branch(W.arg, W.res, W.iw, W.w, 0)) return -3;
+        relax_rows(rod, i_qj(rod, jj), dV, y, yp, res);
+      }
     }
   }
   return 0;

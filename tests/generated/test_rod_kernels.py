@@ -205,3 +205,39 @@ def test_jacobian_by_elements_rejects_cells_outside_the_rod_or_the_window():
     assert call(cf[3], 3, 3) == -4                 # element 3 writes cell 2's columns
     assert call(0, -1, 2) == -4 and call(0, 0, m.N + 1) == -4
     assert call(0, 0, m.N, ldab=m.kl + m.ku + 1) == -2
+
+
+@pytest.mark.parametrize("name", codegen_rod.X4_KERNELS)
+def test_four_lane_kernels_equal_the_scalar_kernel_bit_for_bit(name):
+    """<name>_x4 (derive/codegen_lanes.py) runs the scalar kernel's SX instructions on
+    four elements at once: every lane must be the scalar result exactly."""
+    import ctypes
+
+    m = _model(3, "clamped", "free")
+    if m.backend != "c":
+        pytest.skip("no C compiler")
+    f = next(k for k in dr.kernels() if k.name() == name)
+    rng = np.random.default_rng(4)
+    lanes = [[rng.uniform(0.5, 1.5, f.nnz_in(i)) * rng.choice([-1, 1], f.nnz_in(i))
+              for i in range(f.n_in())] for _ in range(4)]
+    outs = [[np.full(f.nnz_out(o), np.nan) for o in range(f.n_out())] for _ in range(5)]
+    P = ctypes.c_void_p
+    arg = (P * (4 * f.n_in()))(*[lanes[lane][i].ctypes.data for i in range(f.n_in())
+                                 for lane in range(4)])
+    res = (P * (4 * f.n_out()))(*[outs[lane][o].ctypes.data for o in range(f.n_out())
+                                  for lane in range(4)])
+    assert getattr(m._lib, name + "_x4")(arg, res) == 0
+    scalar = getattr(m._lib, name)
+    for lane in range(4):
+        a1 = (P * f.n_in())(*[x.ctypes.data for x in lanes[lane]])
+        r1 = (P * f.n_out())(*[outs[4][o].ctypes.data for o in range(f.n_out())])
+        assert scalar(a1, r1, None, (ctypes.c_double * max(f.sz_w(), 1))(), 0) == 0
+        for o in range(f.n_out()):
+            assert np.array_equal(outs[lane][o], outs[4][o]), (lane, o)
+    # and the numbers are the function's (in-process CasADi, to rounding)
+    for lane in range(4):
+        ref = f(*lanes[lane])
+        ref = [ref] if f.n_out() == 1 else ref
+        for o in range(f.n_out()):
+            want = np.asarray(ref[o]).ravel(order="F")
+            assert np.allclose(outs[lane][o], want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
