@@ -31,8 +31,10 @@ STEP = "discrete_rod"
 TEMPLATES = Path(__file__).resolve().parent / "templates"
 #: CasADi CodeGenerator options (part of every inputs hash)
 CODEGEN_OPTIONS = {"with_header": True, "indent": 2, "casadi_int": "long long int"}
-#: kernels that also get a four-lane variant (``<name>_x4``): the residual's costliest
-X4_KERNELS = ("rod_segment_forces", "rod_joint_torques")
+#: kernels that also get a four-lane variant (``<name>_x4``): the costliest of the
+#: residual and of the Jacobian
+X4_KERNELS = ("rod_segment_forces", "rod_joint_torques", "rod_segment_forces_jac",
+              "rod_joint_torques_jac")
 
 
 def _env() -> jinja2.Environment:

@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_assembly.c.jinja
 // derivation step: discrete_rod
-// inputs sha256: c9e7267cb05c1a58edc5a6bc9150a2b6efdebc3d021eacf0a1b451eabf457e24
+// inputs sha256: f67a7867c86ec8106230f2c8de6d93b6ada7348da4a166243ed2aa0b5139c50c
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*
@@ -444,16 +444,21 @@ static int jac_segment_inertia(const kvrod_rod* rod, int i, const double* y,
  * forces to the segment's internal strains q_b (through n_q = -sum C_b q_b) and the
  * relaxation rows q_b' - (dV - q_b)/theta_b. */
 static int jac_segment(const kvrod_rod* rod, int i, const double* y, double cy, double cj,
-                       const band_t* B, work_t* W, double* J) {
+                       const band_t* B, work_t* W, double* J, const double* Jx) {
   const int N = rod->N;
   int rb[6], ra[3], cb[13], cpart[13], r, c, b, k;
   double nq[3];
-  seg_nq(rod, i, y, nq);
-  W->arg[0] = y + i_phi(rod, i - 1); W->arg[1] = y + i_phi(rod, i); W->arg[2] = y + i_p(rod, i);
-  W->arg[3] = y + i_v(rod, i - 1); W->arg[4] = y + i_v(rod, i); W->arg[5] = y + i_om(rod, i);
-  W->arg[6] = segp(rod, i); W->arg[7] = nq;
-  W->res[0] = J;
-  if (rod_segment_forces_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
+  const double* Jk = Jx;         /* the kernel's result, if evaluated already (x4) */
+  if (!Jk) {
+    seg_nq(rod, i, y, nq);
+    W->arg[0] = y + i_phi(rod, i - 1); W->arg[1] = y + i_phi(rod, i);
+    W->arg[2] = y + i_p(rod, i); W->arg[3] = y + i_v(rod, i - 1);
+    W->arg[4] = y + i_v(rod, i); W->arg[5] = y + i_om(rod, i);
+    W->arg[6] = segp(rod, i); W->arg[7] = nq;
+    W->res[0] = J;
+    if (rod_segment_forces_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    Jk = J;
+  }
   const int use_a = (i - 1 > 0 || !(node_held(rod, 0) > 0.5));
   const int use_b = (i < N || !(node_held(rod, N) > 0.5));
   for (r = 0; r < 3; ++r) {
@@ -468,7 +473,7 @@ static int jac_segment(const kvrod_rod* rod, int i, const double* y, double cy, 
   for (c = 0; c < 13; ++c) {
     const int c2 = cpart[c];
     for (r = 0; r < 6; ++r) {
-      const double val = cy * J[r + 6 * c];
+      const double val = cy * Jk[r + 6 * c];
       if (rb[r] >= 0) {
         AB(rb[r], cb[c]) -= val;
         if (c2 >= 0) AB(rb[r], c2) += val;
@@ -510,7 +515,7 @@ static int jac_segment(const kvrod_rod* rod, int i, const double* y, double cy, 
 
 /* joint j sits at node j: between segments j and j+1, or a clamp frame and a segment */
 static int jac_joint(const kvrod_rod* rod, int j, const double* y, double cy, double cj,
-                     const band_t* B, work_t* W, double* J) {
+                     const band_t* B, work_t* W, double* J, const double* Jx) {
   const int N = rod->N, has_a = j >= 1, has_b = j + 1 <= N;
   int jrows[6], jcols[14], r, c, b, k;
   double mq[3];
@@ -522,10 +527,14 @@ static int jac_joint(const kvrod_rod* rod, int j, const double* y, double cy, do
       }
     return 0;
   }
-  jnt_mq(rod, j, y, mq);
-  W->arg[5] = mq;
-  W->res[0] = J;
-  if (rod_joint_torques_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
+  const double* Jk = Jx;         /* the kernel's result, if evaluated already (x4) */
+  if (!Jk) {
+    jnt_mq(rod, j, y, mq);
+    W->arg[5] = mq;
+    W->res[0] = J;
+    if (rod_joint_torques_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    Jk = J;
+  }
   for (r = 0; r < 3; ++r) {
     jrows[r] = has_a ? i_om(rod, j) + r : -1;
     jrows[3 + r] = has_b ? i_om(rod, j + 1) + r : -1;
@@ -539,7 +548,7 @@ static int jac_joint(const kvrod_rod* rod, int j, const double* y, double cy, do
   for (c = 0; c < 14; ++c) {
     if (jcols[c] < 0) continue;
     for (r = 0; r < 6; ++r)
-      if (jrows[r] >= 0) AB(jrows[r], jcols[c]) -= cy * J[r + 6 * c];
+      if (jrows[r] >= 0) AB(jrows[r], jcols[c]) -= cy * Jk[r + 6 * c];
   }
   if (!rod->nb) return 0;
   double dU[3], dUx[24], G[18];
@@ -581,11 +590,44 @@ int kvrod_jacobian_band_cells(const kvrod_rod* rod, double t, const double* y,
   work_t W;
   double J[84];
   const band_t band = {ab, ldab, col0}, *B = &band;
-  int i, b, k;
+  int i, b, k, l, g0 = -1, gj = 0;
+  /* the segment and joint kernels of elements g0..g0+3, four per call (x4, bit for bit
+   * the scalar kernels); their terms are then added element by element as without */
+  double JS[4][6 * 13], JJ[4][6 * 14], q4[4][3];
+  const double* a4[4 * 8];
+  double* r4[4];
   /* one sweep over the cells; the columns of cell i+1 are zeroed just before the
    * elements of cell i (which reach one cell ahead) are added: cache friendly */
   if (i0 == 0) zero_cell(rod, 0, B);
   for (i = i0; i <= i1; ++i) {
+    if (cy != 0.0 && i >= 1 && i + 3 <= i1 && (g0 < 0 || i >= g0 + 4)) {
+      g0 = i;
+      for (l = 0; l < 4; ++l) {
+        const int s = i + l;
+        a4[l] = y + i_phi(rod, s - 1); a4[4 + l] = y + i_phi(rod, s);
+        a4[8 + l] = y + i_p(rod, s); a4[12 + l] = y + i_v(rod, s - 1);
+        a4[16 + l] = y + i_v(rod, s); a4[20 + l] = y + i_om(rod, s);
+        a4[24 + l] = segp(rod, s);
+        seg_nq(rod, s, y, q4[l]);
+        a4[28 + l] = q4[l];
+        r4[l] = JS[l];
+      }
+      if (rod_segment_forces_jac_x4(a4, r4)) return -3;
+      gj = i + 3 <= N - 1;               /* joints i..i+3 all between two segments */
+      if (gj) {
+        for (l = 0; l < 4; ++l) {
+          const int jj = i + l;
+          a4[l] = y + i_p(rod, jj); a4[4 + l] = y + i_p(rod, jj + 1);
+          a4[8 + l] = y + i_om(rod, jj); a4[12 + l] = y + i_om(rod, jj + 1);
+          a4[16 + l] = jntp(rod, jj);
+          jnt_mq(rod, jj, y, q4[l]);
+          a4[20 + l] = q4[l];
+          r4[l] = JJ[l];
+        }
+        if (rod_joint_torques_jac_x4(a4, r4)) return -3;
+      }
+    }
+    const int in_g = g0 >= 0 && i >= g0 && i < g0 + 4;
     if (i + 1 <= N) zero_cell(rod, i + 1, B);
     if (jac_node(rod, i, y, yp, cy, cj, B, &W, J)) return -3;
     if (i >= 1 && jac_segment_inertia(rod, i, y, yp, cy, cj, B, &W, J)) return -3;
@@ -596,8 +638,8 @@ int kvrod_jacobian_band_cells(const kvrod_rod* rod, double t, const double* y,
       }
       continue;
     }
-    if (i >= 1 && jac_segment(rod, i, y, cy, cj, B, &W, J)) return -3;
-    if (jac_joint(rod, i, y, cy, cj, B, &W, J)) return -3;
+    if (i >= 1 && jac_segment(rod, i, y, cy, cj, B, &W, J, in_g ? JS[i - g0] : 0)) return -3;
+    if (jac_joint(rod, i, y, cy, cj, B, &W, J, in_g && gj ? JJ[i - g0] : 0)) return -3;
   }
   return 0;
 }
