@@ -133,7 +133,8 @@ def run_all(quick: bool = False, out_dir: Path = Path("bench/results"),
                 break
         _log("== scaling in N")
         doc = scaling.run(scaling.QUICK_SIZES if quick else scaling.SIZES,
-                          T=2.0 if quick else 10.0, rtol=rtol, log=_log)
+                          T=2.0 if quick else 10.0, rtol=rtol, log=_log,
+                          rounds=1 if quick else scaling.ROUNDS)
         doc["meta"] = metadata()
         keep("scaling", doc)
     if not quick:

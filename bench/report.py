@@ -156,8 +156,10 @@ def integrators_md(doc: dict) -> list[str]:
 def scaling_md(doc: dict) -> list[str]:
     out = ["## 2. Scaling in N (kvrod)", "",
            f"Cantilever release, rtol = {doc['rtol']:.0e} with default_atol, T = "
-           f"{doc['T']:g} s, output every 0.1 s, one subprocess per N, median of 3 solves "
-           "(2 above N = 2000). Peak RSS is the whole process (Python, NumPy, SciPy, "
+           f"{doc['T']:g} s, output every 0.1 s, one subprocess per N and round, "
+           f"{doc.get('rounds', 1)} rounds over all N, the median over the rounds (a slow "
+           "spell of a shared machine spoils one size in one round, not all repeats of "
+           "it). Peak RSS is the whole process (Python, NumPy, SciPy, "
            "CasADi); tracemalloc peak is the solve's own Python/NumPy allocations.", "",
            "| N | n | wall s | s per simulated s | steps | us/step | LU | peak RSS MiB | "
            "solve alloc peak MiB |", "|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]

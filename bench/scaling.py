@@ -4,8 +4,11 @@ Each N runs in a fresh subprocess (``python -m bench.scaling N T rtol``) so that
 resident set size (``VmHWM`` of /proc/self/status) belongs to that run alone; the child
 also reports the peak of Python/NumPy allocations during the solve (``tracemalloc``,
 measured in a second, shorter solve so that tracing does not slow the timed one). A
-0.01 s solve first warms up the process (library loading, first touches of the arrays);
-the timed solve is the median of 3 solves (2 above N = 2000). The
+0.01 s solve first warms up the process (library loading, first touches of the arrays).
+The sizes run in ROUNDS rounds (N = 25 .. 4000, then again), one timed solve per size and
+round, and each size's time is the median over the rounds: on a shared machine a slow
+spell then spoils one size in one round, not all repeats of a size (the slope and the
+N = 1000 figure are within such spells' reach otherwise). The
 cantilever release of :mod:`bench.integrators` (``released_rod``), one rtol for all N
 (the matched rtol at N = 50) with kvrod's per-component ``default_atol``, output every
 0.1 s. The log-log slope of time against N is a least-squares fit, over all N and over
@@ -31,6 +34,7 @@ SIZES = (25, 50, 100, 200, 500, 1000, 2000, 4000)
 QUICK_SIZES = (25, 50)
 SLOPE_MAX = 1.05
 N1000_MAX_SECONDS = 1.5
+ROUNDS = 5
 
 
 def _peak_rss_kib() -> float:
@@ -45,7 +49,7 @@ def _peak_rss_kib() -> float:
     return float(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
 
 
-def one(N: int, T: float, rtol: float) -> dict:
+def one(N: int, T: float, rtol: float, repeats: int = 1) -> dict:
     """Run in this process: static solve, release, integrate T seconds; timings, memory."""
     from bench.idas_script import released_rod
     from runtime.solvers.integrator import solve
@@ -56,7 +60,7 @@ def one(N: int, T: float, rtol: float) -> dict:
     # warm-up (first calls: library loading, page faults of the work arrays)
     solve(c.model, (0.0, 0.01), c.y0, c.yp0, rtol=rtol, atol=atol)
     walls = []
-    for _ in range(3 if N <= 2000 else 2):
+    for _ in range(repeats):
         t0 = time.perf_counter()
         s = solve(c.model, (0.0, T), c.y0, c.yp0, rtol=rtol, atol=atol, t_eval=grid)
         walls.append(time.perf_counter() - t0)
@@ -75,23 +79,39 @@ def one(N: int, T: float, rtol: float) -> dict:
             "peak_rss_MiB": rss_kib / 1024.0, "solve_tracemalloc_peak_MiB": peak / 2**20}
 
 
+def _child(N: int, T: float, rtol: float, timeout: float) -> dict:
+    cmd = [sys.executable, "-m", "bench.scaling", str(N), repr(T), repr(rtol)]
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, check=True)
+        return json.loads(p.stdout.strip().splitlines()[-1])
+    except (subprocess.SubprocessError, json.JSONDecodeError, IndexError) as exc:
+        return {"N": N, "ok": False, "message": str(exc)[-300:]}
+
+
 def run(sizes=SIZES, T: float = 10.0, rtol: float = 1e-7, timeout: float = 600.0,
-        log=print) -> dict:
-    rows = []
-    for N in sizes:
-        cmd = [sys.executable, "-m", "bench.scaling", str(N), repr(T), repr(rtol)]
-        try:
-            p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout,
-                               check=True)
-            row = json.loads(p.stdout.strip().splitlines()[-1])
-        except (subprocess.SubprocessError, json.JSONDecodeError, IndexError) as exc:
-            row = {"N": N, "ok": False, "message": str(exc)[-300:]}
-        rows.append(row)
-        if row.get("ok"):
-            log(f"  N={N}: {row['wall']:.2f} s for {T:g} s simulated, "
-                f"{row['nstep']} steps, peak RSS {row['peak_rss_MiB']:.0f} MiB")
-        else:
-            log(f"  N={N}: failed ({row.get('message', '')})")
+        log=print, rounds: int = ROUNDS) -> dict:
+    by_n: dict[int, dict] = {}
+    for k in range(rounds):
+        for N in sizes:
+            if k and not by_n[N].get("ok"):
+                continue
+            row = _child(N, T, rtol, timeout)
+            if not row.get("ok"):
+                by_n[N] = row
+                log(f"  N={N}: failed ({row.get('message', '')})")
+                continue
+            first = by_n.setdefault(N, row)
+            if first is not row:
+                first["walls"] += row["walls"]
+                first["peak_rss_MiB"] = max(first["peak_rss_MiB"], row["peak_rss_MiB"])
+            log(f"  N={N} (round {k + 1}/{rounds}): {row['wall']:.2f} s for {T:g} s "
+                f"simulated, {row['nstep']} steps, peak RSS {row['peak_rss_MiB']:.0f} MiB")
+    rows = [by_n[N] for N in sizes]
+    for r in rows:
+        if r.get("ok"):
+            r["wall"] = float(np.median(r["walls"]))
+            r["wall_per_simulated_second"] = r["wall"] / T
+            r["us_per_step"] = 1e6 * r["wall"] / r["nstep"]
     good = [r for r in rows if r.get("ok")]
     slope = None
     if len(good) >= 2:
@@ -112,7 +132,7 @@ def run(sizes=SIZES, T: float = 10.0, rtol: float = 1e-7, timeout: float = 600.0
         target(f"N = 1000, 10 s simulated: kvrod integration < {N1000_MAX_SECONDS} s",
                n1000[0]["wall"] if n1000 and T == 10.0 else None, N1000_MAX_SECONDS,
                strict=True)]
-    return {"T": T, "rtol": rtol, "rows": rows, "loglog_slope": slope,
+    return {"T": T, "rtol": rtol, "rounds": rounds, "rows": rows, "loglog_slope": slope,
             "loglog_slope_N_ge_200": slope_large, "targets": targets}
 
 

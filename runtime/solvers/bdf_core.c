@@ -11,8 +11,9 @@
    names follow IDA's (IDASetCoeffs, IDANls, IDATestError, IDACompleteStep, ...).
 
    The problem comes as function pointers: the rod's compiled kernels (kvrod_residual,
-   kvrod_jacobian_band, kvrod_energies on a kvrod_rod struct), or ctypes callbacks into
-   Python for any other problem. Loads that change with time are re-applied by a
+   kvrod_jacobian_band or, on the condensed block path, kvrod_jacobian_band_cells,
+   kvrod_energies on a kvrod_rod struct), or ctypes callbacks into Python for any other
+   problem. Loads that change with time are re-applied by a
    callback ("drive") only when t leaves the interval on which they are constant. */
 #define _POSIX_C_SOURCE 199309L     /* clock_gettime under -std=c99 */
 #include <time.h>
