@@ -14,6 +14,12 @@
 #define KV_STREAM 0
 #endif
 
+#if defined(__GNUC__)
+#define KV_INLINE static inline __attribute__((always_inline))
+#else
+#define KV_INLINE static inline
+#endif
+
 /* LU with partial pivoting of a band matrix in LAPACK band storage: LAPACK's unblocked
    dgbtf2, which is what dgbtrf runs for kvrod's bands (kl < 32, its block size), with the
    same storage, pivots (1-based) and info. Written here, not called from SciPy, so that
@@ -187,6 +193,41 @@ double kv_wrms(int n, const double *v, const double *a, const double *w)
    c_j(t_i) phi_j and y'(t_i) = sum_j d_j(t_i) phi_j, phi (k+1, n) C order, out_y and
    out_yp (m, n) C order. The coefficients are IDA's recurrences (bdf.py's
    _interp_coefficients); one call replaces about twenty NumPy calls per step. */
+/* y = sum_j c_j phi_j, yp = sum_j d_j phi_j over components lo..hi-1, summed in j order
+   per component; k a literal at the call sites, so that the j loop unrolls and the q
+   loop vectorises */
+KV_INLINE void interp_span(int k, int lo, int hi, const double *const *ph, const double *c,
+                           const double *d, double *restrict y, double *restrict yp)
+{
+    for (int q = lo; q < hi; ++q) {
+        double a = ph[0][q], b = 0.0;
+        for (int j = 1; j <= k; ++j) { a += c[j] * ph[j][q]; b += d[j] * ph[j][q]; }
+        y[q] = a;
+        yp[q] = b;
+    }
+}
+
+#if KV_STREAM
+/* interp_span on pairs from lo (16-byte aligned in y and yp) with non-temporal stores;
+   returns the first component not done */
+KV_INLINE int interp_stream(int k, int lo, int hi, const double *const *ph, const double *c,
+                            const double *d, double *restrict y, double *restrict yp)
+{
+    int q = lo;
+    for (; q + 1 < hi; q += 2) {
+        double a0 = ph[0][q], a1 = ph[0][q + 1], b0 = 0.0, b1 = 0.0;
+        for (int j = 1; j <= k; ++j) {
+            const double p0 = ph[j][q], p1 = ph[j][q + 1];
+            a0 += c[j] * p0; a1 += c[j] * p1;
+            b0 += d[j] * p0; b1 += d[j] * p1;
+        }
+        _mm_stream_pd(y + q, _mm_set_pd(a1, a0));
+        _mm_stream_pd(yp + q, _mm_set_pd(b1, b0));
+    }
+    return q;
+}
+#endif
+
 void kv_interp(int k, int n, int m, double tn, const double *psi, const double *phi,
                const double *ts, double *out_y, double *out_yp)
 {
@@ -205,39 +246,34 @@ void kv_interp(int k, int n, int m, double tn, const double *psi, const double *
             c[j] = cs;
             d[j] = ds;
         }
-        /* one pass, summed in j order per component; outputs of a large state are stored
-           past the cache (an output grid of full states at N = 4000 is 0.8 MB per time,
-           which would otherwise evict the integrator's working set) */
+        /* one pass over phi; outputs of a large state are stored past the cache (an
+           output grid of full states at N = 4000 is 0.8 MB per time, which would
+           otherwise evict the integrator's working set) */
         double *y = out_y + (size_t)i * n, *yp = out_yp + (size_t)i * n;
-        const int stream = KV_STREAM && (size_t)n * sizeof(double) >= ((size_t)1 << 18);
         int q = 0;
 #if KV_STREAM
-        if (stream) {
-            for (; q < n && (((size_t)(y + q) | (size_t)(yp + q)) & 15); ++q) {
-                double a = ph[0][q], b = 0.0;
-                for (int j = 1; j <= k; ++j) { a += c[j] * ph[j][q]; b += d[j] * ph[j][q]; }
-                y[q] = a;
-                yp[q] = b;
-            }
-            if ((((size_t)(y + q)) & 15) == 0 && (((size_t)(yp + q)) & 15) == 0)
-                for (; q + 1 < n; q += 2) {
-                    double a0 = ph[0][q], a1 = ph[0][q + 1], b0 = 0.0, b1 = 0.0;
-                    for (int j = 1; j <= k; ++j) {
-                        const double p0 = ph[j][q], p1 = ph[j][q + 1];
-                        a0 += c[j] * p0; a1 += c[j] * p1;
-                        b0 += d[j] * p0; b1 += d[j] * p1;
-                    }
-                    _mm_stream_pd(y + q, _mm_set_pd(a1, a0));
-                    _mm_stream_pd(yp + q, _mm_set_pd(b1, b0));
+        if ((size_t)n * sizeof(double) >= ((size_t)1 << 18)) {
+            for (; q < n && (((size_t)(y + q) | (size_t)(yp + q)) & 15); ++q)
+                interp_span(k, q, q + 1, ph, c, d, y, yp);
+            if ((((size_t)(y + q)) & 15) == 0 && (((size_t)(yp + q)) & 15) == 0) {
+                switch (k) {
+                case 1: q = interp_stream(1, q, n, ph, c, d, y, yp); break;
+                case 2: q = interp_stream(2, q, n, ph, c, d, y, yp); break;
+                case 3: q = interp_stream(3, q, n, ph, c, d, y, yp); break;
+                case 4: q = interp_stream(4, q, n, ph, c, d, y, yp); break;
+                case 5: q = interp_stream(5, q, n, ph, c, d, y, yp); break;
+                default: q = interp_stream(k, q, n, ph, c, d, y, yp); break;
                 }
+            }
         }
 #endif
-        (void)stream;
-        for (; q < n; ++q) {
-            double a = ph[0][q], b = 0.0;
-            for (int j = 1; j <= k; ++j) { a += c[j] * ph[j][q]; b += d[j] * ph[j][q]; }
-            y[q] = a;
-            yp[q] = b;
+        switch (k) {
+        case 1: interp_span(1, q, n, ph, c, d, y, yp); break;
+        case 2: interp_span(2, q, n, ph, c, d, y, yp); break;
+        case 3: interp_span(3, q, n, ph, c, d, y, yp); break;
+        case 4: interp_span(4, q, n, ph, c, d, y, yp); break;
+        case 5: interp_span(5, q, n, ph, c, d, y, yp); break;
+        default: interp_span(k, q, n, ph, c, d, y, yp); break;
         }
     }
 #if KV_STREAM
@@ -324,11 +360,6 @@ typedef struct {
     int col0;
 } kv_cond;
 
-#if defined(__GNUC__)
-#define KV_INLINE static inline __attribute__((always_inline))
-#else
-#define KV_INLINE static inline
-#endif
 
 #define J_(i, j) ab[(size_t)(kv + (i) - (j)) + (size_t)(j) * (size_t)c->ldab]
 #define JC_(i, j) abc[(size_t)(kvc + (i) - (j)) + (size_t)(j) * (size_t)c->ldc]

@@ -253,3 +253,30 @@ def test_a_signal_during_callbacks_is_delivered_after_the_compiled_loop_returns(
         s.advance(100.0)
     assert 0.0 < s.t < 100.0 and s.nfev >= 50 and abs(s.y[0] - math.exp(-s.t)) < 1e-4
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+@pytest.mark.parametrize("n", [7, 13006, 40001])
+@pytest.mark.parametrize("k", [1, 3, 5])
+def test_interpolation_in_c_sums_like_numpy_at_every_size_and_alignment(n, k):
+    """kv_interp (one pass over phi, vectorised per order, non-temporal stores from 256 kB
+    per output row, rows of odd n alternating in alignment) gives y = phi_0 + c_1 phi_1
+    + ... and y' = 0 + d_1 phi_1 + ... summed in j order: NumPy's sums term by term."""
+    import ctypes
+
+    from runtime.solvers.bdf import _interp_coefficients
+
+    lib = _bdf_c.load()
+    rng = np.random.default_rng(n + k)
+    phi = rng.standard_normal((k + 1, n))
+    psi = np.cumsum(rng.uniform(0.01, 0.02, 6))
+    ts = np.array([-0.003, -0.0071, 0.0])
+    y, yp = np.full((3, n), np.nan), np.full((3, n), np.nan)
+    P = lambda a: a.ctypes.data  # noqa: E731
+    lib.kv_interp(k, n, 3, ctypes.c_double(0.0), P(psi), P(phi), P(ts), P(y), P(yp))
+    c, d = _interp_coefficients(ts, 0.0, psi, k)
+    for i in range(3):
+        wy, wyp = phi[0].copy(), np.zeros(n)
+        for j in range(1, k + 1):
+            wy += c[j, i] * phi[j]
+            wyp += d[j, i] * phi[j]
+        assert np.array_equal(y[i], wy) and np.array_equal(yp[i], wyp), i
