@@ -81,9 +81,11 @@ def _released(model):
     return consistent_initial(model, 0.0, model.initial_state(0.0), np.zeros(model.n))
 
 
-@pytest.mark.parametrize("kw", [dict(), dict(tau=None, **MAXWELL),
-                                dict(start="pinned", end="clamped")])
-@pytest.mark.parametrize("chunk", [1, 2, None])
+_KV, _MAXWELL, _PINNED = dict(), dict(tau=None, **MAXWELL), dict(start="pinned", end="clamped")
+
+
+@pytest.mark.parametrize("kw,chunk", [(_KV, 1), (_KV, 2), (_KV, None), (_MAXWELL, 2),
+                                      (_MAXWELL, None), (_PINNED, 1), (_PINNED, None)])
 def test_same_steps_on_the_rod_kernels(kw, chunk, monkeypatch):
     """Also: the compiled loop evaluates J element by element and factors each cell
     behind the sweep (bdf_core.c's jac_factor_cells), with windows slid after every
