@@ -363,7 +363,8 @@ class RodModel:
         return CKernels(address(lib.kvrod_residual), address(lib.kvrod_jacobian_band),
                         address(lib.kvrod_energies), ctypes.addressof(self._struct),
                         drive=drive, keep=self,
-                        jacobian_cells=address(lib.kvrod_jacobian_band_cells))
+                        jacobian_cells=address(lib.kvrod_jacobian_band_cells),
+                        drive_constant=drive is not None and not self.drive.time_dependent)
 
     def _struct_ptr(self):
         import ctypes

@@ -76,7 +76,9 @@ class CoreLink:
         self.ptr = ctypes.addressof(s)
         self._error: BaseException | None = None
         self._keep: list[Any] = []
-        self._callbacks = False      # some function is a Python callback (signals held)
+        self._callbacks = False      # a function other than the drive is a Python callback
+        self._drive_now = None       # constant loads: drive(t) before each run
+        self._go = None              # loads moved with t: the drive callback's body
         n = solver.n
         # every buffer the C code may hand to a callback, by address
         self._arrays: dict[int, np.ndarray] = {}
@@ -91,9 +93,12 @@ class CoreLink:
             s.res, s.jac, s.en, s.ctx = kern.residual, kern.jacobian, kern.energies, kern.ctx
             self._keep.append(kern.keep)
             self.has_energies = bool(kern.energies)
-            if kern.drive is not None:
+            if kern.drive is not None and not kern.drive_constant:
                 self._set_drive(kern.drive)
             else:
+                # constant loads: driven from Python before each run (advance), so that
+                # C never calls back for them (no callback: no signals to hold either)
+                self._drive_now = kern.drive
                 s.drive_lo, s.drive_hi = -math.inf, math.inf
         else:
             self._python_functions(problem)
@@ -153,9 +158,9 @@ class CoreLink:
         def go(t: float) -> None:
             s.drive_lo, s.drive_hi = drive(t)
 
+        self._go = go
         cb = _bdf_c.DRIVE_FN(self._guard(go))
         self._keep.append(cb)
-        self._callbacks = True
         s.drive = ctypes.cast(cb, ctypes.c_void_p).value
         s.drive_lo = s.drive_hi = math.nan          # nothing is known to hold yet
 
@@ -223,10 +228,18 @@ class CoreLink:
         s = self.s
         if s.drive:
             # Python code may have driven the loads to another time since the last call
-            # (an observer evaluating the model at an output time): forget what held.
+            # (an observer evaluating the model at an output time): drive them to the
+            # current time here, which also tells whether C can need the callback at all
             s.drive_lo = s.drive_hi = s.drive_t = math.nan
+            self._go(s.t)
+            s.drive_t = s.t
+        elif self._drive_now is not None:
+            self._drive_now(s.t)             # a no-op unless the model was moved meanwhile
         s.stop = 0
-        if self._callbacks:
+        # the drive is called back only when t leaves [lo, hi) (a release: never again)
+        drive_calls = bool(s.drive) and not (math.isinf(s.drive_hi) if s.direction > 0
+                                              else math.isinf(s.drive_lo))
+        if self._callbacks or drive_calls:
             code, held = _call_holding_signals(s, self._lib.kv_ida_advance, self.ptr, t_stop,
                                                max_steps)
         else:

@@ -163,11 +163,17 @@ class CKernels:
     ``jacobian_cells`` (optional, 0 if none): the Jacobian element by element
     (``kvrod_jacobian_band_cells``), element i being cell i of the problem's
     ``condensation_cells()``; with it the step loop factors the condensed Newton
-    matrix cell by cell right behind the Jacobian's sweep."""
+    matrix cell by cell right behind the Jacobian's sweep.
+
+    ``drive_constant``: the loads do not change with t (``drive`` returns an unbounded
+    interval); the step loop then drives once from Python before each run and never
+    calls back into Python for it."""
 
     def __init__(self, residual: int, jacobian: int, energies: int, ctx: int,
-                 drive=None, keep: Any = None, jacobian_cells: int = 0) -> None:
+                 drive=None, keep: Any = None, jacobian_cells: int = 0,
+                 drive_constant: bool = False) -> None:
         self.residual, self.jacobian, self.energies, self.ctx = residual, jacobian, energies, ctx
         self.jacobian_cells = jacobian_cells
+        self.drive_constant = drive_constant
         self.drive = drive
         self.keep = keep
