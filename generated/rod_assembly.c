@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_assembly.c.jinja
 // derivation step: discrete_rod
-// inputs sha256: f67a7867c86ec8106230f2c8de6d93b6ada7348da4a166243ed2aa0b5139c50c
+// inputs sha256: d51f8d81f5a9a477dd50a6fee21c2b96f5a0ffe8cb0ef9dd2d1842b7131ad170
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*
@@ -139,6 +139,27 @@ static void jnt_mq(const kvrod_rod* r, int j, const double* y, double* mq) {
 }
 
 static const double kZero3[3] = {0.0, 0.0, 0.0};
+
+/* The inputs of segment s's kernels (forces, their Jacobian, diagnostics):
+ * a[stride * k] for input k (stride 1: a call's argument list; 4: lane l of a four-lane
+ * call, a = a4 + l), with its relaxation resultant n_q written into nq. */
+static void seg_args(const kvrod_rod* r, int s, const double* y, const double** a,
+                     int stride, double* nq) {
+  seg_nq(r, s, y, nq);
+  a[0] = y + i_phi(r, s - 1); a[stride] = y + i_phi(r, s); a[2 * stride] = y + i_p(r, s);
+  a[3 * stride] = y + i_v(r, s - 1); a[4 * stride] = y + i_v(r, s);
+  a[5 * stride] = y + i_om(r, s); a[6 * stride] = segp(r, s); a[7 * stride] = nq;
+}
+
+/* lane l of a four-lane call of the kernels of joint j between segments j and j+1 (an
+ * interior joint; joint_args covers the clamp joints), with its resultant m_q into mq */
+static void jnt_lane(const kvrod_rod* r, int j, const double* y, const double** a4, int l,
+                     double* mq) {
+  jnt_mq(r, j, y, mq);
+  a4[l] = y + i_p(r, j); a4[4 + l] = y + i_p(r, j + 1);
+  a4[8 + l] = y + i_om(r, j); a4[12 + l] = y + i_om(r, j + 1);
+  a4[16 + l] = jntp(r, j); a4[20 + l] = mq;
+}
 
 /* work memory large enough for every kernel */
 #define MAXW 78
@@ -294,19 +315,14 @@ int kvrod_residual(const kvrod_rod* rod, double t, const double* y, const double
   double* r4[4];
   for (i = 1; i <= N; i += nl) {
     nl = N - i + 1 >= 4 ? 4 : 1;
-    for (l = 0; l < nl; ++l) {
-      const int s = i + l;
-      a4[l] = y + i_phi(rod, s - 1); a4[4 + l] = y + i_phi(rod, s); a4[8 + l] = y + i_p(rod, s);
-      a4[12 + l] = y + i_v(rod, s - 1); a4[16 + l] = y + i_v(rod, s);
-      a4[20 + l] = y + i_om(rod, s); a4[24 + l] = segp(rod, s);
-      seg_nq(rod, s, y, nq4[l]);
-      a4[28 + l] = nq4[l];
-      r4[l] = Q4[l];
-    }
     if (nl == 4) {
+      for (l = 0; l < 4; ++l) {
+        seg_args(rod, i + l, y, a4 + l, 4, nq4[l]);
+        r4[l] = Q4[l];
+      }
       if (rod_segment_forces_x4(a4, r4)) return -3;
     } else {
-      for (k = 0; k < 8; ++k) W.arg[k] = a4[4 * k];
+      seg_args(rod, i, y, W.arg, 1, nq4[0]);
       W.res[0] = Q4[0];
       if (rod_segment_forces(W.arg, W.res, W.iw, W.w, 0)) return -3;
     }
@@ -336,12 +352,7 @@ int kvrod_residual(const kvrod_rod* rod, double t, const double* y, const double
     nl = j >= 1 && j + 3 <= N - 1 ? 4 : 1;
     if (nl == 4) {
       for (l = 0; l < 4; ++l) {
-        const int jj = j + l;
-        a4[l] = y + i_p(rod, jj); a4[4 + l] = y + i_p(rod, jj + 1);
-        a4[8 + l] = y + i_om(rod, jj); a4[12 + l] = y + i_om(rod, jj + 1);
-        a4[16 + l] = jntp(rod, jj);
-        jnt_mq(rod, jj, y, mq4[l]);
-        a4[20 + l] = mq4[l];
+        jnt_lane(rod, j + l, y, a4, l, mq4[l]);
         r4[l] = T4[l];
       }
       if (rod_joint_torques_x4(a4, r4)) return -3;
@@ -450,11 +461,7 @@ static int jac_segment(const kvrod_rod* rod, int i, const double* y, double cy, 
   double nq[3];
   const double* Jk = Jx;         /* the kernel's result, if evaluated already (x4) */
   if (!Jk) {
-    seg_nq(rod, i, y, nq);
-    W->arg[0] = y + i_phi(rod, i - 1); W->arg[1] = y + i_phi(rod, i);
-    W->arg[2] = y + i_p(rod, i); W->arg[3] = y + i_v(rod, i - 1);
-    W->arg[4] = y + i_v(rod, i); W->arg[5] = y + i_om(rod, i);
-    W->arg[6] = segp(rod, i); W->arg[7] = nq;
+    seg_args(rod, i, y, W->arg, 1, nq);
     W->res[0] = J;
     if (rod_segment_forces_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
     Jk = J;
@@ -603,25 +610,14 @@ int kvrod_jacobian_band_cells(const kvrod_rod* rod, double t, const double* y,
     if (cy != 0.0 && i >= 1 && i + 3 <= i1 && (g0 < 0 || i >= g0 + 4)) {
       g0 = i;
       for (l = 0; l < 4; ++l) {
-        const int s = i + l;
-        a4[l] = y + i_phi(rod, s - 1); a4[4 + l] = y + i_phi(rod, s);
-        a4[8 + l] = y + i_p(rod, s); a4[12 + l] = y + i_v(rod, s - 1);
-        a4[16 + l] = y + i_v(rod, s); a4[20 + l] = y + i_om(rod, s);
-        a4[24 + l] = segp(rod, s);
-        seg_nq(rod, s, y, q4[l]);
-        a4[28 + l] = q4[l];
+        seg_args(rod, i + l, y, a4 + l, 4, q4[l]);
         r4[l] = JS[l];
       }
       if (rod_segment_forces_jac_x4(a4, r4)) return -3;
       gj = i + 3 <= N - 1;               /* joints i..i+3 all between two segments */
       if (gj) {
         for (l = 0; l < 4; ++l) {
-          const int jj = i + l;
-          a4[l] = y + i_p(rod, jj); a4[4 + l] = y + i_p(rod, jj + 1);
-          a4[8 + l] = y + i_om(rod, jj); a4[12 + l] = y + i_om(rod, jj + 1);
-          a4[16 + l] = jntp(rod, jj);
-          jnt_mq(rod, jj, y, q4[l]);
-          a4[20 + l] = q4[l];
+          jnt_lane(rod, i + l, y, a4, l, q4[l]);
           r4[l] = JJ[l];
         }
         if (rod_joint_torques_jac_x4(a4, r4)) return -3;
@@ -694,10 +690,7 @@ static int energies_one(const kvrod_rod* rod, const double* y, const double* yp,
     e[0] += Tk;
     if (segment_torque(rod, i, y, W, S3)) return -3;
     for (k = 0; k < 3; ++k) e[3] += S3[k] * y[i_om(rod, i) + k];
-    seg_nq(rod, i, y, nq);
-    W->arg[0] = y + i_phi(rod, i - 1); W->arg[1] = y + i_phi(rod, i); W->arg[2] = y + i_p(rod, i);
-    W->arg[3] = y + i_v(rod, i - 1); W->arg[4] = y + i_v(rod, i); W->arg[5] = y + i_om(rod, i);
-    W->arg[6] = segp(rod, i); W->arg[7] = nq;
+    seg_args(rod, i, y, W->arg, 1, nq);
     W->res[0] = &Wel; W->res[1] = &Dd; W->res[2] = S3; W->res[3] = R3;
     if (rod_segment_diagnostics(W->arg, W->res, W->iw, W->w, 0)) return -3;
     e[1] += Wel; e[2] += 2.0 * Dd;

@@ -216,13 +216,6 @@ static int call_en(kv_run *R, int m, const double *ts, const double *ys, const d
 }
 
 /* ---- vector helpers ---------------------------------------------------------------- */
-static double wrms(int n, const double *v, const double *w)
-{
-    double s = 0.0;
-    for (int i = 0; i < n; ++i) { double t = v[i] * w[i]; s += t * t; }
-    return n > 0 ? sqrt(s / n) : 0.0;
-}
-
 static int argmax_abs(int n, const double *v, const double *w)
 {
     int k = 0;
