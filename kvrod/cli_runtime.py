@@ -67,6 +67,10 @@ def _cmd_static(args) -> int:
     print(f"static tip [m]: {st['tip']}  (Newton iterations: {st['newton_iterations']})")
     for p in st["path"][:-1]:
         print(f"  at load factor {p['load_factor']:g}: tip [m] {p['tip']}")
+    for end, r in st.get("reactions", {}).items():
+        f = ", ".join(f"{v:.6g}" for v in r["force"])
+        m = ", ".join(f"{v:.6g}" for v in r["moment"])
+        print(f"  support at the {end}: force [N] [{f}], moment [N m] [{m}]")
     print(f"wrote {out}/ summary.json, static.npz, problem.toml")
     if summary["status"] != "finished":
         print(f"kvrod static: {summary['message']}", file=sys.stderr)

@@ -105,19 +105,20 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
             write_status(out, params, "running", st["t"])
 
         series = None
+        model = None
         if vtk_every is not None:
             from runtime.io.vtk import VtkSeries
             from runtime.problem.assemble import build_model
 
-            series = VtkSeries(out / "vtk", build_model(problem),
-                               resume_from=t_start if state else None)
+            model = build_model(problem)          # one model: the run's and the frames'
+            series = VtkSeries(out / "vtk", model, resume_from=t_start if state else None)
         cb, close = (progress_bar(problem.simulation.t_end, label) if progress
                      else (None, lambda: None))
         try:
             run = simulate(problem, progress=cb, checkpoint=on_checkpoint,
                            checkpoint_every=checkpoint_every, resume=state,
                            snapshot_every=vtk_every,
-                           snapshot_sink=series.add if series else None)
+                           snapshot_sink=series.add if series else None, model=model)
         except BaseException as exc:   # a bug or resource error: say so, keep the checkpoint
             write_status(out, params, "failed", t_start, f"{type(exc).__name__}: {exc}")
             raise
@@ -149,7 +150,9 @@ def static_and_write(problem, out: Path, overwrite: bool = False) -> tuple[dict,
     ``out`` (checked and locked like :func:`run_and_write`): summary.json with the end
     positions, the load path and Newton iterations; static.npz with the state ``y``, node
     ``positions`` (3, N+1) and segment ``frames`` (N, 3, 3; columns d1, d2, d3) of the
-    equilibrium and of the ``reference``, and the segment ``quaternions`` (4, N);
+    equilibrium and of the ``reference``, the segment ``quaternions`` (4, N), the end
+    frames ``start_frame``, ``end_frame`` (3, 3) and, per held end, the support's
+    ``start_reaction_force`` / ``_moment`` (N, N m about the node; also in summary.json);
     problem.toml. Returns (summary, model, y); a failed solve keeps its last converged
     state (status "failed")."""
     import time
@@ -176,17 +179,25 @@ def static_and_write(problem, out: Path, overwrite: bool = False) -> tuple[dict,
                                             sum(exc.iterations), list(exc.iterations))
             path = load_path_table(getattr(exc, "path", []))
         pos = model.positions(y)
+        with model.statics():
+            reactions = model.reactions(0.0, y)
+            ends = model.end_frames(0.0, y)
         summary = {"status": status, "message": message, "problem": problem.name,
                    "parameters": params,
                    "static": {"tip": pos[:, -1].tolist(), "start": pos[:, 0].tolist(),
+                              "reactions": {end: {w: v.tolist() for w, v in r.items()}
+                                            for end, r in reactions.items()},
                               "newton_iterations": int(its),
                               "newton_iterations_per_load_step": per,
                               "path": path,
                               "wall_time_s": time.perf_counter() - wall0},
                    "backend": model.backend}
+        extra = {f"{end}_frame": f for end, f in ends.items()}
+        for end, r in reactions.items():
+            extra.update({f"{end}_reaction_{w}": v for w, v in r.items()})
         write_npz(out / "static.npz", y=y, positions=pos, quaternions=model.quaternions(y),
                   frames=model.frames(y), reference=model.positions(model.reference),
-                  reference_frames=model.frames(model.reference))
+                  reference_frames=model.frames(model.reference), **extra)
         write_problem(out / "problem.toml", params)
         write_json(out / "summary.json", summary)
     return summary, model, y
