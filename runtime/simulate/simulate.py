@@ -25,7 +25,7 @@ from runtime.analysis.audit import audit_run, significant_maxima
 from runtime.analysis.decay import damping_ratios, log_decrements, periods
 from runtime.model.quaternion import quat_log, quat_mul, quat_rotation
 from runtime.model.rod import RodModel
-from runtime.model.statics import RodStatics
+from runtime.model.statics import RodStatics, largest_displacement
 from runtime.problem.assemble import build_model
 from runtime.problem.schema import Problem
 from runtime.problem.timefunctions import TimeFunction
@@ -56,6 +56,10 @@ class StaticOutcome:
     reactions: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
     #: director frames (3, 3) at s = 0 ("start") and s = L ("end")
     end_frames: dict[str, np.ndarray] = field(default_factory=dict)
+    #: the gauge that held free rigid motions (runtime.model.rigid), in words, or None
+    gauge: str | None = None
+    #: for a rod held at both ends: the node that moved most (largest_displacement)
+    largest: dict | None = None
 
     def path_table(self) -> list[dict]:
         return load_path_table(self.path)
@@ -240,6 +244,8 @@ class SimulationResult:
                 "newton_iterations_per_load_step": [] if st is None else list(st.per_step),
                 "wall_time_s": 0.0 if st is None else st.wall_time_s,
                 "path": [] if st is None else st.path_table(),
+                "gauge": None if st is None else st.gauge,
+                "largest_displacement": None if st is None else st.largest,
             },
             **pk,
             "energy_balance_max_rel": audit.max_rel,
@@ -353,6 +359,10 @@ def _linear_response(problem: Problem) -> tuple[float, float]:
     st = RodStatics(model)
     with model.statics():
         y = model.initial_state()
+        try:     # free rigid motions without load along them: held by a gauge
+            st.hold_rigid_motions(y)
+        except ValueError:   # loads along them, or too soft: no linear response
+            return problem.rod.length, math.pi
         r = np.empty(st.n_static)
         st.static_residual(y, r)
         try:
@@ -418,32 +428,46 @@ def static_equilibrium(problem: Problem, model: RodModel) -> StaticOutcome:
     Returns
     -------
     StaticOutcome
-        State ``y``, end position ``tip`` (m), Newton iterations, the load path.
+        State ``y``, end position ``tip`` (m), Newton iterations, the load path, the
+        gauge, and for a rod held at both ends the largest displacement.
 
     Raises
     ------
     StaticSolveError
         No equilibrium found; it carries the last converged state and the load path.
+    IllPosedError
+        Before any work: the loads act along a rigid motion the supports leave free, or
+        the rod is too soft for them (``RodStatics.hold_rigid_motions``). Free rigid
+        motions without load along them are held by a gauge (``StaticOutcome.gauge``).
     """
     wall0 = time.perf_counter()
     st = RodStatics(model)
     path: list[tuple[float, np.ndarray]] = []
     with model.statics():
+        y0 = model.initial_state()
+        gauge = st.hold_rigid_motions(y0)     # IllPosedError before any work
         try:
-            res = solve_static(st, model.initial_state(),
-                               load_steps=problem.statics.load_steps,
+            res = solve_static(st, y0, load_steps=problem.statics.load_steps,
                                stations=problem.statics.report + (1.0,),
                                on_station=lambda lam, y: path.append(
                                    (lam, model.tip_position(y))))
+            doubt = None if gauge is None else gauge.doubt(st, res.y)
+            if doubt is not None:
+                raise StaticSolveError(f"solve_static: {doubt}", y=res.y, load_scale=1.0,
+                                       iterations=res.iterations,
+                                       residual_norm=res.residual_norm)
         except StaticSolveError as exc:
             exc.path = path   # the stations reached before the failure are kept
             raise
         reactions = model.reactions(0.0, res.y)
         frames = model.end_frames(0.0, res.y)
+    both_held = problem.start.held and problem.end.held
     return StaticOutcome(y=res.y.copy(), tip=model.tip_position(res.y),
                          iterations=res.total_iterations, per_step=list(res.iterations),
                          wall_time_s=time.perf_counter() - wall0, path=path,
-                         reactions=reactions, end_frames=frames)
+                         reactions=reactions, end_frames=frames,
+                         gauge=None if gauge is None else gauge.describe(),
+                         largest=largest_displacement(model, res.y) if both_held else None)
 
 
 def simulate(problem: Problem, *, progress: Callable[[float], object] | None = None,
