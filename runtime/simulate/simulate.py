@@ -414,7 +414,7 @@ def default_atol(problem: Problem, model: RodModel, y0: np.ndarray) -> np.ndarra
     return atol
 
 
-def static_equilibrium(problem: Problem, model: RodModel) -> StaticOutcome:
+def static_equilibrium(problem: Problem, model: RodModel | None = None) -> StaticOutcome:
     """Equilibrium under the loads at t = 0- (ends at their t = 0 positions), by Newton
     with load stepping (``problem.statics``).
 
@@ -422,8 +422,9 @@ def static_equilibrium(problem: Problem, model: RodModel) -> StaticOutcome:
     ----------
     problem : Problem
         The rod problem.
-    model : RodModel
-        Its model (:func:`~runtime.problem.assemble.build_model`).
+    model : RodModel, optional
+        Its model (:func:`~runtime.problem.assemble.build_model`), built from ``problem``
+        when not given (pass it to reuse one model, e.g. to read positions off the state).
 
     Returns
     -------
@@ -441,6 +442,8 @@ def static_equilibrium(problem: Problem, model: RodModel) -> StaticOutcome:
         motions without load along them are held by a gauge (``StaticOutcome.gauge``).
     """
     wall0 = time.perf_counter()
+    if model is None:
+        model = build_model(problem)
     st = RodStatics(model)
     path: list[tuple[float, np.ndarray]] = []
     with model.statics():
