@@ -326,6 +326,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
+        import shlex
+
+        # the command as typed, for the measurements the notes commands write
+        args.command_line = shlex.join(["kvrod", *(sys.argv[1:] if argv is None else argv)])
         if args.command not in _NO_COMPILE:
             from kvrod.notices import install_compile_notices
 

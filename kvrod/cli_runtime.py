@@ -110,9 +110,18 @@ def _cmd_plot(args) -> int:
 def _cmd_reproduce(args) -> int:
     from kvrod.reproduce import reproduce
 
-    out = reproduce(Path(args.out), n_elements=args.n_elements, t_end=args.t_end,
-                    notes=Path(args.notes), rtol=args.rtol, derive=not args.skip_derive,
-                    overwrite=args.overwrite)
+    # --out alone keeps the notes with the results: only the default run rewrites the
+    # committed notes/ (the notes quote their results folder)
+    out = Path(args.out or "results/reproduce")
+    notes = Path(args.notes or (out / "reproduction.md" if args.out else
+                                "notes/reproduction.md"))
+    from kvrod.notices import DerivationProgress
+
+    out = reproduce(out, n_elements=args.n_elements, t_end=args.t_end,
+                    notes=notes, rtol=args.rtol, derive=not args.skip_derive,
+                    overwrite=args.overwrite, derive_progress=DerivationProgress(
+                        "kvrod reproduce"),
+                    command=getattr(args, "command_line", "kvrod reproduce"))
     print(f"wrote {out}")
     return 0
 
@@ -143,8 +152,11 @@ def add_commands(sub, parser_class) -> None:
     pl.set_defaults(func=_cmd_plot)
 
     r = sub.add_parser("reproduce", help="reproduce the paper's Sect. 5 (figures + notes)")
-    r.add_argument("--out", default="results/reproduce", help="results folder")
-    r.add_argument("--notes", default="notes/reproduction.md", help="notes file to write")
+    r.add_argument("--out", help="results folder (default results/reproduce; when given, "
+                                 "the notes are written into it unless --notes says where)")
+    r.add_argument("--notes", help="notes file to write (default notes/reproduction.md, or "
+                                   "DIR/reproduction.md with --out DIR); notes/derivation.md "
+                                   "goes beside it")
     r.add_argument("--n-elements", dest="n_elements", type=int, default=100)
     r.add_argument("--t-end", dest="t_end", type=float, default=10.0)
     r.add_argument("--rtol", type=float, default=1e-7,
