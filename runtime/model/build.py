@@ -54,8 +54,9 @@ _warned = False
 #: what is compiled, as the observers are told
 ROD_KERNELS = "the rod kernels"
 STEP_LOOP = "the BDF step loop"
-#: rough first-build wall times (s) for the observers' messages (measured here: GCC, 2 cores)
-TYPICAL_SECONDS = {ROD_KERNELS: 30, STEP_LOOP: 10}
+#: rough first-build wall times (s) for the observers' messages (measured on 2 shared cores:
+#: 6 s and 9.5 s with GCC)
+TYPICAL_SECONDS = {ROD_KERNELS: 10, STEP_LOOP: 10}
 
 CompileObserver = Callable[[str, "float | None"], None]
 _observers: list[CompileObserver] = []

@@ -98,7 +98,7 @@ def test_compile_is_announced(tmp_path, monkeypatch, capsys):
         remove_compile_notices()
         build._observers.clear()
     assert events[0] == (build.ROD_KERNELS, None) and events[1][1] >= 0
-    assert err[0] == "kvrod: compiling the rod kernels (first use, ~30 s; cached afterwards)..."
+    assert err[0] == "kvrod: compiling the rod kernels (first use, ~10 s; cached afterwards)..."
     assert re.fullmatch(r"kvrod: compiled the rod kernels in \d+\.\d s", err[1])
 
 
