@@ -19,7 +19,7 @@ import jinja2
 import numpy as np
 
 from references import examples as RX
-from runtime.io.atomic import save_figure, write_text
+from runtime.io.atomic import write_text
 
 TEMPLATE_DIR = Path(__file__).parent / "templates"
 STATIC = ("rollup", "bathe_bolourchi", "helix", "clamped_both")
@@ -42,12 +42,9 @@ def _floats(x) -> list[float]:
 
 
 def _plt():
-    import matplotlib
+    from runtime.io.figures import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+    return pyplot()
 
 
 # -- the measured quantity of each static example ------------------------------------------
@@ -229,12 +226,10 @@ def _fig_base(run, ref: dict, out: Path) -> Path:
 
 
 def _save(fig, path: Path) -> Path:
-    import matplotlib.pyplot as plt
+    from runtime.io.figures import save
 
     fig.tight_layout()
-    save_figure(fig, path, dpi=120)
-    plt.close(fig)
-    return path
+    return save(fig, path, dpi=120)
 
 
 # -- the notes --------------------------------------------------------------------------
