@@ -86,16 +86,13 @@ def _compare(out: Path) -> dict:
 
 
 def _write_modes(res: dict, out: Path) -> list[Path]:
-    """modes.json and mode_shapes.png as `kvrod modes` writes them."""
-    from kvrod.analyses import plot_mode_shapes
-    from runtime.io.results import write_json
+    """modes.json and mode_shapes.png (with modes.npz, mode_shapes_3d.png) as `kvrod
+    modes` writes them (``kvrod.analyses.write_modes``); returns [modes.json,
+    mode_shapes.png]."""
+    from kvrod.analyses import write_modes
 
-    sc, modes = res["problem"], res["modes"]
-    js = write_json(out / "modes.json", {
-        "problem": sc.name, "parameters": sc.to_mapping(), "tau_E": sc.material.tau_E,
-        "deformed": res["deformed"], "static_tip": res["static_tip"],
-        "modes": [m.to_dict() for m in modes]})
-    return [js, plot_mode_shapes(modes, sc.rod.length, out / "mode_shapes.png")]
+    paths = write_modes(res, out)
+    return [paths[0], *[p for p in paths if p.name == "mode_shapes.png"]]
 
 
 def _distinct(modes: list, count: int, rtol: float = 1e-6) -> list[list]:

@@ -11,7 +11,7 @@ import math
 import sys
 from pathlib import Path
 
-from kvrod.analyses import compare_table, modes_table, plot_mode_shapes, run_modes, write_compare
+from kvrod.analyses import compare_table, modes_table, run_modes, write_compare, write_modes
 
 
 def _cli_error(message: str) -> Exception:
@@ -40,13 +40,11 @@ def _cmd_modes(args) -> int:
     from kvrod.outputs import results_folder
 
     with results_folder(out, "modes", markers=("modes.json",), overwrite=args.overwrite,
-                        names=("modes.json", "mode_shapes.png")):
+                        names=("modes.json", "modes.npz")):
         return _modes_into(args, problem, out)
 
 
 def _modes_into(args, problem, out: Path) -> int:
-    from runtime.io.results import write_json
-
     res = run_modes(problem, args.count, args.deformed)
     modes = res["modes"]
     m = problem.material
@@ -55,12 +53,8 @@ def _modes_into(args, problem, out: Path) -> int:
     if res["static_tip"] is not None:
         print(f"static tip [m]: {[round(float(v), 6) for v in res['static_tip']]}")
     print(modes_table(modes))
-    write_json(out / "modes.json", {
-        "problem": problem.name, "parameters": problem.to_mapping(), "tau_E": m.tau_E,
-        "deformed": args.deformed, "static_tip": res["static_tip"],
-        "modes": [md.to_dict() for md in modes]})
-    plot_mode_shapes(modes, problem.rod.length, out / "mode_shapes.png")
-    print(f"wrote {out}/modes.json, mode_shapes.png")
+    paths = write_modes(res, out)
+    print(f"wrote {out}/{', '.join(p.name for p in paths)}")
     return 0
 
 

@@ -95,15 +95,14 @@ def _cmd_static(args) -> int:
 
 
 def _cmd_plot(args) -> int:
-    """Plots of a finished (or stopped) run folder, written next to its results."""
-    from kvrod.errors import CliError
-    from runtime.io.plots import plot_folder
+    """The pictures of a results folder, written next to its results (kvrod/plotting.py)."""
+    from kvrod.plotting import plot_folder
 
-    out = Path(args.folder)
-    if not (out / "summary.json").exists() or not (out / "series.npz").exists():
-        raise CliError(f"kvrod plot: {str(out)!r} holds no run (summary.json, series.npz)")
-    paths = plot_folder(out)
-    print(f"wrote {', '.join(str(p) for p in paths)}")
+    done = plot_folder(Path(args.folder), animate=args.animate)
+    print(f"{args.folder}: {done.kind} result; wrote "
+          f"{', '.join(str(p) for p in done.paths) or 'nothing'}")
+    for note in done.notes:
+        print(f"  {note}")
     return 0
 
 
@@ -147,8 +146,12 @@ def add_commands(sub, parser_class) -> None:
                    help="replace a finished result in --out (default: refuse)")
     t.set_defaults(func=_cmd_static)
 
-    pl = sub.add_parser("plot", help="draw the PNG plots of a results folder")
-    pl.add_argument("folder", help="a results folder of kvrod simulate")
+    pl = sub.add_parser("plot", help="draw the pictures of a results folder: a run, a static "
+                                     "result, modes or a sweep")
+    pl.add_argument("folder", help="a results folder of kvrod simulate, static, modes or sweep")
+    pl.add_argument("--animate", nargs="?", const="gif", choices=("gif", "mp4"),
+                    help="also animate a run's centreline: centreline.gif (default) or "
+                         ".mp4 (needs ffmpeg on PATH)")
     pl.set_defaults(func=_cmd_plot)
 
     r = sub.add_parser("reproduce", help="reproduce the paper's Sect. 5 (figures + notes)")

@@ -57,12 +57,9 @@ DERIVATION = {
 
 
 def _plt():
-    import matplotlib
+    from runtime.io.figures import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+    return pyplot()
 
 
 def _derivation() -> list[dict]:
@@ -84,16 +81,14 @@ def _problems() -> tuple[Any, Any]:
 
 def _modes(kv, mx, out: Path) -> list[dict]:
     """Damped modes of both rods at N = MODES_N (one row per distinct bending pair)."""
-    from kvrod.analyses import run_modes
-    from runtime.io.results import write_json
+    from kvrod.analyses import run_modes, write_modes
 
     rows: dict[int, dict] = {}
     for label, problem in (("kv", kv), ("mx", mx)):
         p = problem.with_overrides({"rod.elements": MODES_N})
-        modes = run_modes(p, MODES_COUNT)["modes"]
-        write_json(out / f"modes-{label}" / "modes.json",
-                   {"problem": p.name, "parameters": p.to_mapping(),
-                    "modes": [md.to_dict() for md in modes]})
+        res = run_modes(p, MODES_COUNT)
+        modes = res["modes"]
+        write_modes(res, out / f"modes-{label}", figures=False)
         for md in modes:
             if md.family == "bending-1":
                 rows.setdefault(md.family_index, {"k": md.family_index})[label] = md
