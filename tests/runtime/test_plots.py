@@ -99,6 +99,20 @@ def test_centreline_frames_on_their_grid(small):
     assert np.ptp(run.centreline[:, 0, -1]) > 0.2
 
 
+def test_frames_of_a_moving_clamp_are_at_its_prescribed_positions():
+    p = load_problem("examples/base_excitation.toml", {"n_elements": 6, "t_end": 0.3,
+                                                       "simulation.centreline_frames": 7})
+    run = simulate(p)
+    assert run.status == "finished"
+    moved = 0.0
+    for j, t in enumerate(run.centreline_t):
+        k = np.flatnonzero(np.isclose(run.t, t, rtol=0, atol=1e-12))
+        assert k.size
+        assert np.allclose(run.centreline[j][:, 0], run.start[:, k[0]], rtol=0, atol=1e-15)
+        moved = max(moved, float(np.abs(run.start[:, k[0]] - run.start[:, 0]).max()))
+    assert moved > 1e-4        # the clamp did move
+
+
 def test_frames_do_not_change_the_run(small):
     a = simulate(small)
     b = simulate(small.with_overrides({"simulation.centreline_frames": 0}))
