@@ -102,7 +102,6 @@ __all__ = [
     "family_retardation_time",
     "linearize",
     "modal_analysis",
-    "sign_normalised",
 ]
 
 #: strain components in the order of the energy fractions
@@ -265,9 +264,7 @@ class Mode:
     zeta_modal: ``phi^T C phi / (2 omega phi^T M phi)`` (uncoupled modal damping, a check);
     energy_fractions: strain-energy fractions of :data:`STRAIN_COMPONENTS`;
     displacement (3, N+1) node displacement (m) and rotation (3, N) segment rotation
-    (rad, material) of the mass-normalised undamped mode shape, its sign fixed by
-    ``sign_normalised`` (largest entry positive; a mode shape's sign is arbitrary: an
-    eigensolver may return either); analytic_omega: the
+    (rad, material) of the mass-normalised undamped mode shape; analytic_omega: the
     continuum beam/bar value where known (straight clamped-free rod), else None.
     A rigid mode (family ``rigid``, not resisted by the stiffness) has omega 0,
     eigenvalues (0, 0), zeta and zeta_modal NaN (no damping ratio: ``None`` in
@@ -312,30 +309,6 @@ class Mode:
             if not math.isfinite(d[key]) and self.family == "rigid":
                 d[key] = None
         return d
-
-
-#: entries within this fraction of the largest count as tied in :func:`sign_normalised`
-SIGN_TIE_RTOL = 1e-6
-
-
-def sign_normalised(displacement: np.ndarray, rotation: np.ndarray, length: float
-                    ) -> tuple[np.ndarray, np.ndarray]:
-    """A mode shape with its sign fixed: the largest entry of ``(displacement, rotation
-    * length)`` (m; rotations as theta L, so both count in metres) is positive.
-
-    Entries within ``SIGN_TIE_RTOL`` of the largest magnitude count as tied (e.g. the
-    two ends of a symmetric free-free mode, equal to round-off) and the first of them in
-    storage order decides (displacements before rotations; each as x at every node, then
-    y, then z), so the choice does not depend on round-off. Returns new arrays."""
-    d = np.asarray(displacement, dtype=float)
-    r = np.asarray(rotation, dtype=float)
-    v = np.concatenate([d.ravel(), (r * length).ravel()])
-    big = float(np.max(np.abs(v))) if v.size else 0.0
-    if big == 0.0:
-        return d.copy(), r.copy()
-    first = int(np.flatnonzero(np.abs(v) >= (1.0 - SIGN_TIE_RTOL) * big)[0])
-    sign = 1.0 if v[first] > 0 else -1.0
-    return sign * d, sign * r
 
 
 def _strain_energy_fractions(lin: Linearization, Q: np.ndarray) -> np.ndarray:
@@ -834,21 +807,15 @@ def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int =
     rigid_share = _rigid_participation(Z_all, lin.M, Phi[:, :k_show])
     modes: list[Mode] = []
     family_count: dict[str, int] = {}
-    length = float(np.sum(model.arrays.seg_field("h")))
-
-    def shape(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        dx = lin.expand(q)
-        return sign_normalised(dx[lin.statics.phi_cols].T, dx[lin.statics.theta_cols].T,
-                               length)
-
     for j in range(min(k0, count)):      # the unresisted rigid motions: omega = 0
-        disp, rot = shape(Zn[:, j])
+        dx = lin.expand(Zn[:, j])
         family_count["rigid"] = j + 1
         modes.append(Mode(index=j + 1, family="rigid", family_index=j + 1, omega=0.0,
                           eigenvalues=(0j, 0j), zeta=math.nan, omega_damped=0.0,
                           zeta_modal=math.nan,
                           energy_fractions=dict.fromkeys(STRAIN_COMPONENTS, 0.0),
-                          displacement=disp, rotation=rot))
+                          displacement=dx[lin.statics.phi_cols].T,
+                          rotation=dx[lin.statics.theta_cols].T))
     Cd = lin.C
     # omega^2 below this is round-off of the eigensolvers (eps ~ 1e-16 times the largest
     # stiffness-to-mass ratio, with room for n and the conditioning)
@@ -866,7 +833,9 @@ def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int =
             omega[k], l1, l2, zeta, zm = 0.0, 0j, 0j, math.nan, math.nan
         if maxwell:   # frequency-dependent moduli: the natural frequency is |lambda|, and
             omega[k], zm = wn, math.nan        # there is no constant damping matrix
-        disp, rot = shape(phi)
+        dx = lin.expand(phi)
+        disp = dx[lin.statics.phi_cols].T
+        rot = dx[lin.statics.theta_cols].T
         modes.append(Mode(index=len(modes) + 1, family=fam, family_index=family_count[fam],
                           omega=float(omega[k]), eigenvalues=(l1, l2), zeta=float(zeta),
                           omega_damped=float(abs(l1.imag)), zeta_modal=zm,

@@ -18,8 +18,8 @@ modes.json (format 2)
 modes.npz
     ``index`` (k,) the modes' indices; ``displacement`` (k, 3, N+1) node displacements
     (m) and ``rotation`` (k, 3, N) segment rotations (rad, material) of the
-    mass-normalised mode shapes, sign-normalised (the largest entry of displacement and
-    rotation times L is positive: :func:`runtime.analysis.modal.sign_normalised`);
+    mass-normalised mode shapes, their sign fixed where they are computed
+    (:func:`runtime.analysis.modal.fix_sign`: the largest component positive);
     ``equilibrium`` (3, N+1) node positions (m) and ``equilibrium_frames`` (N, 3, 3;
     columns d1, d2, d3) of the state the rod was linearised about; ``reference``
     (3, N+1) the stress-free reference centreline (m).
