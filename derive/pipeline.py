@@ -10,6 +10,12 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 from derive.step import Step, StepFunction
+from derive.steps.anisotropic import (
+    anisotropic_shear,
+    anisotropic_viscosity,
+    elastic_condensation,
+    voigt_materials,
+)
 from derive.steps.biot import biot_strain
 from derive.steps.dissipation import dissipation
 from derive.steps.energy import stored_energy
@@ -54,6 +60,16 @@ PIPELINE: tuple[PipelineEntry, ...] = (
     PipelineEntry("kelvin_voigt_uniaxial", kelvin_voigt_uniaxial,
                   ("isotropic_moduli", "dissipation", "naive_resultants", "maxwell_rod")),
     PipelineEntry("biot_strain", biot_strain, ("green_lagrange", "lateral_contraction")),
+    # issue 25: any homogeneous C and V (Voigt), consistent and naive viscosity
+    PipelineEntry("voigt_materials", voigt_materials,
+                  ("isotropic_moduli", "dissipation", "naive_resultants")),
+    PipelineEntry("elastic_condensation", elastic_condensation,
+                  ("voigt_materials", "lateral_contraction")),
+    PipelineEntry("anisotropic_viscosity", anisotropic_viscosity,
+                  ("isotropic_moduli", "dissipation", "naive_resultants", "voigt_materials",
+                   "elastic_condensation")),
+    PipelineEntry("anisotropic_shear", anisotropic_shear,
+                  ("isotropic_moduli", "dissipation", "voigt_materials")),
 )
 
 STEP_NAMES: tuple[str, ...] = tuple(e.name for e in PIPELINE)
