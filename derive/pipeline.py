@@ -102,6 +102,21 @@ PIPELINE: tuple[PipelineEntry, ...] = (
     _entry_of("biot_strain", "biot",
               "Biot strain: closed-form spectral decomposition of C (appendix A1)",
               ("A1", "(18)", "footnote 19"), ("green_lagrange", "lateral_contraction")),
+    _entry_of("voigt_materials", "anisotropic",
+              "Materials as 6x6 Voigt matrices: isotropic C and V, anisotropic classes",
+              ("(23)", "(29)", "Sect. 4.3"),
+              ("isotropic_moduli", "dissipation", "naive_resultants")),
+    _entry_of("elastic_condensation", "anisotropic",
+              "Elastic lateral response of a fibre: w = (e_33, -C_ff^-1 C_f3), E_eff = 1/S_33",
+              ("(24)", "(25)", "Sect. 3.4"), ("voigt_materials", "lateral_contraction")),
+    _entry_of("anisotropic_viscosity", "anisotropic",
+              "Consistent w.V.w and naive e_33.V.w extensional viscosity for any C and V",
+              ("(4)", "(5)", "(6)", "(32)", "Sect. 4.2"),
+              ("isotropic_moduli", "dissipation", "naive_resultants", "voigt_materials",
+               "elastic_condensation")),
+    _entry_of("anisotropic_shear", "anisotropic",
+              "Shear and torsion viscosity of a homogeneous section: when (8) carries over",
+              ("(8)", "(9)", "(32)"), ("isotropic_moduli", "dissipation", "voigt_materials")),
 )
 
 STEP_NAMES: tuple[str, ...] = tuple(e.name for e in PIPELINE)
