@@ -75,9 +75,10 @@ def _write(path: Path, text: str) -> None:
 
 
 def source_key(dirs: tuple[str, ...] = SOURCE_DIRS,
-               libraries: tuple[str, ...] = LIBRARIES) -> str:
-    """sha256 of the files under ``dirs`` (paths and contents; caches and build products
-    excluded), the Python version and the versions of ``libraries``."""
+               libraries: tuple[str, ...] = LIBRARIES, root: Path = ROOT) -> str:
+    """sha256 of the files under ``root/dir`` for each of ``dirs`` (paths and contents;
+    caches and build products excluded), the Python version and the versions of
+    ``libraries``."""
     h = hashlib.sha256(sys.version.encode() + b"\0")
     for lib in libraries:
         try:
@@ -86,11 +87,11 @@ def source_key(dirs: tuple[str, ...] = SOURCE_DIRS,
             version = "absent"
         h.update(f"{lib}=={version}\0".encode())
     for d in dirs:
-        for path in sorted((ROOT / d).rglob("*")):
+        for path in sorted((root / d).rglob("*")):
             if (not path.is_file() or "__pycache__" in path.parts
                     or path.suffix in (".pyc", ".so", ".o", ".tmp")):
                 continue
-            h.update(path.relative_to(ROOT).as_posix().encode() + b"\0")
+            h.update(path.relative_to(root).as_posix().encode() + b"\0")
             h.update(path.read_bytes() + b"\0")
     return h.hexdigest()
 
