@@ -304,18 +304,30 @@ def render(srcdir: Path) -> None:
             lambda: command_outputs(FIRST_ROD))
 
 
+#: jupyter-cache folders kept besides the current one (switching back to a recent branch
+#: or revision reuses its executed notebooks)
+KEEP_CACHES = 2
+
+
 def _set_notebook_cache(app, config) -> None:
     """Execute the tutorials through a jupyter-cache folder named by :func:`source_key`
     (next to the HTML output: docs/_build/.jupyter_cache/KEY for the README's command), so
-    a cached notebook is only ever reused with the code it ran against; the folders of
-    other keys are removed."""
+    a cached notebook is only ever reused with the code it ran against. A changed key
+    changes this configuration value, so Sphinx reads every page again. Only the
+    ``KEEP_CACHES`` most recently used other folders are kept."""
     root = Path(app.outdir).resolve().parent / ".jupyter_cache"
-    key = source_key()[:20]
-    if root.is_dir():
-        for old in root.iterdir():
-            if old.name != key:
-                shutil.rmtree(old, ignore_errors=True) if old.is_dir() else old.unlink()
-    config.nb_execution_cache_path = str(root / key)
+    current = root / source_key()[:20]
+    current.mkdir(parents=True, exist_ok=True)
+    os.utime(current)                                   # most recently used
+    entries = [p for p in root.iterdir() if p != current]
+    for p in entries:
+        if not p.is_dir():                              # a cache from before the keys
+            p.unlink()
+    older = sorted((p for p in entries if p.is_dir()), key=lambda p: p.stat().st_mtime,
+                   reverse=True)
+    for p in older[KEEP_CACHES:]:
+        shutil.rmtree(p, ignore_errors=True)
+    config.nb_execution_cache_path = str(current)
 
 
 def _on_builder_inited(app) -> None:

@@ -99,9 +99,12 @@ def test_math_is_served_locally(built):
     _, out = built
     scripts = Counter()
     for page in _pages(out):
-        for src in re.findall(r'<script[^>]*\ssrc="([^"]+)"', page.read_text()):
+        html = page.read_text()
+        for src in re.findall(r'<script[^>]*\ssrc="([^"]+)"', html):
             scripts[src] += 1
             assert not re.match(r"(https?:)?//", src), f"{page.name} loads {src}"
+        for href in re.findall(r'<link[^>]*rel="stylesheet"[^>]*href="([^"]+)"', html):
+            assert not re.match(r"(https?:)?//", href), f"{page.name} loads {href}"
     mathjax = [s for s in scripts if "mathjax" in s]
     assert mathjax, "no page loads MathJax"
     for src in mathjax:
