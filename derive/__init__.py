@@ -12,10 +12,13 @@ from __future__ import annotations
 
 # Order matters: the submodules derive.step and derive.formulas are imported before the
 # functions of the same names are bound here (importing a submodule the first time sets
-# the package attribute to the module). None of these imports SymPy.
+# the package attribute to the module). So is the subpackage derive.steps, whose step
+# modules a derivation imports later: imported then for the first time, it would replace
+# the function steps() below. None of these imports SymPy.
 from derive.step import Step  # isort: skip
 from derive.formulas import formulas  # isort: skip
 from derive.pipeline import PIPELINE, STEP_NAMES, UnknownStepError, run, step  # isort: skip
+from derive import steps as _steps_package  # noqa: F401  # isort: skip
 
 
 def steps() -> dict[str, Step]:

@@ -54,6 +54,13 @@ def _tex(value) -> str:
     return tex
 
 
+def _text(line: str) -> str:
+    """A step's plain-text line for Markdown, with ``&`` and ``<`` escaped as HTML
+    entities: a section average such as <xi2 S_33> is then shown, not read as an HTML tag
+    (and dropped) by the Markdown renderer. ``>`` needs no escape inside a line."""
+    return line.replace("&", "&amp;").replace("<", "&lt;")
+
+
 def render_derivation_notes() -> str:
     """The Markdown text of notes/derivation.md."""
     steps = run()
@@ -62,9 +69,10 @@ def render_derivation_notes() -> str:
     rows = []
     for s in steps.values():
         rows.append({
-            "name": s.name, "title": s.title, "equations": s.equations, "inputs": s.inputs,
-            "assumptions": s.assumptions, "symbol_assumptions": s.symbol_assumptions,
-            "notes": s.notes, "stated": s.stated, "all_match": s.all_match,
+            "name": s.name, "title": _text(s.title), "equations": s.equations,
+            "inputs": s.inputs, "assumptions": [_text(a) for a in s.assumptions],
+            "symbol_assumptions": [_text(a) for a in s.symbol_assumptions],
+            "notes": [_text(n) for n in s.notes], "stated": s.stated, "all_match": s.all_match,
             "rows": [(k, _tex(v), s.stated.get(k), s.matches.get(k)) for k, v in s.results.items()],
         })
     n_checks = sum(len(s.matches) for s in steps.values())

@@ -55,6 +55,7 @@ def _entry_of(name: str, module: str, title: str, equations: tuple[str, ...],
                          f"derive.steps.{module}:{function or name}")
 
 
+#: the catalogue of the derivation's steps, in the order they are derived
 PIPELINE: tuple[PipelineEntry, ...] = (
     _entry_of("kinematics", "kinematics",
               "Rod kinematics, deformation gradient and strain vector H",

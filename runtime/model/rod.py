@@ -37,7 +37,7 @@ class Drive(Protocol):
     from the left, for statics at ``t = 0-``) into ``arrays``; ``scale`` is the load
     factor, which also scales prescribed end displacements and rotations in statics;
     ``static``: velocities of the ends are zero (statics). ``time_dependent``: False when
-    the values never change with t (then :meth:`apply` runs once).
+    the values never change with t (then ``apply`` runs once).
     """
 
     time_dependent: bool

@@ -46,8 +46,10 @@ class IntegrationError(RuntimeError):
 
     Attributes
     ----------
-    t, y, yp : float, ndarray, ndarray
-        Time and state (copies) of the last accepted step.
+    t : float
+        Time of the last accepted step.
+    y, yp : ndarray
+        State and its rate at the last accepted step (copies).
     h : float
         The step size last attempted.
     residual_norm : float

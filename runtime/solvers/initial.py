@@ -30,9 +30,10 @@ def consistent_initial(
     (columns of dF/dy' for differential, of dF/dy for algebraic unknowns) and a
     backtracking line search on ``|F|``.
 
-    Returns ``(y0, yp0)`` (new arrays).  Raises :class:`IntegrationError` (with the
-    initial guess as state) if Newton does not reach ``max|F| <= tol * scale``, where
-    ``scale`` is ``max(1, max|F|)`` at the guess.
+    Returns ``(y0, yp0)`` (new arrays). Raises
+    :class:`~runtime.solvers.bdf.IntegrationError` (with the initial guess as state) if
+    Newton does not reach ``max|F| <= tol * scale``, where ``scale`` is ``max(1, max|F|)``
+    at the guess.
     """
     n = int(problem.n)
     kl, ku = int(problem.kl), int(problem.ku)

@@ -164,7 +164,7 @@ def solve(
         ``(t0, t_end)`` in s.
     y0, yp0 : ndarray
         Initial values; if ``yp0`` is None, a consistent ``(y0, yp0)`` is computed by
-        :func:`consistent_initial` from ``y' = 0``.
+        :func:`~runtime.solvers.initial.consistent_initial` from ``y' = 0``.
     rtol, atol : float or ndarray
         Tolerances (see :class:`~runtime.solvers.bdf.BDF`).
     t_eval : ndarray, optional
@@ -185,15 +185,17 @@ def solve(
         Passed to :class:`~runtime.solvers.bdf.BDF` (``max_order``, ``max_step``,
         ``first_step``, ``suppress_alg``, ``fixed_step``, ...).
 
-    The solver stops at every breakpoint of the problem's inputs and restarts where one
-    jumps (``runtime.solvers.schedule``: a pulse or a fast end motion is never stepped
-    over); steps are bounded by the active inputs' time scales.
-
     Returns
     -------
     SolveResult
         Failures of the integrator do not raise here: the result has ``status = -1``,
         the outputs computed so far, and the exception in ``error``.
+
+    Notes
+    -----
+    The solver stops at every breakpoint of the problem's inputs and restarts where one
+    jumps (``runtime.solvers.schedule``: a pulse or a fast end motion is never stepped
+    over); steps are bounded by the active inputs' time scales.
     """
     t0, tf = float(t_span[0]), float(t_span[1])
     y0 = np.asarray(y0, dtype=float)
