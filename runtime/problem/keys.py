@@ -238,6 +238,21 @@ KEYS: tuple[Key, ...] = (
 )
 
 
+#: how the command line and the Python API change keys (shown by both renderings)
+OVERRIDES = (
+    "Any key can be changed without editing the file: on the command line with `--set "
+    "PATH=VALUE` (repeatable, TOML values: `--set material.tau=0.02`, `--set "
+    "loads.0.vector=[0,0,1]`), in Python with `load_problem(path, {PATH: value})` or "
+    "`Problem.with_overrides({PATH: value})`. PATH is the table path and key below; an "
+    "array of tables (`[[loads]]`, `[[material.branches]]`) is indexed from 0 "
+    "(`loads.0.time.start`). A whole table or entry is given as an inline table (a "
+    "dict in Python): `--set 'material={youngs_modulus=2e6, tau=0.01}'` replaces the "
+    "material. To append an entry, give the whole entry at the index one past the "
+    "last: `--set 'loads.1={kind=\"force\", vector=[0,0,1]}'` adds a second load to a "
+    "problem with one (a larger index is refused, naming the allowed range). Every "
+    "value is checked as in a problem file.")
+
+
 def by_table() -> dict[str, list[Key]]:
     """The catalogue grouped by table, in file order."""
     out: dict[str, list[Key]] = {}
@@ -248,7 +263,7 @@ def by_table() -> dict[str, list[Key]]:
 
 def markdown() -> str:
     """The reference as Markdown tables, one per table (what the documentation shows)."""
-    lines = []
+    lines = ["### Changing keys: `--set` and overrides", "", OVERRIDES, ""]
     for table, keys in by_table().items():
         head = ("top level" if not table else "time functions (`time = {...}` of a load, "
                 "`translation_time`/`rotation_time` of a motion)" if table == "<time>"
@@ -272,4 +287,9 @@ def text() -> str:
         kinds = f" [{', '.join(k.kinds)}]" if k.kinds else ""
         out.append(f"{path}{kinds}  unit: {k.unit}; default: {k.default}; allowed: "
                    f"{k.allowed}\n    {k.doc}")
+    import textwrap
+
+    out += ["", "changing keys (--set, overrides):",
+            textwrap.fill(OVERRIDES.replace("`", ""), 88, initial_indent="    ",
+                          subsequent_indent="    ")]
     return "\n".join(out)

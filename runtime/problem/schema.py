@@ -301,7 +301,15 @@ class Problem:
         )
 
     def with_overrides(self, overrides: Mapping[str, Any]) -> Problem:
-        """A new problem with dotted-path values replaced (aliases allowed), all checked."""
+        """A new problem with dotted-path values replaced (aliases allowed), all checked.
+
+        Keys are applied in order: dotted paths (``"material.tau"``, ``"loads.0.vector"``),
+        the short :data:`ALIASES`, or a top-level table (``"material"``, ``"loads"``). A
+        value may be a whole table (dict) or array of tables (list of dicts); the index
+        one past an array's last entry appends a whole entry (``{"loads.1": {"kind":
+        "force", "vector": [0, 0, 1.0]}}``). The result is validated exactly as a problem
+        file would be (:meth:`from_mapping`); the caller's values are not modified.
+        """
         if not overrides:
             return self
         if isinstance(self.rod.geometry, Curve) and getattr(self.rod.geometry, "_source",
@@ -345,22 +353,48 @@ ALIASES: dict[str, str] = {
 
 
 def resolve_alias(key: str) -> str:
-    """The dotted path of a key or alias (unknown single words are errors)."""
+    """The dotted path of a key or alias (unknown single words are errors); a top-level
+    table or key of a problem file (``material``, ``loads``, ``name``, ...) is its own
+    path."""
     if key in ALIASES:
         return ALIASES[key]
-    if "." in key:
+    if "." in key or key in TOP_KEYS:
         return key
-    raise ParameterError(key, None, "a dotted path (e.g. material.tau) or one of: "
-                         + ", ".join(sorted(ALIASES)))
+    raise ParameterError(key, None, "a dotted path (e.g. material.tau), a top-level key ("
+                         + ", ".join(TOP_KEYS) + ") or one of: " + ", ".join(sorted(ALIASES)))
+
+
+def _list_index(path: str, part: str, size: int, append: bool) -> int:
+    """The index ``part`` of an array of ``size`` entries: 0 ... size - 1, or ``size``
+    (append a new entry) when the whole entry is given (``append``)."""
+    top = size if append else size - 1
+    if part.isdigit() and int(part) <= top:
+        return int(part)
+    allowed = f"an index 0 ... {top}" if top >= 0 else "no index: the array is empty"
+    if append:
+        allowed += f" ({size} appends a new entry)"
+    else:
+        allowed += (f"; to append an entry, set {path.rsplit('.', 1)[0]}.{size} to a whole "
+                    "table (e.g. --set loads.1={kind = \"force\", vector = [0, 0, 1]})")
+    raise ParameterError(path, part, allowed)
 
 
 def apply_override(m: dict[str, Any], key: str, value: Any) -> None:
-    """Set ``key`` (dotted path or alias) in the problem mapping ``m`` in place."""
+    """Set ``key`` (dotted path or alias) in the problem mapping ``m`` in place.
+
+    A path through an array (``loads.0.vector``) names an entry by its index; the whole
+    entry at index ``len(array)`` appends one (``loads.1 = {kind = "force", ...}`` to a
+    problem with one load). Values are deep-copied (the caller's dicts stay untouched).
+    """
+    value = copy.deepcopy(value)
     path = resolve_alias(key)
     if path == "tip_force":
         _set_tip_force(m, value)
         return
     parts = path.split(".")
+    if not all(parts):
+        raise ParameterError(path, value, "a dotted path without empty parts "
+                             "(e.g. loads.0.vector)")
     if parts[0] == "material" and len(parts) == 2:  # one way of giving the viscosity
         mat = m.setdefault("material", {})
         if parts[1] == "tau":
@@ -375,22 +409,20 @@ def apply_override(m: dict[str, Any], key: str, value: Any) -> None:
             mat.pop("zeta", None)
     node: Any = m
     for i, part in enumerate(parts[:-1]):
+        here = ".".join(parts[:i + 1])
         if isinstance(node, list):
-            try:
-                node = node[int(part)]
-            except (ValueError, IndexError):
-                raise ParameterError(".".join(parts[:i + 1]), part,
-                                     f"an index 0 ... {len(node) - 1}") from None
+            node = node[_list_index(here, part, len(node), append=False)]
         else:
             if part not in node or not isinstance(node[part], (dict, list)):
                 node[part] = {}
             node = node[part]
     last = parts[-1]
     if isinstance(node, list):
-        try:
-            node[int(last)] = value
-        except (ValueError, IndexError):
-            raise ParameterError(path, last, f"an index 0 ... {len(node) - 1}") from None
+        k = _list_index(path, last, len(node), append=True)
+        if k == len(node):
+            node.append(value)
+        else:
+            node[k] = value
     else:
         node[last] = value
 
