@@ -125,15 +125,22 @@ def _cmd_calibrate(args) -> int:
     kw: dict = {}
     if args.tip_force is not None:
         kw["tip_force"] = args.tip_force
-    n = args.n_elements or 16
+    n = 16 if args.n_elements is None else args.n_elements
+    # the model is checked before the data, so a bad flag is named as such
+    problem = load_problem(args.problem, {"n_elements": n, **kw})
+    if args.tau0 is not None:
+        lo, hi = cal.tau_range(problem)
+        if not lo <= args.tau0 <= hi:
+            raise _cli_error(f"kvrod calibrate: --tau0 = {args.tau0:g} s is outside the "
+                             f"allowed range: {lo:g} ... {hi:.3g} s for this rod (below: no "
+                             "measurable damping; above: the viscous forces swamp the "
+                             "inertia)")
     try:
         if args.mode == "signal":
             data = cal.validate_signal(*cal.load_csv(args.data, ("t", "x")))
-            problem = load_problem(args.problem, {"n_elements": n, **kw})
             cal.check_record(data[0], data[1], problem)
         else:
             data = (cal.validate_decrements(*cal.load_csv(args.data, ("delta",))),)
-            problem = load_problem(args.problem, {"n_elements": n, **kw})
     except ValueError as exc:
         from runtime.errors import ParameterError
 

@@ -41,10 +41,12 @@ __all__ = [
     "CalibrationResult",
     "calibrate_decrements",
     "calibrate_signal",
+    "check_tau0",
     "decrement_model",
     "load_csv",
     "plot_calibration",
     "signal_maxima",
+    "tau_range",
     "validate_decrements",
     "validate_signal",
 ]
@@ -383,15 +385,39 @@ def _ci(tau: float, J: np.ndarray, r: np.ndarray) -> tuple[float, tuple[float, f
     return se, (tau - q * se, tau + q * se)
 
 
+def tau_range(problem=None) -> tuple[float, float]:
+    """(lowest, highest) tau (s) a fit may try on ``problem``: :data:`TAU_MIN`, and the
+    largest retardation time the rod accepts (``schema.VISCOUS_RATE_MAX`` over the
+    stiffest element mode's omega_max^2; see ``Problem.element_rates``)."""
+    from runtime.problem.schema import VISCOUS_RATE_MAX
+
+    w2, _ = _problem(problem).element_rates()
+    return TAU_MIN, VISCOUS_RATE_MAX / w2
+
+
+def check_tau0(tau0: float | None, problem=None) -> None:
+    """ParameterError (naming tau0 and its range) unless tau0 is None or a time within
+    :func:`tau_range`."""
+    if tau0 is None:
+        return
+    from runtime.errors import ParameterError
+
+    lo, hi = tau_range(problem)
+    if not (isinstance(tau0, (int, float)) and math.isfinite(tau0) and lo <= tau0 <= hi):
+        raise ParameterError("tau0", tau0, f"a starting retardation time {lo:g} ... {hi:.3g} s "
+                             "(above it the rod's viscous forces swamp its inertia)")
+
+
 def _fit(res: Callable[[float], np.ndarray], tau0: float, diff_step: float,
-         xtol: float = 1e-10, ftol: float = 1e-12):
+         xtol: float = 1e-10, ftol: float = 1e-12, tau_max: float = np.inf):
     nfev = [0]
 
     def fun(p: np.ndarray) -> np.ndarray:
         nfev[0] += 1
         return res(float(p[0]))
 
-    sol = least_squares(fun, x0=[tau0], bounds=([TAU_MIN], [np.inf]), method="trf",
+    tau0 = min(max(tau0, TAU_MIN), tau_max)
+    sol = least_squares(fun, x0=[tau0], bounds=([TAU_MIN], [tau_max]), method="trf",
                         jac="2-point", diff_step=diff_step, x_scale=[tau0], xtol=xtol,
                         ftol=ftol, gtol=1e-12, max_nfev=50)
     return sol, nfev[0]
@@ -416,13 +442,15 @@ def calibrate_decrements(delta: Sequence[float], problem=None,
     CalibrationResult
     """
     d = validate_decrements(delta)
+    check_tau0(tau0, problem)
     model = decrement_model(problem)
     if tau0 is None:
         d1 = model(0.04)
         z1 = float(damping_ratios([d1])[0])
         zm = float(damping_ratios([float(np.mean(d))])[0])
         tau0 = 0.04 * zm / z1
-    sol, nfev = _fit(lambda tau: np.full(d.size, model(tau)) - d, tau0, 1e-6)
+    sol, nfev = _fit(lambda tau: np.full(d.size, model(tau)) - d, tau0, 1e-6,
+                     tau_max=tau_range(problem)[1])
     tau = float(sol.x[0])
     se, ci = _ci(tau, sol.jac, sol.fun)
     k = np.arange(1, d.size + 1, dtype=float)
@@ -466,6 +494,7 @@ def calibrate_signal(t: Sequence[float], x: Sequence[float], problem=None,
     """
     t, x = validate_signal(t, x)
     sc = _problem(problem, n_elements=n_elements, output_step=output_step)
+    check_tau0(tau0, sc)
     check_record(t, x, sc)
     lp = sc.linear_prediction()
     if tau0 is None:
@@ -479,7 +508,7 @@ def calibrate_signal(t: Sequence[float], x: Sequence[float], problem=None,
         return CubicSpline(ts, xs)(tq)
 
     sol, nfev = _fit(lambda tau: model_at(tau, t) - x, tau0, 1e-4, xtol=1e-4,
-                     ftol=1e-6)
+                     ftol=1e-6, tau_max=tau_range(sc)[1])
     tau = float(sol.x[0])
     se, ci = _ci(tau, sol.jac, sol.fun)
     tf = np.linspace(float(t[0]), float(t[-1]), 2000)

@@ -45,6 +45,20 @@ MAX_PERIODS = 1e6               # first-mode periods in t_end (~50 steps each)
 #: smallest accepted tolerances (below them the error test works on round-off)
 RTOL_MIN = 100 * float(np.finfo(float).eps)
 ATOL_MIN = 1e-20
+#: fastest viscous rate tau omega_max^2 (1/s) of a discrete Kelvin-Voigt rod accepted:
+#: 0.1/eps. The integrator forms its iteration matrices (and the consistent initial
+#: accelerations) from the viscous and inertial terms together; where the viscous rate
+#: of the stiffest element mode exceeds 1/eps times the inertia, the inertia is lost to
+#: round-off (measured: cantilever N = 4 / 50 / 400 fails from tau = 1e9 / 1e8 / 1e6 s,
+#: rates 4e16 / 4e15 / 2e15 1/s; this bound keeps a 10 % margin below the first failure).
+VISCOUS_RATE_MAX = 0.1 / float(np.finfo(float).eps)
+#: largest load accepted, as the strain (or, for a moment, the rotation in rad) it would
+#: cause if the rod's softest stiffness carried it alone: |F| / min(EA, GA), |q| L /
+#: min(EA, GA), rho A |g| L / min(EA, GA), |M| L / min(EI, GJ). A linear rod law means
+#: nothing long before a strain of 1; the bound only keeps out loads whose solve cannot
+#: mean anything (1e300 N overflows the residual) while a merely too large load (1e6 N on
+#: the paper's cantilever, a strain of 3e4) still runs and fails with its own message.
+LOAD_STRAIN_MAX = 1e6
 #: first root of 1 + cos(x) cosh(x) = 0 (clamped-free Euler-Bernoulli beam)
 BETA1_L = 1.8751040687119611
 
@@ -171,6 +185,81 @@ class Problem:
                 f"{getattr(self.material, 'density', float('nan')):g} kg/m^3, E "
                 f"{getattr(self.material, 'youngs_modulus', float('nan')):g} Pa); the run "
                 f"would need more than {50 * periods:.2g} steps")
+
+        self._check_viscous_rate()
+        self._check_load_magnitudes()
+
+    def _check_load_magnitudes(self) -> None:
+        m = self.material.rod_matrices(self.section, np.array([0.0, 0.5, 1.0]))
+        EA = float(np.min(m["C_F"]))
+        EI = float(np.min(m["C_M"]))
+        rhoA = float(np.max(m["rhoA"]))
+        L = self.rod.length
+        for k, ld in enumerate(self.loads):
+            size = math.hypot(*ld.vector)          # no overflow of the squares
+            peak = _time_peak(ld.time)
+            scale = {"force": 1 / EA, "distributed": L / EA, "gravity": rhoA * L / EA,
+                     "moment": L / EI}[ld.kind]
+            with np.errstate(over="ignore"):
+                measure = size * peak * scale
+            if measure <= LOAD_STRAIN_MAX:
+                continue
+            what = "rotation (rad) |M| L / min(EI, GJ)" if ld.kind == "moment" else (
+                "strain |F| / min(EA, GA)" if ld.kind == "force" else
+                "strain |q| L / min(EA, GA)" if ld.kind == "distributed" else
+                "strain rho A |g| L / min(EA, GA)")
+            name, value = ((f"loads.{k}.time", ld.time.to_mapping())
+                           if size * scale <= LOAD_STRAIN_MAX and peak > 1 else
+                           (f"loads.{k}.vector", list(ld.vector)))
+            raise ParameterError(
+                name, value, f"a load whose {what} stays below {LOAD_STRAIN_MAX:.0e} (this "
+                f"load: {measure:.3g}, its time function peaking at {peak:.3g}; the rod "
+                f"carries at most {LOAD_STRAIN_MAX / scale:.3g} "
+                f"{'N m' if ld.kind == 'moment' else 'N' if ld.kind == 'force' else 'N/m' if ld.kind == 'distributed' else 'm/s^2'}"
+                " meaningfully)")
+
+    def element_rates(self) -> tuple[float, float]:
+        """(omega_max^2 in 1/s^2, viscous rate in 1/s) of the stiffest element mode: the
+        largest stiffness-to-inertia ratio over the rod's element modes (extension,
+        shear, bending and torsion of one element of length L/N, and the rotation of a
+        section against its shear stiffness, kappa G A / (rho I)), from C and from the
+        Kelvin-Voigt V = diag(tau) C (eqs. (7), (9)); evaluated at both ends and the middle
+        (tapers are linear). A generalized Maxwell material has no V: rate 0."""
+        m = self.material.rod_matrices(self.section, np.array([0.0, 0.5, 1.0]))
+        k2 = (self.rod.elements / self.rod.length) ** 2
+        rhoA, rhoI = m["rhoA"][:, None], m["rhoI"]
+        rhoI12 = np.min(rhoI[:, :2], axis=1)[:, None]
+
+        def rate(F: np.ndarray, M: np.ndarray) -> float:
+            with np.errstate(over="ignore", invalid="ignore"):
+                r = np.concatenate([(F / rhoA * k2).ravel(), (M / rhoI * k2).ravel(),
+                                    (F[:, :2] / rhoI12).ravel()])
+            return float(np.max(r)) if np.all(np.isfinite(r)) else math.inf
+
+        if "V_F" not in m or isinstance(self.material, GeneralizedMaxwell):
+            return rate(m["C_F"], m["C_M"]), 0.0
+        return rate(m["C_F"], m["C_M"]), rate(m["V_F"], m["V_M"])
+
+    def _check_viscous_rate(self) -> None:
+        if isinstance(self.material, GeneralizedMaxwell):
+            return
+        w2, lam = self.element_rates()
+        if lam <= VISCOUS_RATE_MAX:
+            return
+        mat = self.material
+        if mat.tau_S == mat.tau_B:
+            name, value = "material.tau", mat.tau_S
+        elif mat.tau_S > mat.tau_B:
+            name, value = "material.tau_S", mat.tau_S
+        else:
+            name, value = "material.tau_B", mat.tau_B
+        raise ParameterError(
+            name, value, f"retardation times with tau * omega_max^2 <= {VISCOUS_RATE_MAX:.2g} "
+            f"1/s, i.e. tau <= {VISCOUS_RATE_MAX / w2:.3g} s for this rod (N = "
+            f"{self.rod.elements} elements: its stiffest element mode has omega_max^2 = "
+            f"{w2:.3g} 1/s^2); beyond it the viscous forces exceed the inertia by more than "
+            "1/(10 eps) and the integrator loses the inertia to round-off (the first mode's "
+            f"damping ratio would be {self.characteristic_frequency() * value / 2:.3g})")
 
     # -- derived figures ---------------------------------------------------------------
     def bdf_max_order(self) -> int:
@@ -317,16 +406,29 @@ class Problem:
             raise ParameterError("rod.geometry", "curve", "a TOML-expressible geometry for "
                                  "overrides (a Python callable)")
         m = copy.deepcopy(self.to_mapping())
+        used: dict[str, str] = {}
         for key, value in overrides.items():
-            apply_override(m, key, value)
+            used[apply_override(m, key, value)] = key
         try:
             return Problem.from_mapping(m, base=self.base, name=self.name)
         except ParameterError as exc:   # name the value as the caller wrote it
-            used = {resolve_alias(k): k for k in overrides if k != "tip_force"}
             if exc.name in used and used[exc.name] != exc.name:
                 raise ParameterError(f"{used[exc.name]} ({exc.name})", exc.value,
                                      exc.allowed, exc.where) from None
             raise
+
+
+def _time_peak(tf: Any) -> float:
+    """The largest |value| a time function takes (ramps, steps and releases: 1)."""
+    kind = getattr(tf, "kind", "constant")
+    with np.errstate(over="ignore"):
+        if kind == "constant":
+            return abs(float(tf.value))
+        if kind == "harmonic":
+            return abs(float(tf.offset)) + abs(float(tf.amplitude))
+        if kind == "table":
+            return max((abs(float(v)) for _, v in tf.points), default=0.0)
+    return 1.0
 
 
 def _settings(cls, path: str, m: Any):
@@ -379,18 +481,19 @@ def _list_index(path: str, part: str, size: int, append: bool) -> int:
     raise ParameterError(path, part, allowed)
 
 
-def apply_override(m: dict[str, Any], key: str, value: Any) -> None:
+def apply_override(m: dict[str, Any], key: str, value: Any) -> str:
     """Set ``key`` (dotted path or alias) in the problem mapping ``m`` in place.
 
     A path through an array (``loads.0.vector``) names an entry by its index; the whole
     entry at index ``len(array)`` appends one (``loads.1 = {kind = "force", ...}`` to a
     problem with one load). Values are deep-copied (the caller's dicts stay untouched).
+    Returns the dotted path the value went to (``tip_force``: that load's vector), the
+    name a rejected value is reported under.
     """
     value = copy.deepcopy(value)
     path = resolve_alias(key)
     if path == "tip_force":
-        _set_tip_force(m, value)
-        return
+        return _set_tip_force(m, value)
     parts = path.split(".")
     if not all(parts):
         raise ParameterError(path, value, "a dotted path without empty parts "
@@ -425,13 +528,14 @@ def apply_override(m: dict[str, Any], key: str, value: Any) -> None:
             node[k] = value
     else:
         node[last] = value
+    return path
 
 
-def _set_tip_force(m: dict[str, Any], value: Any) -> None:
+def _set_tip_force(m: dict[str, Any], value: Any) -> str:
     """tip_force F: the first point force at the s = L end gets magnitude |F| along its
-    direction (the sign of F flips it)."""
+    direction (the sign of F flips it). Returns the path of that load's vector."""
     F = C.number("tip_force", value)
-    for ld in m.get("loads", []):
+    for k, ld in enumerate(m.get("loads", [])):
         if ld.get("kind", "force") == "force" and ld.get("at", "end") == "end" and "s" not in ld:
             v = np.array(ld.get("vector", [0.0, 0.0, 0.0]), dtype=float)
             nv = float(np.linalg.norm(v))
@@ -439,7 +543,7 @@ def _set_tip_force(m: dict[str, Any], value: Any) -> None:
                 raise ParameterError("tip_force", value, "a problem whose end force has a "
                                      "direction (its vector is zero)")
             ld["vector"] = list(F * v / nv)
-            return
+            return f"loads.{k}.vector"
     raise ParameterError("tip_force", value, "a problem with a point force at the end "
                          "(use --set loads.K.vector=... otherwise)")
 
