@@ -59,6 +59,7 @@ VISCOUS_RATE_MAX = 0.1 / float(np.finfo(float).eps)
 #: mean anything (1e300 N overflows the residual) while a merely too large load (1e6 N on
 #: the paper's cantilever, a strain of 3e4) still runs and fails with its own message.
 LOAD_STRAIN_MAX = 1e6
+_LOAD_UNITS = {"force": "N", "distributed": "N/m", "gravity": "m/s^2", "moment": "N m"}
 #: first root of 1 + cos(x) cosh(x) = 0 (clamped-free Euler-Bernoulli beam)
 BETA1_L = 1.8751040687119611
 
@@ -214,9 +215,8 @@ class Problem:
             raise ParameterError(
                 name, value, f"a load whose {what} stays below {LOAD_STRAIN_MAX:.0e} (this "
                 f"load: {measure:.3g}, its time function peaking at {peak:.3g}; the rod "
-                f"carries at most {LOAD_STRAIN_MAX / scale:.3g} "
-                f"{'N m' if ld.kind == 'moment' else 'N' if ld.kind == 'force' else 'N/m' if ld.kind == 'distributed' else 'm/s^2'}"
-                " meaningfully)")
+                f"carries at most {LOAD_STRAIN_MAX / scale:.3g} {_LOAD_UNITS[ld.kind]} "
+                "meaningfully)")
 
     def element_rates(self) -> tuple[float, float]:
         """(omega_max^2 in 1/s^2, viscous rate in 1/s) of the stiffest element mode: the
