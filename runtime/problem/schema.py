@@ -189,6 +189,15 @@ class Problem:
 
         self._check_viscous_rate()
         self._check_load_magnitudes()
+        w_max = math.sqrt(self.element_rates()[0])
+        t_min = math.sqrt(float(np.finfo(float).eps)) / w_max
+        if self.simulation.t_end < t_min:
+            raise ParameterError(
+                "simulation.t_end", self.simulation.t_end,
+                f">= sqrt(eps) / omega_max = {t_min:.3g} s for this rod (omega_max = "
+                f"{w_max:.4g} rad/s, its stiffest element mode at N = {self.rod.elements}): "
+                "in a shorter run not even that mode moves the rod by more than round-off "
+                "(a displacement ~ (omega t)^2 of its scale)")
 
     def _check_load_magnitudes(self) -> None:
         m = self.material.rod_matrices(self.section, np.array([0.0, 0.5, 1.0]))
