@@ -43,6 +43,7 @@ __all__ = [
     "calibrate_signal",
     "check_tau0",
     "decrement_model",
+    "dominant_period",
     "load_csv",
     "plot_calibration",
     "signal_maxima",
@@ -230,12 +231,69 @@ def signal_maxima(t: np.ndarray, x: np.ndarray, prominence: float = 0.05,
     return np.asarray(tk), np.asarray(xk)
 
 
+def dominant_period(t: np.ndarray, x: np.ndarray) -> float:
+    """The period (s) of the strongest oscillation of a record (t in s, x in m): the peak
+    of its amplitude spectrum.
+
+    Robust to measurement noise, unlike the spacing of maxima (white noise spreads over
+    all frequencies, while the decay concentrates at its own). The record is resampled
+    onto a uniform grid of as many points (linear interpolation; NumPy's FFT needs one),
+    its mean removed, zero-padded eightfold for a fine frequency grid, and the spectrum's
+    largest value above the lowest resolvable frequency 1/span is refined by a parabola
+    through it and its neighbours.
+    """
+    t = np.asarray(t, dtype=float)
+    x = np.asarray(x, dtype=float)
+    n = min(t.size, 1 << 20)
+    span = float(t[-1] - t[0])
+    tu = np.linspace(float(t[0]), float(t[-1]), n)
+    xu = np.interp(tu, t, x)
+    xu = xu - xu.mean()
+    m = 8 * n
+    spec = np.abs(np.fft.rfft(xu, m))
+    freq = np.fft.rfftfreq(m, d=span / (n - 1))
+    ok = np.flatnonzero(freq >= 1.0 / span)
+    if ok.size < 3 or not np.any(spec[ok] > 0):
+        return math.inf
+    k = int(ok[np.argmax(spec[ok])])
+    if 0 < k < spec.size - 1:
+        a, b, c = spec[k - 1], spec[k], spec[k + 1]
+        den = a - 2 * b + c
+        shift = 0.5 * (a - c) / den if den != 0 else 0.0
+        f = freq[k] + float(np.clip(shift, -1, 1)) * (freq[1] - freq[0])
+    else:
+        f = freq[k]
+    return 1.0 / f if f > 0 else math.inf
+
+
+def smoothed_maxima(t: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`signal_maxima` of the record smoothed over a tenth of its
+    :func:`dominant_period` (a moving average on a uniform grid): the maxima of the
+    oscillation, not of the noise on it."""
+    T = dominant_period(t, x)
+    n = t.size
+    tu = np.linspace(float(t[0]), float(t[-1]), n)
+    xu = np.interp(tu, t, x)
+    w = int(round(0.1 * T / (tu[1] - tu[0]))) if math.isfinite(T) else 1
+    if w >= 3:
+        # a centred moving average; the ends keep their own (shorter) windows
+        c = np.concatenate([[0.0], np.cumsum(xu)])
+        lo = np.clip(np.arange(n) - w // 2, 0, n)
+        hi = np.clip(np.arange(n) + w // 2 + 1, 0, n)
+        xu = (c[hi] - c[lo]) / (hi - lo)
+    return signal_maxima(tu, xu)
+
+
 #: a record whose scale differs from the model's by more than this factor is rejected
 SCALE_FACTOR = 3.0
 #: longest record accepted, in first-mode periods of the model
 MAX_RECORD_PERIODS = 200.0
-#: a fit whose residual RMS exceeds this fraction of the signal's RMS is rejected
+#: a fit whose residual RMS exceeds this fraction of the signal's RMS is rejected, unless
+#: the residual is the record's own noise (at most NOISE_FACTOR times its estimate)
 MAX_RESIDUAL_FRACTION = 0.3
+NOISE_FACTOR = 1.5
+#: a record whose noise is this fraction of its RMS or more holds no measurable decay
+MAX_NOISE_FRACTION = 0.7
 
 
 def check_signal_against_model(t: np.ndarray, x: np.ndarray, release_x: float,
@@ -263,9 +321,8 @@ def check_signal_against_model(t: np.ndarray, x: np.ndarray, release_x: float,
                 " (check the units and the problem's tip force)")
         raise ValueError(f"the record's first maximum {first:.4g} m is {ratio:.3g} times the "
                          f"model's release deflection {release_x:.4g} m{unit}")
-    tk, _ = signal_maxima(t, x)
-    if tk.size >= 2:
-        T = float(np.median(np.diff(tk)))
+    T = dominant_period(t, x)
+    if math.isfinite(T):
         r = T / period
         if not 1 / SCALE_FACTOR <= r <= SCALE_FACTOR:
             unit = (" (is time in ms? t must be in s)" if 300 < r < 3000 else
@@ -278,9 +335,18 @@ def check_signal_against_model(t: np.ndarray, x: np.ndarray, release_x: float,
                          f"model (at most {MAX_RECORD_PERIODS:g}); cut it to the decay")
 
 
+def noise_rms(x: np.ndarray) -> float:
+    """RMS of white measurement noise on a finely sampled record (m): second differences
+    of white noise of variance s^2 have variance 6 s^2, while a smooth oscillation
+    sampled many times per period contributes little to them (an upper estimate)."""
+    x = np.asarray(x, dtype=float)
+    return float(np.std(np.diff(x, 2)) / math.sqrt(6.0)) if x.size > 3 else 0.0
+
+
 def fit_doubts(tau: float, ci: tuple[float, float], residual_rms: float,
-               signal_rms: float, lower_bound: float) -> list[str]:
-    """Why a converged fit is still not believable (empty when it is)."""
+               signal_rms: float, lower_bound: float, noise: float = 0.0) -> list[str]:
+    """Why a converged fit is still not believable (empty when it is). ``noise``: the
+    record's own noise level (:func:`noise_rms`); a residual at that level is no misfit."""
     doubts = []
     lo, hi = ci
     if not (math.isfinite(lo) and math.isfinite(hi)):
@@ -291,10 +357,14 @@ def fit_doubts(tau: float, ci: tuple[float, float], residual_rms: float,
     if tau <= 1.01 * lower_bound:
         doubts.append(f"tau = {tau:.3g} s sits at its lower bound: the model cannot match "
                       "the data (units? sign?)")
-    if signal_rms > 0 and residual_rms > MAX_RESIDUAL_FRACTION * signal_rms:
+    if (signal_rms > 0 and residual_rms > MAX_RESIDUAL_FRACTION * signal_rms
+            and residual_rms > NOISE_FACTOR * noise):
         doubts.append(f"the residual RMS {residual_rms:.4g} is {residual_rms / signal_rms:.2f} "
-                      f"of the signal's RMS {signal_rms:.4g}: the model does not fit the "
-                      "data (units, sign, problem?)")
+                      f"of the signal's RMS {signal_rms:.4g} and above the record's noise "
+                      f"{noise:.3g}: the model does not fit the data (units, sign, problem?)")
+    if noise > 0 and noise >= MAX_NOISE_FRACTION * signal_rms:
+        doubts.append(f"the record's noise {noise:.3g} is {noise / signal_rms:.2f} of its RMS "
+                      f"{signal_rms:.4g}: no decay can be told from that noise")
     return doubts
 
 
@@ -498,9 +568,9 @@ def calibrate_signal(t: Sequence[float], x: Sequence[float], problem=None,
     check_record(t, x, sc)
     lp = sc.linear_prediction()
     if tau0 is None:
-        _, xk = signal_maxima(t, x)
-        z = float(np.mean(damping_ratios(log_decrements(xk))))
-        tau0 = max(2 * z / lp["omega_1"], 1e-4)
+        _, xk = smoothed_maxima(t, x)
+        z = float(np.mean(damping_ratios(log_decrements(xk)))) if xk.size >= 2 else 0.0
+        tau0 = min(max(2 * z / lp["omega_1"], 1e-4), tau_range(sc)[1])
     t_end = float(t[-1]) + 2 * output_step
 
     def model_at(tau: float, tq: np.ndarray) -> np.ndarray:
@@ -519,7 +589,7 @@ def calibrate_signal(t: Sequence[float], x: Sequence[float], problem=None,
                              message=str(sol.message), data_t=t, data_y=x, fit_t=tf,
                              fit_y=model_at(tau, tf),
                              doubts=fit_doubts(tau, ci, rms, float(np.sqrt(np.mean(x**2))),
-                                               TAU_MIN))
+                                               TAU_MIN, noise_rms(x)))
 
 
 def check_record(t: np.ndarray, x: np.ndarray, problem) -> None:

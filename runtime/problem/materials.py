@@ -112,9 +112,16 @@ class KelvinVoigt:
         k = section.constants(nu, x)
         rho, E = self.at(x)
         out = {n: np.empty((x.size, 3)) for n in ("C_F", "C_M", "V_F", "V_M")}
+        done: dict[tuple, int] = {}       # a uniform rod evaluates the formulas once
         for i in range(x.size):
             geo = tuple(float(k[n][i]) for n in ("A", "I1", "I2", "I3", "kappa_1", "kappa_2",
                                                  "kappa_3"))
+            key = (float(E[i]), *geo)
+            if key in done:
+                for name in out:
+                    out[name][i] = out[name][done[key]]
+                continue
+            done[key] = i
             CF, CM = c.stiffness_matrices(float(E[i]), nu, *geo)
             VF, VM = c.damping_matrices(float(E[i]), nu, self.tau_S, self.tau_B, *geo,
                                         route=self.damping)

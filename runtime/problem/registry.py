@@ -70,8 +70,15 @@ def problem_path(spec: str | Path) -> Path:
         if not p.exists():
             raise ProblemFileError(f"{p}: no such problem file")
         return p
-    if str(spec) in builtin_names():
-        return EXAMPLES_DIR / f"{spec}.toml"
+    # a built-in name is its own file: read that one (not every example, which a study
+    # of many points would otherwise parse once per point)
+    f = EXAMPLES_DIR / f"{spec}.toml"
+    if f.is_file():
+        try:
+            if _is_problem(tomllib.loads(f.read_text())):
+                return f
+        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+            pass
     names = ", ".join(builtin_names()) or "(none found)"
     raise ProblemFileError(f"unknown problem {str(spec)!r}; built-in problems: {names}; or "
                            "give a problem file (.toml)")

@@ -200,7 +200,7 @@ class Problem:
                 "(a displacement ~ (omega t)^2 of its scale)")
 
     def _check_load_magnitudes(self) -> None:
-        m = self.material.rod_matrices(self.section, np.array([0.0, 0.5, 1.0]))
+        m = self._end_matrices()
         EA = float(np.min(m["C_F"]))
         EI = float(np.min(m["C_M"]))
         rhoA = float(np.max(m["rhoA"]))
@@ -234,7 +234,7 @@ class Problem:
         section against its shear stiffness, kappa G A / (rho I)), from C and from the
         Kelvin-Voigt V = diag(tau) C (eqs. (7), (9)); evaluated at both ends and the middle
         (tapers are linear). A generalized Maxwell material has no V: rate 0."""
-        m = self.material.rod_matrices(self.section, np.array([0.0, 0.5, 1.0]))
+        m = self._end_matrices()
         k2 = (self.rod.elements / self.rod.length) ** 2
         rhoA, rhoI = m["rhoA"][:, None], m["rhoI"]
         rhoI12 = np.min(rhoI[:, :2], axis=1)[:, None]
@@ -291,8 +291,17 @@ class Problem:
         x = (np.arange(N) + 0.5) / N
         return self.material.rod_matrices(self.section, x)
 
+    def _end_matrices(self) -> dict[str, np.ndarray]:
+        """The rod matrices at the start, middle and end (x = 0, 1/2, 1), computed once
+        (the checks of every new problem use them)."""
+        m = self.__dict__.get("_m3")
+        if m is None:
+            m = self.material.rod_matrices(self.section, np.array([0.0, 0.5, 1.0]))
+            object.__setattr__(self, "_m3", m)
+        return m
+
     def _uniform_matrices(self) -> dict[str, np.ndarray]:
-        return self.material.rod_matrices(self.section, np.array([0.5]))
+        return {k: v[1:2] if k != "theta" else v for k, v in self._end_matrices().items()}
 
     def characteristic_frequency(self) -> float:
         """Euler-Bernoulli clamped-free first bending frequency (rad/s) of the rod at mid
@@ -414,7 +423,11 @@ class Problem:
                                                            None) is None:
             raise ParameterError("rod.geometry", "curve", "a TOML-expressible geometry for "
                                  "overrides (a Python callable)")
-        m = copy.deepcopy(self.to_mapping())
+        base = self.__dict__.get("_mapping")
+        if base is None:                  # a study applies thousands of overrides to one
+            base = self.to_mapping()
+            object.__setattr__(self, "_mapping", base)
+        m = copy.deepcopy(base)
         used: dict[str, str] = {}
         for key, value in overrides.items():
             used[apply_override(m, key, value)] = key
