@@ -225,7 +225,10 @@ class Problem:
                 name, value, f"a load whose {what} stays below {LOAD_STRAIN_MAX:.0e} (this "
                 f"load: {measure:.3g}, its time function peaking at {peak:.3g}; the rod "
                 f"carries at most {LOAD_STRAIN_MAX / scale:.3g} {_LOAD_UNITS[ld.kind]} "
-                "meaningfully)")
+                f"meaningfully: its softest stiffness is {EI if ld.kind == 'moment' else EA:.3g} "
+                f"{'N m^2' if ld.kind == 'moment' else 'N'}, from the section and "
+                f"material.youngs_modulus = {getattr(self.material, 'youngs_modulus', 0):g} "
+                "Pa)")
 
     def element_rates(self) -> tuple[float, float]:
         """(omega_max^2 in 1/s^2, viscous rate in 1/s) of the stiffest element mode: the
