@@ -128,6 +128,11 @@ def _cmd_calibrate(args) -> int:
     n = 16 if args.n_elements is None else args.n_elements
     # the model is checked before the data, so a bad flag is named as such
     problem = load_problem(args.problem, {"n_elements": n, **kw})
+    if problem.material.model != "kelvin_voigt":
+        raise _cli_error(f"kvrod calibrate: --problem {args.problem}: the fit is of the "
+                         f"Kelvin-Voigt tau, but this rod's material is "
+                         f"{problem.material.model}; give a Kelvin-Voigt rod, or fit a "
+                         "generalized Maxwell material to DMA data with --dma")
     if args.tau0 is not None:
         lo, hi = cal.tau_range(problem)
         if not lo <= args.tau0 <= hi:

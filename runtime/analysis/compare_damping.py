@@ -225,13 +225,16 @@ def _check_ranges(base: Problem, tau_S: float, tau_B: float, poisson_ratio: floa
     omega = lp["omega_1"]
     taus = {"consistent": float(retardation_time_extension(tau_B, tau_S, poisson_ratio)),
             "naive": float(retardation_time_extension_naive(tau_B, tau_S))}
-    for route, tau in taus.items():
+    for route, tau in sorted(taus.items(), key=lambda kv: kv[0] != "naive"):
         zeta = omega * tau / 2
         if not ZETA_MIN <= zeta <= ZETA_MAX:
-            name = "tau_S" if tau_S >= tau_B else "tau_B"
-            value = tau_S if name == "tau_S" else tau_B
+            # the naive tau~_E depends on the retardation times only, tau_E on nu as well
+            name = ("tau_S" if tau_S >= tau_B else "tau_B") if route == "naive" else "nu"
+            value = {"tau_S": tau_S, "tau_B": tau_B, "nu": poisson_ratio}[name]
             raise ValueError(
-                f"{name} = {value:g} s is outside the allowed range: the first bending mode's "
+                f"{name} = {value:g}{' s' if name != 'nu' else ''} is outside the allowed "
+                f"range (with tau_S = {tau_S:g} s, tau_B = {tau_B:g} s, nu = "
+                f"{poisson_ratio:g}): the first bending mode's "
                 f"damping ratio omega_1 tau_E / 2 must lie in [{ZETA_MIN}, {ZETA_MAX}] on both "
                 f"routes for a resolvable decay over the run (here {route}: tau_E = "
                 f"{tau:.3g} s, zeta = {zeta:.3g}; omega_1 = {omega:.4g} rad/s: tau_E = "

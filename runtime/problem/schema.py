@@ -167,7 +167,12 @@ class Problem:
     base: Path | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
+        from runtime.problem.sections import LENGTH_MAX, LENGTH_MIN, LENGTH_RANGE
+
         N = self.rod.elements
+        if not LENGTH_MIN <= self.rod.length <= LENGTH_MAX:
+            raise ParameterError("rod.length", self.rod.length, LENGTH_RANGE)
+        self._check_matrices()
         for ld in self.loads:
             if ld.s is not None and ld.s > self.rod.length * (1 + 1e-12):
                 raise ParameterError("loads.s", ld.s, f"0 ... rod length {self.rod.length:g} m")
@@ -189,15 +194,86 @@ class Problem:
 
         self._check_viscous_rate()
         self._check_load_magnitudes()
+        self._check_positions()
+        self._check_input_frequencies()
         w_max = math.sqrt(self.element_rates()[0])
         t_min = math.sqrt(float(np.finfo(float).eps)) / w_max
         if self.simulation.t_end < t_min:
             raise ParameterError(
                 "simulation.t_end", self.simulation.t_end,
                 f">= sqrt(eps) / omega_max = {t_min:.3g} s for this rod (omega_max = "
-                f"{w_max:.4g} rad/s, its stiffest element mode at N = {self.rod.elements}): "
-                "in a shorter run not even that mode moves the rod by more than round-off "
-                "(a displacement ~ (omega t)^2 of its scale)")
+                f"{w_max:.4g} rad/s, its stiffest element mode at N = {self.rod.elements}, "
+                f"from length {self.rod.length:g} m, density "
+                f"{getattr(self.material, 'density', float('nan')):g} kg/m^3, E "
+                f"{getattr(self.material, 'youngs_modulus', float('nan')):g} Pa): in a "
+                "shorter run not even that mode moves the rod by more than round-off (a "
+                "displacement ~ (omega t)^2 of its scale)")
+
+    def _check_matrices(self) -> None:
+        """The rod's stiffness and inertia must be finite and positive numbers."""
+        m = self._end_matrices()
+        for key in ("C_F", "C_M", "rhoA", "rhoI"):
+            v = np.asarray(m[key], dtype=float)
+            if not (np.all(np.isfinite(v)) and np.all(v > 0)):
+                what = "stiffness" if key.startswith("C") else "mass or rotary inertia"
+                raise ParameterError(
+                    "section", self.section.to_mapping(),
+                    f"a section and material whose {what} ({key}) is a finite number > 0 "
+                    f"(here {key} = {float(np.min(v)):.3g} ... {float(np.max(v)):.3g}; material "
+                    f"E = {getattr(self.material, 'youngs_modulus', float('nan')):g} Pa, "
+                    f"density {getattr(self.material, 'density', float('nan')):g} kg/m^3)")
+
+    def _check_positions(self) -> None:
+        """Positions (origin, prescribed translations) and clamp rotations small enough
+        that round-off leaves the element strains meaningful: |r| eps <= 1e-8 L/N (a
+        strain error of 1e-8), |angle| eps <= 1e-8 rad."""
+        eps = float(np.finfo(float).eps)
+        r_max = 1e-8 * self.rod.length / self.rod.elements / eps
+        origin = getattr(self.rod.geometry, "origin", (0.0, 0.0, 0.0))
+        if math.hypot(*origin) > r_max:
+            raise ParameterError("rod.geometry.origin", list(origin),
+                                 f"|origin| <= 1e-8 (L/N)/eps = {r_max:.3g} m for this rod: "
+                                 "farther out, round-off of the coordinates swamps the "
+                                 "elements' strains")
+        a_max = math.degrees(1e-8 / eps)
+        for name, end in (("start", self.start), ("end", self.end)):
+            mo = end.motion
+            if mo is None:
+                continue
+            with np.errstate(over="ignore"):
+                tr = math.hypot(*mo.translation) * _time_peak(mo.translation_time)
+                ang = abs(mo.rotation_angle) * _time_peak(mo.rotation_time)
+            if tr > r_max:
+                raise ParameterError(f"{name}.motion.translation", list(mo.translation),
+                                     f"|translation| x its time function's peak <= 1e-8 "
+                                     f"(L/N)/eps = {r_max:.3g} m for this rod (here "
+                                     f"{tr:.3g} m): farther, round-off of the coordinates "
+                                     "swamps the elements' strains")
+            if ang > a_max:
+                raise ParameterError(f"{name}.motion.rotation_angle", mo.rotation_angle,
+                                     f"|rotation_angle| x its time function's peak <= "
+                                     f"{a_max:.3g} deg (1e-8 rad / eps: the round-off of a "
+                                     "larger angle exceeds 1e-8 rad)")
+
+    def _check_input_frequencies(self) -> None:
+        """A harmonic input may hold at most MAX_PERIODS periods in t_end (a run resolves
+        each period with tens of steps, like the rod's own modes)."""
+        inputs = [(f"loads.{k}.time", ld.time) for k, ld in enumerate(self.loads)]
+        for name, end in (("start", self.start), ("end", self.end)):
+            if end.motion is not None:
+                inputs += [(f"{name}.motion.translation_time", end.motion.translation_time),
+                           (f"{name}.motion.rotation_time", end.motion.rotation_time)]
+        for name, tf in inputs:
+            if getattr(tf, "kind", "") != "harmonic":
+                continue
+            with np.errstate(over="ignore"):
+                periods = self.simulation.t_end * float(tf.frequency)
+            if periods > MAX_PERIODS:
+                raise ParameterError(f"{name}.frequency", tf.frequency,
+                                     f"at most {MAX_PERIODS:.0e} periods in t_end = "
+                                     f"{self.simulation.t_end:g} s, i.e. <= "
+                                     f"{MAX_PERIODS / self.simulation.t_end:.3g} Hz (each "
+                                     "period needs tens of integrator steps)")
 
     def _check_load_magnitudes(self) -> None:
         m = self._end_matrices()
@@ -535,6 +611,8 @@ def apply_override(m: dict[str, Any], key: str, value: Any) -> str:
                 mat.setdefault("tau_B", t)
             mat.pop("eta", None)
             mat.pop("zeta", None)
+        elif parts[1] in ("eta", "zeta"):   # the viscosities replace the retardation times
+            _times_to_viscosities(mat, keep=parts[1])
     node: Any = m
     for i, part in enumerate(parts[:-1]):
         here = ".".join(parts[:i + 1])
@@ -545,6 +623,9 @@ def apply_override(m: dict[str, Any], key: str, value: Any) -> str:
                 node[part] = {}
             node = node[part]
     last = parts[-1]
+    if parts[0] == "loads" and len(parts) == 3 and isinstance(node, dict):
+        # a point load is placed by `at` or by `s`: the one given replaces the other
+        node.pop({"s": "at", "at": "s"}.get(last, ""), None)
     if isinstance(node, list):
         k = _list_index(path, last, len(node), append=True)
         if k == len(node):
@@ -554,6 +635,27 @@ def apply_override(m: dict[str, Any], key: str, value: Any) -> str:
     else:
         node[last] = value
     return path
+
+
+def _times_to_viscosities(mat: dict[str, Any], keep: str) -> None:
+    """Before ``material.eta`` or ``.zeta`` is set: the retardation times of the mapping
+    become viscosities (eta = G tau_S, zeta = K tau_B), so the one not set keeps its
+    value and the material is given one way (the parser refuses a mix)."""
+    if "tau" in mat:
+        t = mat.pop("tau")
+        mat.setdefault("tau_S", t)
+        mat.setdefault("tau_B", t)
+    tS, tB = mat.pop("tau_S", None), mat.pop("tau_B", None)
+    E, nu = mat.get("youngs_modulus", 1.0e6), mat.get("poisson_ratio", 0.3)
+    try:
+        G = float(E) / (2 * (1 + float(nu)))
+        K = math.inf if float(nu) >= 0.5 else float(E) / (3 * (1 - 2 * float(nu)))
+    except (TypeError, ValueError, ZeroDivisionError):
+        return                               # the parser names the bad E or nu
+    if keep == "eta" and tB is not None and "zeta" not in mat:
+        mat["zeta"] = 0.0 if math.isinf(K) else K * float(tB)
+    if keep == "zeta" and tS is not None and "eta" not in mat:
+        mat["eta"] = G * float(tS)
 
 
 def _set_tip_force(m: dict[str, Any], value: Any) -> str:

@@ -63,9 +63,10 @@ class Shape:
         for d, suffix in ((got, ""), (dict(self.dims_end), "_end")):
             for n, v in d.items():
                 if self.kind == "tube" and n == "inner_radius":
-                    C.nonnegative(f"section.{n}{suffix}", v)
+                    C.number(f"section.{n}{suffix}", v, low=0.0, high=LENGTH_MAX)
                 else:
-                    C.positive(f"section.{n}{suffix}", v)
+                    C.number(f"section.{n}{suffix}", v, low=LENGTH_MIN, high=LENGTH_MAX,
+                             allowed=LENGTH_RANGE)
         if self.kind == "tube":
             for d, suffix in ((got, ""), ({**got, **dict(self.dims_end)}, "_end")):
                 if d["inner_radius"] >= d["outer_radius"]:
@@ -100,6 +101,13 @@ class Shape:
         out.update({f"{k}_end": v for k, v in self.dims_end})
         out["shear_correction"] = self.shear_correction
         return out
+
+
+#: lengths of a rod and its section (m): far beyond any rod, and keeping their fourth
+#: powers (second moments, L^4 of the bending frequency) normal floating-point numbers
+LENGTH_MIN, LENGTH_MAX = 1e-30, 1e30
+LENGTH_RANGE = (f"a length {LENGTH_MIN:g} ... {LENGTH_MAX:g} m (beyond any rod; its fourth "
+                "power must stay a normal floating-point number)")
 
 
 @lru_cache(maxsize=4096)

@@ -128,8 +128,10 @@ def _coerce(name: str, value: Any, where: str) -> Any:
         return int(value) if integer and value.is_integer() else value
     if isinstance(value, list):
         return [_coerce(name, v, where) for v in value]
+    if isinstance(value, dict):      # a whole table, e.g. an appended load (loads.1)
+        return {k: _coerce(f"{name}.{k}", v, where) for k, v in value.items()}
     raise StudyError(f"{where}: {name} = {value!r} has the wrong type (a number, string, "
-                     "boolean or list)")
+                     "boolean, list or table)")
 
 
 def _check_params(params: Mapping[str, Any], where: str) -> dict[str, Any]:
