@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 from kvrod.analyses import compare_table, modes_table, plot_mode_shapes, run_modes, write_compare
+from kvrod.outputs import safe_name
 
 
 def _cli_error(message: str) -> Exception:
@@ -36,7 +37,7 @@ def _cmd_modes(args) -> int:
         raise _cli_error(f"kvrod modes: --count {args.count} exceeds the {nq} degrees of "
                          f"freedom of {problem.rod.elements} elements")
     out = Path(args.out) if args.out else Path("results") / (
-        f"modes-{problem.name}" + ("-deformed" if args.deformed else ""))
+        f"modes-{safe_name(problem.name)}" + ("-deformed" if args.deformed else ""))
     from kvrod.outputs import results_folder
 
     with results_folder(out, "modes", markers=("modes.json",), overwrite=args.overwrite,

@@ -146,8 +146,8 @@ KEYS: tuple[Key, ...] = (
     _k("material", "branches", "-", "required", "1 ... 12 tables [[material.branches]]",
        "the Maxwell branches (below)", invalid=[], kinds=("generalized_maxwell",)),
     # -- [[material.branches]] ----------------------------------------------------------
-    _k("material.branches", "tau", "s", "required", "> 0", "relaxation time of the branch",
-       invalid=0.0),
+    _k("material.branches", "tau", "s", "required", ">= 1e-12", "relaxation time of the "
+       "branch", invalid=0.0),
     _k("material.branches", "youngs_modulus", "Pa", "-", ">= 0; with poisson_ratio, not "
        "with shear/bulk_modulus", "the branch's spring as E", invalid=-1.0),
     _k("material.branches", "poisson_ratio", "-", "-", "-1 < nu < 1/2", "the branch's "

@@ -60,6 +60,9 @@ VISCOUS_RATE_MAX = 0.1 / float(np.finfo(float).eps)
 #: the paper's cantilever, a strain of 3e4) still runs and fails with its own message.
 LOAD_STRAIN_MAX = 1e6
 _LOAD_UNITS = {"force": "N", "distributed": "N/m", "gravity": "m/s^2", "moment": "N m"}
+#: largest ratio of a generalized Maxwell solid's glassy to equilibrium shear or bulk modulus
+#: (real polymers: 1e2 ... 1e4; at 1e300 the static solve meets a singular Jacobian)
+GLASSY_RATIO_MAX = 1e10
 #: first root of 1 + cos(x) cosh(x) = 0 (clamped-free Euler-Bernoulli beam)
 BETA1_L = 1.8751040687119611
 
@@ -193,6 +196,7 @@ class Problem:
                 f"would need more than {50 * periods:.2g} steps")
 
         self._check_viscous_rate()
+        self._check_maxwell_springs()
         self._check_load_magnitudes()
         self._check_positions()
         self._check_input_frequencies()
@@ -208,6 +212,34 @@ class Problem:
                 f"{getattr(self.material, 'youngs_modulus', float('nan')):g} Pa): in a "
                 "shorter run not even that mode moves the rod by more than round-off (a "
                 "displacement ~ (omega t)^2 of its scale)")
+
+    def _check_maxwell_springs(self) -> None:
+        """A generalized Maxwell rod: without an equilibrium spring (a Maxwell fluid) no
+        static equilibrium exists under loads; and its instantaneous (glassy) modulus may
+        exceed the equilibrium one by at most GLASSY_RATIO_MAX, beyond which the relaxed
+        stiffness is lost to round-off next to the branches'."""
+        mat = self.material
+        if not isinstance(mat, GeneralizedMaxwell):
+            return
+        if mat.youngs_modulus == 0.0:
+            if self.loads and self.simulation.initial == "static":
+                raise ParameterError(
+                    "simulation.initial", "static", '"reference" for a Maxwell fluid '
+                    "(material.youngs_modulus = 0: no equilibrium spring, so no static "
+                    "equilibrium under the loads; start from the reference at rest)")
+            return
+        G_inf, K_inf, G_j, K_j, _ = mat.moduli       # of the 3-D solid (Pa)
+        with np.errstate(over="ignore", invalid="ignore"):
+            ratio = max((G_inf + float(np.sum(G_j))) / G_inf,
+                        (K_inf + float(np.sum(K_j))) / K_inf)
+        if not ratio <= GLASSY_RATIO_MAX:
+            k = int(np.argmax([b.shear_modulus + b.bulk_modulus for b in mat.branches]))
+            raise ParameterError(
+                f"material.branches.{k}", mat.branches[k].to_mapping(),
+                f"branches whose springs keep the glassy moduli at most "
+                f"{GLASSY_RATIO_MAX:.0e} times the equilibrium ones (G_inf = {G_inf:g} Pa, "
+                f"K_inf = {K_inf:g} Pa; here "
+                f"{ratio:.3g} times): beyond it the relaxed stiffness is lost to round-off")
 
     def _check_matrices(self) -> None:
         """The rod's stiffness and inertia must be finite and positive numbers."""
@@ -613,6 +645,11 @@ def apply_override(m: dict[str, Any], key: str, value: Any) -> str:
             mat.pop("zeta", None)
         elif parts[1] in ("eta", "zeta"):   # the viscosities replace the retardation times
             _times_to_viscosities(mat, keep=parts[1])
+    if (parts[:2] == ["material", "branches"] and len(parts) == 4
+            and isinstance(m.get("material", {}).get("branches"), list)):
+        branches = m["material"]["branches"]
+        if parts[2].isdigit() and int(parts[2]) < len(branches):
+            _branch_spring_as(branches[int(parts[2])], parts[3])
     node: Any = m
     for i, part in enumerate(parts[:-1]):
         here = ".".join(parts[:i + 1])
@@ -635,6 +672,26 @@ def apply_override(m: dict[str, Any], key: str, value: Any) -> str:
     else:
         node[last] = value
     return path
+
+
+def _branch_spring_as(branch: Any, key: str) -> None:
+    """Before one spring constant of a Maxwell branch is set: its spring is rewritten in
+    the pair that key belongs to (E, nu or G, K: eq. of isotropic elasticity), so the
+    other constant keeps its meaning and the branch is given one way."""
+    if not isinstance(branch, dict):
+        return
+    try:
+        if key in ("youngs_modulus", "poisson_ratio") and "shear_modulus" in branch:
+            G, K = float(branch.pop("shear_modulus")), float(branch.pop("bulk_modulus", 0.0))
+            branch.setdefault("youngs_modulus", 9 * K * G / (3 * K + G) if 3 * K + G else 0.0)
+            branch.setdefault("poisson_ratio", (3 * K - 2 * G) / (2 * (3 * K + G))
+                              if 3 * K + G else 0.0)
+        elif key in ("shear_modulus", "bulk_modulus") and "youngs_modulus" in branch:
+            E, nu = float(branch.pop("youngs_modulus")), float(branch.pop("poisson_ratio", 0.3))
+            branch.setdefault("shear_modulus", E / (2 * (1 + nu)))
+            branch.setdefault("bulk_modulus", E / (3 * (1 - 2 * nu)))
+    except (TypeError, ValueError, ZeroDivisionError):
+        return                               # the parser names the bad value
 
 
 def _times_to_viscosities(mat: dict[str, Any], keep: str) -> None:
