@@ -110,8 +110,8 @@ def load_csv(path: str | Path, columns: Sequence[str]) -> list[np.ndarray]:
     """Read the named columns (case-insensitive header names) of a CSV file as floats.
 
     Lines starting with '#' are comments. A file with one unnamed numeric column is
-    accepted when one column is asked for. Empty cells or text give NaN, which the
-    validators reject with the row number.
+    accepted when one column is asked for. An empty cell, text or a non-finite number in
+    an asked column is refused naming the file's line and the column (never skipped).
     """
     path = Path(path)
     if not path.is_file():
@@ -120,9 +120,11 @@ def load_csv(path: str | Path, columns: Sequence[str]) -> list[np.ndarray]:
                             else "does not exist"))
     try:
         with path.open(newline="", encoding="utf-8") as fh:
-            rows = [r for r in csv.reader(line for line in fh
-                                          if not line.lstrip().startswith("#"))
-                    if any(c.strip() for c in r)]
+            numbered = [(i, r) for i, r in enumerate(csv.reader(fh), 1)
+                        if r and not r[0].lstrip().startswith("#")
+                        and any(c.strip() for c in r)]
+        lines = [i for i, _ in numbered]
+        rows = [r for _, r in numbered]
     except UnicodeDecodeError as exc:
         raise ValueError(f"data file {str(path)!r} is not UTF-8 text ({exc.reason} at byte "
                          f"{exc.start}): save it as a plain CSV") from None
@@ -138,7 +140,7 @@ def load_csv(path: str | Path, columns: Sequence[str]) -> list[np.ndarray]:
             raise ValueError(f"data file {str(path)!r} has no header; expected columns "
                              f"{', '.join(columns)}")
     else:
-        body = rows[1:]
+        body, lines = rows[1:], lines[1:]
     idx = []
     for name in columns:
         if name.lower() not in header:
@@ -148,8 +150,12 @@ def load_csv(path: str | Path, columns: Sequence[str]) -> list[np.ndarray]:
     out = [np.full(len(body), np.nan) for _ in columns]
     for i, r in enumerate(body):
         for c, j in enumerate(idx):
-            if j < len(r) and _is_number(r[j]):
-                out[c][i] = float(r[j])
+            cell = r[j].strip() if j < len(r) else ""
+            if not (_is_number(cell) and math.isfinite(float(cell))):
+                what = f"{cell!r} is not a finite number" if cell else "the cell is empty"
+                raise ValueError(f"data file {str(path)!r}: line {lines[i]}, column "
+                                 f"{columns[c]!r}: {what}; correct or remove that row")
+            out[c][i] = float(cell)
     return out
 
 

@@ -1681,4 +1681,13 @@ CASES: list[Case] = [
                 '"loads.1" = [{kind = "force", vector = [0, 0, 0.001]}]\n'),),
          (csv_has(lambda rows: [r["status"] for r in rows] == ["finished"], "1 finished"),),
          note="found: a table value was 'the wrong type'"),
+    Case("calibrate-record-typo-named-by-line", "message",
+         ("calibrate", "--data", "{tmp}/typo.csv", "--n-elements", "4", *OUT), 2,
+         ("typo.csv", "line 3", "'O.12'"),
+         (write("typo.csv", "t,x\n0,0.2\n0.01,O.12\n0.02,0.19\n"),), (ABSENT,), **GUARDED,
+         note="found: 'x contains NaN or inf (first at row 1)': the data row, not the line"),
+    Case("calibrate-record-gap-named-by-line", "message",
+         ("calibrate", "--data", "{tmp}/gap.csv", "--n-elements", "4", *OUT), 2,
+         ("gap.csv", "line 3", "empty"),
+         (write("gap.csv", "t,x\n0,0.2\n0.01,\n0.02,0.19\n"),), (ABSENT,), **GUARDED),
 ]
