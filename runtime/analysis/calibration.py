@@ -462,7 +462,7 @@ def _ci(tau: float, J: np.ndarray, r: np.ndarray) -> tuple[float, tuple[float, f
 
 
 def tau_range(problem=None) -> tuple[float, float]:
-    """(lowest, highest) tau (s) a fit may try on ``problem``: :data:`TAU_MIN`, and the
+    """(lowest, highest) tau (s) a fit may try on ``problem``: ``TAU_MIN``, and the
     largest retardation time the rod accepts (``schema.VISCOUS_RATE_MAX`` over the
     stiffest element mode's omega_max^2; see ``Problem.element_rates``)."""
     from runtime.problem.schema import VISCOUS_RATE_MAX

@@ -53,11 +53,12 @@ ATOL_MIN = 1e-20
 #: rates 4e16 / 4e15 / 2e15 1/s; this bound keeps a 10 % margin below the first failure).
 VISCOUS_RATE_MAX = 0.1 / float(np.finfo(float).eps)
 #: largest load accepted, as the strain (or, for a moment, the rotation in rad) it would
-#: cause if the rod's softest stiffness carried it alone: |F| / min(EA, GA), |q| L /
-#: min(EA, GA), rho A |g| L / min(EA, GA), |M| L / min(EI, GJ). A linear rod law means
-#: nothing long before a strain of 1; the bound only keeps out loads whose solve cannot
-#: mean anything (1e300 N overflows the residual) while a merely too large load (1e6 N on
-#: the paper's cantilever, a strain of 3e4) still runs and fails with its own message.
+#: cause if the rod's softest stiffness carried it alone: ``|F| / min(EA, GA)``,
+#: ``|q| L / min(EA, GA)``, ``rho A |g| L / min(EA, GA)``, ``|M| L / min(EI, GJ)``. A
+#: linear rod law means nothing long before a strain of 1; the bound only keeps out loads
+#: whose solve cannot mean anything (1e300 N overflows the residual) while a merely too
+#: large load (1e6 N on the paper's cantilever, a strain of 3e4) still runs and fails with
+#: its own message.
 LOAD_STRAIN_MAX = 1e6
 _LOAD_UNITS = {"force": "N", "distributed": "N/m", "gravity": "m/s^2", "moment": "N m"}
 #: largest ratio of a generalized Maxwell solid's glassy to equilibrium shear or bulk modulus
@@ -552,7 +553,7 @@ class Problem:
 
 
 def _time_peak(tf: Any) -> float:
-    """The largest |value| a time function takes (ramps, steps and releases: 1)."""
+    """The largest absolute value a time function takes (ramps, steps, releases: 1)."""
     kind = getattr(tf, "kind", "constant")
     with np.errstate(over="ignore"):
         if kind == "constant":
