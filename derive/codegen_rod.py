@@ -125,7 +125,7 @@ def _context() -> dict:
         "node_load_offsets": dr.NODE_LOAD_OFFSETS,
         "segment_loads": dr.SEGMENT_LOADS, "n_segment_load": dr.N_SEGMENT_LOAD,
         "segment_load_offsets": dr.SEGMENT_LOAD_OFFSETS,
-        "n_diag_scalars": len(dr.DIAG_SCALARS),
+        "n_diag_scalars": len(dr.DIAG_SCALARS), "n_diag_energies": len(dr.DIAG_ENERGIES),
         "kernels": {f.name(): _signature(f) for f in fns},
         "max_w": max(1, max(f.sz_w() for f in fns)),
         "max_iw": max(1, max(f.sz_iw() for f in fns)),

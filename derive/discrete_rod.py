@@ -132,10 +132,12 @@ PARAMS: tuple[tuple[str, int, str, str], ...] = (
     ("clamp_end", 1, "1", "1: frame clamped at s = L, else 0"),
     ("r_start", 3, "m", "prescribed position of node 0"),
     ("v_start", 3, "m/s", "prescribed velocity of node 0"),
+    ("a_start", 3, "m/s^2", "prescribed acceleration of node 0 (its support's reaction)"),
     ("p_start", 4, "1", "clamp frame quaternion at s = 0 (scalar first)"),
     ("Omega_start", 3, "rad/s", "material angular velocity of the clamp frame at s = 0"),
     ("r_end", 3, "m", "prescribed position of node N"),
     ("v_end", 3, "m/s", "prescribed velocity of node N"),
+    ("a_end", 3, "m/s^2", "prescribed acceleration of node N (its support's reaction)"),
     ("p_end", 4, "1", "clamp frame quaternion at s = L (scalar first)"),
     ("Omega_end", 3, "rad/s", "material angular velocity of the clamp frame at s = L"),
 )
@@ -178,9 +180,17 @@ def static_cell_start(i: int) -> int:
     return 0 if i == 0 else STATIC_CELL0_SIZE + STATIC_CELL_SIZE * (i - 1)
 
 
-#: diagnostics vector: scalars then per-element arrays (sizes in multiples of N or N+1)
-DIAG_SCALARS = ("kinetic", "elastic", "dissipation_rate", "external_power",
-                "boundary_power")
+#: diagnostics vector: scalars then per-element arrays (sizes in multiples of N or N+1).
+#: The scalars: kinetic and elastic energy (J), dissipation rate 2D, power of the loads and
+#: of the prescribed end motion (W), then the force (N) and moment (N m, about the node)
+#: that each support exerts on the rod, spatial (zero at a free end; the moment also at a
+#: pinned one): m a - f_ext - f_int at the held node, minus the clamp joint's torque on
+#: the clamp frame
+DIAG_ENERGIES = ("kinetic", "elastic", "dissipation_rate", "external_power",
+                 "boundary_power")
+DIAG_REACTIONS = tuple(f"{end}_{what}_{c}" for end in ("start", "end")
+                       for what in ("force", "moment") for c in "xyz")
+DIAG_SCALARS = DIAG_ENERGIES + DIAG_REACTIONS
 
 # --------------------------------------------------------------------------------------
 # Quaternion algebra (scalar part first), CasADi SX
@@ -557,19 +567,20 @@ def kernels() -> list[ca.Function]:
     J_seg = cy * ca.jacobian(r_seg, xs) + cj * ca.jacobian(r_seg, xds)
     seg_in_in = {"p": p, "Omega": om, "p_dot": pd, "Omega_dot": omd, "seg": s.sp}
 
-    # node rows: [phi' - v; m v' - f] for a free node, [phi' - v; v - v_held] for a held
-    # one (its velocity prescribed, its position the integral of it from the prescribed
-    # initial position: an index-1 DAE whose position error is error-controlled like any
-    # other); f is the total external force
+    # node rows: [phi' - v; m v' - f] for a free node, [phi - r_held; v - v_held] for a
+    # held one: its position and velocity are prescribed (algebraic rows), so a held end
+    # sits at r(t) to round-off at every step rather than at the integral of v(t) to the
+    # integration error; f is the total external force
     phi, v = s.phi_a, s.v_a
     phid, vd = S("phi_dot", 3), S("v_dot", 3)
     m, f, held = S("m"), S("f", 3), S("held")
-    vr = S("v_held", 3)
-    r_node = ca.vertcat(phid - v, (1 - held) * (m * vd - f) + held * (v - vr))
+    rr, vr = S("r_held", 3), S("v_held", 3)
+    r_node = ca.vertcat((1 - held) * (phid - v) + held * (phi - rr),
+                        (1 - held) * (m * vd - f) + held * (v - vr))
     xn, xdn = ca.vertcat(phi, v), ca.vertcat(phid, vd)
     J_node = cy * ca.jacobian(r_node, xn) + cj * ca.jacobian(r_node, xdn)
     node_in = {"phi": phi, "v": v, "phi_dot": phid, "v_dot": vd, "m": m, "f": f,
-               "held": held, "v_held": vr}
+               "held": held, "r_held": rr, "v_held": vr}
 
     x = S("x", 3)
     return [

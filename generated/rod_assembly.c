@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_assembly.c.jinja
 // derivation step: discrete_rod
-// inputs sha256: d51f8d81f5a9a477dd50a6fee21c2b96f5a0ffe8cb0ef9dd2d1842b7131ad170
+// inputs sha256: 95cb6b16d54b27cf5a8a8593a45b6282301e413490623c02b28614b7eea5e8cd
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*
@@ -32,7 +32,8 @@
 #define NJNT 10
 #define NNL 6
 #define NSL 6
-#define NDIAG 5
+#define NDIAG 17
+#define NDIAG_E 5   /* energies and powers; then the reactions */
 
 #define PAR_LOAD_SCALE 0
 #define PAR_GRAVITY 1
@@ -43,12 +44,14 @@
 #define PAR_CLAMP_END 10
 #define PAR_R_START 11
 #define PAR_V_START 14
-#define PAR_P_START 17
-#define PAR_OMEGA_START 21
-#define PAR_R_END 24
-#define PAR_V_END 27
-#define PAR_P_END 30
-#define PAR_OMEGA_END 34
+#define PAR_A_START 17
+#define PAR_P_START 20
+#define PAR_OMEGA_START 24
+#define PAR_R_END 27
+#define PAR_V_END 30
+#define PAR_A_END 33
+#define PAR_P_END 36
+#define PAR_OMEGA_END 40
 
 #define SEG_H 0
 #define SEG_C_F 1
@@ -164,7 +167,7 @@ static void jnt_lane(const kvrod_rod* r, int j, const double* y, const double** 
 /* work memory large enough for every kernel */
 #define MAXW 78
 #define MAXIW 1
-#define MAXARG 10
+#define MAXARG 11
 #define MAXRES 4
 typedef struct {
   const double* arg[MAXARG];
@@ -197,8 +200,16 @@ static double node_held(const kvrod_rod* r, int i) {
 /* the segment whose frame carries node i's follower force */
 static inline int host(int i) { return i >= 1 ? i : 1; }
 
+static const double* held_r(const kvrod_rod* r, int i) {
+  return r->par + (i == 0 ? PAR_R_START : PAR_R_END);
+}
+
 static const double* held_v(const kvrod_rod* r, int i) {
   return r->par + (i == 0 ? PAR_V_START : PAR_V_END);
+}
+
+static const double* held_a(const kvrod_rod* r, int i) {
+  return r->par + (i == 0 ? PAR_A_START : PAR_A_END);
 }
 
 static int has_follower(const double* f) { return f[0] != 0.0 || f[1] != 0.0 || f[2] != 0.0; }
@@ -253,7 +264,7 @@ static int joint_args(const kvrod_rod* r, int j, const double* y, work_t* W) {
 int kvrod_n_state(int N, int nb) { return CELL0_BASE + CELL0_PER * nb + (CELL_BASE + CELL_PER * nb) * N; }
 int kvrod_kl(int N, int nb) { return KL0 + KL1 * nb - (N == 1 ? 1 : 0); }
 int kvrod_ku(int N, int nb) { return KU0 + KU1 * nb - (N == 1 ? 0 : 0); }
-int kvrod_n_params(void) { return 37; }
+int kvrod_n_params(void) { return 43; }
 
 /* a rod the assembly can work on: N >= 1, 0 <= nb <= MAX_NB, its band at least the
  * layout's (a wider band is fine) */
@@ -292,7 +303,8 @@ int kvrod_residual(const kvrod_rod* rod, double t, const double* y, const double
     W.arg[0] = y + i_phi(rod, i); W.arg[1] = y + i_v(rod, i);
     W.arg[2] = yp + i_phi(rod, i); W.arg[3] = yp + i_v(rod, i);
     W.arg[4] = &m; W.arg[5] = f; W.arg[6] = &held;
-    W.arg[7] = i == 0 || i == N ? held_v(rod, i) : kZero3;
+    W.arg[7] = i == 0 || i == N ? held_r(rod, i) : kZero3;
+    W.arg[8] = i == 0 || i == N ? held_v(rod, i) : kZero3;
     W.res[0] = res + i_phi(rod, i);
     if (rod_node_inertia(W.arg, W.res, W.iw, W.w, 0)) return -3;
   }
@@ -405,8 +417,9 @@ static int jac_node(const kvrod_rod* rod, int i, const double* y, const double* 
   W->arg[0] = y + i_phi(rod, i); W->arg[1] = y + i_v(rod, i);
   W->arg[2] = yp + i_phi(rod, i); W->arg[3] = yp + i_v(rod, i);
   W->arg[4] = &m; W->arg[5] = f; W->arg[6] = &held;
-  W->arg[7] = i == 0 || i == N ? held_v(rod, i) : kZero3;
-  W->arg[8] = &cy; W->arg[9] = &cj;
+  W->arg[7] = i == 0 || i == N ? held_r(rod, i) : kZero3;
+  W->arg[8] = i == 0 || i == N ? held_v(rod, i) : kZero3;
+  W->arg[9] = &cy; W->arg[10] = &cj;
   W->res[0] = J;
   if (rod_node_inertia_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
   const int o = i_phi(rod, i);
@@ -721,21 +734,30 @@ static int energies_one(const kvrod_rod* rod, const double* y, const double* yp,
       relax_energy(rod, jntb(rod, j, 0), 3, jntp(rod, j)[JNT_H], dX, y + i_qj(rod, j), e);
     }
     if (out_el) for (k = 0; k < 3; ++k) { oU[3 * j + k] = S3[k]; oM[3 * j + k] = R3[k]; }
-    if (j == 0 || j == N) {             /* power of the clamp frames' prescribed rotation */
+    if (j == 0 || j == N) {             /* the clamp's moment and its power */
       W->res[0] = T6;
       if (rod_joint_torques(W->arg, W->res, W->iw, W->w, 0)) return -3;
       const double* om = rod->par + (j == 0 ? PAR_OMEGA_START : PAR_OMEGA_END);
-      const double* Tc = j == 0 ? T6 : T6 + 3;
-      for (k = 0; k < 3; ++k) e[4] -= Tc[k] * om[k];
+      const double* pc = rod->par + (j == 0 ? PAR_P_START : PAR_P_END);
+      double mTc[3];
+      const double* Tc = j == 0 ? T6 : T6 + 3;  /* the joint's torque on the clamp frame */
+      for (k = 0; k < 3; ++k) { e[4] -= Tc[k] * om[k]; mTc[k] = -Tc[k]; }
+      W->arg[0] = pc; W->arg[1] = mTc;    /* the support's moment, spatial */
+      W->res[0] = e + NDIAG_E + (j == 0 ? 3 : 9);
+      if (rod_rotate(W->arg, W->res, W->iw, W->w, 0)) return -3;
     }
   }
-  for (j = 0; j < 2; ++j) {             /* power of the held nodes' prescribed motion */
+  for (j = 0; j < 2; ++j) {             /* the supports' forces and their power */
     i = j == 0 ? 0 : N;
     if (!(node_held(rod, i) > 0.5)) continue;
     m = node_mass(rod, i);
     if (node_force(rod, i, y, W, f)) return -3;
-    for (k = 0; k < 3; ++k)
-      e[4] += (m * yp[i_v(rod, i) + k] - f[k] - Fint[j][k]) * y[i_v(rod, i) + k];
+    double* R = e + NDIAG_E + 6 * j;
+    const double* a = held_a(rod, i);
+    for (k = 0; k < 3; ++k) {
+      R[k] = m * a[k] - f[k] - Fint[j][k];
+      e[4] += R[k] * y[i_v(rod, i) + k];
+    }
   }
   return 0;
 }

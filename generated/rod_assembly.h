@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_assembly.h.jinja
 // derivation step: discrete_rod
-// inputs sha256: c6170561dcce4f6d9191a986baa1b691c3279027e731249a82a289fe3cf150d2
+// inputs sha256: 5fd8891d5558d253003a7a818f6a91cc5cf0054691cdb65a99250da38274dc81
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*
@@ -30,7 +30,7 @@ typedef struct {
   int N;                  /* number of elements (segments) */
   int nb;                 /* number of relaxation terms (0: Kelvin-Voigt) */
   int kl, ku;             /* band widths of the caller's band storage */
-  const double* par;      /* global parameters: 37 values */
+  const double* par;      /* global parameters: 43 values */
   const double* seg;      /* N x 14 segment parameters */
   const double* jnt;      /* (N+1) x 10 joint parameters */
   const double* nload;    /* (N+1) x 6 node loads */

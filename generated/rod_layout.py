@@ -1,7 +1,7 @@
 # GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 # source: derive/templates/rod_layout.py.jinja
 # derivation step: discrete_rod
-# inputs sha256: 30e9ec1af995a43b4149613cd63ce2926c3bae20a201ae53c5c74846cdf57ae6
+# inputs sha256: 0ba18acaad71db84989aefcbf7841d040e746f2d6f3e113c8cf8bc680c09bb30
 # tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 """State, parameter and diagnostics layout of the discrete rod (the one place that owns it).
@@ -83,16 +83,18 @@ PARAMS = (
     ("clamp_end", 1, "1", "1: frame clamped at s = L, else 0"),
     ("r_start", 3, "m", "prescribed position of node 0"),
     ("v_start", 3, "m/s", "prescribed velocity of node 0"),
+    ("a_start", 3, "m/s^2", "prescribed acceleration of node 0 (its support\u0027s reaction)"),
     ("p_start", 4, "1", "clamp frame quaternion at s = 0 (scalar first)"),
     ("Omega_start", 3, "rad/s", "material angular velocity of the clamp frame at s = 0"),
     ("r_end", 3, "m", "prescribed position of node N"),
     ("v_end", 3, "m/s", "prescribed velocity of node N"),
+    ("a_end", 3, "m/s^2", "prescribed acceleration of node N (its support\u0027s reaction)"),
     ("p_end", 4, "1", "clamp frame quaternion at s = L (scalar first)"),
     ("Omega_end", 3, "rad/s", "material angular velocity of the clamp frame at s = L"),
 )
-N_PARAMS = 37
-PARAM_OFFSETS = {'load_scale': 0, 'gravity': 1, 'f_dist': 4, 'fix_start': 7, 'clamp_start': 8, 'fix_end': 9, 'clamp_end': 10, 'r_start': 11, 'v_start': 14, 'p_start': 17, 'Omega_start': 21, 'r_end': 24, 'v_end': 27, 'p_end': 30, 'Omega_end': 34}
-PARAM_SIZES = {'load_scale': 1, 'gravity': 3, 'f_dist': 3, 'fix_start': 1, 'clamp_start': 1, 'fix_end': 1, 'clamp_end': 1, 'r_start': 3, 'v_start': 3, 'p_start': 4, 'Omega_start': 3, 'r_end': 3, 'v_end': 3, 'p_end': 4, 'Omega_end': 3}
+N_PARAMS = 43
+PARAM_OFFSETS = {'load_scale': 0, 'gravity': 1, 'f_dist': 4, 'fix_start': 7, 'clamp_start': 8, 'fix_end': 9, 'clamp_end': 10, 'r_start': 11, 'v_start': 14, 'a_start': 17, 'p_start': 20, 'Omega_start': 24, 'r_end': 27, 'v_end': 30, 'a_end': 33, 'p_end': 36, 'Omega_end': 40}
+PARAM_SIZES = {'load_scale': 1, 'gravity': 3, 'f_dist': 3, 'fix_start': 1, 'clamp_start': 1, 'fix_end': 1, 'clamp_end': 1, 'r_start': 3, 'v_start': 3, 'a_start': 3, 'p_start': 4, 'Omega_start': 3, 'r_end': 3, 'v_end': 3, 'a_end': 3, 'p_end': 4, 'Omega_end': 3}
 
 #: per-segment parameters (segment i = 1..N): (name, size, unit, meaning), in order
 SEGMENT_PARAMS = (
@@ -132,10 +134,13 @@ SEGMENT_LOAD_OFFSETS = {'m_dead': 0, 'm_follower': 3}
 
 #: diagnostics vector: these scalars, then V (3N), F (3N), U (3(N+1)), M (3(N+1));
 #: joint j = 0..N sits at node j (j = 0 and j = N are the clamp joints, zero if absent)
-DIAG_SCALARS = ('kinetic', 'elastic', 'dissipation_rate', 'external_power', 'boundary_power')
+DIAG_SCALARS = ('kinetic', 'elastic', 'dissipation_rate', 'external_power', 'boundary_power', 'start_force_x', 'start_force_y', 'start_force_z', 'start_moment_x', 'start_moment_y', 'start_moment_z', 'end_force_x', 'end_force_y', 'end_force_z', 'end_moment_x', 'end_moment_y', 'end_moment_z')
+#: the first five: energies and powers; then the supports' reactions (6 per end)
+DIAG_ENERGIES = DIAG_SCALARS[:5]
+DIAG_REACTIONS = DIAG_SCALARS[5:]
 
 #: per-element CasADi kernels (names, inputs, outputs)
-KERNELS = {'rod_segment_forces': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'seg': [14, 1], 'n_q': [3, 1]}, 'outputs': {'Q': [9, 1]}}, 'rod_segment_forces_jac': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'seg': [14, 1], 'n_q': [3, 1]}, 'outputs': {'dQb_dxb': [6, 13]}}, 'rod_joint_torques': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1], 'm_q': [3, 1]}, 'outputs': {'T': [6, 1]}}, 'rod_joint_torques_jac': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1], 'm_q': [3, 1]}, 'outputs': {'dT_dx': [6, 14]}}, 'rod_segment_inertia': {'inputs': {'p': [4, 1], 'Omega': [3, 1], 'p_dot': [4, 1], 'Omega_dot': [3, 1], 'seg': [14, 1]}, 'outputs': {'r': [7, 1]}}, 'rod_segment_inertia_jac': {'inputs': {'p': [4, 1], 'Omega': [3, 1], 'p_dot': [4, 1], 'Omega_dot': [3, 1], 'seg': [14, 1], 'c_y': [1, 1], 'c_j': [1, 1]}, 'outputs': {'J': [7, 7]}}, 'rod_node_inertia': {'inputs': {'phi': [3, 1], 'v': [3, 1], 'phi_dot': [3, 1], 'v_dot': [3, 1], 'm': [1, 1], 'f': [3, 1], 'held': [1, 1], 'v_held': [3, 1]}, 'outputs': {'r': [6, 1]}}, 'rod_node_inertia_jac': {'inputs': {'phi': [3, 1], 'v': [3, 1], 'phi_dot': [3, 1], 'v_dot': [3, 1], 'm': [1, 1], 'f': [3, 1], 'held': [1, 1], 'v_held': [3, 1], 'c_y': [1, 1], 'c_j': [1, 1]}, 'outputs': {'J': [6, 6]}}, 'rod_rotate': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'Rx': [3, 1]}}, 'rod_rotate_jac': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'dRx_dp': [3, 4]}}, 'rod_rotate_transposed': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'RTx': [3, 1]}}, 'rod_rotate_transposed_jac': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'dRTx_dp': [3, 4]}}, 'rod_segment_diagnostics': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'seg': [14, 1], 'n_q': [3, 1]}, 'outputs': {'W': [1, 1], 'D': [1, 1], 'V': [3, 1], 'F': [3, 1]}}, 'rod_joint_diagnostics': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1], 'm_q': [3, 1]}, 'outputs': {'W': [1, 1], 'D': [1, 1], 'U': [3, 1], 'M': [3, 1]}}, 'rod_segment_kinetic': {'inputs': {'Omega': [3, 1], 'seg': [14, 1]}, 'outputs': {'T': [1, 1]}}, 'rod_node_kinetic': {'inputs': {'v': [3, 1], 'm': [1, 1]}, 'outputs': {'T': [1, 1]}}, 'rod_segment_branch': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'seg': [14, 1]}, 'outputs': {'dV': [3, 1], 'dV_dx': [3, 7], 'G': [6, 3]}}, 'rod_joint_branch': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'jnt': [10, 1]}, 'outputs': {'dU': [3, 1], 'dU_dx': [3, 8], 'G': [6, 3]}}}
+KERNELS = {'rod_segment_forces': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'seg': [14, 1], 'n_q': [3, 1]}, 'outputs': {'Q': [9, 1]}}, 'rod_segment_forces_jac': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'seg': [14, 1], 'n_q': [3, 1]}, 'outputs': {'dQb_dxb': [6, 13]}}, 'rod_joint_torques': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1], 'm_q': [3, 1]}, 'outputs': {'T': [6, 1]}}, 'rod_joint_torques_jac': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1], 'm_q': [3, 1]}, 'outputs': {'dT_dx': [6, 14]}}, 'rod_segment_inertia': {'inputs': {'p': [4, 1], 'Omega': [3, 1], 'p_dot': [4, 1], 'Omega_dot': [3, 1], 'seg': [14, 1]}, 'outputs': {'r': [7, 1]}}, 'rod_segment_inertia_jac': {'inputs': {'p': [4, 1], 'Omega': [3, 1], 'p_dot': [4, 1], 'Omega_dot': [3, 1], 'seg': [14, 1], 'c_y': [1, 1], 'c_j': [1, 1]}, 'outputs': {'J': [7, 7]}}, 'rod_node_inertia': {'inputs': {'phi': [3, 1], 'v': [3, 1], 'phi_dot': [3, 1], 'v_dot': [3, 1], 'm': [1, 1], 'f': [3, 1], 'held': [1, 1], 'r_held': [3, 1], 'v_held': [3, 1]}, 'outputs': {'r': [6, 1]}}, 'rod_node_inertia_jac': {'inputs': {'phi': [3, 1], 'v': [3, 1], 'phi_dot': [3, 1], 'v_dot': [3, 1], 'm': [1, 1], 'f': [3, 1], 'held': [1, 1], 'r_held': [3, 1], 'v_held': [3, 1], 'c_y': [1, 1], 'c_j': [1, 1]}, 'outputs': {'J': [6, 6]}}, 'rod_rotate': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'Rx': [3, 1]}}, 'rod_rotate_jac': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'dRx_dp': [3, 4]}}, 'rod_rotate_transposed': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'RTx': [3, 1]}}, 'rod_rotate_transposed_jac': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'dRTx_dp': [3, 4]}}, 'rod_segment_diagnostics': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'seg': [14, 1], 'n_q': [3, 1]}, 'outputs': {'W': [1, 1], 'D': [1, 1], 'V': [3, 1], 'F': [3, 1]}}, 'rod_joint_diagnostics': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1], 'm_q': [3, 1]}, 'outputs': {'W': [1, 1], 'D': [1, 1], 'U': [3, 1], 'M': [3, 1]}}, 'rod_segment_kinetic': {'inputs': {'Omega': [3, 1], 'seg': [14, 1]}, 'outputs': {'T': [1, 1]}}, 'rod_node_kinetic': {'inputs': {'v': [3, 1], 'm': [1, 1]}, 'outputs': {'T': [1, 1]}}, 'rod_segment_branch': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'seg': [14, 1]}, 'outputs': {'dV': [3, 1], 'dV_dx': [3, 7], 'G': [6, 3]}}, 'rod_joint_branch': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'jnt': [10, 1]}, 'outputs': {'dU': [3, 1], 'dU_dx': [3, 8], 'G': [6, 3]}}}
 
 
 def _check_branches(branches: int) -> int:

@@ -21,8 +21,9 @@ def modes_table(modes) -> str:
         ref = f"{m.analytic_omega:15.5f}" if m.analytic_omega else f"{'-':>15}"
         diff = (f"{(m.omega / m.analytic_omega - 1) * 100:+7.3f}%" if m.analytic_omega
                 else f"{'':>8}")
+        zeta = f"{m.zeta:9.5f}" if math.isfinite(m.zeta) else f"{'-':>9}"
         lines.append(f"{m.index:>4}  {m.family:<10} {m.frequency_hz:10.5f} {m.omega:14.5f} "
-                     f"{m.zeta:9.5f} {lam:>30} {ref} {diff}")
+                     f"{zeta} {lam:>30} {ref} {diff}")
     return "\n".join(lines)
 
 

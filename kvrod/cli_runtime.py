@@ -11,10 +11,26 @@ from kvrod.problem_args import add_problem_arguments, problem_from_args
 from kvrod.runs import already_finished, run_and_write, static_and_write
 
 
+def _static_lines(st: dict) -> list[str]:
+    """What `kvrod static` and `kvrod simulate` print of a static result: the tip of a rod
+    with a free end, or the largest displacement and where for a rod held at both ends (its
+    "tip" is a support); the gauge of free rigid motions."""
+    its = f"(Newton iterations: {st['newton_iterations']})"
+    big = st.get("largest_displacement")
+    if big:
+        pos = [round(v, 9) for v in big["position"]]
+        lines = [f"static: largest displacement {big['magnitude']:.6g} m at node "
+                 f"{big['node']} (s = {big['s']:.6g} m), position [m] {pos}  {its}"]
+    else:
+        lines = [f"static tip [m]: {st['tip']}  {its}"]
+    if st.get("gauge"):
+        lines.append(f"gauge: {st['gauge']}")
+    return lines
+
+
 def _print_summary(s: dict, out: Path, vtk: bool, plots: bool) -> None:
-    tip = s["static"]["tip"]
-    if tip is not None:
-        print(f"static tip [m]: {tip}  (Newton iterations: {s['static']['newton_iterations']})")
+    if s["static"]["tip"] is not None:
+        print("\n".join(_static_lines(s["static"])))
     if s.get("peaks"):
         z = s["damping_ratios"]
         print(f"maxima: {len(s['peaks'])}, damping ratios: {[round(v, 4) for v in z]}")
@@ -65,9 +81,13 @@ def _cmd_static(args) -> int:
     out = Path(args.out) if args.out else Path("results") / f"{safe_name(problem.name)}-static"
     summary, _, _ = static_and_write(problem, out, overwrite=args.overwrite)
     st = summary["static"]
-    print(f"static tip [m]: {st['tip']}  (Newton iterations: {st['newton_iterations']})")
+    print("\n".join(_static_lines(st)))
     for p in st["path"][:-1]:
         print(f"  at load factor {p['load_factor']:g}: tip [m] {p['tip']}")
+    for end, r in st.get("reactions", {}).items():
+        f = ", ".join(f"{v:.6g}" for v in r["force"])
+        m = ", ".join(f"{v:.6g}" for v in r["moment"])
+        print(f"  support at the {end}: force [N] [{f}], moment [N m] [{m}]")
     print(f"wrote {out}/ summary.json, static.npz, problem.toml")
     if summary["status"] != "finished":
         print(f"kvrod static: {summary['message']}", file=sys.stderr)

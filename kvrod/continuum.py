@@ -1,10 +1,14 @@
 """Continuum reference frequencies for the modes table, from the independent references.
 
-For a straight, uniform, unloaded rod clamped at s = 0 and free at s = L, the
-``references`` package (written without kvrod code) gives the Timoshenko bending, axial
-and torsional frequencies; the section constants come from ``references.sections`` too,
-so the column ``analytic omega`` of ``kvrod modes`` is an independent check of the
-discrete rod, not a copy of it.
+For a straight, uniform rod with no end motion, clamped at s = 0 and free at s = L, pinned
+at both ends (simply supported) or free at both ends, the ``references`` package (written
+without kvrod code) gives the Timoshenko bending, axial and torsional frequencies
+(``references.beams`` and, for generalized Maxwell materials, the complex-modulus
+cantilever of ``references.viscoelastic_beam``; ``references.supported`` for the other two
+supports); the section constants come from ``references.sections`` too, so the column
+``analytic omega`` of ``kvrod modes`` is an independent check of the discrete rod, not a
+copy of it. Where no reference exists (rigid and shear modes, a Maxwell rod that is not a
+cantilever, a root the reference cannot track) the column stays empty.
 """
 
 from __future__ import annotations
@@ -13,7 +17,7 @@ import math
 
 import numpy as np
 
-from references import beams
+from references import beams, supported
 from references import sections as ref_sections
 
 
@@ -30,15 +34,26 @@ def _section(problem):
             }[s.kind]()
 
 
-def applies(problem) -> bool:
-    """Straight, uniform, clamped-free, no end motion: the continuum references apply."""
+def support(problem) -> str | None:
+    """"clamped-free", "pinned-pinned" or "free-free" for a straight, untwisted, uniform
+    rod without end motion whose ends are those; else None (no continuum reference)."""
     from runtime.problem.geometry import Straight
 
-    return (isinstance(problem.rod.geometry, Straight) and problem.rod.geometry.twist == 0
-            and problem.start.kind == "clamped" and problem.start.motion is None
-            and problem.end.kind == "free" and not getattr(problem.section, "tapered", False)
+    if not (isinstance(problem.rod.geometry, Straight) and problem.rod.geometry.twist == 0
+            and problem.start.motion is None and problem.end.motion is None
+            and not getattr(problem.section, "tapered", False)
             and problem.material.density_end is None
-            and problem.material.youngs_modulus_end is None)
+            and problem.material.youngs_modulus_end is None):
+        return None
+    ends = (problem.start.kind, problem.end.kind)
+    return {("clamped", "free"): "clamped-free", ("pinned", "pinned"): "pinned-pinned",
+            ("free", "free"): "free-free"}.get(ends)
+
+
+def applies(problem) -> bool:
+    """Straight, uniform, no end motion, and clamped-free, pinned-pinned or free-free: the
+    continuum references apply."""
+    return support(problem) is not None
 
 
 def _maxwell_solid(m):
@@ -74,38 +89,53 @@ def _maxwell_frequencies(problem, sec, family: str, n: int) -> np.ndarray:
 
 def frequencies(problem, family: str, n: int) -> np.ndarray:
     """First n continuum angular frequencies (rad/s) of a family (NaN where unknown); for
-    a generalized Maxwell material the natural frequencies |lambda| of the complex-modulus
-    continuum."""
+    a generalized Maxwell material (cantilevers only) the natural frequencies |lambda| of
+    the complex-modulus continuum."""
     sec = _section(problem)
-    if sec is None or n < 1:
+    kind = support(problem)
+    if sec is None or n < 1 or kind is None:
         return np.full(max(n, 0), math.nan)
     m = problem.material
     if getattr(m, "model", "") == "generalized_maxwell":
+        if kind != "clamped-free":
+            return np.full(n, math.nan)
         return _maxwell_frequencies(problem, sec, family, n)
     E, rho = m.youngs_modulus, m.density
     G = E / (2 * (1 + m.poisson_ratio))
     L = problem.rod.length
-    if family == "bending-1":      # about d1: E I1, shear along d2
-        return beams.timoshenko_frequencies(n, L=L, rho=rho, A=sec.A, E=E, I=sec.I1,
-                                            kGA=sec.kappa_2 * G * sec.A)
-    if family == "bending-2":      # about d2: E I2, shear along d1
-        return beams.timoshenko_frequencies(n, L=L, rho=rho, A=sec.A, E=E, I=sec.I2,
-                                            kGA=sec.kappa_1 * G * sec.A)
+    if family in ("bending-1", "bending-2"):   # about d1: E I1, shear along d2 (and v.v.)
+        I, kappa = (sec.I1, sec.kappa_2) if family == "bending-1" else (sec.I2, sec.kappa_1)
+        kw = {"L": L, "rho": rho, "A": sec.A, "E": E, "I": I, "kGA": kappa * G * sec.A}
+        return {"clamped-free": beams.timoshenko_frequencies,
+                "pinned-pinned": supported.simply_supported_timoshenko_frequencies,
+                "free-free": supported.free_free_timoshenko_frequencies}[kind](n, **kw)
     if family == "torsion":
-        return beams.torsional_frequencies(n, L=L, rho=rho, G=G, J_T=sec.J_T, I3=sec.I3)
+        kw = {"L": L, "rho": rho, "G": G, "J_T": sec.J_T, "I3": sec.I3}
+        if kind == "clamped-free":
+            return beams.torsional_frequencies(n, **kw)
+        return supported.shaft_free_free_frequencies(n, **kw)   # a pin leaves the twist free
     if family == "axial":
-        return beams.axial_frequencies(n, L=L, rho=rho, E=E)
+        if kind == "clamped-free":
+            return beams.axial_frequencies(n, L=L, rho=rho, E=E)
+        return supported.bar_frequencies(n, L=L, rho=rho, E=E)
     return np.full(n, math.nan)
 
 
 def attach(problem, modes) -> None:
-    """Set ``analytic_omega`` of each mode where the references apply."""
+    """Set ``analytic_omega`` of each mode where the references apply: the k-th mode of a
+    family gets the family's k-th continuum frequency; None where there is none (or the
+    reference cannot compute it)."""
     if not applies(problem):
         return
     counts: dict[str, int] = {}
     for md in modes:
         counts[md.family] = max(counts.get(md.family, 0), md.family_index)
-    ref = {f: frequencies(problem, f, k) for f, k in counts.items()}
+    ref: dict[str, np.ndarray] = {}
+    for f, k in counts.items():
+        try:
+            ref[f] = np.asarray(frequencies(problem, f, k), dtype=float)
+        except RuntimeError:      # a root the reference could not find or track
+            ref[f] = np.full(k, math.nan)
     for md in modes:
         w = float(ref[md.family][md.family_index - 1])
         md.analytic_omega = w if math.isfinite(w) else None

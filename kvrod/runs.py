@@ -97,6 +97,13 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
                                       f"problem needs ({n},) finite values; start again with "
                                       "--overwrite")
     build.require_generated()
+    if (state is None and problem.simulation.initial == "static"
+            and not (problem.start.clamped or problem.end.clamped)):
+        # rigid motions may be free: a static start under loads along them is refused
+        # before the folder is touched (the model is built twice only for such rods)
+        from runtime.problem.assemble import build_model
+
+        check_statics(build_model(problem))
     with F.claim(out, "simulate", overwrite=overwrite and not resume) as claimed:
         t_start = float(state["t"]) if state else 0.0
         write_status(out, params, "running", t_start)
@@ -109,19 +116,20 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
             write_status(out, params, "running", st["t"])
 
         series = None
+        model = None
         if vtk_every is not None:
             from runtime.io.vtk import VtkSeries
             from runtime.problem.assemble import build_model
 
-            series = VtkSeries(out / "vtk", build_model(problem),
-                               resume_from=t_start if state else None)
+            model = build_model(problem)          # one model: the run's and the frames'
+            series = VtkSeries(out / "vtk", model, resume_from=t_start if state else None)
         cb, close = (progress_bar(problem.simulation.t_end, label) if progress
                      else (None, lambda: None))
         try:
             run = simulate(problem, progress=cb, checkpoint=on_checkpoint,
                            checkpoint_every=checkpoint_every, resume=state,
                            snapshot_every=vtk_every,
-                           snapshot_sink=series.add if series else None)
+                           snapshot_sink=series.add if series else None, model=model)
         except BaseException as exc:   # a bug or resource error: say so, keep the checkpoint
             write_status(out, params, "failed", t_start, f"{type(exc).__name__}: {exc}")
             raise
@@ -148,12 +156,28 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
     return run, summary
 
 
+def check_statics(model) -> None:
+    """Refuse (:class:`runtime.errors.IllPosedError`) a static problem that has no
+    equilibrium to compute as posed: loads along a rigid motion its supports leave free, a
+    rod too soft for its loads (``RodStatics.hold_rigid_motions``, in statics at load
+    factor 1; nothing is written)."""
+    from runtime.model.statics import RodStatics
+
+    with model.statics():
+        RodStatics(model).hold_rigid_motions(model.initial_state())
+
+
 def static_and_write(problem, out: Path, overwrite: bool = False) -> tuple[dict, object, object]:
     """Static equilibrium of ``problem`` under its loads at t = 0- into results folder
-    ``out`` (checked and locked like :func:`run_and_write`): summary.json with the end
-    positions, the load path and Newton iterations; static.npz with the state ``y``, node
+    ``out`` (checked and locked like :func:`run_and_write`; a problem statics cannot solve
+    as posed is refused before, see :func:`check_statics`): summary.json with the end
+    positions (for a rod held at both ends also the largest displacement and where), the
+    gauge holding free rigid motions, the load path and Newton iterations; static.npz with
+    the state ``y``, node
     ``positions`` (3, N+1) and segment ``frames`` (N, 3, 3; columns d1, d2, d3) of the
-    equilibrium and of the ``reference``, and the segment ``quaternions`` (4, N);
+    equilibrium and of the ``reference``, the segment ``quaternions`` (4, N), the end
+    frames ``start_frame``, ``end_frame`` (3, 3) and, per held end, the support's
+    ``start_reaction_force`` / ``_moment`` (N, N m about the node; also in summary.json);
     problem.toml. Returns (summary, model, y); a failed solve keeps its last converged
     state (status "failed")."""
     import time
@@ -161,36 +185,51 @@ def static_and_write(problem, out: Path, overwrite: bool = False) -> tuple[dict,
     from kvrod.outputs import results_folder
     from runtime.io.results import jsonable, write_json, write_npz, write_problem
     from runtime.model import build
+    from runtime.model.statics import largest_displacement
     from runtime.problem.assemble import build_model
     from runtime.simulate.simulate import load_path_table, static_equilibrium
     from runtime.solvers.statics import StaticSolveError
 
     build.require_generated()
+    wall0 = time.perf_counter()
+    model = build_model(problem)
+    check_statics(model)            # an ill-posed problem is refused before the folder
     with results_folder(out, "static", markers=("summary.json",), overwrite=overwrite,
                         names=("summary.json", "static.npz", "problem.toml")):
-        wall0 = time.perf_counter()
-        model = build_model(problem)
         params = jsonable(problem.to_mapping())
+        gauge = None
         try:
             st = static_equilibrium(problem, model)
             status, message, y, its, per = "finished", "ok", st.y, st.iterations, st.per_step
-            path = st.path_table()
+            path, gauge = st.path_table(), st.gauge
         except StaticSolveError as exc:
             status, message, y, its, per = ("failed", f"static solve failed: {exc}", exc.y,
                                             sum(exc.iterations), list(exc.iterations))
             path = load_path_table(getattr(exc, "path", []))
         pos = model.positions(y)
+        with model.statics():
+            reactions = model.reactions(0.0, y)
+            ends = model.end_frames(0.0, y)
+        both_held = problem.start.held and problem.end.held
         summary = {"status": status, "message": message, "problem": problem.name,
                    "parameters": params,
                    "static": {"tip": pos[:, -1].tolist(), "start": pos[:, 0].tolist(),
+                              "largest_displacement": (largest_displacement(model, y)
+                                                       if both_held else None),
+                              "gauge": gauge,
+                              "reactions": {end: {w: v.tolist() for w, v in r.items()}
+                                            for end, r in reactions.items()},
                               "newton_iterations": int(its),
                               "newton_iterations_per_load_step": per,
                               "path": path,
                               "wall_time_s": time.perf_counter() - wall0},
                    "backend": model.backend}
+        extra = {f"{end}_frame": f for end, f in ends.items()}
+        for end, r in reactions.items():
+            extra.update({f"{end}_reaction_{w}": v for w, v in r.items()})
         write_npz(out / "static.npz", y=y, positions=pos, quaternions=model.quaternions(y),
                   frames=model.frames(y), reference=model.positions(model.reference),
-                  reference_frames=model.frames(model.reference))
+                  reference_frames=model.frames(model.reference), **extra)
         write_problem(out / "problem.toml", params)
         write_json(out / "summary.json", summary)
     return summary, model, y

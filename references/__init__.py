@@ -20,6 +20,9 @@
 - :mod:`.rollup`: roll-up of a straight cantilever by an end moment (closed form).
 - :mod:`.helix`: axial stiffness of a helical spring (classical and end-point loads).
 - :mod:`.clamped`: rod clamped at both ends, linear Timoshenko deflections.
+- :mod:`.supported`: simply supported (pinned-pinned) and free-free beams: linear
+  Timoshenko midspan sag, natural frequencies (closed-form and transfer-matrix frequency
+  equations), bars and shafts.
 
 Only NumPy and SciPy are used, so the references share no code with the simulator.
 """

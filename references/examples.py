@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from . import bend45, clamped, helix, pendulum, rollup, sections
+from . import bend45, clamped, helix, pendulum, rollup, sections, supported
 from . import viscoelastic_beam as vb
 
 Doc = dict[str, Any]
@@ -77,6 +77,27 @@ def clamped_both_reference(doc: Doc) -> dict[str, Any]:
     return {"q": q, "L": L, "midspan": clamped.clamped_uniform_load_deflection(q, **kw),
             "shear_part": q * L * L / (8.0 * kw["kGA"]),
             "curve": lambda x: clamped.clamped_uniform_load_curve(x, q, **kw)}
+
+
+def simply_supported_reference(doc: Doc) -> dict[str, Any]:
+    """Sag under gravity along -e3 (bending about d1, E I1; shear along d2, kappa_2):
+    ``w(x)`` (downward, m), the midspan value, and the first bending frequencies of both
+    planes (rad/s) of the simply supported Timoshenko beam."""
+    m, s = doc["material"], doc["section"]
+    sec = sections.rectangle(s["width"], s["height"], m["poisson_ratio"])
+    E, G = m["youngs_modulus"], _shear_modulus(m)
+    rho = m["density"]
+    q = rho * sec.A * abs(doc["loads"][0]["vector"][2])
+    L = doc["rod"]["length"]
+    kw = {"L": L, "EI": E * sec.I1, "kGA": G * sec.kappa_2 * sec.A}
+    freq = {f"bending-{i}": supported.simply_supported_timoshenko_frequencies(
+        3, L=L, rho=rho, A=sec.A, E=E, I=I, kGA=G * kappa * sec.A)
+        for i, I, kappa in ((1, sec.I1, sec.kappa_2), (2, sec.I2, sec.kappa_1))}
+    return {"q": q, "L": L,
+            "midspan": supported.simply_supported_uniform_load_deflection(q, **kw),
+            "shear_part": q * L * L / (8.0 * kw["kGA"]),
+            "curve": lambda x: supported.simply_supported_uniform_load_curve(x, q, **kw),
+            "frequencies": freq}
 
 
 def pendulum_reference(doc: Doc) -> dict[str, Any]:

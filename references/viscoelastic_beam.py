@@ -111,18 +111,38 @@ def _secant(
 
 
 def _follow(
-    residual: Callable[[complex, float], complex], lam0: complex, steps: int
+    residual: Callable[[complex, float], complex], lam0: complex, steps: int,
+    *, max_move: float = 0.1, min_step: float = 1e-7,
 ) -> complex:
-    """Track the root of ``residual(lambda, h)`` from ``h = 0`` (root ``lam0``) to ``h = 1``."""
-    lam = lam0
-    prev = None
-    for h in np.linspace(0.0, 1.0, steps + 1)[1:]:
-        # linear extrapolation in h from the two last roots as the second secant point
-        guess = lam if prev is None else 2 * lam - prev
+    """Track the root of ``residual(lambda, h)`` from ``h = 0`` (root ``lam0``) to ``h = 1``.
+
+    Steps in ``h`` start at ``1/steps``; a step is accepted when the secant converges and
+    the root moved by at most ``max_move |lambda|`` (from the last root and from the
+    linear extrapolation), else it is halved. Why adaptive: with fixed steps the secant of
+    a strongly damped high mode (a generalized Maxwell beam's 4th bending mode, whose
+    moduli triple between relaxed and glassy) landed on the branch of mode 1.
+    """
+    lam, h, dh = lam0, 0.0, 1.0 / steps
+    prev: tuple[complex, float] | None = None
+    while h < 1.0:
+        dh = min(dh, 1.0 - h)
+        guess = lam if prev is None else lam + (lam - prev[0]) * dh / prev[1]
         if guess == lam:
             guess = lam * (1.0 + 1e-6j) + 1e-12
-        new = _secant(lambda z, h=h: residual(z, h), lam, guess)
-        prev, lam = lam, new
+        h_new = 1.0 if dh >= 1.0 - h else h + dh
+        try:
+            new = _secant(lambda z, h=h_new: residual(z, h), lam, guess)
+            ok = (abs(new - lam) <= max_move * abs(lam)
+                  and abs(new - guess) <= max_move * abs(lam))
+        except RuntimeError:
+            ok = False
+        if not ok:
+            dh *= 0.5
+            if dh < min_step:
+                raise RuntimeError(f"root tracking lost the root near {lam!r} at h = {h:.3g}")
+            continue
+        prev, lam, h = (lam, dh), new, h_new
+        dh = min(2.0 * dh, 1.0 / steps)
     return lam
 
 
@@ -262,7 +282,18 @@ def timoshenko_eigenvalues(
             )
 
         out.append(_follow(residual, 1j * w, steps))
-    return np.array(out)
+    out_arr = np.array(out)
+    _check_distinct(out_arr)
+    return out_arr
+
+
+def _check_distinct(lam: np.ndarray) -> None:
+    """RuntimeError when two tracked roots coincide (a root tracking jumped branches)."""
+    for i in range(lam.size):
+        for j in range(i):
+            if abs(lam[i] - lam[j]) <= 1e-8 * max(abs(lam[i]), abs(lam[j])):
+                raise RuntimeError(f"roots {j + 1} and {i + 1} coincide ({lam[i]!r}): the "
+                                   "root tracking jumped between modes")
 
 
 # ----------------------------------------------------------------------------- base excitation

@@ -20,6 +20,16 @@ class ParameterError(constitutive.ParameterError):
                          f"range: {allowed}")
 
 
+class IllPosedError(ValueError):
+    """A problem that is valid key by key but has no solution to compute as posed (a
+    free-free rod under a net load in statics, a rod too soft for its loads); the message
+    says why and ``key`` names the problem key that fixes it. Raised before any work."""
+
+    def __init__(self, message: str, key: str = "") -> None:
+        super().__init__(message)
+        self.key = key
+
+
 class GeneratedCodeError(RuntimeError):
     """generated/ is inconsistent with its manifest (regenerate with `kvrod generate`)."""
 

@@ -108,14 +108,15 @@ def energy_rate_function(m: RodModel):
 
 
 def move_held_ends(m: RodModel, seed: int = 11) -> RodModel:
-    """Hand-set end motion for kernel tests: random velocities of held ends, random
-    angular velocities and turned frames of clamped ends; the drive is removed so that
-    nothing overwrites them. Returns ``m``."""
+    """Hand-set end motion for kernel tests: random velocities and accelerations of held
+    ends, random angular velocities and turned frames of clamped ends; the drive is
+    removed so that nothing overwrites them. Returns ``m``."""
     a = m.arrays
     rng = np.random.default_rng(seed)
     for name in ("start", "end"):
         if a.held(name):
             a.set_param("v_" + name, rng.standard_normal(3))
+            a.set_param("a_" + name, rng.standard_normal(3))
         if a.clamped(name):
             a.set_param("Omega_" + name, rng.standard_normal(3))
             p = quat_mul(a.param("p_" + name), quat_exp(0.3 * rng.standard_normal(3)))

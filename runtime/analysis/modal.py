@@ -37,6 +37,24 @@ the fractions of the mode's strain energy in the six strain components
 Kelvin-Voigt damping with ``V = diag(tau) C`` (eq. (9)) gives ``zeta = omega tau / 2`` per
 family: ``tau_E`` for bending and extension, ``tau_S`` for torsion and shear.
 
+Rigid modes
+-----------
+The rigid motions the supports leave free (:func:`runtime.model.rigid.rigid_motions`: the
+spin of a pinned-pinned rod about the line through its pins, the six motions of a
+free-free rod, the rotations of a pinned-free rod about its pin) are computed from the
+geometry of ``y_eq``. Those the linearised stiffness does not resist (``K z = 0`` and
+``z^T K = 0`` to round-off; all of them in an unloaded state) are taken out of the
+eigenproblem exactly: the elastic modes are solved on the M-orthogonal complement (dense:
+projected onto it; sparse: shift-invert through the bordered matrix
+``[[K, M Z], [Z^T M, 0]]``, regular where K is singular), and the rigid modes are reported
+as family ``rigid`` with ``omega = 0``, eigenvalues (0, 0), no damping ratio (``zeta`` and
+``zeta_modal`` NaN, ``null`` in JSON) and zero strain energy, listed first. Rigid motions
+that the loads do resist (the spin of a sagged pinned-pinned beam, a pendulum in the
+gravity field) are ordinary modes of the linearisation; a mode whose M-norm lies mostly
+(> 1/2) in the rigid motions is labelled ``rigid`` with its own (pendulum) frequency, or
+with omega = 0 and no damping ratio where omega^2 is below the eigensolvers' round-off
+(1e-12 of the largest stiffness-to-mass ratio).
+
 Dense ``scipy.linalg.eig`` is used up to ``dense_max`` reduced unknowns (default 300, i.e.
 N <= 50 clamped-free); above, sparse shift-invert ``scipy.sparse.linalg.eigs`` (undamped
 modes at ``sigma = 0``; each damped eigenvalue refined by shift-invert at the prediction of
@@ -77,8 +95,11 @@ __all__ = [
 
 #: strain components in the order of the energy fractions
 STRAIN_COMPONENTS = ("V1", "V2", "V3", "U1", "U2", "U3")
-#: family names
-FAMILIES = ("bending-1", "bending-2", "torsion", "axial", "shear")
+#: family names ("rigid": a rigid motion the supports leave free)
+FAMILIES = ("bending-1", "bending-2", "torsion", "axial", "shear", "rigid")
+#: a rigid motion z is "not resisted" when |K z| and |K^T z| are below this fraction of
+#: the size of the terms summed (|K| |z|): round-off, not a stiffness
+RIGID_NULL_RTOL = 1e-10
 
 
 # --------------------------------------------------------------------------------------
@@ -234,6 +255,9 @@ class Mode:
     displacement (3, N+1) node displacement (m) and rotation (3, N) segment rotation
     (rad, material) of the mass-normalised undamped mode shape; analytic_omega: the
     continuum beam/bar value where known (straight clamped-free rod), else None.
+    A rigid mode (family ``rigid``, not resisted by the stiffness) has omega 0,
+    eigenvalues (0, 0), zeta and zeta_modal NaN (no damping ratio: ``None`` in
+    :meth:`to_dict`) and zero energy fractions.
     """
 
     index: int
@@ -266,6 +290,9 @@ class Mode:
         d["displacement"] = self.displacement.tolist()
         d["rotation"] = self.rotation.tolist()
         d["frequency_hz"] = self.frequency_hz
+        for key in ("zeta", "zeta_modal"):   # a rigid mode has no damping ratio
+            if not math.isfinite(d[key]) and self.family == "rigid":
+                d[key] = None
         return d
 
 
@@ -416,18 +443,134 @@ def _finish_pair(vals: list[complex]) -> tuple[complex, complex]:
     return complex(math.nan), complex(math.nan)
 
 
-def _dense_modes(lin: Linearization):
+def _m_orthonormal(Z: np.ndarray, M) -> np.ndarray:
+    """Z (nq, k) with M-orthonormal columns spanning the same space (Cholesky: column j
+    mixes columns 0..j only, so the order of the columns is kept)."""
+    if Z.shape[1] == 0:
+        return Z
+    G = Z.T @ (M @ Z)
+    Lc = np.linalg.cholesky(0.5 * (G + G.T))
+    return la.solve_triangular(Lc, Z.T, lower=True).T
+
+
+def _rigid_subspaces(lin: Linearization) -> tuple[np.ndarray, np.ndarray]:
+    """(Z_all, Z_null): M-orthonormal bases (nq, k) of the rigid motions the supports leave
+    free at ``y_eq`` and of the part of them the stiffness does not resist (|K z| and
+    |K^T z| below ``RIGID_NULL_RTOL`` |K| |z|: round-off)."""
+    motions = lin.statics.rigid_motions(lin.y_eq)
+    if motions.k == 0:
+        empty = np.zeros((lin.nq, 0))
+        return empty, empty
+    Z = _m_orthonormal(motions.basis[lin.dofs], lin.M)
+    K = lin.K
+    absK = abs(K)
+    size = float(np.max(np.linalg.norm(absK @ np.abs(Z), axis=0)
+                        + np.linalg.norm(absK.T @ np.abs(Z), axis=0)))
+    W = np.vstack([np.asarray(K @ Z), np.asarray(K.T @ Z)]) / max(size, 1e-300)
+    if np.all(np.linalg.norm(W, axis=0) <= RIGID_NULL_RTOL):
+        return Z, Z                                   # unloaded: all of them (the rule)
+    _, sv, Vt = np.linalg.svd(W, full_matrices=False)
+    null = Vt[sv <= RIGID_NULL_RTOL].T                # (k, k0) combinations
+    if null.shape[1] == 0:
+        return Z, np.zeros((lin.nq, 0))
+    # a basis of their span that does not depend on the LAPACK build: the unit vectors
+    # projected on it, in order
+    P = null @ null.T
+    cols: list[np.ndarray] = []
+    for e in np.eye(Z.shape[1]):
+        v = P @ e
+        for u in cols:
+            v = v - (u @ v) * u
+        if np.linalg.norm(v) > 1e-6:
+            cols.append(v / np.linalg.norm(v))
+        if len(cols) == null.shape[1]:
+            break
+    return Z, _m_orthonormal(Z @ np.column_stack(cols), lin.M)
+
+
+def _singular(exc: Exception) -> ValueError:
+    return ValueError(
+        "the linearised stiffness at y_eq is singular beyond the rigid motions its "
+        f"supports leave free (a mechanism, or a buckling load): no modes ({exc})")
+
+
+def _rigid_participation(Z: np.ndarray, M, X: np.ndarray) -> np.ndarray:
+    """Fraction of the M-norm of each column of X (real or complex) in span(Z)
+    (Z M-orthonormal)."""
+    if Z.shape[1] == 0 or X.shape[1] == 0:
+        return np.zeros(X.shape[1])
+    c = Z.T @ (M @ X)
+    nrm = np.real(np.einsum("ij,ij->j", X.conj(), M @ X))
+    return np.sum(np.abs(c) ** 2, axis=0) / np.maximum(nrm, 1e-300)
+
+
+def _dense_modes(lin: Linearization, Zn: np.ndarray):
     M, K = lin.M.toarray(), lin.K.toarray()
-    if np.allclose(K, K.T, rtol=0.0, atol=1e-12 * np.abs(K).max()):
-        w2, Phi = la.eigh(0.5 * (K + K.T), M)  # straight, unloaded: symmetric
+    Q = None
+    if Zn.shape[1]:
+        # elastic modes on the M-orthogonal complement of the unresisted rigid motions
+        # (exact: K Z = 0 and Z^T K = 0 there)
+        Q = la.null_space((M @ Zn).T)
+        K, M = Q.T @ K @ Q, Q.T @ M @ Q
+    symmetric = np.allclose(K, K.T, rtol=0.0, atol=1e-12 * np.abs(K).max())
+    if symmetric:
+        w2, Phi = la.eigh(0.5 * (K + K.T), 0.5 * (M + M.T))  # straight, unloaded
     else:
         w2, Phi = la.eig(K, M)  # geometric stiffness of a loaded state
     order = np.argsort(w2.real)
     w2, Phi = w2.real[order], Phi[:, order].real
-    Phi /= np.sqrt(np.einsum("ik,ij,jk->k", Phi, M, Phi))[None, :]
-    # E = [[I, 0], [*, M]] is regular: a standard eigenproblem is ~3x faster than QZ
-    lam, X = la.eig(la.solve(lin.E.toarray(), -lin.A.toarray()))
-    return (w2, Phi, *_upper_half(lam, X[: lin.nq]))
+    if Q is not None:
+        Phi = Q @ Phi
+    if not symmetric:   # eig may return one vector twice for a repeated eigenvalue
+        Phi = _span_clusters(lin, np.sqrt(np.maximum(w2, 0.0)), Phi, symmetric=False)
+    Mf = lin.M.toarray()
+    Phi /= np.sqrt(np.einsum("ik,ij,jk->k", Phi, Mf, Phi))[None, :]
+    lam, X = _pencil_eigen(lin)
+    lam, Xq = _upper_half(lam, X[: lin.nq])
+    if Zn.shape[1]:   # the (defective) zero eigenvalues of the rigid motions
+        keep = _rigid_participation(Zn, lin.M, Xq) < 0.5
+        lam, Xq = lam[keep], Xq[:, keep]
+    return w2, Phi, lam, Xq
+
+
+def _pencil_eigen(lin: Linearization) -> tuple[np.ndarray, np.ndarray]:
+    """All eigenvalues and eigenvectors of the first-order pencil ``-A x = lambda E x``.
+
+    Kelvin-Voigt: E = [[I, 0], [*, M]] is regular, and the standard eigenproblem of
+    E^-1 A is ~3x faster than QZ. Generalized Maxwell: the rows of the internal strains
+    carry the rates 1/tau_b (1e12 1/s for tau_b = 1e-12 s); E^-1 A puts them next to rows
+    of order 1..1e4 and the slow eigenvalues drown in its rounding (the first bending mode
+    of examples/maxwell_cantilever.toml with tau_1 = 1e-12 s came out at 5.5 rad/s with a
+    negative damping ratio for 3.57). The QZ algorithm on the pencil with its rows
+    equilibrated (each row of [A E] scaled to max 1: the eigenvalues do not change) is
+    backward stable row by row, so the fast branches stay where they are (eigenvalues
+    ~ -1/tau_b) and the slow ones keep their accuracy."""
+    Ed, Ad = lin.E.toarray(), lin.A.toarray()
+    if not lin.model.branches:
+        return la.eig(la.solve(Ed, -Ad))
+    d = 1.0 / np.maximum(np.max(np.abs(Ad), axis=1), np.max(np.abs(Ed), axis=1))
+    lam, X = la.eig(-Ad * d[:, None], Ed * d[:, None])
+    return lam, X
+
+
+def _deflated_inverse(lin: Linearization, Zn: np.ndarray) -> spla.LinearOperator:
+    """x = K^+ b on the M-orthogonal complement of span(Zn) (K Zn = 0 = Zn^T K): the
+    solution of the bordered system [[K, M Zn], [Zn^T M, 0]] [x; mu] = [b; 0], regular
+    though K is singular. As ARPACK's shift-invert operator at sigma = 0 it maps the
+    rigid motions to 0, so they are never returned, and it is M-symmetric."""
+    nq, k = lin.nq, Zn.shape[1]
+    MZ = sp.csc_matrix(np.asarray(lin.M @ Zn))
+    Kb = sp.bmat([[lin.K, MZ], [MZ.T, None]]).tocsc()
+    try:
+        lu = spla.splu(Kb)
+    except RuntimeError as exc:
+        raise _singular(exc) from None
+    pad = np.zeros(k)
+
+    def solve(b: np.ndarray) -> np.ndarray:
+        return lu.solve(np.r_[np.ravel(b), pad])[:nq]
+
+    return spla.LinearOperator((nq, nq), matvec=solve, dtype=float)
 
 
 def _upper_half(lam: np.ndarray, X: np.ndarray, rtol: float = 1e-7):
@@ -453,7 +596,8 @@ def _is_symmetric(K: sp.spmatrix) -> bool:
     return d.nnz == 0 or d.max() <= 1e-12 * abs(K).max()
 
 
-def _span_clusters(lin: Linearization, omega: np.ndarray, Phi: np.ndarray) -> np.ndarray:
+def _span_clusters(lin: Linearization, omega: np.ndarray, Phi: np.ndarray,
+                   symmetric: bool | None = None) -> np.ndarray:
     """Make every cluster of repeated frequencies span its whole eigenspace.
 
     Non-symmetric ARPACK (``eigs``, needed for the geometric stiffness of a loaded state)
@@ -462,8 +606,16 @@ def _span_clusters(lin: Linearization, omega: np.ndarray, Phi: np.ndarray) -> np
     same one twice, depending on its random start vector (``kvrod modes --n-elements 80``
     then failed one run in three in the energy-metric Cholesky). Such a cluster is
     recomputed by shift-invert subspace iteration at its frequency, from the vectors found
-    plus fixed random ones, and a Rayleigh-Ritz step.
+    plus fixed random ones, and a Rayleigh-Ritz step that cannot return parallel vectors
+    either: for a symmetric K (M is SPD) ``eigh`` of the projected pencil, whose vectors
+    are M-orthonormal; otherwise the ordered QZ decomposition (``ordqz``), whose Schur
+    vectors give an orthonormal basis of the cluster's deflating subspace, M-orthonormalised
+    (a non-symmetric ``eig`` may return one eigenvector twice for a repeated eigenvalue:
+    that is how this step failed on another machine). ``symmetric``: which of the two
+    (default: whether K is symmetric).
     """
+    if symmetric is None:
+        symmetric = _is_symmetric(lin.K)
     Phi = Phi.copy()
     for g in _clusters(omega):
         if g.size < 2:
@@ -480,19 +632,47 @@ def _span_clusters(lin: Linearization, omega: np.ndarray, Phi: np.ndarray) -> np
             Z = lu.solve(np.asarray(lin.M @ Z))
             Z, _ = np.linalg.qr(Z)
         Kr, Mr = Z.T @ (lin.K @ Z), Z.T @ (lin.M @ Z)
-        w2, C = la.eig(Kr, Mr)
-        pick = np.argsort(np.abs(w2.real - omega[g[0]] ** 2))[: g.size]
-        Phi[:, g] = (Z @ C[:, pick]).real
+        target = omega[g[0]] ** 2
+        if symmetric:
+            w2, C = la.eigh(0.5 * (Kr + Kr.T), 0.5 * (Mr + Mr.T))
+            pick = np.sort(np.argsort(np.abs(w2 - target))[: g.size])
+            Phi[:, g] = Z @ C[:, pick]
+        else:
+            lam = la.eigvals(Kr, Mr)
+            dist = np.abs(lam - target)
+            cut = np.sort(dist)[g.size - 1] * (1 + 1e-9) + 1e-300
+
+            def near(alpha, beta, cut=cut, target=target):
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    return np.abs(alpha / beta - target) <= cut
+
+            *_, Zs = la.ordqz(Kr, Mr, sort=near, output="complex")
+            V = (Z @ Zs[:, : g.size])
+            V = np.column_stack([V.real, V.imag]) if np.iscomplexobj(V) else V
+            # a real basis of the subspace (its vectors' real and imaginary parts), the
+            # g.size directions of largest M-norm, M-orthonormal
+            G = V.T @ (lin.M @ V)
+            ev, W = la.eigh(0.5 * (G + G.T))
+            Phi[:, g] = _m_orthonormal(V @ W[:, ::-1][:, : g.size], lin.M)
     return Phi
 
 
-def _sparse_modes(lin: Linearization, count: int):
-    m = min(count + 6, lin.nq - 2)
+def _sparse_modes(lin: Linearization, count: int, Zn: np.ndarray):
+    m = min(count + 6, lin.nq - Zn.shape[1] - 2)
     v0 = _start_vector(lin.nq)
-    if _is_symmetric(lin.K):  # Lanczos: M-orthogonal eigenvectors, repeated ones included
-        w2, Phi = spla.eigsh(lin.K, k=m, M=lin.M, sigma=0.0, which="LM", v0=v0)
-    else:
-        w2, Phi = spla.eigs(lin.K, k=m, M=lin.M, sigma=0.0, which="LM", v0=v0)
+    opinv = None
+    if Zn.shape[1]:
+        opinv = _deflated_inverse(lin, Zn)
+        v0 = v0 - Zn @ (Zn.T @ (lin.M @ v0))     # start in the elastic complement
+    try:
+        if _is_symmetric(lin.K):  # Lanczos: M-orthogonal eigenvectors, repeated ones too
+            w2, Phi = spla.eigsh(lin.K, k=m, M=lin.M, sigma=0.0, which="LM", v0=v0,
+                                 OPinv=opinv)
+        else:
+            w2, Phi = spla.eigs(lin.K, k=m, M=lin.M, sigma=0.0, which="LM", v0=v0,
+                                OPinv=opinv)
+    except RuntimeError as exc:   # SuperLU: "Factor is exactly singular"
+        raise _singular(exc) from None
     order = np.argsort(w2.real)
     w2, Phi = w2.real[order], Phi[:, order].real
     Phi = _span_clusters(lin, np.sqrt(np.maximum(w2, 0.0)), Phi)
@@ -549,8 +729,10 @@ def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int =
     -------
     list of Mode
         Sorted by undamped natural frequency: omega (rad/s), damping ratio zeta of the
-        eigenvalue pair, family, mode shape. Continuum reference values are attached by
-        the command line from the independent ``references`` package.
+        eigenvalue pair, family, mode shape; the rigid modes the supports leave free
+        (family ``rigid``, omega 0) first, counted in ``count``. Continuum reference
+        values are attached by the command line from the independent ``references``
+        package.
     """
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
         raise ValueError(f"count = {count!r} must be an integer >= 1")
@@ -562,10 +744,13 @@ def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int =
         raise ValueError(f"the linearised generalized Maxwell rod has {lin.E.shape[0]} "
                          f"unknowns (internal strains included); at most {MAXWELL_DENSE_MAX} "
                          "are solved (dense): use fewer elements")
+    Z_all, Zn = _rigid_subspaces(lin)
+    k0 = Zn.shape[1]
+    n_el = count - min(k0, count)          # elastic (and resisted rigid) modes to show
     if lin.nq <= dense_max or maxwell:
-        w2, Phi, lam, Xq = _dense_modes(lin)
+        w2, Phi, lam, Xq = _dense_modes(lin, Zn)
     else:
-        w2, Phi, lam, Xq = _sparse_modes(lin, count)
+        w2, Phi, lam, Xq = _sparse_modes(lin, max(n_el, 1), Zn)
     if maxwell:
         # the real eigenvalues are the relaxation of the internal strains (and overdamped
         # motion, not identified here): the modes are the oscillatory pairs
@@ -578,27 +763,42 @@ def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int =
     Pmat = np.abs(c.T) ** 2
     Pmat /= np.maximum(np.real(np.einsum("ij,ij->i", Xq.T.conj(), (lin.M @ Xq).T)), 1e-300
                        )[:, None]
-    pairs = _assign(lam, Pmat, omega, min(Phi.shape[1], count + 6))
-    k_show = min(count, Phi.shape[1])
-    energies = _strain_energy_fractions(lin, Phi[:, :k_show])
+    pairs = _assign(lam, Pmat, omega, min(Phi.shape[1], n_el + 6))
+    k_show = min(n_el, Phi.shape[1])
+    energies = _strain_energy_fractions(lin, Phi[:, :k_show]) if k_show else np.zeros((0, 6))
+    rigid_share = _rigid_participation(Z_all, lin.M, Phi[:, :k_show])
     modes: list[Mode] = []
     family_count: dict[str, int] = {}
+    for j in range(min(k0, count)):      # the unresisted rigid motions: omega = 0
+        dx = lin.expand(Zn[:, j])
+        family_count["rigid"] = j + 1
+        modes.append(Mode(index=j + 1, family="rigid", family_index=j + 1, omega=0.0,
+                          eigenvalues=(0j, 0j), zeta=math.nan, omega_damped=0.0,
+                          zeta_modal=math.nan,
+                          energy_fractions=dict.fromkeys(STRAIN_COMPONENTS, 0.0),
+                          displacement=dx[lin.statics.phi_cols].T,
+                          rotation=dx[lin.statics.theta_cols].T))
     Cd = lin.C
+    # omega^2 below this is round-off of the eigensolvers (eps ~ 1e-16 times the largest
+    # stiffness-to-mass ratio, with room for n and the conditioning)
+    w2_floor = 1e-12 * float(np.max(np.abs(lin.K.diagonal()) / lin.M.diagonal()))
     for k in range(k_show):
         e = energies[k]
         fr = e / e.sum() if e.sum() > 0 else e
-        fam = _classify(fr)
+        fam = "rigid" if rigid_share[k] > 0.5 else _classify(fr)
         family_count[fam] = family_count.get(fam, 0) + 1
         l1, l2 = _finish_pair(pairs[k])
         wn, zeta = _pair_zeta(l1, l2)
         phi = Phi[:, k]
         zm = float(phi @ (Cd @ phi)) / (2 * omega[k]) if omega[k] > 0 else math.inf
+        if fam == "rigid" and abs(w2[k]) <= w2_floor:   # unresisted to round-off
+            omega[k], l1, l2, zeta, zm = 0.0, 0j, 0j, math.nan, math.nan
         if maxwell:   # frequency-dependent moduli: the natural frequency is |lambda|, and
             omega[k], zm = wn, math.nan        # there is no constant damping matrix
         dx = lin.expand(phi)
         disp = dx[lin.statics.phi_cols].T
         rot = dx[lin.statics.theta_cols].T
-        modes.append(Mode(index=k + 1, family=fam, family_index=family_count[fam],
+        modes.append(Mode(index=len(modes) + 1, family=fam, family_index=family_count[fam],
                           omega=float(omega[k]), eigenvalues=(l1, l2), zeta=float(zeta),
                           omega_damped=float(abs(l1.imag)), zeta_modal=zm,
                           energy_fractions=dict(zip(STRAIN_COMPONENTS, map(float, fr),

@@ -59,19 +59,31 @@ def write_run(out_dir: Path, run, extra: dict | None = None) -> dict:
     series.npz: ``t`` (n,), ``tip`` and ``start`` (3, n) end positions (m), the energies
     ``kinetic``, ``elastic``, ``dissipated``, ``external_work`` (J) and
     ``energy_balance_rel`` on the output grid, ``peaks_t``/``peaks_x``, and the static and
-    last states ``y_static``, ``y_last``. problem.toml: the resolved problem (rerun it with
-    ``kvrod simulate DIR/problem.toml``).
+    last states ``y_static``, ``y_last``; the end frames ``start_frame``, ``end_frame``
+    (n, 3, 3; columns d1, d2, d3) and their rotations from the reference,
+    ``start_rotation``, ``end_rotation`` (3, n; rad, spatial rotation vectors); for each
+    held end the support's ``start_reaction_force`` / ``_moment`` (3, n; N, N m about the
+    node, spatial, inertia included), likewise ``end_reaction_*``. problem.toml: the
+    resolved problem (rerun it with ``kvrod simulate DIR/problem.toml``).
     """
     out_dir = Path(out_dir)
     summary = run.summary()
     if extra:
         summary.update(extra)
+    ends = {}
+    for end, f in run.end_frames().items():
+        ends[f"{end}_frame"] = f
+    for end, r in run.end_rotations().items():
+        ends[f"{end}_rotation"] = r
+    for end, r in run.reactions.items():
+        for what, v in r.items():
+            ends[f"{end}_reaction_{what}"] = v
     write_npz(out_dir / "series.npz", t=run.t, tip=run.tip, start=run.start,
               kinetic=run.kinetic, elastic=run.elastic, dissipated=run.dissipated,
               external_work=run.external_work, energy_balance_rel=run.energy_balance_rel,
               peaks_t=run.peaks_t, peaks_x=run.peaks_x,
               y_static=run.y_static if run.y_static is not None else np.zeros(0),
-              y_last=run.y_last if run.y_last is not None else np.zeros(0))
+              y_last=run.y_last if run.y_last is not None else np.zeros(0), **ends)
     write_problem(out_dir / "problem.toml", summary["parameters"])
     write_json(out_dir / "summary.json", summary)
     return summary

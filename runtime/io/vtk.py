@@ -32,9 +32,12 @@ def _array_xml(name: str, data: np.ndarray) -> str:
             f'format="ascii">{body}</DataArray>')
 
 
-def element_fields(model: RodModel, y: np.ndarray) -> tuple[dict, dict]:
-    """(cell_data, point_data) of state ``y``: see the module docstring for the fields."""
-    d = model.diagnostics(0.0, y, None)
+def element_fields(model: RodModel, t: float, y: np.ndarray, yp: np.ndarray | None = None
+                   ) -> tuple[dict, dict]:
+    """(cell_data, point_data) of state ``y`` and its rate ``yp`` at time ``t`` (the
+    prescribed end frames, the loads and the viscous resultants of that time): see the
+    module docstring for the fields."""
+    d = model.diagnostics(t, y, yp)
     a = model.arrays
     N = model.N
     V, U = d["strains"]["V"], d["strains"]["U"]
@@ -130,9 +133,10 @@ class VtkSeries:
         self._k = len(self.entries)
         self.pvd_every = max(1, int(pvd_every))
 
-    def add(self, t: float, y: np.ndarray) -> None:
-        """Write the frame of state ``y`` at time ``t``."""
-        cell, point = element_fields(self.model, np.ascontiguousarray(y))
+    def add(self, t: float, y: np.ndarray, yp: np.ndarray | None = None) -> None:
+        """Write the frame of state ``y`` (rate ``yp``; None: at rest) at time ``t``."""
+        cell, point = element_fields(self.model, float(t), np.ascontiguousarray(y),
+                                     None if yp is None else np.ascontiguousarray(yp))
         pos = point.pop("position")
         name = f"{self.stem}_{self._k:05d}.vtp"
         write_vtp(self.folder / name, pos, cell, point)
@@ -148,10 +152,11 @@ class VtkSeries:
     close = write_collection
 
 
-def write_series(folder: Path, model: RodModel, snapshots: Iterable[tuple[float, np.ndarray]],
+def write_series(folder: Path, model: RodModel, snapshots: Iterable[tuple],
                  stem: str = "rod") -> Path:
-    """Write ``stem_0000.vtp ...`` and ``stem.pvd`` (the time collection) into ``folder``."""
+    """Write ``stem_0000.vtp ...`` and ``stem.pvd`` (the time collection) into ``folder``
+    from snapshots ``(t, y)`` or ``(t, y, yp)``."""
     series = VtkSeries(folder, model, stem)
-    for t, y in snapshots:
-        series.add(t, y)
+    for snap in snapshots:
+        series.add(*snap)
     return series.close()

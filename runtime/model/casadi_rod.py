@@ -42,7 +42,8 @@ class CasadiRod:
 
     ``residual(t, y, yp, par, seg, jnt, nload, sload) -> F`` (n,);
     ``jacobian(..., cy, cj) -> cy dF/dy + cj dF/dy'`` (sparse n x n);
-    ``energies(...) -> (T, W, 2D, P_ext, P_bc)`` and ``elements(...) -> (V, F, U, M)``.
+    ``energies(...) -> (T, W, 2D, P_ext, P_bc, reactions...)`` and
+    ``elements(...) -> (V, F, U, M)``.
     Call :meth:`args` to get the numeric inputs of a :class:`RodArrays`.
     """
 
@@ -113,10 +114,11 @@ class CasadiRod:
                       + nl[_r(no["f_dead"], 3), :] + f_follow)           # (3, N+1)
         held = np.zeros(N + 1)
         held[0], held[N] = float(self.held[0]), float(self.held[1])
-        v_held = ca.horzcat(P("v_start"), ca.MX.zeros(3, N - 1), P("v_end")) if N > 1 else \
-            ca.horzcat(P("v_start"), P("v_end"))
+        def ends(name: str) -> ca.MX:        # a parameter of both ends, zero inside
+            return ca.horzcat(P(name + "_start"), ca.MX.zeros(3, N - 1), P(name + "_end"))
+
         rn = k["rod_node_inertia"].map(N + 1)(Y["phi"], Y["v"], YP["phi"], YP["v"], mass,
-                                              f_ext, ca.DM(held).T, v_held)
+                                              f_ext, ca.DM(held).T, ends("r"), ends("v"))
         rs = k["rod_segment_inertia"].map(N)(Y["p"], Y["Om"], YP["p"], YP["Om"], seg)
         lo = L.SEGMENT_LOAD_OFFSETS
         t_dead = k["rod_rotate_transposed"].map(N)(Y["p"], sl[_r(lo["m_dead"], 3), :])
@@ -150,17 +152,17 @@ class CasadiRod:
             put(om_i[:-1], 3, -T[0:3, :])
             put(om_i[1:], 3, -T[3:6, :])
         jt = k["rod_joint_torques"]
-        self._clamp_T = []
+        clamp_T = []        # (the joint's torque on the clamp frame, its Omega, p, end)
         if self.clamped[0]:
             T0 = jt(P("p_start"), Y["p"][:, 0], P("Omega_start"), Y["Om"][:, 0], jnt[:, 0],
                     m_q[:, 0])
             put(om_i[:1], 3, -T0[3:6])
-            self._clamp_T.append((T0[0:3], P("Omega_start")))
+            clamp_T.append((T0[0:3], P("Omega_start"), P("p_start"), 0))
         if self.clamped[1]:
             TN = jt(Y["p"][:, N - 1], P("p_end"), Y["Om"][:, N - 1], P("Omega_end"), jnt[:, N],
                     m_q[:, N])
             put(om_i[-1:], 3, -TN[0:3])
-            self._clamp_T.append((TN[3:6], P("Omega_end")))
+            clamp_T.append((TN[3:6], P("Omega_end"), P("p_end"), 1))
         # relaxation rows q' - (strain - q)/theta (strain 0 at an absent clamp joint)
         dV = dU = None
         if B:
@@ -225,14 +227,19 @@ class CasadiRod:
             el, dis = el + Wj, dis + 2 * Dj
         pext = ca.sum2(ca.sum1(f_ext * Y["v"])) + ca.sum2(ca.sum1(t_ext * Y["Om"]))
         pbc = ca.MX.zeros(1, 1)
-        for Tc, om in self._clamp_T:
+        reaction = [[ca.MX.zeros(3, 1), ca.MX.zeros(3, 1)] for _ in range(2)]
+        for Tc, om, pc, end in clamp_T:       # the support's moment, spatial
             pbc -= ca.dot(Tc, om)
+            reaction[end][1] = k["rod_rotate"](pc, -Tc)
         for end, i, fint in ((0, 0, Q[0:3, 0]), (1, N, Q[3:6, N - 1])):
             if self.held[end]:
-                react = mass[i] * YP["v"][:, i] - f_ext[:, i] - fint
-                pbc += ca.dot(react, Y["v"][:, i])
-        self.energies = ca.Function("rod_energy", self._inputs, [kin, el, dis, pext, pbc],
-                                    self._names, list(L.DIAG_SCALARS))
+                name = "a_start" if end == 0 else "a_end"
+                reaction[end][0] = mass[i] * P(name) - f_ext[:, i] - fint
+                pbc += ca.dot(reaction[end][0], Y["v"][:, i])
+        scalars = [kin, el, dis, pext, pbc] + [r[c] for e in reaction for r in e
+                                               for c in range(3)]
+        self.energies = ca.Function("rod_energy", self._inputs, scalars, self._names,
+                                    list(L.DIAG_SCALARS))
         self.elements = ca.Function("rod_elements", self._inputs,
                                     [V, Fs, ca.horzcat(*U), ca.horzcat(*M)], self._names,
                                     ["V", "F", "U", "M"])

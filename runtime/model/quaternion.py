@@ -79,3 +79,28 @@ def cayley_curvature(p_a: np.ndarray, p_b: np.ndarray, h: np.ndarray) -> np.ndar
     conj = p_a * np.array([1.0, -1.0, -1.0, -1.0])
     r = quat_mul(conj, p_b)
     return 2.0 / np.asarray(h)[..., None] * r[..., 1:] / r[..., :1]
+
+
+def quat_log(p: np.ndarray) -> np.ndarray:
+    """Rotation vector theta (rad, |theta| <= pi) of quaternions (..., 4) of any norm:
+    the inverse of :func:`quat_exp` (``p ~ exp((0, theta)/2)``)."""
+    p = np.asarray(p, dtype=float)
+    p = np.where(p[..., :1] < 0, -p, p)            # the shorter of the two rotations
+    s = np.linalg.norm(p[..., 1:], axis=-1)
+    angle = 2.0 * np.arctan2(s, p[..., 0])
+    scale = np.where(s > 0, angle / np.where(s > 0, s, 1.0), 2.0 / np.where(
+        p[..., 0] != 0, p[..., 0], 1.0))
+    return scale[..., None] * p[..., 1:]
+
+
+def end_quaternion(p_inner: np.ndarray, p_last: np.ndarray, h_last: np.ndarray,
+                   h_joint: np.ndarray) -> np.ndarray:
+    """The frame at the free end of a rod, a half segment beyond the centre of its last
+    segment: the rotation between the last two segments (centres ``h_joint`` apart) per
+    length, continued over ``h_last / 2`` (second order in h; quaternions (..., 4), the
+    result normalised)."""
+    conj = np.asarray(p_inner, dtype=float) * np.array([1.0, -1.0, -1.0, -1.0])
+    rel = quat_mul(conj, np.asarray(p_last, dtype=float))
+    theta = quat_log(rel) * (0.5 * np.asarray(h_last) / np.asarray(h_joint))[..., None]
+    q = quat_mul(np.asarray(p_last, dtype=float), quat_exp(theta))
+    return q / np.linalg.norm(q, axis=-1, keepdims=True)

@@ -27,7 +27,7 @@ from generated import rod_layout as L
 from runtime.errors import GeneratedCodeError, ParameterError
 from runtime.model import build
 from runtime.model.arrays import RodArrays
-from runtime.model.quaternion import quat_rotation
+from runtime.model.quaternion import end_quaternion, quat_rotation
 
 
 class Drive(Protocol):
@@ -107,9 +107,10 @@ class RodModel:
         self.kl, self.ku = L.bandwidths(N, B)
         self.ldab = 2 * self.kl + self.ku + 1
         self.drive = drive
-        self._key: tuple = ()       # (time, statics?, load factor) the arrays were driven to
+        self._key: tuple = ()       # (time, left?, load factor) the arrays were driven to
         self._steady = (0.0, 0.0)   # times on which those arrays hold (empty: none known)
         self._static = False
+        self._piece_end = math.inf  # inputs are evaluated from the left here (enter_piece)
         build.require_generated()
         lib = None if backend == "casadi" else build.load_library()
         if backend == "c" and lib is None:
@@ -143,9 +144,15 @@ class RodModel:
         self.velocity_mask[self.v_index.ravel()] = True
         self.velocity_mask[self.omega_index.ravel()] = True
         self.differential = np.ones(self.n, dtype=bool)
-        for end, i in (("start", 0), ("end", N)):
-            if arrays.held(end):     # the velocity is prescribed (algebraic row)
-                self.differential[self.v_index[i]] = False
+        #: the held nodes (0 and/or N): position and velocity prescribed (algebraic rows)
+        self.held_nodes = tuple(i for end, i in (("start", 0), ("end", N)) if arrays.held(end))
+        for i in self.held_nodes:
+            self.differential[self.phi_index[i]] = False
+            self.differential[self.v_index[i]] = False
+        #: their rows phi - r(t), v - v(t): the integrator solves them exactly
+        self.exact_rows = np.array(sorted(int(k) for i in self.held_nodes
+                                          for k in (*self.phi_index[i], *self.v_index[i])),
+                                   dtype=np.int32)
         self._pattern: sp.csc_matrix | None = None
         self._band_pattern: np.ndarray | None = None
         self._pattern_flat = np.zeros(0, dtype=np.intp)
@@ -164,22 +171,58 @@ class RodModel:
         self.arrays.set_param("load_scale", value)
 
     def at(self, t: float) -> None:
-        """Drive the arrays to time ``t`` (in statics: to ``t-`` with the ends at rest);
-        no-op when nothing changed since the last call."""
+        """Drive the arrays to time ``t`` (in statics: to ``t-`` with the ends at rest; at
+        the end of the current piece, :meth:`enter_piece`, also to ``t-``); no-op when
+        nothing changed since the last call."""
         if self.drive is None:
             return
+        left = self._static or t >= self._piece_end
         lo, hi = self._steady
-        if self.drive.time_dependent and not self._static and lo <= t < hi:
+        if self.drive.time_dependent and not left and lo <= t < hi:
             tk = self._key[0] if self._key else None   # arrays of an earlier t still hold
         else:
             tk = t if self.drive.time_dependent else None
-        key = (tk, self._static, self.load_scale)
+        key = (tk, left, self.load_scale)
         if key != self._key:
-            self.drive.apply(self.arrays, t, left=self._static, scale=self.load_scale,
+            self.drive.apply(self.arrays, t, left=left, scale=self.load_scale,
                              static=self._static)
             self._key = key
-            self._steady = ((-math.inf, -math.inf) if self._static or not
-                            self.drive.time_dependent else self.drive.steady_interval(t))
+            if self._static or not self.drive.time_dependent:
+                self._steady = (-math.inf, -math.inf)
+            elif left:                    # the end of a piece: these values hold at t only
+                self._steady = (t, t)
+            else:
+                lo, hi = self.drive.steady_interval(t)
+                self._steady = (lo, min(hi, self._piece_end))
+
+    # -- the inputs' breakpoints (the run drivers stop the integrator at each) ------------
+    def breakpoints(self, t0: float, t1: float) -> list[tuple[float, bool]]:
+        """Times in ``(t0, t1)`` where a load or a prescribed motion is not smooth, with
+        whether the integrator must restart there (``ProblemDrive.breakpoints``)."""
+        get = getattr(self.drive, "breakpoints", None)
+        return [] if get is None else get(t0, t1)
+
+    def enter_piece(self, t0: float, t1: float) -> float:
+        """Integrate next over ``[t0, t1]`` (between two breakpoints): the inputs are
+        evaluated from the right at t0 and from the left at t1, the implicit steps that
+        end on t1 seeing the inputs before their jump. Returns the largest step on the
+        piece (``ProblemDrive.max_step``; inf without a bound)."""
+        self._piece_end = float(t1)
+        self._key = ()
+        get = getattr(self.drive, "max_step", None)
+        return math.inf if get is None else float(get(t0, t1))
+
+    def prescribed_rates(self, t: float, yp: np.ndarray) -> np.ndarray:
+        """``yp`` with the derivatives of the algebraic unknowns set exactly: a held node's
+        phi' = v(t) and v' = a(t) (the integrator's history starts from them, so its first
+        predictor follows the prescribed motion)."""
+        self.at(t)
+        yp = np.array(yp, dtype=float)
+        for end, i in (("start", 0), ("end", self.N)):
+            if i in self.held_nodes:
+                yp[self.phi_index[i]] = self.arrays.param("v_" + end)
+                yp[self.v_index[i]] = self.arrays.param("a_" + end)
+        return yp
 
     def _steady_for(self, ts: np.ndarray) -> bool:
         """Drive the arrays to ``ts[0]`` and say whether they hold for every time of ``ts``
@@ -289,15 +332,64 @@ class RodModel:
         """Position of node 0, the s = 0 end (3,) in m."""
         return y[self.phi_index[0]].copy()
 
+    # -- end frames ---------------------------------------------------------------------
+    def end_segments(self) -> dict[str, np.ndarray]:
+        """State indices of the quaternions that give the end frames: ``"first"`` of
+        segments 1, 2 and ``"last"`` of segments N-1, N (one segment when N = 1)."""
+        k = min(2, self.N)
+        return {"first": self.p_index[:k].ravel(), "last": self.p_index[self.N - k:].ravel()}
+
+    def end_quaternions(self, ts: np.ndarray, first: np.ndarray, last: np.ndarray
+                        ) -> dict[str, np.ndarray]:
+        """Unit quaternions (m, 4) of the frames at s = 0 (``"start"``) and s = L
+        (``"end"``) at times ``ts`` (m,), from the quaternions of :meth:`end_segments`
+        (``first``, ``last``: (m, 4k)). A clamped end has its clamp frame (prescribed: of
+        its time); a free or pinned end the frame half a segment beyond its segment's
+        centre, continued with the curvature of the neighbouring joint (second order)."""
+        ts = np.atleast_1d(np.asarray(ts, dtype=float))
+        m, k = ts.size, min(2, self.N)
+        first = np.asarray(first, dtype=float).reshape(m, k, 4)
+        last = np.asarray(last, dtype=float).reshape(m, k, 4)
+        h = self.arrays.seg_field("h")[:, 0]
+        hj = self.arrays.jnt_field("h")[:, 0]
+        out = {}
+        for end, segs, h_end, h_joint, inner, outer in (
+                ("start", first, h[0], hj[1] if self.N > 1 else h[0], 1, 0),
+                ("end", last, h[-1], hj[-2] if self.N > 1 else h[-1], 0, k - 1)):
+            if self.arrays.clamped(end):
+                timed = self.drive is not None and self.drive.time_dependent
+                q = np.empty((m, 4))
+                for j in range(m):
+                    if timed or j == 0:
+                        self.at(float(ts[j]))
+                        pc = self.arrays.param("p_" + end).copy()
+                    q[j] = pc
+            elif k == 1:
+                q = segs[:, 0]
+            else:
+                q = end_quaternion(segs[:, inner], segs[:, outer], h_end, h_joint)
+            out[end] = q / np.linalg.norm(q, axis=1, keepdims=True)
+        return out
+
+    def end_frames(self, t: float, y: np.ndarray) -> dict[str, np.ndarray]:
+        """Director frames (3, 3) (columns d1, d2, d3) at s = 0 and s = L of one state
+        (:meth:`end_quaternions`)."""
+        idx = self.end_segments()
+        q = self.end_quaternions(np.array([t]), y[idx["first"]][None], y[idx["last"]][None])
+        return {end: quat_rotation(v[0]) for end, v in q.items()}
+
     def condensation_blocks(self) -> list[tuple[int, int, int, int, int]]:
         """The kinematic blocks a Newton solve may eliminate (``runtime.solvers._bdf_c.
-        CondensedNewton``): per node, the rows phi' = v eliminate v (kept: phi); per
-        segment, the rows p' = 1/2 p*(0, Omega) eliminate p (kept: Omega). Each as
+        CondensedNewton``): per node, the rows phi' = v eliminate v (kept: phi; at a held
+        node the rows v = v(t)); per segment, the rows p' = 1/2 p*(0, Omega) eliminate p
+        (kept: Omega). Each as
         ``(e_off, e_size, r_off, k_off, k_size)`` of contiguous state ranges."""
         blocks = []
         for i in range(self.N + 1):
             phi, v = self.phi_index[i], self.v_index[i]
-            blocks.append((int(v[0]), 3, int(phi[0]), int(phi[0]), 3))
+            # a held node: its rows are phi - r(t), v - v(t); v goes with its own rows
+            rows = v if i in self.held_nodes else phi
+            blocks.append((int(v[0]), 3, int(rows[0]), int(phi[0]), 3))
         for i in range(self.N):
             p, om = self.p_index[i], self.omega_index[i]
             blocks.append((int(p[0]), 4, int(p[0]), int(om[0]), 3))
@@ -364,7 +456,8 @@ class RodModel:
                         address(lib.kvrod_energies), ctypes.addressof(self._struct),
                         drive=drive, keep=self,
                         jacobian_cells=address(lib.kvrod_jacobian_band_cells),
-                        drive_constant=drive is not None and not self.drive.time_dependent)
+                        drive_constant=drive is not None and not self.drive.time_dependent,
+                        n_energies=len(L.DIAG_SCALARS))
 
     def _struct_ptr(self):
         import ctypes
@@ -492,15 +585,34 @@ class RodModel:
                                           P(yp_, n), out.ctypes.data)
             if rc:
                 raise GeneratedCodeError(f"kvrod_energies failed (code {rc})")
-            return tuple(float(v) for v in out)
+            return tuple(float(v) for v in out[:len(L.DIAG_ENERGIES)])
         vals = self._casadi.energies(*self._cargs(t, y, yp_))
-        return tuple(float(v) for v in vals)
+        return tuple(float(v) for v in vals[:len(L.DIAG_ENERGIES)])
+
+    #: names of the energies' columns after the first five: the supports' reactions
+    reaction_names: tuple[str, ...] = tuple(L.DIAG_REACTIONS)
+
+    def reactions(self, t: float, y: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
+        """The force (N) and moment (N m, about the node) that each held end's support
+        exerts on the rod in state ``y`` at time ``t``, spatial: ``{"start": {"force",
+        "moment"}, "end": {...}}`` for the held ends (the moment of a pinned end is 0).
+        In a dynamic state the held node's inertia is included (``m a - f_ext - f_int``
+        with the prescribed acceleration a); velocities enter through the viscous
+        forces. The last columns of :meth:`energies` hold the same numbers."""
+        d = self.diagnostics(t, y)
+        out = {}
+        for end, i in (("start", 0), ("end", self.N)):
+            if i in self.held_nodes:
+                out[end] = {what: np.array([d[f"{end}_{what}_{c}"] for c in "xyz"])
+                            for what in ("force", "moment")}
+        return out
 
     def energies(self, ts: np.ndarray, ys: np.ndarray, yps: np.ndarray) -> np.ndarray:
-        """(m, 5) energies and powers of m states (rows of ``ys``, ``yps``) in one call
-        (the per-step energy quadrature). Loads must not depend on time within ``ts``
-        beyond what :meth:`at` of each time gives; time-dependent problems evaluate per
-        state."""
+        """(m, k) energies and powers of m states (rows of ``ys``, ``yps``) in one call
+        (the per-step energy quadrature): the columns of ``DIAG_SCALARS`` (layout), the
+        five of :meth:`energy_scalars` then the supports' reactions. Loads must not
+        depend on time within ``ts`` beyond what :meth:`at` of each time gives;
+        time-dependent problems evaluate per state."""
         ys = np.ascontiguousarray(ys, dtype=float)
         yps = np.ascontiguousarray(yps, dtype=float)
         ts = np.ascontiguousarray(ts, dtype=float)
@@ -513,7 +625,8 @@ class RodModel:
                 raise GeneratedCodeError(f"kvrod_energies failed (code {rc})")
             return out
         for k in range(m):
-            out[k] = self.energy_scalars(float(ts[k]), ys[k], yps[k])
+            d = self.diagnostics(float(ts[k]), ys[k], yps[k])
+            out[k] = [d[name] for name in L.DIAG_SCALARS]
         return out
 
     def diagnostics(self, t: float, y: np.ndarray, yp: np.ndarray | None = None) -> dict:

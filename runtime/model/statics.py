@@ -6,7 +6,9 @@ rotation increments ``dtheta`` (rad, material, ``p <- p exp(dtheta/2)``); rows: 
 balance of every node and the torque balance of every segment at rest. A held node's rows
 and unknowns are replaced by identities (its position is prescribed: :meth:`constrain`).
 Loads are evaluated as in statics (:meth:`RodModel.statics`: at ``t = 0-``, the load factor
-also scaling prescribed end motion).
+also scaling prescribed end motion). Rigid motions the supports leave free (a pinned-pinned
+rod's spin, a free-free rod) are held by a gauge (:meth:`RodStatics.hold_rigid_motions`,
+:mod:`runtime.model.rigid`).
 """
 
 from __future__ import annotations
@@ -20,7 +22,25 @@ if TYPE_CHECKING:
 
 from generated import rod_layout as L
 from runtime.model.quaternion import quat_exp, quat_mul
+from runtime.model.rigid import (
+    StaticGauge,
+    check_stiffness,
+    refuse_loaded_motions,
+    rigid_motions,
+)
 from runtime.model.rod import RodModel
+
+
+def largest_displacement(model: RodModel, y: np.ndarray) -> dict:
+    """The node that moved most from the reference: {"node": i, "s": arc length (m),
+    "position": phi_i (m), "displacement": phi_i - phi_ref (m), "magnitude": (m)} (for a
+    rod held at both ends, where the "tip" is a support)."""
+    d = y[model.phi_index] - model.reference[model.phi_index]
+    mag = np.linalg.norm(d, axis=1)
+    i = int(np.argmax(mag))
+    s = float(np.sum(model.arrays.seg_field("h")[:i, 0]))
+    return {"node": i, "s": s, "position": [float(v) for v in y[model.phi_index[i]]],
+            "displacement": [float(v) for v in d[i]], "magnitude": float(mag[i])}
 
 
 def _half_L(p: np.ndarray) -> np.ndarray:
@@ -67,6 +87,32 @@ class RodStatics:
         # only needed when an end moves (a fixed end stays where the reference put it)
         moving = bool(getattr(m.drive, "moving_ends", False))
         self.constrain = self._constrain if moving else None
+        #: the gauge holding free rigid motions (:meth:`hold_rigid_motions`), or None
+        self.gauge: StaticGauge | None = None
+
+    def rigid_motions(self, y: np.ndarray):
+        """The rigid motions the supports leave free at state y
+        (:func:`runtime.model.rigid.rigid_motions`), in this problem's layout."""
+        return rigid_motions(self.model, y, (self.n_static, self.phi_cols, self.theta_cols))
+
+    def hold_rigid_motions(self, y: np.ndarray) -> StaticGauge | None:
+        """Check that statics from ``y`` is well posed and hold the free rigid motions.
+
+        Call inside ``with model.statics():`` before solving. Raises
+        :class:`~runtime.errors.IllPosedError` (before any work) when the loads at load
+        factor 1 are beyond what double precision resolves on this rod's stiffness, or do
+        work along a free rigid motion (no equilibrium where the rod is); otherwise sets
+        and returns :attr:`gauge` (None when the supports leave nothing free)."""
+        self.gauge = None
+        check_stiffness(self, y)
+        motions = self.rigid_motions(y)
+        if motions.k == 0:
+            return None
+        refuse_loaded_motions(self, y, motions)
+        ab = np.zeros((2 * self.kl_static + self.ku_static + 1, self.n_static), order="F")
+        self.static_jacobian_band(y, ab)
+        self.gauge = StaticGauge(self, y, motions, ab[self.kl_static + self.ku_static])
+        return self.gauge
 
     @property
     def load_scale(self) -> float:
@@ -95,6 +141,8 @@ class RodStatics:
         m.residual(0.0, self.at_rest(y), m._zeros, r)
         out[:] = r[self.static_rows]
         out[~self._rowmask] = 0.0
+        if self.gauge is not None:
+            out[self.gauge.cols] += self.gauge.force(y)
 
     def jacobian_csr(self, y: np.ndarray) -> sp.csr_matrix:
         import scipy.sparse as sp
@@ -110,7 +158,13 @@ class RodStatics:
             f = self.fixed_cols
             self._fixed_matrix = sp.csr_matrix((np.ones(f.size), (f, f)),
                                                shape=(self.n_static, self.n_static))
-        return (keep @ J).tocsr() + self._fixed_matrix
+        out = (keep @ J).tocsr() + self._fixed_matrix
+        if self.gauge is not None:
+            c = self.gauge.cols
+            r, q = np.meshgrid(c, c, indexing="ij")
+            out = out + sp.csr_matrix((self.gauge.K.ravel(), (r.ravel(), q.ravel())),
+                                      shape=out.shape)
+        return out.tocsr()
 
     def tangent(self, y: np.ndarray) -> sp.csc_matrix:
         """T (n x n_static): dy = T dx; dphi -> phi (identity), dtheta -> dp = 1/2 L(p) [0; I]."""
@@ -188,6 +242,9 @@ class RodStatics:
         flat = np.bincount(dst, weights=vals, minlength=out_ab.size)
         flat[fixed] += 1.0
         out_ab[:] = flat.reshape(out_ab.shape, order="F")
+        if self.gauge is not None:
+            c = self.gauge.cols
+            out_ab[kl + ku + c[:, None] - c[None, :], c[None, :]] += self.gauge.K
 
     def static_retract(self, y: np.ndarray, dx: np.ndarray) -> np.ndarray:
         """New state: phi += dphi, p <- p*exp(dtheta/2) renormalised; velocities kept."""

@@ -11,6 +11,8 @@ the prescribed end motion at any time.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from runtime.model.arrays import RodArrays
@@ -25,6 +27,7 @@ from runtime.model.rod import RodModel
 from runtime.problem.geometry import Straight, discretize
 from runtime.problem.materials import joint_average
 from runtime.problem.schema import Problem
+from runtime.problem.timefunctions import TimeFunction
 
 
 class ProblemDrive:
@@ -48,6 +51,68 @@ class ProblemDrive:
         self._nodes = [ld.node(N, self.length) for ld in self.loads]
         #: an end has prescribed motion (statics must move the held nodes)
         self.moving_ends = any(e.motion is not None and e.motion.moves for e in self.ends)
+
+    #: steps per time scale of an active input at most (a ramp's duration, a harmonic's
+    #: period, a table piece): the error test sees nothing to control in a rod at rest
+    STEPS_PER_TIME_SCALE = 10
+    #: breakpoints closer than this (relative to max(1, |t|)) are one
+    MERGE_RTOL = 1e-10
+
+    def _inputs(self) -> list[tuple[TimeFunction, bool]]:
+        """(time function, drives a motion) of every input that acts (nonzero)."""
+        out = [(ld.time, False) for ld in self.loads if any(ld.vector)]
+        for e in self.ends:
+            mo = e.motion
+            if mo is not None:
+                if any(mo.translation):
+                    out.append((mo.translation_time, True))
+                if mo.rotation_angle:
+                    out.append((mo.rotation_time, True))
+        return out
+
+    def breakpoints(self, t0: float, t1: float) -> list[tuple[float, bool]]:
+        """The inputs' breakpoints in ``(t0, t1)``, sorted, each with whether the integrator
+        must restart there: where a load or its rate jumps, or a prescribed motion, its
+        rate or its acceleration (the held node's velocity is an algebraic unknown, so an
+        acceleration jump is a kink of an unknown, as a rate jump of a load is of the
+        accelerations). Breakpoints closer than ``MERGE_RTOL`` are one."""
+        raw: list[tuple[float, bool]] = []
+        for f, motion in self._inputs():
+            for t, order in f.breakpoints(t0, t1):
+                raw.append((t, order <= (2 if motion else 1)))
+        out: list[tuple[float, bool]] = []
+        for t, restart in sorted(raw):
+            tol = self.MERGE_RTOL * max(1.0, abs(t))
+            if not t0 + tol < t < t1 - tol:
+                continue
+            if out and t - out[-1][0] <= tol:
+                out[-1] = (out[-1][0], out[-1][1] or restart)
+            else:
+                out.append((t, restart))
+        return out
+
+    def max_step(self, t0: float, t1: float) -> float:
+        """Largest step (s) on the piece ``[t0, t1]`` between two breakpoints: a fraction
+        ``1 / STEPS_PER_TIME_SCALE`` of the shortest time scale of the inputs active on
+        it (inf when none is)."""
+        tm = 0.5 * (t0 + t1) if math.isfinite(t1) else t0
+        scale = min((f.time_scale(tm) for f, _ in self._inputs()), default=math.inf)
+        return scale / self.STEPS_PER_TIME_SCALE
+
+    def held_positions(self, end: str, ts: np.ndarray) -> np.ndarray:
+        """Prescribed positions (3, m) of a held end (``"start"``, ``"end"``) at times
+        ``ts`` (m), as :meth:`apply` writes them (the outputs report these: a held end is
+        where its motion puts it, not where an interpolant of the steps does)."""
+        k = 0 if end == "start" else 1
+        ts = np.atleast_1d(np.asarray(ts, dtype=float))
+        r = np.repeat(self.r_ends[k][:, None], ts.size, axis=1)
+        mo = self.ends[k].motion
+        if mo is not None and any(mo.translation):
+            f = mo.translation_time
+            tr = np.asarray(mo.translation)
+            for j, t in enumerate(ts):
+                r[:, j] = self.r_ends[k] + 1.0 * tr * f.value_at(float(t))
+        return r
 
     def steady_interval(self, t: float) -> tuple[float, float]:
         """``(a, b)``, ``a <= t < b``: an interval on which every load and end motion is
@@ -95,24 +160,28 @@ class ProblemDrive:
         for k, (end, name) in enumerate(zip(self.ends, ("start", "end"), strict=True)):
             if not end.held:
                 continue
-            r, v = self.r_ends[k].copy(), np.zeros(3)
+            r, v, acc = self.r_ends[k].copy(), np.zeros(3), np.zeros(3)
             p, om = self.p_ends[k].copy(), np.zeros(3)
             mo = end.motion
             if mo is not None:
                 s = scale if static else 1.0
                 tr = np.asarray(mo.translation)
-                r = r + s * tr * mo.translation_time.value_at(t, left=left)
+                f = mo.translation_time
+                r = r + s * tr * f.value_at(t, left=left)
                 if not static:
-                    v = tr * mo.translation_time.rate_at(t)
+                    v = tr * f.rate_at(t, left=left)
+                    acc = tr * f.accel_at(t, left=left)
                 if mo.rotation_angle:
                     ang = np.radians(mo.rotation_angle)
                     axis = np.asarray(mo.rotation_axis)
-                    theta = s * ang * mo.rotation_time.value_at(t, left=left)
+                    g = mo.rotation_time
+                    theta = s * ang * g.value_at(t, left=left)
                     p = quat_mul(quat_exp(theta * axis), p)       # spatial rotation first
                     if not static:
-                        om = quat_rotation(p).T @ (axis * ang * mo.rotation_time.rate_at(t))
+                        om = quat_rotation(p).T @ (axis * ang * g.rate_at(t, left=left))
             a.set_param("r_" + name, r)
             a.set_param("v_" + name, v)
+            a.set_param("a_" + name, acc)
             a.set_param("p_" + name, p)
             a.set_param("Omega_" + name, om)
 

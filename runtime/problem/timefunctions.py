@@ -82,7 +82,7 @@ class TimeFunction:
         if k == "harmonic":
             w = 2 * math.pi * self.frequency
             return self.offset + self.amplitude * math.sin(w * t + self.phase)
-        ts, vs = zip(*self.points, strict=True)
+        ts, vs = self._table()
         return float(np.interp(t, ts, vs))
 
     def constant_interval(self, t: float) -> tuple[float, float]:
@@ -112,26 +112,105 @@ class TimeFunction:
             return (ts[i], ts[i + 1]) if vs[i] == vs[i + 1] else (t, t)
         return t, t
 
-    def rate_at(self, t: float) -> float:
-        """df/dt (1/s); 0 at the jumps of ``step``/``release`` (they are not for motion)."""
+    def rate_at(self, t: float, left: bool = False) -> float:
+        """df/dt (1/s); ``left``: the limit from the left where the rate jumps (the ends of
+        a ramp, the kinks of a table); 0 at the jumps of ``step``/``release`` (they are
+        not for motion)."""
         k = self.kind
         if k in ("constant", "step", "release"):
             return 0.0
         if k in ("ramp", "smooth_ramp"):
             x = (t - self.start) / self.duration
-            if not 0.0 < x < 1.0:
+            if not (0.0 < x <= 1.0 if left else 0.0 <= x < 1.0):
                 return 0.0
             return (1.0 / self.duration if k == "ramp"
                     else 0.5 * math.pi / self.duration * math.sin(math.pi * x))
         if k == "harmonic":
             w = 2 * math.pi * self.frequency
             return self.amplitude * w * math.cos(w * t + self.phase)
-        ts = np.array([p[0] for p in self.points])
-        vs = np.array([p[1] for p in self.points])
-        i = int(np.searchsorted(ts, t, side="right")) - 1
+        ts, vs = self._table()
+        i = int(np.searchsorted(ts, t, side="left" if left else "right")) - 1
         if i < 0 or i >= ts.size - 1:
             return 0.0
         return float((vs[i + 1] - vs[i]) / (ts[i + 1] - ts[i]))
+
+    def accel_at(self, t: float, left: bool = False) -> float:
+        """d^2f/dt^2 (1/s^2), the limit from the left with ``left`` (0 on the linear
+        pieces of a ramp or table: their kinks are breakpoints, not accelerations)."""
+        k = self.kind
+        if k == "smooth_ramp":
+            x = (t - self.start) / self.duration
+            if not (0.0 < x <= 1.0 if left else 0.0 <= x < 1.0):
+                return 0.0
+            return 0.5 * (math.pi / self.duration) ** 2 * math.cos(math.pi * x)
+        if k == "harmonic":
+            w = 2 * math.pi * self.frequency
+            return -self.amplitude * w * w * math.sin(w * t + self.phase)
+        return 0.0
+
+    #: a kink of a table is a breakpoint when its slope changes by more than this
+    #: fraction of the table's steepest slope (a finely sampled smooth signal merges)
+    KINK_FRACTION = 0.05
+
+    def _table(self) -> tuple[np.ndarray, np.ndarray]:
+        return (np.array([p[0] for p in self.points], dtype=float),
+                np.array([p[1] for p in self.points], dtype=float))
+
+    def breakpoints(self, t0: float, t1: float) -> list[tuple[float, int]]:
+        """Times in ``[t0, t1]`` where f is not smooth, with the order of what jumps there:
+        0 the value (``step``, ``release``), 1 the rate (the ends of a ``ramp``, the kinks
+        of a ``table``), 2 the second derivative (the ends of a ``smooth_ramp``).
+
+        A table's kink counts when its slope changes by more than ``KINK_FRACTION`` of the
+        table's steepest slope, so that a long table sampled from a smooth signal is not
+        cut at every point (its pieces are then bounded by :meth:`time_scale`)."""
+        k = self.kind
+        out: list[tuple[float, int]] = []
+        if k in ("step", "release"):
+            out = [(self.start, 0)]
+        elif k in ("ramp", "smooth_ramp"):
+            order = 1 if k == "ramp" else 2
+            out = [(self.start, order), (self.start + self.duration, order)]
+        elif k == "table":
+            ts, vs = self._table()
+            slopes = np.concatenate([[0.0], np.diff(vs) / np.diff(ts), [0.0]])
+            jump = np.abs(np.diff(slopes))              # at each point
+            steep = float(np.max(np.abs(slopes)))
+            if steep > 0.0:
+                out = [(float(t), 1) for t, j in zip(ts, jump, strict=True)
+                       if j > self.KINK_FRACTION * steep]
+        return [(t, o) for t, o in out if t0 <= t <= t1]
+
+    def time_scale(self, t: float) -> float:
+        """The time (s) over which f changes appreciably on its smooth piece that starts at
+        ``t`` (right of a breakpoint at ``t``); inf where f is constant. The run loop
+        bounds its steps by a fraction of it, so that an input is resolved even when the
+        error test has nothing yet to see (a rod at rest before a pulse)."""
+        k = self.kind
+        inf = math.inf
+        if k in ("ramp", "smooth_ramp"):
+            return self.duration if self.start <= t < self.start + self.duration else inf
+        if k == "harmonic":
+            return (1.0 / self.frequency if self.amplitude != 0.0 and self.frequency > 0.0
+                    else inf)
+        if k == "table":
+            ts, vs = self._table()
+            if not ts[0] <= t < ts[-1]:
+                return inf
+            cuts = [b for b, _ in self.breakpoints(-inf, inf)] + [ts[0], ts[-1]]
+            lo = max(c for c in cuts if c <= t)
+            hi = min(c for c in cuts if c > t)
+            i0 = int(np.searchsorted(ts, lo, side="left"))
+            i1 = int(np.searchsorted(ts, hi, side="right"))
+            seg_t, seg_v = ts[i0:i1], vs[i0:i1]
+            steep = float(np.max(np.abs(np.diff(seg_v) / np.diff(seg_t)))) if seg_t.size > 1 \
+                else 0.0
+            if steep == 0.0:
+                return inf
+            # the piece's range over its steepest slope: its length for a straight piece,
+            # period/pi for a sampled sine
+            return min(hi - lo, float(np.ptp(seg_v)) / steep)
+        return inf
 
     def peak(self, t_end: float) -> float:
         """max |f| over [0, t_end] (for scales: tolerances, checks)."""

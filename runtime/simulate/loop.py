@@ -22,6 +22,7 @@ import numpy as np
 
 from runtime.errors import INTERRUPTS
 from runtime.solvers.bdf import BDF, IntegrationError
+from runtime.solvers.schedule import Pieces
 
 
 @dataclass
@@ -89,6 +90,10 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
              restored: bool = False) -> LoopResult:
     """Integrate ``model`` from ``(t0, y0, yp0)`` to ``t_end`` with observers.
 
+    The run goes piece by piece between the breakpoints of the model's inputs
+    (``runtime.solvers.schedule``): the solver lands on each and restarts where an input
+    jumps; observers with a ``restart(run, restart)`` hook are told.
+
     ``restored``: the observers were restored from a checkpoint at ``t0`` (their ``begin``
     must not record the start again; they are called with it anyway so that they can pick
     up the state). ``counters0``: counters of the run before the resume. See the module
@@ -96,18 +101,20 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
     """
     wall0 = time.perf_counter()
     counters0 = dict(counters0 or {})
-    solver = BDF(model, t0, y0, yp0, t_end, rtol=rtol, atol=atol, min_step=min_step,
-                 max_order=max_order)
+    pieces = Pieces(model, t0, t_end)
+    solver = BDF(model, t0, y0, yp0, pieces.end, rtol=rtol, atol=atol, min_step=min_step,
+                 max_order=max_order, max_step=pieces.enter())
     run = RunState(t=t0, y=np.array(y0, dtype=float), yp=np.array(yp0, dtype=float),
                    solver=solver)
     hooks = {name: [getattr(o, name) for o in observers if hasattr(o, name)]
-             for name in ("begin", "step", "end")}
+             for name in ("begin", "step", "restart", "end")}
     for f in hooks["begin"]:
         f(run)
     next_ckpt = t0 + checkpoint_every
     every_step = _needs_every_step(solver, observers)
+    watches = [w for o in observers if hasattr(o, "watches") for w in o.watches()]
     if not every_step:
-        solver.watch([w for o in observers if hasattr(o, "watches") for w in o.watches()])
+        solver.watch(watches)
     timed = [o for o in observers if hasattr(o, "next_time")]
     tick = abs(t_end - t0) / max([getattr(o, "ticks", 1) for o in observers], default=1)
 
@@ -124,7 +131,18 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
                           interrupt=interrupt)
 
     try:
-        while solver.status == "running" and solver.nstep < max_steps:
+        while solver.nstep < max_steps:
+            if solver.status == "finished":
+                if pieces.last:
+                    break
+                restart = pieces.next(solver)      # past the inputs' next breakpoint
+                run.t, run.y, run.yp = solver.t, solver.y, solver.yp
+                if restart is not None:
+                    for f in hooks["restart"]:
+                        f(run, restart)
+                    if not every_step:
+                        solver.watch(watches)
+                continue
             if every_step:
                 solver.step()
             else:
@@ -143,7 +161,7 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
             run.t, run.y, run.yp = t1, solver.y, solver.yp
             for f in hooks["step"]:
                 f(run, dense, t_old, t1)
-            if checkpoint is not None and t1 >= next_ckpt and solver.status == "running":
+            if checkpoint is not None and t1 >= next_ckpt and t1 < t_end:
                 state: dict[str, Any] = {"t": float(t1), "y": solver.y.copy(),
                                          "yp": solver.yp.copy(),
                                          "counters": total_counters()}

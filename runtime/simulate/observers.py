@@ -6,6 +6,8 @@ An observer implements any of
 * ``step(run, dense, t0, t1)``: a step ``[t0, t1]`` was accepted; ``dense(t)`` and
   ``dense.derivative(t)`` interpolate y and y' on it, ``dense.values(ts)`` both at once
   (rows per time);
+* ``restart(run, restart)``: the integrator restarted at a breakpoint of the inputs
+  (``runtime.solvers.schedule.Restart``: its time, the states before and after);
 * ``end(run)``: the run stopped (finished, failed or interrupted);
 * ``state() -> dict`` / ``restore(dict)``: what a checkpoint must keep to continue.
 
@@ -151,6 +153,20 @@ class EnergyIntegrator:
         if self._core is not None:
             self._collect()
 
+    def restart(self, run: Run, restart) -> None:
+        """The integrator restarted at a breakpoint where prescribed velocities jump: the
+        supports' impulse did the work of the held masses' kinetic energy jump (the
+        positions, hence W, are continuous), booked as external work."""
+        t = restart.t
+        dT = (self.model.energy_scalars(t, restart.y_after)[0]
+              - self.model.energy_scalars(t, restart.y_before)[0])
+        if dT == 0.0:
+            return
+        if self._core is not None:
+            self._collect()
+            self._core.s.external_work += dT
+        self.external_work += dT
+
     def state(self) -> dict[str, Any]:
         return {"diss": self.dissipated, "work": self.external_work}
 
@@ -159,51 +175,67 @@ class EnergyIntegrator:
 
 
 class Sampler:
-    """Samples on a uniform output grid: end points, energies and their running integrals.
+    """Samples on a uniform output grid: chosen state components, energies, their running
+    integrals and the model's further output scalars (the supports' reactions).
 
-    Records per output time ``t``: ``tip`` (3,) the position of node N (the s = L end),
-    ``start`` (3,) of node 0, kinetic ``T`` and elastic ``W`` energy (J), dissipated
-    energy ``int 2D`` and external work ``int P`` (J) since the start. The outputs of a
-    step are evaluated together with the step's energy quadrature
+    ``channels``: name -> state indices (e.g. ``"tip"``: the s = L node's position);
+    per output time ``t`` it records each channel's values, kinetic ``T`` and elastic
+    ``W`` energy (J), dissipated energy ``int 2D`` and external work ``int P`` (J) since
+    the start, and ``extras``: the values of ``model.energies`` beyond the first five.
+    The outputs of a step are evaluated together with the step's energy quadrature
     (:meth:`EnergyIntegrator.evaluate`) and kept as arrays per step.
     """
 
     name = "sampler"
-    KEYS = ("t", "tip", "start", "T", "W", "D", "P")
+    SCALARS = ("T", "W", "D", "P")
     sparse = True
 
     def __init__(self, model, energy: EnergyIntegrator, t_out: np.ndarray,
-                 tip_index: np.ndarray, start_index: np.ndarray) -> None:
+                 channels: dict[str, np.ndarray], n_extras: int = 0) -> None:
         self.model, self.energy = model, energy
         self.t_out = np.asarray(t_out, dtype=float)
-        self.i_tip, self.i_start = np.asarray(tip_index), np.asarray(start_index)
+        self.channels = {k: np.asarray(v, dtype=int).ravel() for k, v in channels.items()}
+        self.n_extras = int(n_extras)
         self.k_out = 0
-        self.rec: dict[str, list[np.ndarray]] = {k: [] for k in self.KEYS}
+        self.rec: dict[str, list[np.ndarray]] = {k: [] for k in self._keys()}
         self._core = None
 
-    def _record(self, ts: np.ndarray, tip: np.ndarray, start: np.ndarray, T: np.ndarray,
-                W: np.ndarray, diss: np.ndarray, work: np.ndarray) -> None:
+    def _keys(self) -> tuple[str, ...]:
+        return ("t", *self.channels, *self.SCALARS, "extras")
+
+    def _record(self, ts: np.ndarray, ys: np.ndarray, en: np.ndarray, diss: np.ndarray,
+                work: np.ndarray) -> None:
+        """ys: (k, n) states (or (k, m) with the channels' columns in order), en: (k, >= 2
+        + n_extras) rows [T, W, ..., extras at the end]."""
         r = self.rec
         r["t"].append(np.asarray(ts, dtype=float))
-        r["tip"].append(tip)
-        r["start"].append(start)
-        for key, v in (("T", T), ("W", W), ("D", diss), ("P", work)):
-            r[key].append(np.asarray(v, dtype=float))
+        col = 0
+        for name, idx in self.channels.items():
+            r[name].append(np.array(ys[:, col:col + idx.size]))
+            col += idx.size
+        r["T"].append(np.array(en[:, 0], dtype=float))
+        r["W"].append(np.array(en[:, 1], dtype=float))
+        r["D"].append(np.asarray(diss, dtype=float))
+        r["P"].append(np.asarray(work, dtype=float))
+        r["extras"].append(np.array(en[:, en.shape[1] - self.n_extras:], dtype=float)
+                           if self.n_extras else np.zeros((len(ts), 0)))
+
+    def _all_indices(self) -> np.ndarray:
+        return np.concatenate([*self.channels.values(), np.zeros(0, dtype=int)])
 
     def attach(self, solver) -> bool:
         """Sample in the compiled step loop (with the energy integrator there too)."""
         if self._core is None and self.energy.attach(solver):
             core = solver.core
-            if core.enable_sampling(self.t_out, self.k_out,
-                                    np.concatenate([self.i_tip, self.i_start]), self._rows):
+            if core.enable_sampling(self.t_out, self.k_out, self._all_indices(), self._rows):
                 self._core = core
         return self._core is not None
 
     def _rows(self, rows: np.ndarray) -> None:
-        """Rows [t, tip, start, T, W, int 2D, int P] from the compiled loop."""
-        a, b = 1 + self.i_tip.size, 1 + self.i_tip.size + self.i_start.size
-        self._record(rows[:, 0].copy(), rows[:, 1:a].copy(), rows[:, a:b].copy(),
-                     rows[:, b].copy(), rows[:, b + 1].copy(), rows[:, b + 2].copy(),
+        """Rows [t, channels..., T, W, int 2D, int P, extras...] from the compiled loop."""
+        b = 1 + self._all_indices().size
+        en = np.concatenate([rows[:, b:b + 2], rows[:, b + 4:]], axis=1)
+        self._record(rows[:, 0].copy(), rows[:, 1:b], en, rows[:, b + 2].copy(),
                      rows[:, b + 3].copy())
         self.k_out += rows.shape[0]
 
@@ -216,9 +248,9 @@ class Sampler:
 
     def begin(self, run: Run) -> None:
         if self.k_out == 0 and self.t_out.size and self.t_out[0] <= run.t:
-            e = self.model.energy_scalars(run.t, run.y, run.yp)
-            self._record(np.array([run.t]), run.y[None, self.i_tip], run.y[None, self.i_start],
-                         np.array([e[0]]), np.array([e[1]]), np.zeros(1), np.zeros(1))
+            e = self.model.energies(np.array([run.t]), run.y[None, :], run.yp[None, :])
+            self._record(np.array([run.t]), run.y[None, self._all_indices()], e,
+                         np.zeros(1), np.zeros(1))
             self.k_out = 1
 
     def step(self, run: Run, dense, t0: float, t1: float) -> None:
@@ -235,11 +267,13 @@ class Sampler:
         e = self.energy
         ys, en = e.evaluate(dense, t0, t1, ts)        # with the step's quadrature nodes
         dd, ww = e.partial(dense, t0, t1, ts)
-        self._record(ts, ys[:, self.i_tip], ys[:, self.i_start], en[:, 0], en[:, 1],
-                     e.dissipated + dd, e.external_work + ww)
+        self._record(ts, ys[:, self._all_indices()], en, e.dissipated + dd,
+                     e.external_work + ww)
         self.k_out = k
 
     def arrays(self) -> dict[str, np.ndarray]:
+        """``t`` (n,), each channel (size, n), ``kinetic``, ``elastic``, ``dissipated``,
+        ``external_work`` (n,), ``extras`` (n_extras, n)."""
         r = self.rec
 
         def cat(key: str, width: int = 0) -> np.ndarray:
@@ -247,15 +281,21 @@ class Sampler:
                 return np.concatenate(r[key])
             return np.zeros((0, width)) if width else np.zeros(0)
 
-        return {"t": cat("t"), "tip": cat("tip", 3).T, "start": cat("start", 3).T,
-                "kinetic": cat("T"), "elastic": cat("W"), "dissipated": cat("D"),
-                "external_work": cat("P")}
+        out = {"t": cat("t")}
+        for name, idx in self.channels.items():
+            out[name] = cat(name, idx.size).T
+        out.update(kinetic=cat("T"), elastic=cat("W"), dissipated=cat("D"),
+                   external_work=cat("P"), extras=cat("extras", self.n_extras).T)
+        return out
 
     def state(self) -> dict[str, Any]:
         a = self.arrays()
-        return {"k_out": self.k_out, "rec_t": a["t"], "rec_tip": a["tip"].T,
-                "rec_start": a["start"].T, "rec_T": a["kinetic"], "rec_W": a["elastic"],
-                "rec_D": a["dissipated"], "rec_P": a["external_work"]}
+        st: dict[str, Any] = {"k_out": self.k_out, "rec_t": a["t"], "rec_T": a["kinetic"],
+                              "rec_W": a["elastic"], "rec_D": a["dissipated"],
+                              "rec_P": a["external_work"], "rec_extras": a["extras"].T}
+        for name in self.channels:
+            st["rec_" + name] = a[name].T
+        return st
 
     def restore(self, st: dict[str, Any]) -> None:
         self.k_out = int(st["k_out"])
@@ -263,10 +303,15 @@ class Sampler:
         for key, src in (("t", "rec_t"), ("T", "rec_T"), ("W", "rec_W"), ("D", "rec_D"),
                          ("P", "rec_P")):
             r[key] = [np.asarray(st[src], dtype=float)]
-        r["tip"] = [np.asarray(st["rec_tip"], dtype=float).reshape(-1, 3)]
-        start = st.get("rec_start")
-        r["start"] = [np.asarray(start, dtype=float).reshape(-1, 3) if start is not None
-                      and len(start) else np.full((r["t"][0].size, 3), math.nan)]
+        m = r["t"][0].size
+        for name, idx in self.channels.items():        # absent in an older checkpoint: NaN
+            v = st.get("rec_" + name)
+            r[name] = [np.asarray(v, dtype=float).reshape(-1, idx.size) if v is not None
+                       and np.size(v) == m * idx.size else np.full((m, idx.size), math.nan)]
+        v = st.get("rec_extras")
+        r["extras"] = [np.asarray(v, dtype=float).reshape(-1, self.n_extras)
+                       if v is not None and np.size(v) == m * self.n_extras
+                       else np.full((m, self.n_extras), math.nan)]
 
 
 class Maxima:
@@ -326,18 +371,20 @@ class Maxima:
 
 
 class Snapshots:
-    """Full states every ``every`` seconds (for VTK), handed to ``sink(t, y)`` at once."""
+    """Full states every ``every`` seconds (for VTK), handed to ``sink(t, y, yp)`` at once
+    (the state and its rate at that time: the viscous resultants need both)."""
 
     name = "snapshots"
     sparse = True
 
-    def __init__(self, every: float, sink: Callable[[float, np.ndarray], object]) -> None:
+    def __init__(self, every: float,
+                 sink: Callable[[float, np.ndarray, np.ndarray], object]) -> None:
         self.every, self.sink = float(every), sink
         self.next = math.nan
 
     def begin(self, run: Run) -> None:
         if not math.isfinite(self.next):
-            self.sink(run.t, run.y.copy())
+            self.sink(run.t, run.y.copy(), run.yp.copy())
             self.next = run.t + self.every
 
     def next_time(self) -> float:
@@ -345,7 +392,8 @@ class Snapshots:
 
     def step(self, run: Run, dense, t0: float, t1: float) -> None:
         while self.next <= t1:
-            self.sink(self.next, np.array(dense(self.next)))
+            self.sink(self.next, np.array(dense(self.next)),
+                      np.array(dense.derivative(self.next)))
             self.next += self.every
 
     def state(self) -> dict[str, Any]:

@@ -23,14 +23,15 @@ import numpy as np
 
 from runtime.analysis.audit import audit_run, significant_maxima
 from runtime.analysis.decay import damping_ratios, log_decrements, periods
+from runtime.model.quaternion import quat_log, quat_mul, quat_rotation
 from runtime.model.rod import RodModel
-from runtime.model.statics import RodStatics
+from runtime.model.statics import RodStatics, largest_displacement
 from runtime.problem.assemble import build_model
 from runtime.problem.schema import Problem
 from runtime.problem.timefunctions import TimeFunction
 from runtime.simulate.loop import run_loop
 from runtime.simulate.observers import EnergyIntegrator, Maxima, Progress, Sampler, Snapshots
-from runtime.solvers.integrator import consistent_initial
+from runtime.solvers.initial import consistent_initial
 from runtime.solvers.statics import StaticSolveError, solve_static
 
 #: default absolute tolerance per field, relative to rtol x the field's motion scale
@@ -51,6 +52,14 @@ class StaticOutcome:
     per_step: list[int]
     wall_time_s: float
     path: list[tuple[float, np.ndarray]] = field(default_factory=list)
+    #: per held end: the support's "force" (N) and "moment" (N m, about the node), spatial
+    reactions: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
+    #: director frames (3, 3) at s = 0 ("start") and s = L ("end")
+    end_frames: dict[str, np.ndarray] = field(default_factory=dict)
+    #: the gauge that held free rigid motions (runtime.model.rigid), in words, or None
+    gauge: str | None = None
+    #: for a rod held at both ends: the node that moved most (largest_displacement)
+    largest: dict | None = None
 
     def path_table(self) -> list[dict]:
         return load_path_table(self.path)
@@ -84,6 +93,11 @@ class SimulationResult:
     external_work: np.ndarray = field(default_factory=lambda: np.zeros(0))
     peaks_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
     peaks_x: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    #: per held end ("start", "end"): the support's "force" (N) and "moment" (N m, about
+    #: the held node) on the rod, spatial, (3, n) on the output grid (inertia included)
+    reactions: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
+    #: unit quaternions (4, n) of the frames at s = 0 ("start") and s = L ("end")
+    end_quaternions: dict[str, np.ndarray] = field(default_factory=dict)
     counters: dict[str, int] = field(default_factory=dict)
     wall_time_s: float = 0.0
     t_last: float = 0.0
@@ -119,6 +133,60 @@ class SimulationResult:
             return 0.0
         idx = _maxima_indices(self.model, self.problem.analysis.maxima)[0]
         return 1e3 * float(np.broadcast_to(self.atol, (self.model.n,))[idx])
+
+    def end_frames(self) -> dict[str, np.ndarray]:
+        """Director frames (n, 3, 3) (columns d1, d2, d3) at s = 0 and s = L."""
+        return {end: quat_rotation(q.T) for end, q in self.end_quaternions.items()}
+
+    def end_rotations(self) -> dict[str, np.ndarray]:
+        """Rotation vectors (3, n) (rad, spatial: angle times axis) that take each end's
+        reference frame to its frame at the output times."""
+        if self.model is None or not self.end_quaternions:
+            return {}
+        ref = reference_end_quaternions(self.model)
+        conj = np.array([1.0, -1.0, -1.0, -1.0])
+        return {end: quat_log(quat_mul(q.T, ref[end] * conj)).T
+                for end, q in self.end_quaternions.items()}
+
+    def input_warnings(self) -> list[str]:
+        """Doubts about how the run saw its inputs and its outputs: loads or end motion
+        that acted but left no measurable energy, an output step too coarse for the first
+        mode, a requested peak analysis that found no maxima (and why)."""
+        out = []
+        p = self.problem
+        if self.t.size < 2:
+            return out
+        inputs = any(any(ld.vector) for ld in p.loads) or any(
+            e.motion is not None and e.motion.moves for e in (p.start, p.end))
+        if inputs and not self.audit().applicable:
+            out.append("loads or end motion act in this problem, but the rod stored no "
+                       "measurable energy: an input may be too short or too weak to "
+                       "resolve; the energy audit is not applicable")
+        omega = p.characteristic_frequency()
+        dt = p.simulation.output_step
+        if math.isfinite(omega) and omega > 0.0:
+            per = 2.0 * math.pi / omega / dt
+            if per < 20.0 and p.simulation.t_end > 2.0 * math.pi / omega:
+                out.append(f"the output step {dt:g} s gives {per:.3g} samples per period of "
+                           f"the first bending mode (about {2 * math.pi / omega:.3g} s): "
+                           f"the series are coarse; set simulation.output_step <= "
+                           f"{2 * math.pi / omega / 20:.3g} s for 20 (maxima and decrements "
+                           "come from the integrator's interpolant and are not affected)")
+        which = p.analysis.maxima
+        if which and self.peaks_x.size == 0 and self.status == "finished":
+            ser = self.tip if which.startswith("end") else self.start
+            c = "xyz".index(which.split(".")[1])
+            x0 = _reference_value(self, which)
+            d = ser[c] - x0
+            lo, hi = float(np.min(d)), float(np.max(d))
+            why = (f"its displacement from the reference stays <= 0 (between {lo:.3g} and "
+                   f"{hi:.3g} m) and only maxima of a positive displacement are counted"
+                   if hi <= 0.0 else
+                   f"it moves between {lo:.3g} and {hi:.3g} m from the reference without "
+                   "turning back (no velocity sign change from + to -)")
+            out.append(f"analysis.maxima = {which!r} found no maxima: {why}; choose the "
+                       "component and the sign of the vibration whose decay you want")
+        return out
 
     def tolerance_warnings(self) -> list[str]:
         """Doubts about the tolerances: a user's atol that is not small against the
@@ -160,6 +228,7 @@ class SimulationResult:
         audit = self.audit()
         warnings += audit.warnings
         warnings += self.tolerance_warnings()
+        warnings += self.input_warnings()
         st = self.static
         return {
             "status": self.status,
@@ -175,17 +244,63 @@ class SimulationResult:
                 "newton_iterations_per_load_step": [] if st is None else list(st.per_step),
                 "wall_time_s": 0.0 if st is None else st.wall_time_s,
                 "path": [] if st is None else st.path_table(),
+                "gauge": None if st is None else st.gauge,
+                "largest_displacement": None if st is None else st.largest,
             },
             **pk,
             "energy_balance_max_rel": audit.max_rel,
             "energy_audit": {"applicable": audit.applicable, "max_rel": audit.max_rel,
                              "scale_J": audit.scale, "note": audit.reason},
+            "reactions": self.reaction_summary(),
+            "end_rotation": {end: {"rotation_vector": [float(v) for v in r[:, -1]],
+                                   "angle_deg": float(np.degrees(np.linalg.norm(r[:, -1])))}
+                             for end, r in self.end_rotations().items() if r.size},
             "warnings": warnings,
             "t_reached": float(self.t_last),
             "wall_time_s": self.wall_time_s,
             "counters": dict(self.counters),
             "backend": None if self.model is None else self.model.backend,
         }
+
+
+    def reaction_summary(self) -> dict:
+        """Per held end: the support's force and moment at the last output time and their
+        largest magnitudes over the run (with their times); plus the static ones."""
+        out: dict = {}
+        for end, r in self.reactions.items():
+            e: dict = {}
+            for what, v in r.items():
+                if v.shape[1] == 0:
+                    continue
+                mag = np.linalg.norm(v, axis=0)
+                k = int(np.argmax(mag))
+                e[what] = {"final": [float(x) for x in v[:, -1]], "max_norm": float(mag[k]),
+                           "t_of_max": float(self.t[k])}
+            out[end] = e
+        if self.static is not None and self.static.reactions:
+            out["static"] = {end: {w: [float(x) for x in v] for w, v in r.items()}
+                             for end, r in self.static.reactions.items()}
+        return out
+
+
+def _reference_value(res: SimulationResult, which: str) -> float:
+    ix = _maxima_indices(res.model, which)[0]
+    return float(res.model.reference[ix])
+
+
+def reference_end_quaternions(model: RodModel) -> dict[str, np.ndarray]:
+    """Unit quaternions (4,) of the end frames of the stress-free reference (for clamped
+    ends: the clamp frames without their motion)."""
+    idx = model.end_segments()
+    y = model.reference
+    with model.statics():
+        model.load_scale, scale = 0.0, model.load_scale
+        try:
+            model.at(0.0)
+            q = model.end_quaternions(np.zeros(1), y[idx["first"]][None], y[idx["last"]][None])
+        finally:
+            model.load_scale = scale
+    return {end: v[0] for end, v in q.items()}
 
 
 def _maxima_indices(model: RodModel, which: str) -> tuple[int, int]:
@@ -244,6 +359,10 @@ def _linear_response(problem: Problem) -> tuple[float, float]:
     st = RodStatics(model)
     with model.statics():
         y = model.initial_state()
+        try:     # free rigid motions without load along them: held by a gauge
+            st.hold_rigid_motions(y)
+        except ValueError:   # loads along them, or too soft: no linear response
+            return problem.rod.length, math.pi
         r = np.empty(st.n_static)
         st.static_residual(y, r)
         try:
@@ -309,37 +428,55 @@ def static_equilibrium(problem: Problem, model: RodModel) -> StaticOutcome:
     Returns
     -------
     StaticOutcome
-        State ``y``, end position ``tip`` (m), Newton iterations, the load path.
+        State ``y``, end position ``tip`` (m), Newton iterations, the load path, the
+        gauge, and for a rod held at both ends the largest displacement.
 
     Raises
     ------
     StaticSolveError
         No equilibrium found; it carries the last converged state and the load path.
+    IllPosedError
+        Before any work: the loads act along a rigid motion the supports leave free, or
+        the rod is too soft for them (``RodStatics.hold_rigid_motions``). Free rigid
+        motions without load along them are held by a gauge (``StaticOutcome.gauge``).
     """
     wall0 = time.perf_counter()
     st = RodStatics(model)
     path: list[tuple[float, np.ndarray]] = []
     with model.statics():
+        y0 = model.initial_state()
+        gauge = st.hold_rigid_motions(y0)     # IllPosedError before any work
         try:
-            res = solve_static(st, model.initial_state(),
-                               load_steps=problem.statics.load_steps,
+            res = solve_static(st, y0, load_steps=problem.statics.load_steps,
                                stations=problem.statics.report + (1.0,),
                                on_station=lambda lam, y: path.append(
                                    (lam, model.tip_position(y))))
+            doubt = None if gauge is None else gauge.doubt(st, res.y)
+            if doubt is not None:
+                raise StaticSolveError(f"solve_static: {doubt}", y=res.y, load_scale=1.0,
+                                       iterations=res.iterations,
+                                       residual_norm=res.residual_norm)
         except StaticSolveError as exc:
             exc.path = path   # the stations reached before the failure are kept
             raise
+        reactions = model.reactions(0.0, res.y)
+        frames = model.end_frames(0.0, res.y)
+    both_held = problem.start.held and problem.end.held
     return StaticOutcome(y=res.y.copy(), tip=model.tip_position(res.y),
                          iterations=res.total_iterations, per_step=list(res.iterations),
-                         wall_time_s=time.perf_counter() - wall0, path=path)
+                         wall_time_s=time.perf_counter() - wall0, path=path,
+                         reactions=reactions, end_frames=frames,
+                         gauge=None if gauge is None else gauge.describe(),
+                         largest=largest_displacement(model, res.y) if both_held else None)
 
 
 def simulate(problem: Problem, *, progress: Callable[[float], object] | None = None,
              checkpoint: Callable[[dict], object] | None = None,
              checkpoint_every: float = 1.0, resume: dict | None = None,
              snapshot_every: float | None = None,
-             snapshot_sink: Callable[[float, np.ndarray], object] | None = None,
-             max_steps: int = 2_000_000, backend: str = "auto") -> SimulationResult:
+             snapshot_sink: Callable[[float, np.ndarray, np.ndarray], object] | None = None,
+             max_steps: int = 2_000_000, backend: str = "auto",
+             model: RodModel | None = None) -> SimulationResult:
     """Run a problem: static equilibrium (if ``simulation.initial = "static"``), then the
     BDF integration with energy audit, outputs and maxima (see the module docstring).
 
@@ -359,14 +496,17 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
     resume : dict, optional
         A checkpoint's state to continue from.
     snapshot_every : float, optional
-        Full states every this many seconds, handed to ``snapshot_sink(t, y)`` (default:
-        kept in ``result.snapshots``).
+        Full states every this many seconds, handed to ``snapshot_sink(t, y, yp)``
+        (default: kept in ``result.snapshots`` as ``(t, y, yp)``).
     snapshot_sink : callable, optional
         Receives the snapshots.
     max_steps : int
         Give up after this many steps.
     backend : {"auto", "c", "casadi"}
         As in :func:`~runtime.problem.assemble.build_model`.
+    model : RodModel, optional
+        The problem's model when the caller built it already (e.g. for VTK output); it
+        is driven by this run.
 
     Returns
     -------
@@ -379,12 +519,17 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
     sim = problem.simulation
     res = SimulationResult(problem=problem)
     wall0 = time.perf_counter()
-    model = build_model(problem, backend=backend)
+    if model is None:
+        model = build_model(problem, backend=backend)
     res.model = model
     t_out = np.arange(0.0, sim.t_end + 0.5 * sim.output_step, sim.output_step)
     t_out = t_out[t_out <= sim.t_end]
     energy = EnergyIntegrator(model)
-    sampler = Sampler(model, energy, t_out, model.phi_index[-1], model.phi_index[0])
+    ends = model.end_segments()
+    sampler = Sampler(model, energy, t_out,
+                      {"tip": model.phi_index[-1], "start": model.phi_index[0],
+                       "p_first": ends["first"], "p_last": ends["last"]},
+                      n_extras=len(model.reaction_names))
     observers: list = [sampler, energy]
     maxima = None
     if problem.analysis.maxima:
@@ -393,7 +538,7 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
         observers.append(maxima)
     if snapshot_every is not None:
         observers.append(Snapshots(snapshot_every, snapshot_sink or (
-            lambda t, y: res.snapshots.append((t, y)))))
+            lambda t, y, yp: res.snapshots.append((t, y, yp)))))
     if progress is not None:
         observers.append(Progress(progress))
     counters0: dict[str, int] = {}
@@ -410,10 +555,12 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
             y0 = model.relaxed(res.static.y)   # a held load has let every term relax
         else:
             y0 = model.initial_state(0.0)
+        model.enter_piece(0.0, math.inf)          # the inputs from the right at t = 0
         model.at(0.0)
         if getattr(model.drive, "moving_ends", False):  # held ends at their t = 0 motion
             y0 = model.constrain(y0)
         y0, yp0 = consistent_initial(model, 0.0, y0, np.zeros(model.n))
+        yp0 = model.prescribed_rates(0.0, yp0)
         t_start = 0.0
     else:
         t_start, y0, yp0 = float(resume["t"]), np.array(resume["y"]), np.array(resume["yp"])
@@ -450,6 +597,18 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
     res.t_last, res.y_last, res.counters = out.t_last, out.y_last, out.counters
     a = sampler.arrays()
     res.t, res.tip, res.start = a["t"], a["tip"], a["start"]
+    names = model.reaction_names
+    held_at = getattr(model.drive, "held_positions", None)
+    for end, i, series in (("start", 0, res.start), ("end", model.N, res.tip)):
+        if i in model.held_nodes and held_at is not None and res.t.size:
+            series[:] = held_at(end, res.t)        # exact: the steps hold them at r(t)
+        if i in model.held_nodes:
+            res.reactions[end] = {
+                what: a["extras"][[names.index(f"{end}_{what}_{c}") for c in "xyz"]]
+                for what in ("force", "moment")}
+    if res.t.size:
+        q = model.end_quaternions(res.t, a["p_first"].T, a["p_last"].T)
+        res.end_quaternions = {end: v.T for end, v in q.items()}
     res.kinetic, res.elastic = a["kinetic"], a["elastic"]
     res.dissipated, res.external_work = a["dissipated"], a["external_work"]
     if maxima is not None:

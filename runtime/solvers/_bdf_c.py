@@ -525,7 +525,9 @@ class CoreStruct(ctypes.Structure):
     _I, _P, _D, _L = ctypes.c_int, ctypes.c_void_p, ctypes.c_double, ctypes.c_longlong
     _fields_ = (
         _fields(_I, "n", "kl", "ku", "ldab")
-        + _fields(_P, "res", "jac", "en", "ctx", "drive")
+        + _fields(_P, "res", "jac", "en")
+        + _fields(_I, "nen")
+        + _fields(_P, "ctx", "drive")
         + _fields(_D, "drive_lo", "drive_hi", "drive_t")
         + _fields(_P, "cond", "phi", "y", "yp", "yy", "ypw", "ee", "res_v", "tmp", "ewt",
                   "ewt_err", "errmask", "atol", "ab", "ipiv", "prof")
@@ -536,7 +538,7 @@ class CoreStruct(ctypes.Structure):
         + _fields(_D, "hh", "hused", "cj", "cjold", "cjlast", "cjratio", "ss", "oldnrm",
                   "rr", "t", "t_old")
         + _fields(_I, "started")
-        + _fields(_L, "nstep", "nfev", "njev", "nlu", "nni", "netf", "ncfn")
+        + _fields(_L, "nstep", "nfev", "njev", "nlu", "nni", "netf", "ncfn", "nst0")
         + _fields(_I, "fail_index", "fail_count", "fail_nflag")
         + _fields(_D, "fail_t")
         + _fields(_I, "nwatch")
@@ -555,6 +557,8 @@ class CoreStruct(ctypes.Structure):
         + _fields(_I, "stop")
         + _fields(_P, "jac_cells", "jwin")
         + _fields(_I, "jwin_cols", "jchunk")
+        + _fields(_I, "nexact")
+        + _fields(_P, "exact", "exact_res")
     )
     #: names of the entries of ``sec`` (seconds per part when ``timing`` is set)
     SECTIONS = ("residual", "jacobian", "lu", "newton_solve_update", "energies", "drive")

@@ -271,6 +271,7 @@ class BDF:
 
         self.nstep = self.nfev = self.njev = self.nlu = 0
         self.nni = self.netf = self.ncfn = 0
+        self._nst0 = 0  # nstep at the last (re)start (IDA's first-step logic counts from it)
 
         # Work arrays (all allocated once).
         mo = self.max_order
@@ -283,6 +284,11 @@ class BDF:
         self._res = np.empty(n)
         self._tmp = np.empty(n)
         self._ewt = np.empty(n)
+        #: rows F_i = y_i - g_i(t) of prescribed unknowns (``problem.exact_rows``,
+        #: optional): their Newton corrections are taken unscaled (bdf_core.c, kv_ida)
+        self._exact = np.ascontiguousarray(getattr(problem, "exact_rows", ()),
+                                           dtype=np.int32).ravel()
+        self._exact_res = np.zeros(max(self._exact.size, 1))
         diff = np.asarray(problem.differential, dtype=bool)
         self._errmask = diff.astype(float) if self.suppress_alg else None
         self._ewt_err = np.empty(n) if self.suppress_alg else self._ewt
@@ -345,6 +351,15 @@ class BDF:
         if not np.all(np.isfinite(self._res)):
             self._raise_nonfinite(self.t, self._y, self._yp, 0.0)
 
+        self._start_history(first_step)
+        # The compiled step loop (runtime/solvers/bdf_core.c), from this state on.
+        self._core = (CoreLink(self._c, self)
+                      if self._c is not None and compiled_loop and n > 0 else None)
+
+    def _start_history(self, first_step: float | None) -> None:
+        """IDA's start (IDAInitialSetup and the first step's h): order 1, history
+        ``phi = [y, h y']`` from the current ``t, y, y'``; the first step ``first_step``
+        or, by IDA's rule, ``0.001 (t_bound - t)`` limited by ``0.5 / |y'|_wrms``."""
         tdist = abs(self.t_bound - self.t)
         if self.fixed_step is not None:
             h = self.fixed_step
@@ -366,9 +381,6 @@ class BDF:
         np.multiply(self._yp, self._hh, out=self._phi[1])
         self._psi[0] = self._hh
         self._cj = 1.0 / self._hh
-        # The compiled step loop (runtime/solvers/bdf_core.c), from this state on.
-        self._core = (CoreLink(self._c, self)
-                      if self._c is not None and compiled_loop and n > 0 else None)
 
     # ------------------------------------------------------------------ public API
     @property
@@ -469,6 +481,61 @@ class BDF:
         effect without the compiled loop (which stops after every step anyway)."""
         if self._core is not None:
             self._core.set_watches(watches)
+
+    def extend(self, t_bound: float) -> None:
+        """Move the end of the integration to ``t_bound`` (in the same direction, not
+        behind ``t``): the steps go on with their history and land on it exactly. With
+        :meth:`restart`, what a run driver uses to stop at every breakpoint of its
+        inputs (IDA's ``IDASetStopTime``)."""
+        t_bound = float(t_bound)
+        if not math.isfinite(t_bound) or self.direction * (t_bound - self.t) < 0.0:
+            raise ParameterError("t_bound", t_bound, f"finite and not behind t = {self.t!r} "
+                                 "in the direction of integration")
+        self.t_bound = t_bound
+        self.status = "running" if t_bound != self.t else "finished"
+        if self._core is not None:
+            self._core.s.t_bound = t_bound
+
+    def set_max_step(self, max_step: float) -> None:
+        """Largest step size magnitude from now on (s)."""
+        if not max_step > 0.0:
+            raise ParameterError("max_step", max_step, "> 0")
+        self.max_step = float(max_step)
+        self._hmax_inv = 1.0 / self.max_step
+        if self._core is not None:
+            self._core.s.hmax_inv = self._hmax_inv
+        if abs(self._hh) > self.max_step:          # the next step obeys it at once
+            self._hh = math.copysign(self.max_step, self._hh)
+            if self._core is not None:
+                self._core.s.hh = self._hh
+
+    def restart(self, y: np.ndarray, yp: np.ndarray, first_step: float | None = None) -> None:
+        """Start afresh at the current ``t`` from consistent ``y, y'`` (order 1, a new
+        history, a new Jacobian), as IDA does after ``IDAReInit``: at an input's
+        breakpoint where a load, a prescribed motion or its rate jumps, the history
+        before it does not describe the solution after it. The counters go on;
+        ``first_step``: as in the constructor (default: IDA's rule)."""
+        y = np.asarray(y, dtype=float)
+        yp = np.asarray(yp, dtype=float)
+        if y.shape != (self.n,) or yp.shape != (self.n,):
+            raise ValueError(f"y and yp must have shape ({self.n},), got {y.shape}, "
+                             f"{yp.shape}")
+        if not (np.all(np.isfinite(y)) and np.all(np.isfinite(yp))):
+            raise ValueError("y and yp must be finite")
+        if self.status == "failed":
+            raise RuntimeError("Attempt to restart a failed solver.")
+        self._y[:] = y
+        self._yp[:] = yp
+        self._kk, self._kused, self._knew = 1, 0, 1
+        self._hused, self._ns, self._phase = 0.0, 0, 0
+        self._cjold = self._cjlast = 0.0
+        self._cjratio, self._ss, self._oldnrm, self._rr = 1.0, 20.0, 0.0, 1.0
+        self._have_lu = False
+        self._nst0 = self.nstep
+        self._update_weights()
+        self._start_history(first_step)
+        if self._core is not None:
+            self._core.push(self)
 
     def _advance_core(self, t_stop: float, max_steps: int) -> int:
         core = self._core
@@ -627,7 +694,7 @@ class BDF:
     def _nls(self, tnew: float) -> int:
         """Corrector: simplified Newton for the correction ``ee``; _OK or _CONV_FAIL."""
         call_setup = False
-        if self.nstep == 0 and not self._have_lu:
+        if self.nstep == self._nst0 and not self._have_lu:
             self._cjold = self._cj
             self._ss = 20.0
             call_setup = True
@@ -668,7 +735,10 @@ class BDF:
             scale = 2.0 / (1.0 + self._cjratio) if self._cjratio != 1.0 else 1.0
             ipiv = self._ipiv
             m = 0
+            exact, exact_res = self._exact, self._exact_res
             while True:
+                if exact.size:
+                    exact_res[:exact.size] = res[exact]
                 if cond is not None:
                     delnrm = clib.kv_cond_newton(cond_ptr, p_ab, p_res, scale, p_ewt, p_ee,
                                                  self._p_yy, self._p_ypw, cj)
@@ -690,6 +760,8 @@ class BDF:
                     yy -= res
                     np.multiply(res, cj, out=tmp)
                     ypw -= tmp
+                if exact.size:
+                    self._exact_rows_finish(scale)
                 self.nni += 1
                 if m == 0:
                     self._oldnrm = delnrm
@@ -714,6 +786,17 @@ class BDF:
             if jcur:
                 return _CONV_FAIL
             call_setup = True
+
+    def _exact_rows_finish(self, scale: float) -> None:
+        """After a Newton update: the part (1 - scale) F_i of the exact rows' corrections
+        that the scale left out (as ``exact_rows_finish`` in bdf_core.c)."""
+        if scale == 1.0:
+            return
+        for k, i in enumerate(self._exact):
+            d = (1.0 - scale) * self._exact_res[k]
+            self._ee[i] -= d
+            self._yy[i] -= d
+            self._ypw[i] -= self._cj * d
 
     def _test_error(self, ck: float) -> tuple[int, float, float, float]:
         """IDATestError: local error estimates at orders k, k-1, k-2 and the test."""
@@ -752,7 +835,7 @@ class BDF:
             # sliver of a step behind).
             remaining = self.t_bound - tn
             if self.direction * (self._hh - remaining) > -1e-8 * abs(self._hh):
-                if self.nstep == 0:
+                if self.nstep == self._nst0:
                     self._phi[1] *= remaining / self._hh
                     self._psi[0] = remaining
                 self._hh = remaining
@@ -777,7 +860,7 @@ class BDF:
             else:
                 nef += 1
             self._handle_failure(nflag, ncf, nef, err_k, err_km1)
-            if self.nstep == 0:
+            if self.nstep == self._nst0:
                 # IDAReset: rescale h*y'0 to the new step.
                 self._psi[0] = self._hh
                 self._phi[1] *= self._rr
@@ -831,14 +914,14 @@ class BDF:
         phi, ee = self._phi, self._ee
 
         if self.fixed_step is not None:
-            if self.nstep > 1 and kk < mo:
+            if self.nstep - self._nst0 > 1 and kk < mo:
                 self._kk = kk + 1
             self._hh = self.direction * self.fixed_step
         else:
             if self._knew == kk - 1 or kk == mo:
                 self._phase = 1
             if self._phase == 0:
-                if self.nstep > 1:
+                if self.nstep - self._nst0 > 1:
                     self._kk = kk + 1
                     hnew = 2.0 * self._hh
                     tmp = abs(hnew) * self._hmax_inv

@@ -35,7 +35,8 @@ typedef int (*kv_drive_fn)(double t);
 
 #define KV_MAXORD 5
 #define KV_NH (KV_MAXORD + 2)
-#define KV_NEN 5            /* energies of a state: T, W, 2D, P_ext, P_bc */
+#define KV_NEN 5            /* energies of a state: T, W, 2D, P_ext, P_bc (then extras) */
+#define KV_MAXEN 32         /* most values per state the energies may return (nen) */
 #define KV_MAXWATCH 8
 
 /* IDA's constants (bdf.py) */
@@ -59,6 +60,8 @@ typedef struct {
     kv_res_fn res;
     kv_jac_fn jac;
     kv_en_fn en;                /* NULL: no audit in C */
+    int nen;                    /* values per state of en: KV_NEN, then extras sampled
+                                   with the outputs (e.g. the supports' reactions) */
     const void *ctx;
     kv_drive_fn drive;          /* NULL: loads never change */
     double drive_lo, drive_hi;  /* the loads are constant for t in [lo, hi) (drive writes) */
@@ -79,6 +82,8 @@ typedef struct {
     int started;                /* an accepted step exists (t_old valid) */
     /* counters */
     long long nstep, nfev, njev, nlu, nni, netf, ncfn;
+    long long nst0;             /* nstep at the last (re)start: the first step after a
+                                   restart is IDA's first step (nstep - nst0 == 0) */
     /* failure report: the component blamed, the counts, the kind of the last failure */
     int fail_index, fail_count, fail_nflag;
     double fail_t;              /* time of the attempted point (non-finite values) */
@@ -115,6 +120,14 @@ typedef struct {
     kv_jac_cells_fn jac_cells;
     double *jwin;
     int jwin_cols, jchunk;
+    /* rows F_i = y_i - g_i(t) of prescribed unknowns (a held end's position and velocity):
+       their Newton corrections are taken unscaled, so that they hold to round-off at
+       every step (IDA scales the simplified Newton's corrections by 2/(1 + cj/cj_old)
+       when cj changed, which would leave them at the Newton tolerance); exact_res holds
+       their residuals across the solve */
+    int nexact;
+    const int *exact;
+    double *exact_res;
 } kv_ida;
 
 enum { SEC_RES, SEC_JAC, SEC_LU, SEC_NEWTON, SEC_EN, SEC_DRIVE };
@@ -208,7 +221,7 @@ static int call_en(kv_run *R, int m, const double *ts, const double *ys, const d
         TIC(S);
         USER_MODE(R);
         rc = S->en(S->ctx, 1, ts + i, ys + (size_t)i * S->n, yps + (size_t)i * S->n,
-                   out + (size_t)i * KV_NEN);
+                   out + (size_t)i * S->nen);
         CORE_MODE(R);
         TOC(S, SEC_EN);
     }
@@ -396,12 +409,32 @@ static int setup(kv_run *R, double t)
     return info == 0;
 }
 
+/* the exact rows (see kv_ida.exact): their residuals before the solve, and after it the
+   part of their correction that the scale left out, (1 - scale) F_i, so that the
+   correction is F_i itself (the rows are identities: the solve gives scale F_i) */
+static void exact_rows_keep(kv_ida *S)
+{
+    for (int k = 0; k < S->nexact; ++k) S->exact_res[k] = S->res_v[S->exact[k]];
+}
+
+static void exact_rows_finish(kv_ida *S, double scale)
+{
+    if (scale == 1.0) return;
+    for (int k = 0; k < S->nexact; ++k) {
+        const int i = S->exact[k];
+        const double d = (1.0 - scale) * S->exact_res[k];
+        S->ee[i] -= d;
+        S->yy[i] -= d;
+        S->ypw[i] -= S->cj * d;
+    }
+}
+
 static int nls(kv_run *R, double tnew)   /* IDANls: simplified Newton for ee */
 {
     kv_ida *S = R->S;
     const int n = S->n;
     int call_setup = 0;
-    if (S->nstep == 0 && !S->have_lu) {
+    if (S->nstep == S->nst0 && !S->have_lu) {
         S->cjold = S->cj;
         S->ss = 20.0;
         call_setup = 1;
@@ -432,6 +465,7 @@ static int nls(kv_run *R, double tnew)   /* IDANls: simplified Newton for ee */
         int m = 0;
         for (;;) {
             double delnrm;
+            exact_rows_keep(S);
             TIC(S);
             if (S->cond)
                 delnrm = kv_cond_newton(S->cond, S->ab, S->res_v, scale, S->ewt, S->ee,
@@ -440,6 +474,7 @@ static int nls(kv_run *R, double tnew)   /* IDANls: simplified Newton for ee */
                 delnrm = kv_newton(n, S->kl, S->ku, S->ab, S->ldab, S->ipiv, S->prof,
                                    S->res_v, scale, S->ewt, S->ee, S->yy, S->ypw, cj);
             TOC(S, SEC_NEWTON);
+            exact_rows_finish(S, scale);
             if (!isfinite(delnrm)) { S->fail_t = tnew; return NLS_NONFINITE; }
             S->nni++;
             if (m == 0) {
@@ -547,12 +582,12 @@ static void complete_step(kv_ida *S, double tnew, double err_k, double err_km1)
     S->hused = S->hh;
     double *ee = S->ee;
     if (S->fixed_step > 0.0) {
-        if (S->nstep > 1 && kk < mo) S->kk = kk + 1;
+        if (S->nstep - S->nst0 > 1 && kk < mo) S->kk = kk + 1;
         S->hh = S->direction * S->fixed_step;
     } else {
         if (S->knew == kk - 1 || kk == mo) S->phase = 1;
         if (S->phase == 0) {
-            if (S->nstep > 1) {
+            if (S->nstep - S->nst0 > 1) {
                 S->kk = kk + 1;
                 double hnew = 2.0 * S->hh;
                 double tmp = fabs(hnew) * S->hmax_inv;
@@ -637,7 +672,7 @@ static int step(kv_run *R)
     for (;;) {
         const double remaining = S->t_bound - tn;
         if (S->direction * (S->hh - remaining) > -1e-8 * fabs(S->hh)) {
-            if (S->nstep == 0) {
+            if (S->nstep == S->nst0) {
                 double f = remaining / S->hh, *p = PHI(1);
                 for (int q = 0; q < S->n; ++q) p[q] *= f;
                 S->psi[0] = remaining;
@@ -664,7 +699,7 @@ static int step(kv_run *R)
         else nef++;
         int rc = handle_failure(S, nflag, ncf, nef, err[0], err[1]);
         if (rc) return rc;
-        if (S->nstep == 0) {          /* IDAReset: rescale h y'0 to the new step */
+        if (S->nstep == S->nst0) {    /* IDAReset: rescale h y'0 to the new step */
             S->psi[0] = S->hh;
             double *p = PHI(1);
             for (int q = 0; q < S->n; ++q) p[q] *= S->rr;
@@ -686,14 +721,14 @@ static int audit_step(kv_run *R)
     kv_ida *S = R->S;
     const double t0 = S->t_old, t1 = S->t, h = t1 - t0;
     if (h == 0.0) return 0;
-    double tq[3], e[3 * KV_NEN];
+    double tq[3], e[3 * KV_MAXEN];
     for (int j = 0; j < 3; ++j) tq[j] = t0 + h * S->gl_x[j];
     interp(S, 3, tq, S->wy, S->wyp);
     if (call_en(R, 3, tq, S->wy, S->wyp, e)) return 1;
     double g[3][2];
     for (int j = 0; j < 3; ++j) {
-        g[j][0] = e[j * KV_NEN + 2];
-        g[j][1] = e[j * KV_NEN + 3] + e[j * KV_NEN + 4];
+        g[j][0] = e[j * S->nen + 2];
+        g[j][1] = e[j * S->nen + 3] + e[j * S->nen + 4];
     }
     for (int r = 0; r < 3; ++r)          /* coef = FIT @ g, row r of FIT */
         for (int c = 0; c < 2; ++c)
@@ -717,7 +752,7 @@ static int sample_step(kv_run *R)
     kv_ida *S = R->S;
     const double t1 = S->t, slack = 1e-12 * (fabs(t1) > 1.0 ? fabs(t1) : 1.0);
     while (S->k_out < S->m_out && S->t_out[S->k_out] <= t1 + slack) {
-        double ts = S->t_out[S->k_out] < t1 ? S->t_out[S->k_out] : t1, e[KV_NEN], d, w;
+        double ts = S->t_out[S->k_out] < t1 ? S->t_out[S->k_out] : t1, e[KV_MAXEN], d, w;
         interp(S, 1, &ts, S->sy, S->syp);
         if (call_en(R, 1, &ts, S->sy, S->syp, e)) return 1;
         partial(S, ts, &d, &w);
@@ -734,6 +769,7 @@ static int sample_step(kv_run *R)
         row[2 + S->nsamp] = e[1];
         row[3 + S->nsamp] = S->dissipated + d;
         row[4 + S->nsamp] = S->external_work + w;
+        for (int k = KV_NEN; k < S->nen; ++k) row[k + S->nsamp] = e[k];
         S->k_out++;
     }
     return 0;

@@ -91,6 +91,7 @@ class CoreLink:
         kern: CKernels | None = get() if get is not None else None
         if kern is not None:
             s.res, s.jac, s.en, s.ctx = kern.residual, kern.jacobian, kern.energies, kern.ctx
+            s.nen = kern.n_energies
             self._keep.append(kern.keep)
             self.has_energies = bool(kern.energies)
             if kern.drive is not None and not kern.drive_constant:
@@ -103,6 +104,7 @@ class CoreLink:
         else:
             self._python_functions(problem)
             self.has_energies = False
+            s.nen = 5
         s.drive_t = math.nan
         s.cond = solver._cond.ptr if solver._cond is not None else None
         if kern is not None and kern.jacobian_cells and solver._cond is not None \
@@ -113,6 +115,8 @@ class CoreLink:
         s.y, s.yp, s.yy, s.ypw = p(solver._y), p(solver._yp), p(solver._yy), p(solver._ypw)
         s.ee, s.res_v, s.tmp, s.ewt = p(solver._ee), p(solver._res), p(solver._tmp), p(solver._ewt)
         s.ewt_err = p(solver._ewt_err)
+        s.nexact, s.exact = solver._exact.size, p(solver._exact)
+        s.exact_res = p(solver._exact_res)
         s.errmask = p(solver._errmask)
         s.atol = p(solver.atol)
         s.ab, s.ipiv, s.prof = p(solver._ab), p(solver._ipiv), p(solver._prof)
@@ -201,6 +205,8 @@ class CoreLink:
         s.t_old = solver.t_old if solver.t_old is not None else solver.t
         for name in self._COUNTERS:
             setattr(s, name, getattr(solver, name))
+        s.nst0 = solver._nst0
+        s.t_bound, s.hmax_inv = solver.t_bound, solver._hmax_inv
         for name in ("psi", "alpha", "beta", "sigma", "gamma"):
             vals = getattr(solver, "_" + name)
             arr = getattr(s, name)
@@ -278,15 +284,16 @@ class CoreLink:
 
     def enable_sampling(self, t_out: np.ndarray, k_out: int, indices: np.ndarray,
                         sink) -> bool:
-        """Record rows ``[t, y[indices]..., T, W, int 2D, int P]`` at the output times
-        ``t_out[k_out:]`` (needs the audit); ``sink(rows)`` receives them (a view: copy
+        """Record rows ``[t, y[indices]..., T, W, int 2D, int P, extras...]`` at the output
+        times ``t_out[k_out:]`` (needs the audit; extras: the energies' values beyond the
+        first five, ``CKernels.n_energies``); ``sink(rows)`` receives them (a view: copy
         what you keep) when the buffer is full and at :meth:`flush_samples`."""
         s = self.s
         if not s.audit:
             return False
         self._t_out = np.ascontiguousarray(t_out, dtype=float)
         self._idx = np.ascontiguousarray(indices, dtype=np.int32)
-        self._rec = np.full((self.SAMPLE_ROWS, 5 + self._idx.size), math.nan)
+        self._rec = np.full((self.SAMPLE_ROWS, s.nen + self._idx.size), math.nan)
         self._sink = sink
         self._sy, self._syp = np.zeros(self._solver.n), np.zeros(self._solver.n)
         s.t_out, s.samp_idx, s.rec = (self._t_out.ctypes.data, self._idx.ctypes.data,

@@ -167,12 +167,18 @@ class CKernels:
 
     ``drive_constant``: the loads do not change with t (``drive`` returns an unbounded
     interval); the step loop then drives once from Python before each run and never
-    calls back into Python for it."""
+    calls back into Python for it.
+
+    ``n_energies``: values per state the energies return (at least 5: T, W, 2D, P_ext,
+    P_bc; the extras, e.g. the supports' reactions, are sampled with the outputs)."""
 
     def __init__(self, residual: int, jacobian: int, energies: int, ctx: int,
                  drive=None, keep: Any = None, jacobian_cells: int = 0,
-                 drive_constant: bool = False) -> None:
+                 drive_constant: bool = False, n_energies: int = 5) -> None:
         self.residual, self.jacobian, self.energies, self.ctx = residual, jacobian, energies, ctx
+        if not 5 <= n_energies <= 32:
+            raise ValueError(f"n_energies = {n_energies}: 5 ... 32 values per state")
+        self.n_energies = int(n_energies)
         self.jacobian_cells = jacobian_cells
         self.drive_constant = drive_constant
         self.drive = drive

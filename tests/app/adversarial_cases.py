@@ -689,6 +689,42 @@ def json_is(name: str, pred: Callable[[dict], bool], what: str) -> Check:
     return check
 
 
+def stdout_has(*words: str) -> Check:
+    def check(ctx: Ctx, r: Result) -> str | None:
+        missing = [w for w in words if w not in r.stdout]
+        return f"stdout lacks {missing}" if missing else None
+    return check
+
+
+def stdout_lacks(*words: str) -> Check:
+    def check(ctx: Ctx, r: Result) -> str | None:
+        there = [w for w in words if w in r.stdout]
+        return f"stdout has {there}" if there else None
+    return check
+
+
+def _ss_reference() -> tuple[float, float]:
+    """Midspan sag (m) and first bending omega (rad/s) of examples/simply_supported.toml
+    (references/supported.py, from the file's numbers)."""
+    import tomllib
+
+    from references import examples as RX
+
+    doc = tomllib.loads((ROOT / "examples" / "simply_supported.toml").read_text())
+    ref = RX.simply_supported_reference(doc)
+    return ref["midspan"], float(ref["frequencies"]["bending-1"][0])
+
+
+SS = ("static", "simply_supported")
+SS_SAG, SS_OMEGA = _ss_reference()
+
+
+def _ss_modes_ok(d: dict) -> bool:
+    m0, m1 = d["modes"][0], d["modes"][1]
+    return (m0["family"] == "rigid" and m0["omega"] == 0 and m0["zeta"] is None
+            and m1["family"].startswith("bending") and abs(m1["omega"] / SS_OMEGA - 1) < 5e-3)
+
+
 def not_running(ctx: Ctx, r: Result) -> str | None:
     s = summary_of(ctx)
     if s is not None and s.get("status") == "running":
@@ -1206,6 +1242,37 @@ CASES: list[Case] = [
          (*SWEEP, *OUT), 2, ("tau", "tau_B"),
          (study('scenario = "cantilever"\n[fixed]\nn_elements = 4\nt_end = 0.2\ntau_B = 0.0\n'
                 "[grid]\ntau = [0.01, 0.02]\n"),), (ABSENT,)),
+    Case("static-simply-supported-solves-with-its-spin-gauged", "wrong_answer",
+         (*SS, *OUT), 0, (), (),
+         (status("finished"),
+          summary_is(lambda s: "spin" in s["static"]["gauge"]
+                     and s["static"]["largest_displacement"]["node"] == 32
+                     and abs(s["static"]["largest_displacement"]["magnitude"] / SS_SAG - 1)
+                     < 1e-2, "the spin gauged, the largest displacement at midspan within 1 % "
+                     "of 5 q L^4 / (384 E I) + q L^2 / (8 kGA)")),
+         note="issue 22: 'load stepping stalled ... singular Jacobian ... limit point'"),
+    Case("static-simply-supported-stdout-names-largest-displacement", "wrong_answer",
+         (*SS, *OUT), 0, (), (),
+         (stdout_has("largest displacement", "node 32"), stdout_lacks("static tip")),
+         note="issue 22: 'static tip [0.5, 0, 0]' (the held end)"),
+    Case("modes-simply-supported-rigid-spin-n64", "wrong_answer",
+         ("modes", "simply_supported", "--count", "3", *OUT), 0, (), (),
+         (json_is("modes.json", _ss_modes_ok, "mode 1 rigid (omega 0, zeta null), mode 2 "
+                  "bending within 0.5 % of the simply supported Timoshenko beam"),)),
+    Case("modes-simply-supported-rigid-spin-n256", "wrong_answer",
+         ("modes", "simply_supported", "--n-elements", "256", "--count", "3", *OUT), 0, (),
+         (), (json_is("modes.json", _ss_modes_ok, "mode 1 rigid, mode 2 bending within "
+                      "0.5 % of the simply supported Timoshenko beam"),),
+         note="issue 22: 'internal error: RuntimeError: Factor is exactly singular'"),
+    Case("modes-free-free-six-rigid", "wrong_answer",
+         ("modes", "simply_supported", "--set", "start.kind=free", "--set", "end.kind=free",
+          "--n-elements", "16", "--count", "8", *OUT), 0, (), (),
+         (json_is("modes.json", lambda d: [m["family"] for m in d["modes"][:6]]
+                  == ["rigid"] * 6 and all(m["omega"] == 0 and m["zeta"] is None
+                                          for m in d["modes"][:6])
+                  and all(m["family"].startswith("bending") and m["zeta"] is not None
+                          for m in d["modes"][6:]), "six rigid modes, then bending"),),
+         note="issue 22: rigid modes reported as 'axial' with zeta -0.089, -0.97, inf"),
     Case("modes-n80-count2-not-flaky", "wrong_answer",
          (), 0, (), (), (has("modes.json"),), mode="custom", run=run_modes_repeatedly,
          slow=True, note="issue: 'leading minor not positive definite' one run in three"),
@@ -1378,6 +1445,20 @@ CASES: list[Case] = [
     Case("simulate-E-1e-300", "message",
          (*SIM, "--E", "1e-300", *OUT), (1, 2), {1: ("fail",), 2: ("youngs_modulus",)}, (),
          (not_running,)),
+    Case("static-free-free-under-gravity-refused", "message",
+         (*SS, "--set", "start.kind=free", "--set", "end.kind=free", *OUT), 2,
+         ("free-free", "net force", "start.kind"), (), (ABSENT,),
+         note="issue 22: 'singular Jacobian ... may have a limit point'"),
+    Case("static-E-1e-300-says-double-precision", "message",
+         (*SS, "--E", "1e-300", *OUT), 2, ("youngs_modulus", "double precision"), (),
+         (ABSENT,), note="issue 22: 'singular Jacobian ... may have a limit point'"),
+    Case("static-horizontal-pendulum-refused", "message",
+         ("static", "pendulum", *OUT), 2, ("pinned start", 'start.kind = "clamped"'), (),
+         (ABSENT,)),
+    Case("static-sideways-sag-gauge-reacts-fails", "message",
+         (*SS, "--set", "section.height=0.02", "--set", "rod.geometry.normal=[0,0.6,0.8]",
+          *OUT), 1, ("fail", "gauge", "start.kind"), (),
+         (status("failed"), has("summary.json", "static.npz"))),
     Case("calibrate-binary-data-file-named", "message",
          ("calibrate", "--data", "{tmp}/garbage.csv", *OUT), 2, ("garbage.csv",),
          (write("garbage.csv", bytes(range(256)) * 8),), (ABSENT,)),

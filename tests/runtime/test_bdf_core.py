@@ -184,7 +184,7 @@ def test_observers_in_the_compiled_loop_give_the_python_series(name, overrides, 
     p = load_problem(name, overrides)
     snaps = {False: [], True: []}
     runs = {py: _simulate(p, py, monkeypatch, snapshot_every=0.25,
-                          snapshot_sink=lambda t, y, py=py: snaps[py].append((t, y)))
+                          snapshot_sink=lambda t, y, yp, py=py: snaps[py].append((t, y)))
             for py in (True, False)}
     a, b = runs[True], runs[False]
     assert a.status == b.status == "finished" and a.counters == b.counters
@@ -193,6 +193,12 @@ def test_observers_in_the_compiled_loop_give_the_python_series(name, overrides, 
     for key in ("kinetic", "elastic", "dissipated", "external_work"):
         x, y = getattr(a, key), getattr(b, key)
         np.testing.assert_allclose(y, x, rtol=1e-12, atol=1e-15 * np.abs(x).max()), key
+    assert a.reactions.keys() == b.reactions.keys() == {"start"}
+    for what in ("force", "moment"):
+        x, y = a.reactions["start"][what], b.reactions["start"][what]
+        np.testing.assert_allclose(y, x, rtol=1e-12, atol=1e-14 * np.abs(x).max())
+    for end in ("start", "end"):
+        assert np.array_equal(a.end_quaternions[end], b.end_quaternions[end])
     assert a.t.size == round(p.simulation.t_end / p.simulation.output_step) + 1
     assert [t for t, _ in snaps[True]] == [t for t, _ in snaps[False]]
     assert len(snaps[True]) == int(p.simulation.t_end / 0.25) + 1
