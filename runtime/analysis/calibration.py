@@ -492,10 +492,19 @@ def _fit(res: Callable[[float], np.ndarray], tau0: float, diff_step: float,
         nfev[0] += 1
         return res(float(p[0]))
 
-    tau0 = min(max(tau0, TAU_MIN), tau_max)
-    sol = least_squares(fun, x0=[tau0], bounds=([TAU_MIN], [tau_max]), method="trf",
-                        jac="2-point", diff_step=diff_step, x_scale=[tau0], xtol=xtol,
-                        ftol=ftol, gtol=1e-12, max_nfev=50)
+    x = min(max(tau0, TAU_MIN), tau_max)
+    # restarted from its own result until it stays put: a trust region that collapsed
+    # after an overshoot meets xtol far from the minimum (measured: the paper's record
+    # from tau0 = 42.8 ms stopped at 51.3 ms with a 95 % interval of +-0.15 ms, three
+    # times the residual of tau = 50 ms; the restart reaches 50.0 ms)
+    for _ in range(4):
+        sol = least_squares(fun, x0=[x], bounds=([TAU_MIN], [tau_max]), method="trf",
+                            jac="2-point", diff_step=diff_step, x_scale=[x], xtol=xtol,
+                            ftol=ftol, gtol=1e-12, max_nfev=50)
+        moved = abs(float(sol.x[0]) - x) > 10 * xtol * x
+        x = float(sol.x[0])
+        if not moved:
+            break
     return sol, nfev[0]
 
 
