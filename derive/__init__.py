@@ -5,13 +5,17 @@
 >>> steps()["dissipation"]       # a frozen Step record (LaTeX in Jupyter)
 
 Layering: derive may import SymPy, CasADi, Jinja2 and generated/, never runtime/.
+Importing this package imports no SymPy (it comes with the first derivation or cache read).
 """
 
 from __future__ import annotations
 
-from derive.formulas import formulas
-from derive.pipeline import PIPELINE, STEP_NAMES, UnknownStepError, run, step
-from derive.step import Step
+# Order matters: the submodules derive.step and derive.formulas are imported before the
+# functions of the same names are bound here (importing a submodule the first time sets
+# the package attribute to the module). None of these imports SymPy.
+from derive.step import Step  # isort: skip
+from derive.formulas import formulas  # isort: skip
+from derive.pipeline import PIPELINE, STEP_NAMES, UnknownStepError, run, step  # isort: skip
 
 
 def steps() -> dict[str, Step]:

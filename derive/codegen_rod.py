@@ -23,7 +23,7 @@ from pathlib import Path
 import casadi as ca
 import jinja2
 
-from derive import codegen_lanes
+from derive import cache, codegen_lanes
 from derive import discrete_rod as dr
 from derive.artifact import Artifact, sha256_text
 
@@ -60,9 +60,26 @@ def _build() -> tuple[list[ca.Function], str, str, tuple, tuple]:
         cg.generate(tmp + "/")
         c_text = (Path(tmp) / "rod_kernels.c").read_text()
         h_text = (Path(tmp) / "rod_kernels.h").read_text()
-    bands = tuple(dr.bandwidths(n) for n in (1, 2, 3, 4))
-    sbands = tuple(dr.static_bandwidths(n) for n in (1, 2, 3))
-    return fns, c_text, h_text, bands, sbands
+    bands = _band_data()
+    return fns, c_text, h_text, bands["bands"], bands["static"]
+
+
+def _band_data() -> dict:
+    """Band widths of the Jacobians for N = 1..4 (static: 1..3), the formula in the number
+    of branches and its N = 1 offset, as tuples. Pure functions of discrete_rod's layout
+    that take ~1.5 s of Python, so kept in the derivation cache (:func:`derive.cache.memo`,
+    keyed by derive/)."""
+
+    def compute() -> dict:
+        formula = dr.bandwidth_formula()
+        return {"bands": [dr.bandwidths(n) for n in (1, 2, 3, 4)],
+                "static": [dr.static_bandwidths(n) for n in (1, 2, 3)],
+                "formula": formula, "n1_delta": _n1_delta(formula)}
+
+    d = cache.memo("rod-bands", compute)
+    pairs = lambda rows: tuple(tuple(int(v) for v in r) for r in rows)  # noqa: E731
+    return {"bands": pairs(d["bands"]), "static": pairs(d["static"]),
+            "formula": pairs(d["formula"]), "n1_delta": tuple(int(v) for v in d["n1_delta"])}
 
 
 def _offsets_b(fields) -> dict[str, tuple[int, int]]:
@@ -92,10 +109,10 @@ def _context() -> dict:
     skl, sku = max(b[0] for b in sbands), max(b[1] for b in sbands)
     small = {n: b for n, b in zip((1,), bands[:1], strict=True) if b != (kl, ku)}
     max_jac = max(f.nnz_out(0) for f in fns if f.name().endswith("_jac"))
-    formula = dr.bandwidth_formula()
+    formula = _band_data()["formula"]
     if formula != ((kl, formula[0][1]), (ku, formula[1][1])):
         raise RuntimeError(f"band formula {formula} disagrees with the B = 0 band {kl, ku}")
-    dkl, dku = _n1_delta(formula)
+    dkl, dku = _band_data()["n1_delta"]
     return {
         "cell0_fields_b": dr.CELL0_FIELDS_B, "cell_fields_b": dr.CELL_FIELDS_B,
         "cell0_offsets_b": _offsets_b(dr.CELL0_FIELDS_B),

@@ -11,11 +11,14 @@ generalized Maxwell entries the Laplace variable ``s``, ``G_inf, K_inf``, one br
 
 from __future__ import annotations
 
-import sympy as sp
+from typing import TYPE_CHECKING
 
 from derive.pipeline import run
-from derive.steps.energy import SHEAR_CORRECTION_F, SHEAR_CORRECTION_M, shear_correct
-from derive.symbols import G, G_of, K, K_of, eta, s_lap, tau_B, tau_S, zeta
+
+# SymPy and the step modules are imported by the functions: importing the derive package
+# (e.g. for ``kvrod derive list``) must not pay for them.
+if TYPE_CHECKING:
+    import sympy as sp
 
 FORMULA_DOCS: dict[str, str] = {
     "eta_E": "extensional viscosity from the dissipation function (5) [Pa s]",
@@ -65,21 +68,23 @@ FORMULA_DOCS: dict[str, str] = {
 }
 
 
-_COLLECT = (zeta, eta, tau_B, tau_S)
-
-
 def tidy(expr: sp.Basic) -> sp.Basic:
     """Readable normal form: collect in the viscosities/retardation times, factor the rest."""
+    import sympy as sp
+
+    from derive.symbols import eta, tau_B, tau_S, zeta
+
     if isinstance(expr, sp.MatrixBase):
         return expr.applyfunc(tidy)
-    present = [v for v in _COLLECT if expr.has(v)]
+    present = [v for v in (zeta, eta, tau_B, tau_S) if expr.has(v)]
     if not present:
         return sp.factor(expr)
     return sp.collect(sp.expand(expr), present, sp.factor)
 
 
 def formulas() -> dict[str, sp.Basic]:
-    """The derived results the generated code is rendered from.
+    """The derived results the generated code is rendered from (computed once per process
+    from the step records).
 
     Returns
     -------
@@ -87,6 +92,27 @@ def formulas() -> dict[str, sp.Basic]:
         Name -> SymPy expression (a 3x3 Matrix for C_F, C_M, V_F, V_M and their
         variants), e.g. ``"eta_E"`` (eq. (5)), ``"tau_E"`` (eq. (6)), ``"eta_E_naive"``.
     """
+    global _table
+    if _table is None:
+        _table = _formulas()
+    return dict(_table)
+
+
+_table: dict | None = None
+
+
+def forget() -> None:
+    """Drop the table kept for this process (with :func:`derive.pipeline.forget`)."""
+    global _table
+    _table = None
+
+
+def _formulas() -> dict[str, sp.Basic]:
+    import sympy as sp
+
+    from derive.steps.energy import SHEAR_CORRECTION_F, SHEAR_CORRECTION_M, shear_correct
+    from derive.symbols import G, G_of, K, K_of, s_lap, tau_B, tau_S
+
     steps = run()
     moduli, energy = steps["isotropic_moduli"], steps["stored_energy"]
     diss, naive = steps["dissipation"], steps["naive_resultants"]
@@ -146,6 +172,10 @@ def formulas() -> dict[str, sp.Basic]:
 def in_material_parameters(expr: sp.Basic) -> sp.Basic:
     """Rewrite an expression in E, nu, tau_S, tau_B (eta = G tau_S, zeta = K tau_B,
     G and K from the isotropic moduli), cancelling (1 - 2 nu) where it divides."""
+    import sympy as sp
+
+    from derive.symbols import G, K, eta, tau_B, tau_S, zeta
+
     f = formulas()
     sub = {eta: G * tau_S, zeta: K * tau_B}
     moduli = {G: f["G_of_E"], K: f["K_of_E"]}

@@ -11,10 +11,16 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
+from typing import TYPE_CHECKING, Any
 
-import sympy as sp
+# SymPy is imported inside the functions that use it: the catalogue of steps (titles,
+# equations, ``kvrod derive list``) must not pay for importing it.
+if TYPE_CHECKING:
+    import sympy as sp
 
-Expr = sp.Basic
+    Expr = sp.Basic
+else:
+    Expr = Any
 
 
 def _frozen(d: Mapping | None) -> Mapping:
@@ -27,6 +33,8 @@ def is_zero(expr: Expr) -> bool:
     Cheap normal forms first (expand, cancel), full ``simplify`` only when they fail: the
     derivation is polynomial/rational almost everywhere and this keeps it fast.
     """
+    import sympy as sp
+
     if isinstance(expr, sp.MatrixBase):
         return all(is_zero(e) for e in expr)
     if isinstance(expr, (tuple, list)):
@@ -71,12 +79,16 @@ class Step:
 
     def latex(self) -> str:
         """The step as LaTeX: every result, with its stated counterpart where one exists."""
+        import sympy as sp
+
         lines = [rf"\textbf{{{self.title}}}\ {' '.join(self.equations)}"]
         for key, value in self.results.items():
             lines.append(rf"{latex_name(key)} = {sp.latex(value)}")
         return r"\\ ".join(lines)
 
     def _repr_latex_(self) -> str:  # Jupyter
+        import sympy as sp
+
         body = r"\\ ".join(rf"{latex_name(k)} &= {sp.latex(v)}" for k, v in self.results.items())
         return rf"$\begin{{aligned}}{body}\end{{aligned}}$"
 
@@ -89,8 +101,8 @@ def latex_name(key: str) -> str:
 def make_step(
     *,
     name: str,
-    title: str,
-    equations: tuple[str, ...],
+    title: str | None = None,
+    equations: tuple[str, ...] | None = None,
     assumptions: tuple[str, ...],
     symbol_assumptions: tuple[str, ...] = (),
     inputs: tuple[str, ...] = (),
@@ -98,7 +110,19 @@ def make_step(
     stated: Mapping[str, Expr] | None = None,
     notes: tuple[str, ...] = (),
 ) -> Step:
-    """Build a :class:`Step`, comparing each stated form with the derived result."""
+    """Build a :class:`Step`, comparing each stated form with the derived result.
+
+    ``title`` and ``equations`` default to the step's entry in the pipeline catalogue
+    (:data:`derive.pipeline.PIPELINE`, where every step of the pipeline has them).
+    """
+    import sympy as sp
+
+    if title is None or equations is None:
+        from derive.pipeline import entry
+
+        e = entry(name)
+        title = e.title if title is None else title
+        equations = e.equations if equations is None else equations
     stated = dict(stated or {})
     missing = set(stated) - set(results)
     if missing:

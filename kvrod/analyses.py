@@ -1,7 +1,7 @@
 """The work behind `kvrod modes`, `kvrod compare-damping` and `kvrod calibrate --dma`
-(modal analysis with continuum references, mode-shape plots, the comparison tables and
-files, the DMA fit's files), shared by those commands and the notes commands. Nothing
-here prints."""
+(modal analysis with continuum references, its files and mode-shape plots, the
+comparison tables and files, the DMA fit's files), shared by those commands and the notes
+commands. Nothing here prints."""
 
 from __future__ import annotations
 
@@ -27,49 +27,29 @@ def modes_table(modes) -> str:
     return "\n".join(lines)
 
 
-def plot_mode_shapes(modes, length: float, path: Path) -> Path:
-    """Mode shapes as PNG: displacements (solid) and rotations times L (dashed), scaled
-    together to max 1; components below 1e-6 of the largest are left out."""
-    import matplotlib
+def write_modes(res: dict, out: Path, figures: bool = True) -> list[Path]:
+    """The results of :func:`run_modes` as every command writes them: modes.json and
+    modes.npz (:func:`runtime.io.modes.write_modes`, the one format) and, read back
+    from them, mode_shapes.png (components along s) and mode_shapes_3d.png (the
+    centreline in 3-D) when ``figures``. Returns the paths in that order."""
+    from runtime.io.modes import read_modes
+    from runtime.io.modes import write_modes as write_files
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import numpy as np
+    out = Path(out)
+    paths = write_files(out, res["problem"], res["modes"], model=res["model"],
+                        y_eq=res.get("y_eq"), deformed=res["deformed"],
+                        static_tip=res["static_tip"])
+    if figures:
+        from runtime.io.shapes import plot_mode_components, plot_mode_shapes_3d
 
-    n = len(modes)
-    cols = min(3, n)
-    rows = math.ceil(n / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 2.8 * rows), squeeze=False)
-    for ax, m in zip(axes.ravel(), modes, strict=False):
-        N = m.rotation.shape[1]
-        s_n = np.linspace(0.0, length, N + 1)
-        s_s = (s_n[:-1] + s_n[1:]) / 2
-        d, r = m.displacement, m.rotation * length  # rotations as theta L (m)
-        scale = max(np.abs(d).max(), np.abs(r).max()) or 1.0
-        for c, lab in enumerate(("x", "y", "z")):
-            if np.abs(d[c]).max() > 1e-6 * scale:
-                ax.plot(s_n, d[c] / scale, "-", color=f"C{c}", label=f"u_{lab}")
-            if np.abs(r[c]).max() > 1e-6 * scale:
-                ax.plot(s_s, r[c] / scale, "--", color=f"C{c}", label=f"theta_{c + 1} L")
-        ax.set_title(f"{m.index}: {m.family}, f = {m.frequency_hz:.4g} Hz, "
-                     f"zeta = {m.zeta:.3g}", fontsize=8)
-        ax.set_xlabel("s [m]", fontsize=8)
-        ax.tick_params(labelsize=7)
-        ax.legend(fontsize=6, loc="best")
-        ax.grid(alpha=0.3)
-    for ax in axes.ravel()[n:]:
-        ax.set_visible(False)
-    fig.tight_layout()
-    from runtime.io.atomic import save_figure
-
-    try:
-        return save_figure(fig, path, dpi=110)
-    finally:
-        plt.close(fig)
+        mf = read_modes(out)
+        paths += [plot_mode_components(mf, out / "mode_shapes.png"),
+                  plot_mode_shapes_3d(mf, out / "mode_shapes_3d.png")]
+    return paths
 
 
 def run_modes(problem, count: int = 10, deformed: bool = False) -> dict:
-    """Modal analysis of a problem; returns {"modes", "model", "static_tip", ...}.
+    """Modal analysis of a problem; returns {"modes", "model", "y_eq", "static_tip", ...}.
 
     Straight (default): about the stress-free reference without loads; deformed: about
     the static equilibrium under the problem's loads at t = 0-. Continuum reference
@@ -92,7 +72,7 @@ def run_modes(problem, count: int = 10, deformed: bool = False) -> dict:
     if not deformed:
         continuum.attach(problem, modes)
     return {"problem": problem, "model": model, "modes": modes, "deformed": deformed,
-            "static_tip": tip}
+            "y_eq": y_eq, "static_tip": tip}
 
 
 def compare_table(result) -> str:

@@ -1,4 +1,5 @@
-"""`kvrod notes-beyond`: the three issue-7 analyses with modest settings, and notes/beyond.md.
+"""`kvrod notes-beyond`: three analyses beyond the paper with modest settings, and
+notes/beyond.md.
 
 1. eta_E against eta~_E in simulation (runtime/analysis/compare_damping.py) at N = 20;
 2. damped modal analysis of the paper's cantilever at N = 50 (runtime/analysis/modal.py), straight
@@ -8,15 +9,15 @@
 
 Every result is written to a results folder in the same form as the command quoted next
 to it in the notes (``kvrod compare-damping``, ``kvrod modes``, ``kvrod calibrate``), so
-each number can be regenerated on its own. Runtime about 20-30 s.
+each number can be regenerated on its own. Wall times, the first C compilation and the
+machine go to ``timings.json`` / ``run-info.md`` in the results folder, not into the notes.
+Runtime about 20-30 s.
 """
 
 from __future__ import annotations
 
 import math
-import platform
 import shutil
-import time
 from pathlib import Path
 
 import jinja2
@@ -85,16 +86,13 @@ def _compare(out: Path) -> dict:
 
 
 def _write_modes(res: dict, out: Path) -> list[Path]:
-    """modes.json and mode_shapes.png as `kvrod modes` writes them."""
-    from kvrod.analyses import plot_mode_shapes
-    from runtime.io.results import write_json
+    """modes.json and mode_shapes.png (with modes.npz, mode_shapes_3d.png) as `kvrod
+    modes` writes them (``kvrod.analyses.write_modes``); returns [modes.json,
+    mode_shapes.png]."""
+    from kvrod.analyses import write_modes
 
-    sc, modes = res["problem"], res["modes"]
-    js = write_json(out / "modes.json", {
-        "problem": sc.name, "parameters": sc.to_mapping(), "tau_E": sc.material.tau_E,
-        "deformed": res["deformed"], "static_tip": res["static_tip"],
-        "modes": [m.to_dict() for m in modes]})
-    return [js, plot_mode_shapes(modes, sc.rod.length, out / "mode_shapes.png")]
+    paths = write_modes(res, out)
+    return [paths[0], *[p for p in paths if p.name == "mode_shapes.png"]]
 
 
 def _distinct(modes: list, count: int, rtol: float = 1e-6) -> list[list]:
@@ -206,24 +204,26 @@ def _calibration(out: Path) -> dict:
 
 
 def write_beyond_notes(path: Path = Path("notes/beyond.md"),
-                       out: Path = Path("results/beyond")) -> Path:
+                       out: Path = Path("results/beyond"),
+                       command: str = "kvrod notes-beyond") -> Path:
     """Run the three analyses, write their results under ``out`` and render ``path``.
 
     Figures are copied next to the notes into ``path.parent / "figures"`` with the prefix
-    ``beyond_``. Returns the notes path. Raises RuntimeError if a simulation fails.
+    ``beyond_``; the measurements of this run (``command``) go to ``out/run-info.md``.
+    Returns the notes path. Raises RuntimeError if a simulation fails.
     """
+    from kvrod.run_info import Timings
+
     path, out = Path(path), Path(out)
-    wall0 = time.perf_counter()
-    timings: dict[str, float] = {}
-    t0 = time.perf_counter()
-    compare = _compare(out / "compare-damping")
-    timings["compare"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    modes = _modes(out)
-    timings["modes"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    calib = _calibration(out / "calibration")
-    timings["calibration"] = time.perf_counter() - t0
+    timings = Timings(command)
+    timings.compile_native()
+    with timings.phase("compare-damping"):
+        compare = _compare(out / "compare-damping")
+    with timings.phase("modes"):
+        modes = _modes(out)
+    with timings.phase("calibration"):
+        calib = _calibration(out / "calibration")
+    timings.figures["calibration: model runs of the fit"] = calib["nfev"]
     fig_dir = path.parent / "figures"
     fig_dir.mkdir(parents=True, exist_ok=True)
     links: dict[str, str] = {}
@@ -236,10 +236,10 @@ def write_beyond_notes(path: Path = Path("notes/beyond.md"),
         shutil.copyfile(src, dst)
         links[key] = f"figures/{dst.name}"
     ctx = {"compare": compare, "modes": modes, "cal": calib, "fig": links,
-           "timings": timings, "wall": time.perf_counter() - wall0,
-           "machine": f"{platform.machine()}, Python {platform.python_version()}",
            "out": _rel(out), "notes": _rel(path)}
     env = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATE_DIR),
                              undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
     text = env.get_template("beyond.md.jinja").render(**ctx)
-    return write_text(path, text)
+    write_text(path, text)
+    timings.write(out)
+    return path

@@ -22,18 +22,28 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _cmd_derive_list(args) -> int:
+    """The catalogue of steps, with each step's verdict against its stated forms when a
+    derivation is cached. Derives nothing and imports no SymPy."""
+    from derive import cache
     from derive.pipeline import PIPELINE
 
+    verdicts = cache.summary()
+    known = verdicts["steps"] if verdicts else {}
     if args.json:
-        print(json.dumps([{"name": e.name, "inputs": list(e.inputs)} for e in PIPELINE]))
+        print(json.dumps([{"name": e.name, "title": e.title, "equations": list(e.equations),
+                           "inputs": list(e.inputs),
+                           "all_match": known.get(e.name, {}).get("all_match")}
+                          for e in PIPELINE]))
         return 0
-    from derive.pipeline import run
-
-    steps = run()
-    width = max(len(n) for n in steps)
-    for name, s in steps.items():
-        ok = "ok " if s.all_match else "DIFF"
-        print(f"{name:<{width}}  {ok}  {' '.join(s.equations):<28} {s.title}")
+    width = max(len(e.name) for e in PIPELINE)
+    for e in PIPELINE:
+        v = known.get(e.name)
+        ok = "-   " if v is None else ("ok  " if v["all_match"] else "DIFF")
+        print(f"{e.name:<{width}}  {ok}  {' '.join(e.equations):<28} {e.title}")
+    if not known:
+        print("kvrod derive list: not derived yet, so the column 'ok' (every stated form "
+              "matches) is '-': `kvrod derive show STEP` derives all steps once (about half "
+              "a minute; cached afterwards)", file=sys.stderr)
     return 0
 
 
@@ -70,12 +80,13 @@ def _show_latex(s) -> str:
 
 
 def _cmd_derive_show(args) -> int:
-    from derive.pipeline import STEP_NAMES, step
+    from derive.pipeline import STEP_NAMES
+    from kvrod.notices import derivation
 
     if args.step not in STEP_NAMES:
         raise CliError(f"kvrod derive show: unknown step {args.step!r}; "
                        f"steps are: {', '.join(STEP_NAMES)}")
-    s = step(args.step)
+    s = derivation("kvrod derive show")[args.step]
     print(_show_latex(s) if args.latex else _show_text(s))
     return 0
 
@@ -83,14 +94,15 @@ def _cmd_derive_show(args) -> int:
 def _cmd_derive_export(args) -> int:
     import sympy as sp
 
-    from derive.pipeline import STEP_NAMES, run
+    from derive.pipeline import STEP_NAMES
+    from kvrod.notices import derivation
 
     names = args.steps or list(STEP_NAMES)
     bad = [n for n in names if n not in STEP_NAMES]
     if bad:
         raise CliError(f"kvrod derive export: unknown step(s) {', '.join(map(repr, bad))}; "
                        f"steps are: {', '.join(STEP_NAMES)}")
-    steps = run()
+    steps = derivation("kvrod derive export")
     doc = {n: {"title": steps[n].title, "equations": list(steps[n].equations),
                "assumptions": list(steps[n].assumptions), "inputs": list(steps[n].inputs),
                "results": {k: {"latex": sp.latex(v), "text": sp.sstr(v), "srepr": sp.srepr(v)}
@@ -107,7 +119,9 @@ def _cmd_derive_export(args) -> int:
 
 def _cmd_derive_notes(args) -> int:
     from derive.notes import write_derivation_notes
+    from kvrod.notices import derivation
 
+    derivation("kvrod derive notes")
     path = write_derivation_notes(Path(args.out))
     print(f"wrote {path}")
     return 0
@@ -115,7 +129,9 @@ def _cmd_derive_notes(args) -> int:
 
 def _cmd_generate(args) -> int:
     from derive.artifacts import check_tree, write_tree
+    from kvrod.notices import derivation
 
+    derivation("kvrod generate")
     if args.check:
         problems = check_tree(Path(args.out) if args.out else None)
         if problems:
@@ -152,8 +168,49 @@ def _cmd_problem_keys(args) -> int:
     return 0
 
 
+def version_text() -> str:
+    """``kvrod VERSION (generated/ TREE-HASH)``: the package version from its metadata and
+    the first 12 hex digits of the sha256 of generated/MANIFEST.json (which holds the hash
+    of every generated file); a tree that differs from its manifest is said to."""
+    import hashlib
+    from importlib import metadata
+
+    import generated
+
+    try:
+        version = metadata.version("kvrod")
+    except metadata.PackageNotFoundError:  # pragma: no cover - run from a bare source tree
+        from kvrod import __version__ as version
+    gdir = Path(generated.__file__).resolve().parent
+    try:
+        text = (gdir / "MANIFEST.json").read_text()
+        files = json.loads(text)["files"]
+    except (OSError, ValueError, KeyError):
+        return f"kvrod {version} (generated/ has no readable MANIFEST.json)"
+    tree = hashlib.sha256(text.encode()).hexdigest()[:12]
+    changed = []
+    for name, entry in sorted(files.items()):
+        try:  # the manifest's convention: sha256 of the text followed by NUL
+            digest = hashlib.sha256((gdir / name).read_text().encode() + b"\0").hexdigest()
+        except OSError:
+            digest = None
+        if digest != entry.get("sha256"):
+            changed.append(name)
+    note = (f"; {len(changed)} file(s) differ from it: run `kvrod generate --check`"
+            if changed else "")
+    return f"kvrod {version} (generated/ {tree}{note})"
+
+
+class _VersionAction(argparse.Action):
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(version_text())
+        parser.exit()
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="kvrod", description=__doc__.splitlines()[0] if __doc__ else None)
+    p.add_argument("--version", action=_VersionAction, nargs=0,
+                   help="the kvrod version and the hash of the generated code, then exit")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     d = sub.add_parser("derive", help="inspect the SymPy derivation")
@@ -247,6 +304,10 @@ def _error_line(prefix: str, exc: BaseException) -> tuple[str, int]:
             "bug in kvrod; KVROD_DEBUG=1 shows the traceback)"), 3
 
 
+#: commands that never compile C (and should not import the runtime to say so)
+_NO_COMPILE = ("derive", "generate", "problem-keys")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the `kvrod` console script: the one error boundary of the CLI.
 
@@ -272,6 +333,15 @@ def main(argv: Sequence[str] | None = None) -> int:
             warnings.simplefilter("ignore", RuntimeWarning)
             parser = build_parser()
             args = parser.parse_args(argv)
+            import shlex
+
+            # the command as typed, for the measurements the notes commands write
+            args.command_line = shlex.join(["kvrod",
+                                            *(sys.argv[1:] if argv is None else argv)])
+            if args.command not in _NO_COMPILE:
+                from kvrod.notices import install_compile_notices
+
+                install_compile_notices()
             return int(args.func(args) or 0)
     except BrokenPipeError:  # e.g. `kvrod derive show X | head`
         sys.stderr.close()
@@ -297,6 +367,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
+        from kvrod.notices import remove_compile_notices
+
+        remove_compile_notices()
 
 
 if __name__ == "__main__":

@@ -11,7 +11,7 @@ import math
 import sys
 from pathlib import Path
 
-from kvrod.analyses import compare_table, modes_table, plot_mode_shapes, run_modes, write_compare
+from kvrod.analyses import compare_table, modes_table, run_modes, write_compare, write_modes
 from kvrod.outputs import safe_name
 
 
@@ -41,13 +41,11 @@ def _cmd_modes(args) -> int:
     from kvrod.outputs import results_folder
 
     with results_folder(out, "modes", markers=("modes.json",), overwrite=args.overwrite,
-                        names=("modes.json", "mode_shapes.png")):
+                        names=("modes.json", "modes.npz")):
         return _modes_into(args, problem, out)
 
 
 def _modes_into(args, problem, out: Path) -> int:
-    from runtime.io.results import write_json
-
     res = run_modes(problem, args.count, args.deformed)
     modes = res["modes"]
     m = problem.material
@@ -56,12 +54,8 @@ def _modes_into(args, problem, out: Path) -> int:
     if res["static_tip"] is not None:
         print(f"static tip [m]: {[round(float(v), 6) for v in res['static_tip']]}")
     print(modes_table(modes))
-    write_json(out / "modes.json", {
-        "problem": problem.name, "parameters": problem.to_mapping(), "tau_E": m.tau_E,
-        "deformed": args.deformed, "static_tip": res["static_tip"],
-        "modes": [md.to_dict() for md in modes]})
-    plot_mode_shapes(modes, problem.rod.length, out / "mode_shapes.png")
-    print(f"wrote {out}/modes.json, mode_shapes.png")
+    paths = write_modes(res, out)
+    print(f"wrote {out}/{', '.join(p.name for p in paths)}")
     return 0
 
 
@@ -215,46 +209,71 @@ def _cmd_compare(args) -> int:
 # --------------------------------------------------------------------------------------
 
 
+def _notes_paths(args, name: str, notes: str, out: str) -> tuple[Path, Path]:
+    """(notes file, results folder) of a notes command: the defaults ``notes``, ``out``;
+    ``--out DIR`` alone puts the notes into DIR as well (``DIR/NAME.md``, figures in
+    DIR/figures), so only the default run rewrites the committed notes (which quote their
+    results folder)."""
+    from kvrod.outputs import check_file_argument
+
+    results = Path(args.out or out)
+    path = Path(args.out_notes or (results / f"{name}.md" if args.out else notes))
+    check_file_argument(path, "--out-notes")
+    return path, results
+
+
+def _notes_names(path: Path, results: Path, *names: str) -> tuple[str, ...]:
+    """What a notes command writes into its results folder (removed by --overwrite)."""
+    from kvrod.run_info import FILES
+
+    inside = (path.name,) if path.parent.resolve() == results.resolve() else ()
+    return (*names, *FILES, *inside)
+
+
 def _cmd_notes_beyond(args) -> int:
     from kvrod.beyond import write_beyond_notes
-    from kvrod.outputs import check_file_argument, results_folder
+    from kvrod.outputs import results_folder
 
-    check_file_argument(Path(args.out_notes), "--out-notes")
-    with results_folder(Path(args.out), "notes-beyond",
+    path, out = _notes_paths(args, "beyond", "notes/beyond.md", "results/beyond")
+    with results_folder(out, "notes-beyond",
                         markers=("compare-damping/compare_damping.json", "modes/modes.json",
                                  "calibration/calibration.json"),
                         overwrite=args.overwrite,
-                        names=("compare-damping", "calibration", "modes", "modes-deformed")):
-        path = write_beyond_notes(Path(args.out_notes), Path(args.out))
-    print(f"wrote {path} (results under {args.out}/)")
+                        names=_notes_names(path, out, "compare-damping", "calibration",
+                                           "modes", "modes-deformed")):
+        path = write_beyond_notes(path, out, command=getattr(args, "command_line", "kvrod"))
+    print(f"wrote {path} (results under {out}/)")
     return 0
 
 
 def _cmd_notes_examples(args) -> int:
     from kvrod.examples_notes import DYNAMIC, STATIC, write_examples_notes
-    from kvrod.outputs import check_file_argument, results_folder
+    from kvrod.outputs import results_folder
 
-    check_file_argument(Path(args.out_notes), "--out-notes")
+    path, out = _notes_paths(args, "examples", "notes/examples.md", "results/examples")
     names = STATIC + DYNAMIC
-    with results_folder(Path(args.out), "notes-examples",
+    with results_folder(out, "notes-examples",
                         markers=tuple(f"{n}/summary.json" for n in names),
-                        overwrite=args.overwrite, names=names):
-        path = write_examples_notes(Path(args.out_notes), Path(args.out))
-    print(f"wrote {path} (results under {args.out}/)")
+                        overwrite=args.overwrite, names=_notes_names(path, out, *names)):
+        path = write_examples_notes(path, out, command=getattr(args, "command_line", "kvrod"))
+    print(f"wrote {path} (results under {out}/)")
     return 0
 
 
 def _cmd_notes_maxwell(args) -> int:
     from kvrod.maxwell_notes import write_maxwell_notes
-    from kvrod.outputs import check_file_argument, results_folder
+    from kvrod.notices import derivation
+    from kvrod.outputs import results_folder
 
-    check_file_argument(Path(args.out_notes), "--out-notes")
-    with results_folder(Path(args.out), "notes-maxwell",
+    path, out = _notes_paths(args, "maxwell", "notes/maxwell.md", "results/maxwell")
+    with results_folder(out, "notes-maxwell",
                         markers=("simulate-mx/summary.json", "dma/fit/dma.json"),
                         overwrite=args.overwrite,
-                        names=("modes-kv", "modes-mx", "simulate-kv", "simulate-mx", "dma")):
-        path = write_maxwell_notes(Path(args.out_notes), Path(args.out))
-    print(f"wrote {path} (results under {args.out}/)")
+                        names=_notes_names(path, out, "modes-kv", "modes-mx", "simulate-kv",
+                                           "simulate-mx", "dma")):
+        derivation("kvrod notes-maxwell")       # the notes show derived results
+        path = write_maxwell_notes(path, out, command=getattr(args, "command_line", "kvrod"))
+    print(f"wrote {path} (results under {out}/)")
     return 0
 
 
@@ -336,9 +355,11 @@ def add_commands(sub, parser_class) -> None:
 
     def notes_parser(name: str, text: str, notes: str, out: str):
         q = sub.add_parser(name, help=text)
-        q.add_argument("--out-notes", dest="out_notes", default=notes,
-                       help=f"notes file (default {notes}; figures go to its figures/ folder)")
-        q.add_argument("--out", default=out, help=f"results folder (default {out})")
+        q.add_argument("--out-notes", dest="out_notes",
+                       help=f"notes file (default {notes}, or DIR/{Path(notes).name} with --out "
+                            "DIR; figures go to its figures/ folder)")
+        q.add_argument("--out", help=f"results folder (default {out}; run time, compile time "
+                                     "and solver counters go to its run-info.md)")
         q.add_argument("--overwrite", action="store_true",
                        help="replace the results of an earlier run in --out")
         return q

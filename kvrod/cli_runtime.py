@@ -96,24 +96,32 @@ def _cmd_static(args) -> int:
 
 
 def _cmd_plot(args) -> int:
-    """Plots of a finished (or stopped) run folder, written next to its results."""
-    from kvrod.errors import CliError
-    from runtime.io.plots import plot_folder
+    """The pictures of a results folder, written next to its results (kvrod/plotting.py)."""
+    from kvrod.plotting import plot_folder
 
-    out = Path(args.folder)
-    if not (out / "summary.json").exists() or not (out / "series.npz").exists():
-        raise CliError(f"kvrod plot: {str(out)!r} holds no run (summary.json, series.npz)")
-    paths = plot_folder(out)
-    print(f"wrote {', '.join(str(p) for p in paths)}")
+    done = plot_folder(Path(args.folder), animate=args.animate)
+    print(f"{args.folder}: {done.kind} result; wrote "
+          f"{', '.join(str(p) for p in done.paths) or 'nothing'}")
+    for note in done.notes:
+        print(f"  {note}")
     return 0
 
 
 def _cmd_reproduce(args) -> int:
     from kvrod.reproduce import reproduce
 
-    out = reproduce(Path(args.out), n_elements=args.n_elements, t_end=args.t_end,
-                    notes=Path(args.notes), rtol=args.rtol, derive=not args.skip_derive,
-                    overwrite=args.overwrite)
+    # --out alone keeps the notes with the results: only the default run rewrites the
+    # committed notes/ (the notes quote their results folder)
+    out = Path(args.out or "results/reproduce")
+    notes = Path(args.notes or (out / "reproduction.md" if args.out else
+                                "notes/reproduction.md"))
+    from kvrod.notices import DerivationProgress
+
+    out = reproduce(out, n_elements=args.n_elements, t_end=args.t_end,
+                    notes=notes, rtol=args.rtol, derive=not args.skip_derive,
+                    overwrite=args.overwrite, derive_progress=DerivationProgress(
+                        "kvrod reproduce"),
+                    command=getattr(args, "command_line", "kvrod reproduce"))
     print(f"wrote {out}")
     return 0
 
@@ -139,13 +147,20 @@ def add_commands(sub, parser_class) -> None:
                    help="replace a finished result in --out (default: refuse)")
     t.set_defaults(func=_cmd_static)
 
-    pl = sub.add_parser("plot", help="draw the PNG plots of a results folder")
-    pl.add_argument("folder", help="a results folder of kvrod simulate")
+    pl = sub.add_parser("plot", help="draw the pictures of a results folder: a run, a static "
+                                     "result, modes or a sweep")
+    pl.add_argument("folder", help="a results folder of kvrod simulate, static, modes or sweep")
+    pl.add_argument("--animate", nargs="?", const="gif", choices=("gif", "mp4"),
+                    help="also animate a run's centreline: centreline.gif (default) or "
+                         ".mp4 (needs ffmpeg on PATH)")
     pl.set_defaults(func=_cmd_plot)
 
     r = sub.add_parser("reproduce", help="reproduce the paper's Sect. 5 (figures + notes)")
-    r.add_argument("--out", default="results/reproduce", help="results folder")
-    r.add_argument("--notes", default="notes/reproduction.md", help="notes file to write")
+    r.add_argument("--out", help="results folder (default results/reproduce; when given, "
+                                 "the notes are written into it unless --notes says where)")
+    r.add_argument("--notes", help="notes file to write (default notes/reproduction.md, or "
+                                   "DIR/reproduction.md with --out DIR); notes/derivation.md "
+                                   "goes beside it")
     r.add_argument("--n-elements", dest="n_elements", type=int, default=100)
     r.add_argument("--t-end", dest="t_end", type=float, default=10.0)
     r.add_argument("--rtol", type=float, default=1e-7,

@@ -3,14 +3,14 @@
 Each example runs exactly as ``kvrod static`` / ``kvrod simulate`` runs it (same results
 folder under ``--out``), is compared with its reference from :mod:`references.examples`
 (written separately, section constants from textbook formulas), and gets a figure.
-The static examples also get a convergence study in N. Runtime about a minute.
+The static examples also get a convergence study in N. Wall times, the first C
+compilation, solver counters and the machine go to ``timings.json`` / ``run-info.md`` in
+the results folder, not into the notes. Runtime about a minute.
 """
 
 from __future__ import annotations
 
 import math
-import platform
-import time
 import tomllib
 from pathlib import Path
 from typing import Any
@@ -19,7 +19,7 @@ import jinja2
 import numpy as np
 
 from references import examples as RX
-from runtime.io.atomic import save_figure, write_text
+from runtime.io.atomic import write_text
 
 TEMPLATE_DIR = Path(__file__).parent / "templates"
 STATIC = ("rollup", "bathe_bolourchi", "helix", "clamped_both")
@@ -42,12 +42,9 @@ def _floats(x) -> list[float]:
 
 
 def _plt():
-    import matplotlib
+    from runtime.io.figures import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+    return pyplot()
 
 
 # -- the measured quantity of each static example ------------------------------------------
@@ -229,12 +226,10 @@ def _fig_base(run, ref: dict, out: Path) -> Path:
 
 
 def _save(fig, path: Path) -> Path:
-    import matplotlib.pyplot as plt
+    from runtime.io.figures import save
 
     fig.tight_layout()
-    save_figure(fig, path, dpi=120)
-    plt.close(fig)
-    return path
+    return save(fig, path, dpi=120)
 
 
 # -- the notes --------------------------------------------------------------------------
@@ -253,28 +248,34 @@ def _crossings(run) -> np.ndarray:
 
 
 def write_examples_notes(path: Path = Path("notes/examples.md"),
-                         out: Path = Path("results/examples")) -> Path:
+                         out: Path = Path("results/examples"),
+                         command: str = "kvrod notes-examples") -> Path:
     """Run every example into ``out/<name>/``, compare, draw, and render ``path``.
 
-    Figures go to ``path.parent / "figures"`` as ``examples_*.png``. Raises RuntimeError
-    when a run fails (its folder keeps what was computed)."""
+    Figures go to ``path.parent / "figures"`` as ``examples_*.png``; the measurements of
+    this run (``command``) to ``out/run-info.md``. Raises RuntimeError when a run fails
+    (its folder keeps what was computed)."""
+    from kvrod.run_info import Timings, bound, decade
     from kvrod.runs import run_and_write, static_and_write
     from runtime.problem.registry import load_problem
 
     path, out = Path(path), Path(out)
     figs = path.parent / "figures"
-    wall0 = time.perf_counter()
+    timings = Timings(command)
+    timings.compile_native()
     ctx: dict[str, Any] = {"out": out.as_posix(), "notes": path.as_posix(), "static": {},
-                           "dynamic": {}}
+                           "dynamic": {}, "bound": bound, "decade": decade}
     fig_links: dict[str, str] = {}
     static: dict[str, tuple] = {}
     for name in STATIC:
-        t0 = time.perf_counter()
-        summary, model, y = static_and_write(load_problem(name), out / name, overwrite=True)
+        with timings.phase(f"static {name}"):
+            summary, model, y = static_and_write(load_problem(name), out / name,
+                                                 overwrite=True)
+        timings.run(name, summary)
         if summary["status"] != "finished":
             raise RuntimeError(f"{name}: {summary['message']}")
         pth = [(p["load_factor"], np.array(p["tip"])) for p in summary["static"]["path"]]
-        static[name] = (model, y, pth, summary, time.perf_counter() - t0)
+        static[name] = (model, y, pth, summary, timings.phases[f"static {name}"])
 
     model, y, pth, summary, wall = static["rollup"]
     ref = RX.rollup_reference(_doc("rollup"))
@@ -313,16 +314,17 @@ def write_examples_notes(path: Path = Path("notes/examples.md"),
                                      "shear": ref["shear_part"], "err": w / ref["midspan"] - 1}
     fig_links["clamped_both"] = _fig_clamped(model, y, figs / "examples_clamped_both.png")
 
-    t0 = time.perf_counter()
-    studies = {name: convergence(name) for name in CONVERGENCE}
+    with timings.phase("convergence studies"):
+        studies = {name: convergence(name) for name in CONVERGENCE}
     ctx["convergence"] = studies
-    ctx["convergence_wall"] = time.perf_counter() - t0
     fig_links["convergence"] = _fig_convergence(studies, figs / "examples_convergence.png")
 
     runs = {}
     for name in DYNAMIC:
-        run, summary = run_and_write(load_problem(name), out / name, name, overwrite=True,
-                                     progress=False)
+        with timings.phase(f"simulate {name}"):
+            run, summary = run_and_write(load_problem(name), out / name, name, overwrite=True,
+                                         progress=False)
+        timings.run(name, summary)
         if run.status != "finished":
             raise RuntimeError(f"{name}: {run.message}")
         runs[name] = (run, summary)
@@ -356,8 +358,8 @@ def write_examples_notes(path: Path = Path("notes/examples.md"),
     fig_links["base_excitation"] = _fig_base(run, ref, figs / "examples_base_excitation.png")
 
     ctx["fig"] = {k: f"figures/{Path(v).name}" for k, v in fig_links.items()}
-    ctx["wall"] = time.perf_counter() - wall0
-    ctx["machine"] = f"{platform.machine()}, Python {platform.python_version()}"
     env = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATE_DIR),
                              undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
-    return write_text(path, env.get_template("examples.md.jinja").render(**ctx))
+    write_text(path, env.get_template("examples.md.jinja").render(**ctx))
+    timings.write(out)
+    return path

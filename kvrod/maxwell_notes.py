@@ -10,13 +10,14 @@
    3-D material, with 1 % noise: the series found against the one that made the data.
 
 Each part is written to a results folder in the form of the command quoted next to it.
-Runtime about half a minute.
+Wall times (the cost of a Maxwell run against a Kelvin-Voigt one), the first C compilation,
+solver counters and the machine go to ``timings.json`` / ``run-info.md`` there, not into the
+notes. Runtime about half a minute.
 """
 
 from __future__ import annotations
 
 import math
-import platform
 import time
 from pathlib import Path
 from typing import Any
@@ -56,12 +57,9 @@ DERIVATION = {
 
 
 def _plt():
-    import matplotlib
+    from runtime.io.figures import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+    return pyplot()
 
 
 def _derivation() -> list[dict]:
@@ -83,16 +81,14 @@ def _problems() -> tuple[Any, Any]:
 
 def _modes(kv, mx, out: Path) -> list[dict]:
     """Damped modes of both rods at N = MODES_N (one row per distinct bending pair)."""
-    from kvrod.analyses import run_modes
-    from runtime.io.results import write_json
+    from kvrod.analyses import run_modes, write_modes
 
     rows: dict[int, dict] = {}
     for label, problem in (("kv", kv), ("mx", mx)):
         p = problem.with_overrides({"rod.elements": MODES_N})
-        modes = run_modes(p, MODES_COUNT)["modes"]
-        write_json(out / f"modes-{label}" / "modes.json",
-                   {"problem": p.name, "parameters": p.to_mapping(),
-                    "modes": [md.to_dict() for md in modes]})
+        res = run_modes(p, MODES_COUNT)
+        modes = res["modes"]
+        write_modes(res, out / f"modes-{label}", figures=False)
         for md in modes:
             if md.family == "bending-1":
                 rows.setdefault(md.family_index, {"k": md.family_index})[label] = md
@@ -196,18 +192,33 @@ def _fig_release(sim: dict, path: Path) -> Path:
 
 
 def write_maxwell_notes(path: Path = Path("notes/maxwell.md"),
-                        out: Path = Path("results/maxwell")) -> Path:
+                        out: Path = Path("results/maxwell"),
+                        command: str = "kvrod notes-maxwell") -> Path:
     """Run the three parts into ``out`` and render ``path`` (figures under
-    ``path.parent / "figures"``)."""
+    ``path.parent / "figures"``; the measurements of this run, ``command``, in
+    ``out/run-info.md``)."""
     import shutil
+
+    from kvrod.run_info import Timings, decade
 
     path, out = Path(path), Path(out)
     figs = path.parent / "figures"
-    wall0 = time.perf_counter()
+    timings = Timings(command)
+    timings.compile_native()
     kv, mx = _problems()
-    rows = _modes(kv, mx, out)
-    sim = _simulate(kv, mx, out)
-    dm = _dma(mx, out / "dma")
+    with timings.phase("modes"):
+        rows = _modes(kv, mx, out)
+    with timings.phase("release simulations"):
+        sim = _simulate(kv, mx, out)
+    for label in ("kv", "mx"):
+        timings.run(f"simulate-{label}", sim[label]["summary"], sim[label]["wall"])
+    ratio = sim["mx"]["wall"] / sim["kv"]["wall"]
+    timings.figures["Maxwell release against Kelvin-Voigt release, wall time"] = \
+        f"{ratio:.1f}x"
+    timings.figures["Maxwell release against Kelvin-Voigt release, steps"] = \
+        f"{sim['mx']['nstep'] / sim['kv']['nstep']:.1f}x"
+    with timings.phase("DMA fit"):
+        dm = _dma(mx, out / "dma")
     fig_modes = _fig_modes(rows, mx, figs / "maxwell_modes.png")
     fig_release = _fig_release(sim, figs / "maxwell_release.png")
     fig_dma = figs / "maxwell_dma.png"
@@ -217,20 +228,18 @@ def write_maxwell_notes(path: Path = Path("notes/maxwell.md"),
     ctx = {
         "out": out.as_posix(), "notes": path.as_posix(), "example": EXAMPLE,
         "derivation": _derivation(), "modes": rows, "MODES_N": MODES_N,
-        "SIM_N": SIM_N, "SIM_T_END": SIM_T_END, "sim": sim,
-        "ratio": sim["mx"]["wall"] / sim["kv"]["wall"],
+        "SIM_N": SIM_N, "SIM_T_END": SIM_T_END, "sim": sim, "decade": decade,
+        "step_ratio": sim["mx"]["nstep"] / sim["kv"]["nstep"],
         "eta_kv": kv.material.youngs_modulus * kv.material.tau_E,
         "eta_mx": float(np.sum(r.E * r.theta)), "tau_E_mx": mx.material.tau_E,
         "rod": r,
         "dma": dm, "noise": DMA_NOISE,
         "figs": {k: Path(v).relative_to(path.parent).as_posix() for k, v in
                  (("modes", fig_modes), ("release", fig_release), ("dma", fig_dma))},
-        "platform": f"{platform.python_implementation()} {platform.python_version()}, "
-                    f"{platform.machine()}",
-        "wall": time.perf_counter() - wall0,
     }
     env = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATE_DIR),
                              keep_trailing_newline=True, autoescape=False,
                              undefined=jinja2.StrictUndefined)
     write_text(path, env.get_template("maxwell.md.jinja").render(**ctx))
+    timings.write(out)
     return path

@@ -1,9 +1,12 @@
-"""`kvrod reproduce`: the paper's Sect. 5 end to end, with figures and notes/reproduction.md."""
+"""`kvrod reproduce`: the paper's Sect. 5 end to end, with figures and notes/reproduction.md.
+
+The notes hold what a rerun reproduces (rounded to what the integration error leaves
+stable); wall times, the first C compilation, solver counters and the machine go to
+``timings.json`` and ``run-info.md`` in the results folder (:mod:`kvrod.run_info`).
+"""
 
 from __future__ import annotations
 
-import platform
-import time
 from pathlib import Path
 
 import jinja2
@@ -56,19 +59,24 @@ def _bench_energy_audit() -> dict | None:
 
 def reproduce(out: Path, n_elements: int = 100, t_end: float = 10.0,
               notes: Path = Path("notes/reproduction.md"), rtol: float = 1e-7,
-              derive: bool = True, overwrite: bool = False) -> Path:
+              derive: bool = True, overwrite: bool = False,
+              command: str = "kvrod reproduce", derive_progress=None) -> Path:
     """Run the three tau values, the E = 4 MPa comparison, write figures and notes.
 
     Every run folder under ``out`` is checked before the first run starts: one that holds
-    a result is refused unless ``overwrite``.
+    a result is refused unless ``overwrite``. The C code is compiled first (if it is not
+    yet), so that no run's wall time includes it; ``command`` is how the measurements in
+    ``out/run-info.md`` were made; ``derive_progress`` is told of the derivation's steps
+    when they must be derived for notes/derivation.md (:data:`derive.pipeline.Progress`).
     """
     from kvrod.outputs import check_file_argument
+    from kvrod.run_info import Timings, bound, decade
     from kvrod.runs import run_and_write
     from runtime.io import folder as F
     from runtime.io import plots as P
     from runtime.problem.registry import load_problem
 
-    wall0 = time.perf_counter()
+    timings = Timings(command)
     out = Path(out)
     F.check_output_path(out)
     check_file_argument(notes, "--notes")
@@ -77,34 +85,44 @@ def reproduce(out: Path, n_elements: int = 100, t_end: float = 10.0,
         F.refuse_existing(out / d, "reproduce", overwrite=overwrite)
     if derive:
         from derive.notes import write_derivation_notes
+        from derive.pipeline import run
 
-        write_derivation_notes(notes.parent / "derivation.md")
+        with timings.phase("derivation notes"):
+            run(progress=derive_progress)
+            write_derivation_notes(notes.parent / "derivation.md")
+    timings.compile_native()
     runs, summaries = {}, {}
     for tau in TAUS:
         sc = load_problem("cantilever", {"tau": tau, "n_elements": n_elements,
                                          "t_end": t_end, "rtol": rtol})
-        runs[tau], summaries[tau] = run_and_write(sc, out / f"tau_{tau:g}", f"tau_E = {tau:g} s",
-                                                  overwrite=overwrite)
+        with timings.phase(f"run tau_{tau:g}"):
+            runs[tau], summaries[tau] = run_and_write(sc, out / f"tau_{tau:g}",
+                                                      f"tau_E = {tau:g} s", overwrite=overwrite)
+        timings.run(f"tau_{tau:g}", summaries[tau])
     # E = 4 MPa: tau halved; exact coincidence needs the tip force x 4 as well
     stiff = {}
     for label, force in (("E4_F0.2", 0.2), ("E4_F0.05", 0.05)):
         sc = load_problem("cantilever", {"tau": 0.02, "youngs_modulus": 4e6,
                                          "tip_force": force, "n_elements": n_elements,
                                          "t_end": t_end / 2, "rtol": rtol})
-        stiff[label] = run_and_write(sc, out / label, f"E = 4 MPa, F = {force} N",
-                                     overwrite=overwrite)
+        with timings.phase(f"run {label}"):
+            stiff[label] = run_and_write(sc, out / label, f"E = 4 MPa, F = {force} N",
+                                         overwrite=overwrite)
+        timings.run(label, stiff[label][1])
     figs = out / "figures"
-    labels = [f"tau_E = {tau:g} s" for tau in TAUS]
-    P.plot_tip([runs[t] for t in TAUS], labels, figs / "fig3_tip.png")
-    P.plot_damping_vs_amplitude([runs[t] for t in TAUS], labels,
-                                [summaries[t]["linear_prediction"]["zeta_1"] for t in TAUS],
-                                figs / "damping_ratio_vs_amplitude.png")
-    ref, (r4, s4), (r4b, s4b) = runs[0.04], stiff["E4_F0.2"], stiff["E4_F0.05"]
-    P.plot_overlay(ref, "E = 1 MPa, tau_E = 0.04 s, F = 0.05 N", r4,
-                   "E = 4 MPa, tau_E = 0.02 s, F = 0.2 N", 2.0, figs / "fig4_overlay.png")
-    P.plot_overlay(ref, "E = 1 MPa, tau_E = 0.04 s, F = 0.05 N", r4b,
-                   "E = 4 MPa, tau_E = 0.02 s, F = 0.05 N", 2.0,
-                   figs / "fig4_overlay_same_force.png")
+    with timings.phase("figures"):
+        labels = [f"tau_E = {tau:g} s" for tau in TAUS]
+        P.plot_tip([runs[t] for t in TAUS], labels, figs / "fig3_tip.png")
+        P.plot_damping_vs_amplitude([runs[t] for t in TAUS], labels,
+                                    [summaries[t]["linear_prediction"]["zeta_1"]
+                                     for t in TAUS],
+                                    figs / "damping_ratio_vs_amplitude.png")
+        ref, (r4, s4), (r4b, s4b) = runs[0.04], stiff["E4_F0.2"], stiff["E4_F0.05"]
+        P.plot_overlay(ref, "E = 1 MPa, tau_E = 0.04 s, F = 0.05 N", r4,
+                       "E = 4 MPa, tau_E = 0.02 s, F = 0.2 N", 2.0, figs / "fig4_overlay.png")
+        P.plot_overlay(ref, "E = 1 MPa, tau_E = 0.04 s, F = 0.05 N", r4b,
+                       "E = 4 MPa, tau_E = 0.02 s, F = 0.05 N", 2.0,
+                       figs / "fig4_overlay_same_force.png")
     # coincidence of the stretched time axis: x_4MPa(t/2) against x_1MPa(t)
     # both runs sample every output_step: x_4MPa(t_j) pairs with x_1MPa(2 t_j) = ref sample 2j
     n = min(r4.t.size, (ref.t.size + 1) // 2)
@@ -121,9 +139,8 @@ def reproduce(out: Path, n_elements: int = 100, t_end: float = 10.0,
         "stretch_dev_rel": float(np.max(np.abs(dev))) / amp,
         "stretch_dev_same_force_rel": float(np.max(np.abs(dev_b))) / amp,
         "s4": s4, "s4b": s4b,
-        "wall": time.perf_counter() - wall0,
-        "machine": f"{platform.machine()}, Python {platform.python_version()}",
         "out": out.as_posix(),
+        "bound": bound, "decade": decade,
     }
     ctx["bench_audit"] = _bench_energy_audit()
     stat = summaries[0.04]["static"]["tip"]
@@ -142,4 +159,5 @@ def reproduce(out: Path, n_elements: int = 100, t_end: float = 10.0,
     if dest.resolve() != figs.resolve():  # notes written next to the run's own figures
         for f in figs.glob("*.png"):
             shutil.copyfile(f, dest / f.name)
+    timings.write(out)
     return notes

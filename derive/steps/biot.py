@@ -38,8 +38,6 @@ def biot_strain(green_lagrange: Step, lateral_contraction: Step) -> Step:
     N3_p = sp.simplify(sp.expand(charpoly_p.subs(_x, 1 - 2 * nu * q)))
     return make_step(
         name="biot_strain",
-        title="Biot strain: closed-form spectral decomposition of C (appendix A1)",
-        equations=("A1", "(18)", "footnote 19"),
         assumptions=("exact Green-Lagrange strain (18); H_1^2 + H_2^2 > 0 for N3",),
         symbol_assumptions=("J_0 > 0",),
         inputs=("green_lagrange", "lateral_contraction"),

@@ -116,9 +116,6 @@ def dissipation(kinematics: Step, lateral_contraction: Step, moduli: Step,
     tau_E_stated = ((1 - 2 * nu) * tau_B + 2 * (1 + nu) * tau_S) / 3
     return make_step(
         name="dissipation",
-        title="Kelvin-Voigt dissipation function and the rod damping parameters",
-        equations=("(28)", "(29)", "(30)", "(31)", "(32)", "(11)", "(3)", "(4)", "(5)", "(6)",
-                   "(8)", "(9)"),
         assumptions=(
             "Kelvin-Voigt solid: S = H : E + V : dE/dt, V constant and isotropic (29)",
             "strain rate of the modified strain (24) with (19): linear in dH/dt",

@@ -139,8 +139,6 @@ def stored_energy(kinematics: Step, lateral_contraction: Step) -> Step:
                         [dphi1, dphi2, dphi3, Om1, Om2, Om3])
     return make_step(
         name="stored_energy",
-        title="Stored energy: SVK density, cross-section integral, rod stiffnesses",
-        equations=("(26)", "(27)", "(10)", "(2)", "(7)"),
         assumptions=("dV = J0 ds dxi1 dxi2 ~ ds dxi1 dxi2 (J0 ~ 1)",
                      "section moments: <1> = A, <xi_a> = 0, <xi1 xi2> = 0, <xi2^2> = I1, "
                      "<xi1^2> = I2",

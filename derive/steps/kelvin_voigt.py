@@ -64,8 +64,6 @@ def kelvin_voigt_uniaxial(isotropic_moduli: Step, dissipation: Step, naive_resul
     incompressible = sp.factor(E_kv.subs(nu, sp.Rational(1, 2)))
     return make_step(
         name="kelvin_voigt_uniaxial",
-        title="Exact uniaxial modulus of the 3-D Kelvin-Voigt solid against E (1 + s tau_E)",
-        equations=("(6)", "(29)", "Sect. 4.2", "Sect. 4.4"),
         assumptions=(
             "3-D Kelvin-Voigt solid (29): K(s) = K (1 + s tau_B), G(s) = G (1 + s tau_S)",
             "lateral surface stress free at every s (step maxwell_rod): nu(s) varies with s",

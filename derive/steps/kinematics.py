@@ -59,8 +59,6 @@ def kinematics() -> Step:
     stated_J0 = 1 + xi2 * U01 - xi1 * U02
     return make_step(
         name="kinematics",
-        title="Rod kinematics, deformation gradient and strain vector H",
-        equations=("(14)", "(15)", "(16)", "(17)"),
         assumptions=(
             "prismatic rod: every cross section occupies the same domain A",
             "centroid at the origin and directors along principal axes of A",

@@ -47,8 +47,6 @@ def isotropic_moduli() -> Step:
     K_E = sp.factor(lam_E + sp.Rational(2, 3) * mu_E)
     return make_step(
         name="isotropic_moduli",
-        title="Isotropic moduli from a uniaxial-stress test",
-        equations=("Sect. 3.3",),
         assumptions=("homogeneous isotropic linear elastic (SVK) material",
                      "uniaxial stress: S_11 = S_22 = 0 under lateral strain -nu e"),
         symbol_assumptions=("lambda, mu, E > 0", "-1 < nu < 1/2 for K finite"),
@@ -83,8 +81,6 @@ def svk_material(moduli: Step, green_lagrange: Step) -> Step:
                                               mu: moduli.results["mu"]}))
     return make_step(
         name="svk_material",
-        title="Saint-Venant-Kirchhoff energy and stress; rigid-section stresses",
-        equations=("(21)", "(22)", "(23)"),
         assumptions=("Psi_e(0) = 0, no initial stress; quadratic in E (small strain)",
                      "push-forward with F ~ R_rel (21)",
                      "rigid cross section (no lateral contraction) for S_rigid"),
@@ -131,8 +127,6 @@ def lateral_contraction(moduli: Step, green_lagrange: Step) -> Step:
     w = sp.Matrix([w1, w2]).subs(sol).applyfunc(sp.factor)
     return make_step(
         name="lateral_contraction",
-        title="Uniform lateral contraction and the modified SVK stress",
-        equations=("(24)", "(25)"),
         assumptions=("in-plane stresses S_ab vanish (rod asymptotics: Love, Berdichevsky)",
                      "E_aa = -nu E_33 (no sum), E_12 = 0, with E_33 ~ H_3"),
         symbol_assumptions=("-1 < nu < 1/2",),

@@ -70,8 +70,6 @@ def maxwell_limit() -> Step:
                              (w_r, -sp.oo, sp.oo)) for a in terms_abs), sp.Integer(0)) / (2 * sp.pi)
     return make_step(
         name="maxwell_limit",
-        title="Generalised Maxwell -> Kelvin-Voigt at low frequency",
-        equations=("Sect. 4.4",),
         assumptions=("1-D linear viscoelastic law with a Prony-series relaxation function",
                      "Fourier convention eps(t) = 1/(2 pi) int eps_hat(omega) e^{i omega t} "
                      "d omega",
@@ -197,8 +195,6 @@ def maxwell_material(maxwell_limit_: Step, dissipation: Step) -> Step:
                          - s * dissipation.results["V_KV_Q"]).applyfunc(sp.expand)
     return make_step(
         name="maxwell_material",
-        title="3-D generalized Maxwell solid: internal variables, Laplace moduli, KV limit",
-        equations=("Sect. 4.4", "Sect. 6 (future work)"),
         assumptions=(
             "isotropic linear viscoelastic solid: equilibrium spring (K_inf, G_inf) in parallel "
             "with M Maxwell branches j",

@@ -275,8 +275,6 @@ def maxwell_rod(kinematics: Step, lateral_contraction: Step, isotropic_moduli: S
     Hv = sp.Matrix([H1, H2, H3])
     return make_step(
         name="maxwell_rod",
-        title="Generalized Maxwell rod: Laplace-domain stiffnesses and the rod's Prony series",
-        equations=("(7)", "(24)", "Sect. 4.4", "Sect. 6 (future work)"),
         assumptions=(
             "uniform lateral contraction (24) in the Laplace domain: E'_aa = -nu(s) H3, with "
             "nu(s) fixed by a stress-free lateral surface, S'_11 = S'_22 = 0",

@@ -86,8 +86,6 @@ def naive_resultants(kinematics: Step, lateral_contraction: Step, moduli: Step,
                     [lam_v, mu_v], dict=True)[0]
     return make_step(
         name="naive_resultants",
-        title="The naive resultant route: eta~_E and the missed in-plane dissipation",
-        equations=("Sect. 4.2", "Sect. 4.3"),
         assumptions=(
             "Simo's material resultants: F_i = <S_i3>, M_1 = <xi2 S_33>, M_2 = <-xi1 S_33>, "
             "M_3 = <xi1 S_23 - xi2 S_13>, with P ~ R_rel S (21)",

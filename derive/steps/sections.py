@@ -229,8 +229,6 @@ def cross_sections(kinematics: Step, stored_energy: Step, dissipation: Step) -> 
                 residual if residual == 0 else sp.simplify(residual))
     return make_step(
         name="cross_sections",
-        title="Cross sections: area, moments, torsion constants, shear correction factors",
-        equations=("Sect. 3.1", "(7)", "footnote 1"),
         assumptions=(
             "rectangle: width b along xi1, height d along xi2; ellipse: half axes a along xi2, "
             "b along xi1; circle: radius r; tube: annulus r_i <= |xi| <= r_o, m = r_i/r_o",

@@ -23,8 +23,6 @@ def green_lagrange(kinematics: Step) -> Step:
     sym = Hvec * e3.T + e3 * Hvec.T
     return make_step(
         name="green_lagrange",
-        title="Green-Lagrange strain: exact and small-strain forms",
-        equations=("(18)", "(19)", "(20)"),
         assumptions=(
             "C = F^T F with F = R_rel (I + H (x) a0^(3) / J0); R_rel orthogonal",
             "(19): |H| << 1 (drop O(|H|^2)) and J0 ~ 1 (moderate reference curvature)",

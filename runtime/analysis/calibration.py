@@ -636,11 +636,9 @@ def _release_x(problem) -> float:
 
 def plot_calibration(res: CalibrationResult, path: str | Path) -> Path:
     """The fitted curve over the data (PNG, matplotlib Agg), written atomically."""
-    import matplotlib
+    from runtime.io.figures import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig, ax = plt.subplots(figsize=(8, 4.5))

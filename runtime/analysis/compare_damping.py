@@ -363,15 +363,10 @@ def summary(result: ComparisonResult) -> dict:
 
 
 def _save_fig(fig, path: Path) -> Path:
-    import matplotlib.pyplot as plt
-
-    from runtime.io.atomic import save_figure
+    from runtime.io.figures import save
 
     fig.tight_layout()
-    try:
-        return save_figure(fig, path, dpi=110)
-    finally:
-        plt.close(fig)
+    return save(fig, path, dpi=110)
 
 
 def plot_compare(result: ComparisonResult, out: Path | str) -> list[Path]:
@@ -381,11 +376,9 @@ def plot_compare(result: ComparisonResult, out: Path | str) -> list[Path]:
     m, against t in s); compare_zeta.png: the measured per-cycle damping ratios against
     the linear predictions omega tau_E / 2 and omega tau~_E / 2.
     """
-    import matplotlib
+    from runtime.io.figures import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     cases = [c for c in CASES if c in result["cases"]]
     ylabel = {"bending": "tip x [m]", "axial": "tip u_z = z - L [m]"}
     paths = []

@@ -220,12 +220,10 @@ def fit_prony(omega: np.ndarray, storage: np.ndarray, loss: np.ndarray, *,
 
 def plot_dma(fit: DmaFit, path: Path) -> Path:
     """E' and E'' against frequency: data and fitted series (log-log)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from runtime.io.atomic import save_figure
+    from runtime.io.figures import pyplot
+
+    plt = pyplot()
 
     w = np.logspace(math.log10(fit.omega.min()) - 0.3, math.log10(fit.omega.max()) + 0.3, 200)
     Ep, Epp = fit.moduli(w)

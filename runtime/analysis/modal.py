@@ -31,8 +31,9 @@ natural (undamped) angular frequency ``omega`` (rad/s), the damped eigenvalue pa
 ``(lambda_1, lambda_2)`` (a complex-conjugate pair for an underdamped mode, two negative
 reals for an overdamped one; 1/s), the damping ratio ``zeta = -(lambda_1 + lambda_2) /
 (2 sqrt(lambda_1 lambda_2))`` (``= -Re(lambda)/|lambda|`` for a complex pair, > 1 when
-overdamped), the mode shape (node displacements and segment rotations) and the family from
-the fractions of the mode's strain energy in the six strain components
+overdamped), the mode shape (node displacements and segment rotations; its sign fixed, see
+below) and the family from the fractions of the mode's strain energy in the six strain
+components
 ``V1, V2`` (shear), ``V3`` (extension), ``U1, U2`` (bending about d1, d2), ``U3`` (torsion).
 Kelvin-Voigt damping with ``V = diag(tau) C`` (eq. (9)) gives ``zeta = omega tau / 2`` per
 family: ``tau_E`` for bending and extension, ``tau_S`` for torsion and shear.
@@ -59,6 +60,16 @@ Dense ``scipy.linalg.eig`` is used up to ``dense_max`` reduced unknowns (default
 N <= 50 clamped-free); above, sparse shift-invert ``scipy.sparse.linalg.eigs`` (undamped
 modes at ``sigma = 0``; each damped eigenvalue refined by shift-invert at the prediction of
 the modal projection): N = 200 takes 0.2 s sparse against 7 s dense.
+
+Sign of a mode shape
+--------------------
+An eigenvector is defined up to its sign, and eigensolvers return either (a rerun, another
+BLAS, a degenerate pair rotated differently). Every mode shape, rigid modes included, is
+therefore normalised by one rule (:func:`fix_sign`): the component of the reduced mode
+vector (node displacements in m, segment rotations in rad, mass-normalised) with the
+largest magnitude is positive; where several are within a relative 1e-6 of the largest
+(symmetric shapes), the first of them in the state's order decides. So every consumer
+(modes.json, the mode-shape plots, the notes) sees the same shape on every run.
 
 Limitation: damped eigenvalues are paired with undamped modes by the participation of the
 mode shapes. For strongly overdamped modes whose damping is not proportional (e.g. the
@@ -283,12 +294,16 @@ class Mode:
         """The damped eigenvalue with Im >= 0 (the slower one if overdamped), 1/s."""
         return self.eigenvalues[0]
 
-    def to_dict(self) -> dict:
-        """JSON-ready dict (complex numbers as [re, im], arrays as nested lists)."""
+    def to_dict(self, shapes: bool = True) -> dict:
+        """JSON-ready dict (complex numbers as [re, im], arrays as nested lists; without
+        ``displacement`` and ``rotation`` if not ``shapes``)."""
         d = asdict(self)
         d["eigenvalues"] = [[float(z.real), float(z.imag)] for z in self.eigenvalues]
-        d["displacement"] = self.displacement.tolist()
-        d["rotation"] = self.rotation.tolist()
+        if shapes:
+            d["displacement"] = self.displacement.tolist()
+            d["rotation"] = self.rotation.tolist()
+        else:
+            del d["displacement"], d["rotation"]
         d["frequency_hz"] = self.frequency_hz
         for key in ("zeta", "zeta_modal"):   # a rigid mode has no damping ratio
             if not math.isfinite(d[key]) and self.family == "rigid":
@@ -378,6 +393,28 @@ def _separate_degenerate(lin: Linearization, omega: np.ndarray, Phi: np.ndarray,
         Lc = np.linalg.cholesky(0.5 * (G + G.T))
         Phi[:, g] = np.linalg.solve(Lc, X.T).T
     return Phi
+
+
+#: components within this relative distance of the largest magnitude count as tied
+SIGN_TIE_RTOL = 1e-6
+
+
+def fix_sign(v: np.ndarray) -> np.ndarray:
+    """``v`` or ``-v``: the one whose largest-magnitude component (the first of those
+    within :data:`SIGN_TIE_RTOL` of it, in index order) is positive. A zero vector is
+    returned as it is."""
+    a = np.abs(v)
+    top = float(a.max(initial=0.0))
+    if top == 0.0:
+        return v
+    k = int(np.argmax(a >= (1.0 - SIGN_TIE_RTOL) * top))
+    return -v if v[k] < 0 else v
+
+
+def _fix_signs(X: np.ndarray) -> np.ndarray:
+    """:func:`fix_sign` applied to every column of ``X``."""
+    return np.column_stack([fix_sign(X[:, k]) for k in range(X.shape[1])]) if X.shape[1] \
+        else X
 
 
 def _pair_zeta(l1: complex, l2: complex) -> tuple[float, float]:
@@ -757,7 +794,8 @@ def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int =
         osc = np.abs(lam.imag) > 0
         lam, Xq = lam[osc], Xq[:, osc]
     omega = np.sqrt(np.maximum(w2, 0.0))
-    Phi = _separate_degenerate(lin, omega, Phi, lin.M)
+    Phi = _fix_signs(_separate_degenerate(lin, omega, Phi, lin.M))
+    Zn = _fix_signs(Zn)
     # participation of the undamped modes in every damped eigenvector (M-weighted)
     c = Phi.T @ (lin.M @ Xq)  # (modes, eigvecs)
     Pmat = np.abs(c.T) ** 2

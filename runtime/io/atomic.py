@@ -47,9 +47,24 @@ def write_bytes(path: Path, data: bytes) -> Path:
     return Path(path)
 
 
+#: metadata written by matplotlib that changes between runs or installations (the software
+#: version, creation dates), removed so that the same figure gives the same bytes
+_VOLATILE_METADATA = {".png": {"Software": None},
+                      ".pdf": {"Creator": None, "Producer": None, "CreationDate": None},
+                      ".svg": {"Creator": None, "Date": None}}
+
+
 def save_figure(fig, path: Path, **kwargs) -> Path:
-    """``fig.savefig`` atomically (the temporary keeps the image suffix for matplotlib)."""
+    """``fig.savefig`` atomically (the temporary keeps the image suffix for matplotlib).
+
+    Deterministic: the same figure gives the same bytes on every run (no software version
+    or date in the file's metadata; a caller's ``metadata`` is merged over that). Pass a
+    fixed ``dpi`` for the same pixel size everywhere.
+    """
     path = Path(path)
+    volatile = _VOLATILE_METADATA.get(path.suffix.lower())
+    if volatile is not None:
+        kwargs["metadata"] = {**volatile, **(kwargs.get("metadata") or {})}
     with atomic_path(path, suffix=path.suffix) as tmp:
         fig.savefig(tmp, **kwargs)
     return path

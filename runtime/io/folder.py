@@ -210,7 +210,7 @@ def remove_previous(path: Path, names: Iterable[str] = (), patterns: Iterable[st
 #: what each command writes into its folder (removed by --overwrite)
 RUN_FILES = ("summary.json", "series.npz", "checkpoint.npz", "vtk", "problem.toml",
              "static.npz")
-RUN_PATTERNS = ("*.png", ".*.tmp", ".*.tmp.npz")
+RUN_PATTERNS = ("*.png", "*.gif", "*.mp4", ".*.tmp", ".*.tmp.npz", ".*.tmp.*")
 
 
 @contextlib.contextmanager

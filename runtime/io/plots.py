@@ -1,37 +1,42 @@
-"""Plots of runs (matplotlib, Agg backend; axes labelled with units).
+"""Plots of runs (matplotlib through :mod:`runtime.io.figures`; axes labelled with units).
 
-:func:`plot_run` / :func:`plot_folder` draw any run (end displacements, energies, damping
-ratio per cycle when maxima were tracked); the others are the paper's figures for the
+:func:`plot_run` / :func:`plot_run_folder` draw any run: end displacements (ends.png),
+energies (energy.png), the damping ratio per cycle when maxima were tracked
+(damping_ratio.png) and the deformed centreline at a few frame times in 3-D
+(centreline.png, :mod:`runtime.io.shapes`); the others are the paper's figures for the
 cantilever reproduction. Only on request (``kvrod simulate --plots`` or ``kvrod plot
-DIR``): drawing costs more than a short simulation.
+DIR``): drawing costs more than a short simulation. Each ``figure_*`` function returns
+the matplotlib figure (for inspection), each ``plot_*`` function saves it.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
 from runtime.analysis.decay import damping_ratios, exponential_envelope, log_decrements
-
-
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+from runtime.io.figures import pyplot as _plt
+from runtime.io.figures import save
 
 
 def _save(fig, path: Path) -> Path:
-    from runtime.io.atomic import save_figure
+    return save(fig, path, dpi=120, bbox_inches="tight")
 
-    try:
-        return save_figure(fig, path, dpi=120, bbox_inches="tight")
-    finally:
-        _plt().close(fig)
+
+def padded_limits(values: Sequence[float] | np.ndarray, margin: float = 0.08
+                  ) -> tuple[float, float] | None:
+    """(low, high) around the finite ``values`` with ``margin`` of their range on each
+    side (of their size where they are all equal), or None if there is none."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return None
+    lo, hi = float(v.min()), float(v.max())
+    pad = margin * (hi - lo) if hi > lo else margin * max(abs(hi), 1e-300)
+    return lo - pad, hi + pad
 
 
 def plot_tip(runs: Sequence, labels: Sequence[str], path: Path, envelopes: bool = True) -> Path:
@@ -54,24 +59,51 @@ def plot_tip(runs: Sequence, labels: Sequence[str], path: Path, envelopes: bool 
     return _save(fig, path)
 
 
-def plot_damping_vs_amplitude(runs: Sequence, labels: Sequence[str], predictions: Sequence[float],
-                              path: Path) -> Path:
+def figure_damping_vs_amplitude(runs: Sequence, labels: Sequence[str],
+                                predictions: Sequence[float]):
     """Damping ratio per cycle zeta_k against the cycle's first amplitude x_k, with the
-    linear prediction omega_1 tau_E / 2."""
+    linear prediction (e.g. omega_1 tau_E / 2) as a dotted line; y-limits hold the data
+    and the predictions with margins, the amplitude axis is logarithmic where it spans
+    more than a factor 4."""
+    from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter
+
     plt = _plt()
     fig, ax = plt.subplots(figsize=(7, 4.5))
+    ys: list[float] = []
+    xs: list[float] = []
     for run, label, zlin in zip(runs, labels, predictions, strict=True):
         if run.peaks_x.size < 2:
             continue
         z = damping_ratios(log_decrements(run.peaks_x))
         line, = ax.plot(run.peaks_x[:-1], z, "o-", label=f"{label}")
-        ax.axhline(zlin, color=line.get_color(), ls=":", lw=1.0)
-    ax.set_xscale("log")
+        ys += list(z)
+        xs += list(run.peaks_x[:-1])
+        if math.isfinite(zlin):
+            ax.axhline(zlin, color=line.get_color(), ls=":", lw=1.2,
+                       label=f"{label}: linear {zlin:.4g}")
+            ys.append(zlin)
+    lim = padded_limits(ys, 0.12)
+    if lim is not None:
+        ax.set_ylim(*lim)
+    x = np.asarray(xs, dtype=float)
+    x = x[np.isfinite(x) & (x > 0)]
+    if x.size and x.max() > 4 * x.min():
+        ax.set_xscale("log")
+        ax.xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+        ax.xaxis.set_major_formatter(FormatStrFormatter("%g"))
+        ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("amplitude x_k at the start of the cycle [m]")
     ax.set_ylabel("damping ratio zeta_k [-]")
     ax.set_title("Damping ratio per cycle (dotted: linear omega_1 tau_E / 2)")
-    ax.legend()
-    return _save(fig, path)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="best")
+    return fig
+
+
+def plot_damping_vs_amplitude(runs: Sequence, labels: Sequence[str], predictions: Sequence[float],
+                              path: Path) -> Path:
+    """:func:`figure_damping_vs_amplitude` as PNG."""
+    return _save(figure_damping_vs_amplitude(runs, labels, predictions), path)
 
 
 def plot_overlay(run_a, label_a: str, run_b, label_b: str, stretch: float, path: Path) -> Path:
@@ -87,8 +119,9 @@ def plot_overlay(run_a, label_a: str, run_b, label_b: str, stretch: float, path:
     return _save(fig, path)
 
 
-def plot_energy(run, path: Path) -> Path:
-    """Kinetic, elastic, dissipated energy, external work and the relative balance error."""
+def figure_energy(run):
+    """Kinetic, elastic, dissipated energy, external work and the relative balance error
+    (legend outside the axes, right of the data)."""
     plt = _plt()
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
     a1.plot(run.t, run.kinetic, label="kinetic T")
@@ -97,14 +130,19 @@ def plot_energy(run, path: Path) -> Path:
     if np.any(run.external_work):
         a1.plot(run.t, run.external_work, label="external work int P dt")
     a1.set_ylabel("energy [J]")
-    a1.legend()
+    a1.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
     a2.plot(run.t, run.energy_balance_rel)
     a2.set_xlabel("time t [s]")
     a2.set_ylabel("balance error [-]")
-    return _save(fig, path)
+    return fig
 
 
-def plot_ends(run, path: Path) -> Path:
+def plot_energy(run, path: Path) -> Path:
+    """:func:`figure_energy` as PNG."""
+    return _save(figure_energy(run), path)
+
+
+def figure_ends(run):
     """Displacements of both ends from their initial positions over time."""
     plt = _plt()
     fig, ax = plt.subplots(figsize=(8, 4.5))
@@ -120,24 +158,48 @@ def plot_ends(run, path: Path) -> Path:
     ax.set_xlabel("time t [s]")
     ax.set_ylabel("displacement from t = 0 [m]")
     ax.axhline(0, color="0.7", lw=0.5)
-    ax.legend(fontsize=8)
-    return _save(fig, path)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    return fig
+
+
+def plot_ends(run, path: Path) -> Path:
+    """:func:`figure_ends` as PNG."""
+    return _save(figure_ends(run), path)
+
+
+def _zeta_prediction(run) -> float:
+    lp = run.problem.linear_prediction() if hasattr(run, "problem") else None
+    return lp["zeta_1"] if lp else math.nan
 
 
 def plot_run(run, out: Path) -> list[Path]:
-    """ends.png, energy.png and (with maxima) damping_ratio.png of a run into ``out``."""
+    """ends.png, energy.png, (with maxima) damping_ratio.png and (with centreline frames)
+    centreline.png of a run into ``out``."""
     out = Path(out)
     paths = [plot_ends(run, out / "ends.png"), plot_energy(run, out / "energy.png")]
     if getattr(run, "peaks_x", np.zeros(0)).size >= 2:
-        lp = run.problem.linear_prediction() if hasattr(run, "problem") else None
-        paths.append(plot_damping_vs_amplitude([run], ["run"], [lp["zeta_1"] if lp else
-                                                                np.nan],
+        paths.append(plot_damping_vs_amplitude([run], ["run"], [_zeta_prediction(run)],
                                                out / "damping_ratio.png"))
+    frames = getattr(run, "centreline", np.zeros((0, 3, 0)))
+    if frames.shape[0] and run.model is not None:
+        from runtime.io.shapes import plot_run_centreline
+
+        paths.append(plot_run_centreline(run.centreline_t, frames,
+                                         run.model.positions(run.model.reference),
+                                         out / "centreline.png", title=run.problem.name))
     return paths
 
 
-class _Loaded:
-    """A run read back from series.npz (the attributes the plots use)."""
+class LoadedRun:
+    """A run read back from series.npz (the attributes the plots use; ``centreline``
+    (m, 3, N+1) and ``reference`` (3, N+1) are empty for a run written before kvrod kept
+    centreline frames)."""
+
+    KEYS = ("t", "tip", "start", "kinetic", "elastic", "dissipated", "external_work",
+            "energy_balance_rel", "peaks_t", "peaks_x", "centreline_t", "centreline",
+            "reference")
+    EMPTY = {"tip": (3, 0), "start": (3, 0), "centreline": (0, 3, 0), "reference": (3, 0)}
 
     def __init__(self, out: Path) -> None:
         import zipfile
@@ -145,10 +207,9 @@ class _Loaded:
         path = Path(out) / "series.npz"
         try:
             with np.load(path, allow_pickle=False) as f:
-                for k in ("t", "tip", "start", "kinetic", "elastic", "dissipated",
-                          "external_work", "energy_balance_rel", "peaks_t", "peaks_x"):
+                for k in self.KEYS:
                     setattr(self, k, np.asarray(f[k], dtype=float) if k in f.files else
-                            np.zeros((3, 0) if k in ("tip", "start") else 0))
+                            np.zeros(self.EMPTY.get(k, 0)))
         except (OSError, ValueError, TypeError, EOFError, zipfile.BadZipFile) as exc:
             raise ValueError(f"{path} is damaged ({type(exc).__name__}: "
                              f"{' '.join(str(exc).split())[:120]}); run the problem again "
@@ -163,20 +224,28 @@ class _Loaded:
                              "(DIR/problem.toml) to rewrite it")
 
 
-def plot_folder(out: Path) -> list[Path]:
-    """The plots of :func:`plot_run` from a results folder's series.npz."""
+def plot_run_folder(out: Path) -> list[Path]:
+    """The plots of :func:`plot_run` from a results folder's series.npz (centreline.png
+    only when the run kept centreline frames)."""
     import json
 
-    run = _Loaded(out)
-    zlin = np.nan
+    out = Path(out)
+    run = LoadedRun(out)
+    zlin, name = math.nan, out.name
     try:
-        lp = json.loads((Path(out) / "summary.json").read_text()).get("linear_prediction")
-        zlin = lp["zeta_1"] if lp else np.nan
+        s = json.loads((out / "summary.json").read_text())
+        lp = s.get("linear_prediction")
+        zlin = lp["zeta_1"] if lp else math.nan
+        name = s.get("problem", name)
     except (OSError, ValueError, KeyError, TypeError):
         pass
-    out = Path(out)
     paths = [plot_ends(run, out / "ends.png"), plot_energy(run, out / "energy.png")]
     if run.peaks_x.size >= 2:
         paths.append(plot_damping_vs_amplitude([run], ["run"], [zlin],
                                                out / "damping_ratio.png"))
+    if run.centreline.shape[0] and run.reference.size:
+        from runtime.io.shapes import plot_run_centreline
+
+        paths.append(plot_run_centreline(run.centreline_t, run.centreline, run.reference,
+                                         out / "centreline.png", title=name))
     return paths

@@ -63,8 +63,11 @@ def write_run(out_dir: Path, run, extra: dict | None = None) -> dict:
     (n, 3, 3; columns d1, d2, d3) and their rotations from the reference,
     ``start_rotation``, ``end_rotation`` (3, n; rad, spatial rotation vectors); for each
     held end the support's ``start_reaction_force`` / ``_moment`` (3, n; N, N m about the
-    node, spatial, inertia included), likewise ``end_reaction_*``. problem.toml: the
-    resolved problem (rerun it with ``kvrod simulate DIR/problem.toml``).
+    node, spatial, inertia included), likewise ``end_reaction_*``; the deformed
+    centreline ``centreline`` (m, 3, N+1; m) at the frame times ``centreline_t`` (m,; s;
+    ``simulation.centreline_frames``) and the stress-free ``reference`` centreline
+    (3, N+1; m). problem.toml: the resolved problem (rerun it with ``kvrod simulate
+    DIR/problem.toml``).
     """
     out_dir = Path(out_dir)
     summary = run.summary()
@@ -83,7 +86,10 @@ def write_run(out_dir: Path, run, extra: dict | None = None) -> dict:
               external_work=run.external_work, energy_balance_rel=run.energy_balance_rel,
               peaks_t=run.peaks_t, peaks_x=run.peaks_x,
               y_static=run.y_static if run.y_static is not None else np.zeros(0),
-              y_last=run.y_last if run.y_last is not None else np.zeros(0), **ends)
+              y_last=run.y_last if run.y_last is not None else np.zeros(0),
+              centreline_t=run.centreline_t, centreline=run.centreline,
+              reference=(run.model.positions(run.model.reference) if run.model is not None
+                         else np.zeros((3, 0))), **ends)
     write_problem(out_dir / "problem.toml", summary["parameters"])
     write_json(out_dir / "summary.json", summary)
     return summary

@@ -237,6 +237,9 @@ KEYS: tuple[Key, ...] = (
     _k("simulation", "initial", "-", '"static"', "static, reference", "start from the "
        "static equilibrium under the loads at t = 0-, or from the reference at rest",
        invalid="rest"),
+    _k("simulation", "centreline_frames", "-", "101", "0 or 2 ... 10000", "node "
+       "positions kept at this many equally spaced times from 0 to t_end (the deformed "
+       "centreline that kvrod plot draws and animates; 0: none)", invalid=1),
     # -- [statics], [analysis] ----------------------------------------------------------
     _k("statics", "load_steps", "-", "10", "1 ... 10000", "initial load increments of "
        "the Newton continuation", invalid=0),

@@ -42,6 +42,8 @@ from runtime.problem.sections import GivenStiffness, Section, section_from_mappi
 MAX_ELEMENTS = 200_000          # ~1 GiB of band storage and work arrays
 MAX_SAMPLES = 10_000_000        # output samples t_end / output_step
 MAX_PERIODS = 1e6               # first-mode periods in t_end (~50 steps each)
+MAX_FRAMES = 10_000             # centreline frames of a run
+MAX_FRAME_VALUES = 7e7          # frames x nodes x 3 (~0.5 GiB of stored positions)
 #: smallest accepted tolerances (below them the error test works on round-off)
 RTOL_MIN = 100 * float(np.finfo(float).eps)
 ATOL_MIN = 1e-20
@@ -94,7 +96,9 @@ class Rod:
 class Simulation:
     """The dynamic run: end time (s), tolerances, output sampling (s), BDF settings and
     the initial state ("static": equilibrium under the loads at t = 0-; "reference": the
-    stress-free reference at rest). ``max_order`` None: :meth:`Problem.bdf_max_order`."""
+    stress-free reference at rest). ``max_order`` None: :meth:`Problem.bdf_max_order`.
+    ``centreline_frames``: node positions kept at this many equally spaced times from 0
+    to t_end (the deformed centreline for ``kvrod plot``; 0: none)."""
 
     t_end: float = 10.0
     rtol: float = 1e-6
@@ -103,6 +107,7 @@ class Simulation:
     max_order: int | None = None
     min_step: float = 0.0
     initial: str = "static"
+    centreline_frames: int = 101
 
     def __post_init__(self) -> None:
         C.positive("simulation.t_end", self.t_end)
@@ -118,6 +123,10 @@ class Simulation:
             C.integer("simulation.max_order", self.max_order, low=1, high=5)
         C.number("simulation.min_step", self.min_step, low=0.0, high=self.t_end)
         C.choice("simulation.initial", self.initial, ("static", "reference"))
+        if C.integer("simulation.centreline_frames", self.centreline_frames, low=0,
+                     high=MAX_FRAMES) == 1:
+            raise ParameterError("simulation.centreline_frames", 1,
+                                 f"0 (none) or 2 ... {MAX_FRAMES}")
 
 
 @dataclass(frozen=True)
@@ -189,6 +198,12 @@ class Problem:
         if self.simulation.initial == "reference" and self.loads and all(
                 ld.kind == "gravity" for ld in self.loads):
             pass  # a falling rod (pendulum): nothing to check
+        frames = self.simulation.centreline_frames
+        if frames * 3 * (N + 1) > MAX_FRAME_VALUES:
+            raise ParameterError("simulation.centreline_frames", frames,
+                                 f"0 ... {int(MAX_FRAME_VALUES // (3 * (N + 1)))} for "
+                                 f"{N} elements (at most {MAX_FRAME_VALUES:.0e} stored "
+                                 "node coordinates)")
         periods = self.simulation.t_end * self.characteristic_frequency() / (2 * math.pi)
         if periods > MAX_PERIODS:
             raise ParameterError(

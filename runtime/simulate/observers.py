@@ -403,6 +403,57 @@ class Snapshots:
         self.next = float(st.get("snap_next", math.nan))
 
 
+class Centreline:
+    """The deformed centreline: node positions (3, N+1) at the times ``t_frames`` (s), read
+    from the step's interpolant like :class:`Snapshots`, for plots and animations of a run.
+
+    Only positions are kept (3 (N+1) numbers a frame), so a run stores a modest grid of
+    them (``simulation.centreline_frames``) rather than full states. ``phi_index``
+    (N+1, 3): the state indices of the node positions.
+    """
+
+    name = "centreline"
+    sparse = True
+
+    def __init__(self, t_frames: np.ndarray, phi_index: np.ndarray) -> None:
+        self.t_frames = np.asarray(t_frames, dtype=float)
+        self.idx = np.asarray(phi_index, dtype=int)
+        self.k = 0
+        self.rec: list[np.ndarray] = []
+
+    def begin(self, run: Run) -> None:
+        if self.k == 0 and self.t_frames.size and self.t_frames[0] <= run.t:
+            self.rec.append(np.array(run.y[self.idx].T))
+            self.k = 1
+
+    def next_time(self) -> float:
+        return float(self.t_frames[self.k]) if self.k < self.t_frames.size else math.inf
+
+    def step(self, run: Run, dense, t0: float, t1: float) -> None:
+        k = int(np.searchsorted(self.t_frames, t1 + 1e-12 * max(1.0, abs(t1)), side="right"))
+        for t in self.t_frames[self.k:k]:
+            self.rec.append(np.array(np.asarray(dense(min(t, t1)))[self.idx].T))
+        self.k = max(self.k, k)
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(t, positions)``: the frame times reached (m,) and positions (m, 3, N+1), m."""
+        pos = (np.stack(self.rec) if self.rec
+               else np.zeros((0, 3, self.idx.shape[0])))
+        return self.t_frames[:self.k].copy(), pos
+
+    def state(self) -> dict[str, Any]:
+        return {"centreline_k": self.k, "centreline_positions": self.arrays()[1]}
+
+    def restore(self, st: dict[str, Any]) -> None:
+        self.k = int(st.get("centreline_k", 0))
+        pos = st.get("centreline_positions")
+        shape = (self.k, 3, self.idx.shape[0])
+        # a checkpoint without frames (an older kvrod): the frames before it are unknown
+        self.rec = list(np.asarray(pos, dtype=float).reshape(shape)
+                        if pos is not None and np.size(pos) == math.prod(shape)
+                        else np.full(shape, math.nan))
+
+
 class Progress:
     """Calls ``callback(t)`` after accepted steps (a progress bar): after every step
     without the compiled loop, else at its stops (at least every ``1/ticks`` of the

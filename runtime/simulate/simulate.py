@@ -30,7 +30,14 @@ from runtime.problem.assemble import build_model
 from runtime.problem.schema import Problem
 from runtime.problem.timefunctions import TimeFunction
 from runtime.simulate.loop import run_loop
-from runtime.simulate.observers import EnergyIntegrator, Maxima, Progress, Sampler, Snapshots
+from runtime.simulate.observers import (
+    Centreline,
+    EnergyIntegrator,
+    Maxima,
+    Progress,
+    Sampler,
+    Snapshots,
+)
 from runtime.solvers.initial import consistent_initial
 from runtime.solvers.statics import StaticSolveError, solve_static
 
@@ -77,7 +84,9 @@ class SimulationResult:
     Series on the output grid ``t`` (s): ``tip`` / ``start`` (3, n) positions of the
     s = L and s = 0 ends (m), ``kinetic``, ``elastic`` energies and the running
     ``dissipated`` energy int 2D and ``external_work`` int P (J); ``peaks_t``, ``peaks_x``:
-    maxima of ``analysis.maxima`` (displacement from the reference, m).
+    maxima of ``analysis.maxima`` (displacement from the reference, m);
+    ``centreline_t`` (m,) and ``centreline`` (m, 3, N+1): node positions (m) at the
+    ``simulation.centreline_frames`` frame times reached.
     """
 
     problem: Problem
@@ -106,6 +115,8 @@ class SimulationResult:
     model: RodModel | None = None
     interrupt: BaseException | None = None
     snapshots: list = field(default_factory=list)
+    centreline_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    centreline: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 0)))
 
     @property
     def y_static(self) -> np.ndarray | None:
@@ -414,7 +425,7 @@ def default_atol(problem: Problem, model: RodModel, y0: np.ndarray) -> np.ndarra
     return atol
 
 
-def static_equilibrium(problem: Problem, model: RodModel) -> StaticOutcome:
+def static_equilibrium(problem: Problem, model: RodModel | None = None) -> StaticOutcome:
     """Equilibrium under the loads at t = 0- (ends at their t = 0 positions), by Newton
     with load stepping (``problem.statics``).
 
@@ -422,8 +433,9 @@ def static_equilibrium(problem: Problem, model: RodModel) -> StaticOutcome:
     ----------
     problem : Problem
         The rod problem.
-    model : RodModel
-        Its model (:func:`~runtime.problem.assemble.build_model`).
+    model : RodModel, optional
+        Its model (:func:`~runtime.problem.assemble.build_model`), built from ``problem``
+        when not given (pass it to reuse one model, e.g. to read positions off the state).
 
     Returns
     -------
@@ -441,6 +453,8 @@ def static_equilibrium(problem: Problem, model: RodModel) -> StaticOutcome:
         motions without load along them are held by a gauge (``StaticOutcome.gauge``).
     """
     wall0 = time.perf_counter()
+    if model is None:
+        model = build_model(problem)
     st = RodStatics(model)
     path: list[tuple[float, np.ndarray]] = []
     with model.statics():
@@ -539,6 +553,11 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
     if snapshot_every is not None:
         observers.append(Snapshots(snapshot_every, snapshot_sink or (
             lambda t, y, yp: res.snapshots.append((t, y, yp)))))
+    centreline = None
+    if sim.centreline_frames:
+        centreline = Centreline(np.linspace(0.0, sim.t_end, sim.centreline_frames),
+                                model.phi_index)
+        observers.append(centreline)
     if progress is not None:
         observers.append(Progress(progress))
     counters0: dict[str, int] = {}
@@ -606,6 +625,11 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
             res.reactions[end] = {
                 what: a["extras"][[names.index(f"{end}_{what}_{c}") for c in "xyz"]]
                 for what in ("force", "moment")}
+    if centreline is not None:
+        res.centreline_t, res.centreline = centreline.arrays()
+        for end, i in (("start", 0), ("end", model.N)):
+            if i in model.held_nodes and held_at is not None and res.centreline_t.size:
+                res.centreline[:, :, i] = held_at(end, res.centreline_t).T
     if res.t.size:
         q = model.end_quaternions(res.t, a["p_first"].T, a["p_last"].T)
         res.end_quaternions = {end: v.T for end, v in q.items()}

@@ -82,8 +82,9 @@ def _compile(cc: str, dest: Path) -> None:
         out = Path(tmp) / dest.name
         from runtime.model import build
 
-        proc = build.run_compiler([*_EXTRA, str(Path(tmp) / FILES[0]), "-o", str(out),
-                                   "-lm"], cc)
+        with build.compiling(build.STEP_LOOP):
+            proc = build.run_compiler([*_EXTRA, str(Path(tmp) / FILES[0]), "-o", str(out),
+                                       "-lm"], cc)
         if proc.returncode != 0:
             raise subprocess.SubprocessError(proc.stderr)
         os.replace(out, dest)

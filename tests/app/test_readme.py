@@ -75,7 +75,7 @@ def test_readme_block(block, tmp_path):
 
 def test_readme_problem_file_and_python_snippet(tmp_path):
     """The abridged problem file of the README is a valid problem, and the Python snippet
-    runs as written (from the checkout, where examples/ is)."""
+    runs as written from any folder (it names a built-in problem)."""
     import tomllib
 
     from runtime.problem.schema import Problem
@@ -85,6 +85,6 @@ def test_readme_problem_file_and_python_snippet(tmp_path):
     problem = Problem.from_mapping(tomllib.loads(toml_block))
     assert problem.name == "my_rod" and problem.section.kind == "circle"
     (py_block,) = re.findall(r"```python\n(.*?)```", text, flags=re.S)
-    r = subprocess.run([sys.executable, "-c", py_block], cwd=README.parent,
+    r = subprocess.run([sys.executable, "-c", py_block], cwd=tmp_path,
                        capture_output=True, text=True, timeout=600)
     assert r.returncode == 0 and r.stdout.startswith("finished"), r.stderr[-2000:]

@@ -395,3 +395,42 @@ def test_pinned_free_rod_three_rigid_rotations_and_no_internal_error_when_loaded
     assert modes[0].family == "rigid"
     ref = _ss_reference()["bending-1"][0]
     assert all(abs(md.omega / ref - 1) < 5e-3 for md in modes[1:])
+
+
+def test_fix_sign_rule():
+    from runtime.analysis.modal import fix_sign
+
+    np.testing.assert_array_equal(fix_sign(np.array([0.1, -0.9, 0.3])), [-0.1, 0.9, -0.3])
+    np.testing.assert_array_equal(fix_sign(np.array([0.1, 0.9, -0.3])), [0.1, 0.9, -0.3])
+    # a symmetric shape: equal magnitudes up to round-off, the first one decides
+    v = np.array([0.0, -1.0, 0.2, 1.0 + 1e-13])
+    np.testing.assert_array_equal(fix_sign(v), -v)
+    np.testing.assert_array_equal(fix_sign(-v), -v)
+    np.testing.assert_array_equal(fix_sign(np.zeros(3)), np.zeros(3))
+
+
+@pytest.mark.parametrize("loaded", [False, True])
+def test_mode_shapes_do_not_flip_with_the_eigensolver(monkeypatch, loaded):
+    """Eigensolvers may return any sign: with every eigenvector negated the mode shapes
+    are the same (dense symmetric path unloaded, non-symmetric path about a loaded state;
+    the sparse path too)."""
+    from runtime.analysis import modal
+
+    problem = rod(10, tau_S=0.04, tau_B=0.04, height=0.012, loads=loaded)
+    model = RodModel(problem)
+    y_eq = static_equilibrium(problem, model).y if loaded else None
+    ref = modal_analysis(model, y_eq, count=6)
+    sparse = modal_analysis(model, y_eq, count=6, dense_max=0)
+    real_eigh, real_eig = la.eigh, la.eig
+    monkeypatch.setattr(modal.la, "eigh", lambda *a, **k: (lambda w, v: (w, -v))(
+        *real_eigh(*a, **k)))
+    monkeypatch.setattr(modal.la, "eig", lambda *a, **k: (lambda w, v: (w, -v))(
+        *real_eig(*a, **k)))
+    flipped = modal_analysis(model, y_eq, count=6)
+    for a, b, c in zip(ref, flipped, sparse, strict=True):
+        scale = np.abs(a.displacement).max() + np.abs(a.rotation).max()
+        for other in (b, c):
+            assert other.family == a.family
+            np.testing.assert_allclose(other.displacement, a.displacement, rtol=0,
+                                       atol=1e-6 * scale)
+            np.testing.assert_allclose(other.rotation, a.rotation, rtol=0, atol=1e-6 * scale)

@@ -1,0 +1,110 @@
+"""Rough edges a new user met: `kvrod --version`, the Python API without boilerplate
+(static_equilibrium without a model, built-in problems from any folder), and a line on
+stderr while the C code compiles."""
+
+from __future__ import annotations
+
+import hashlib
+import re
+import shutil
+import subprocess
+import sys
+from importlib import metadata
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_version(capsys):
+    from kvrod.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0
+    out = capsys.readouterr().out.strip()
+    m = re.fullmatch(r"kvrod (\S+) \(generated/ ([0-9a-f]{12})\)", out)
+    assert m, out
+    assert m.group(1) == metadata.version("kvrod")
+    manifest = (ROOT / "generated" / "MANIFEST.json").read_bytes()
+    assert m.group(2) == hashlib.sha256(manifest).hexdigest()[:12]
+
+
+def test_version_says_when_the_tree_differs_from_its_manifest(tmp_path, monkeypatch):
+    import generated
+    from kvrod.cli import version_text
+
+    copy = tmp_path / "generated"
+    shutil.copytree(ROOT / "generated", copy, ignore=shutil.ignore_patterns("__pycache__"))
+    monkeypatch.setattr(generated, "__file__", str(copy / "__init__.py"))
+    assert "differ" not in version_text()
+    (copy / "rod_assembly.c").write_text((copy / "rod_assembly.c").read_text() + "\n")
+    assert "1 file(s) differ from it" in version_text()
+
+
+def test_version_as_a_command_line():
+    r = subprocess.run([sys.executable, "-m", "kvrod", "--version"], capture_output=True,
+                       text=True, timeout=120)
+    assert r.returncode == 0 and r.stdout.startswith("kvrod "), r.stderr
+
+
+def test_static_equilibrium_without_a_model():
+    from runtime.problem.assemble import build_model
+    from runtime.problem.registry import load_problem
+    from runtime.simulate.simulate import static_equilibrium
+
+    problem = load_problem("clamped_both", {"rod.elements": 16})
+    alone = static_equilibrium(problem)
+    given = static_equilibrium(problem, build_model(problem))
+    assert alone.iterations > 0
+    np.testing.assert_allclose(alone.tip, given.tip, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(alone.y, given.y, rtol=0, atol=1e-12)
+
+
+def test_builtin_problem_from_any_folder(tmp_path, monkeypatch):
+    from runtime.problem.registry import ProblemFileError, load_problem
+
+    monkeypatch.chdir(tmp_path)
+    p = load_problem("pendulum", {"simulation.t_end": 1.0})
+    assert p.name == "pendulum" and p.simulation.t_end == 1.0
+    with pytest.raises(ProblemFileError, match="no such problem file"):
+        load_problem("examples/pendulum.toml")      # a path is relative to the cwd
+
+
+def test_compile_is_announced(tmp_path, monkeypatch, capsys):
+    """A compilation of the rod kernels tells the observers when it starts and how long it
+    took; the command line prints both on stderr (library code prints nothing)."""
+    from kvrod.notices import install_compile_notices, remove_compile_notices
+    from runtime.model import build
+
+    def fake_compiler(tail, compiler):     # writes a "library" where -o points
+        out = Path(tail[tail.index("-o") + 1])
+        out.write_bytes(b"not really a library")
+        return subprocess.CompletedProcess(tail, 0, "", "")
+
+    monkeypatch.setattr(build, "run_compiler", fake_compiler)
+    events = []
+    build.add_compile_observer(lambda what, s: events.append((what, s)))
+    try:
+        build.compile_library("cc", outdir=tmp_path)
+        assert capsys.readouterr().err == ""            # no observer that prints
+        install_compile_notices()
+        (tmp_path / "again").mkdir()
+        build.compile_library("cc", outdir=tmp_path / "again")
+        err = capsys.readouterr().err.splitlines()
+    finally:
+        remove_compile_notices()
+        build._observers.clear()
+    assert events[0] == (build.ROD_KERNELS, None) and events[1][1] >= 0
+    assert err[0] == "kvrod: compiling the rod kernels (first use, ~10 s; cached afterwards)..."
+    assert re.fullmatch(r"kvrod: compiled the rod kernels in \d+\.\d s", err[1])
+
+
+def test_compile_native_reports_zero_when_cached():
+    from runtime.model import build
+
+    build.compile_native()                              # whatever it takes the first time
+    spent = build.compile_native()
+    assert spent == {build.ROD_KERNELS: 0.0, build.STEP_LOOP: 0.0}
