@@ -323,18 +323,26 @@ def main(argv: Sequence[str] | None = None) -> int:
         previous = signal.signal(signal.SIGTERM, _on_sigterm)
     except ValueError:  # not the main thread (e.g. called from a test runner thread)
         previous = None
+    import warnings
+
     try:
-        parser = build_parser()
-        args = parser.parse_args(argv)
-        import shlex
+        with warnings.catch_warnings():
+            # floating-point RuntimeWarnings (overflow in NumPy or matplotlib) are no
+            # message for the user: whatever they foreshadow is checked and reported as
+            # one line (a non-finite solve, a rejected fit)
+            warnings.simplefilter("ignore", RuntimeWarning)
+            parser = build_parser()
+            args = parser.parse_args(argv)
+            import shlex
 
-        # the command as typed, for the measurements the notes commands write
-        args.command_line = shlex.join(["kvrod", *(sys.argv[1:] if argv is None else argv)])
-        if args.command not in _NO_COMPILE:
-            from kvrod.notices import install_compile_notices
+            # the command as typed, for the measurements the notes commands write
+            args.command_line = shlex.join(["kvrod",
+                                            *(sys.argv[1:] if argv is None else argv)])
+            if args.command not in _NO_COMPILE:
+                from kvrod.notices import install_compile_notices
 
-            install_compile_notices()
-        return int(args.func(args) or 0)
+                install_compile_notices()
+            return int(args.func(args) or 0)
     except BrokenPipeError:  # e.g. `kvrod derive show X | head`
         sys.stderr.close()
         return 0

@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 from kvrod.analyses import compare_table, modes_table, run_modes, write_compare, write_modes
+from kvrod.outputs import safe_name
 
 
 def _cli_error(message: str) -> Exception:
@@ -36,7 +37,7 @@ def _cmd_modes(args) -> int:
         raise _cli_error(f"kvrod modes: --count {args.count} exceeds the {nq} degrees of "
                          f"freedom of {problem.rod.elements} elements")
     out = Path(args.out) if args.out else Path("results") / (
-        f"modes-{problem.name}" + ("-deformed" if args.deformed else ""))
+        f"modes-{safe_name(problem.name)}" + ("-deformed" if args.deformed else ""))
     from kvrod.outputs import results_folder
 
     with results_folder(out, "modes", markers=("modes.json",), overwrite=args.overwrite,
@@ -119,15 +120,27 @@ def _cmd_calibrate(args) -> int:
     kw: dict = {}
     if args.tip_force is not None:
         kw["tip_force"] = args.tip_force
-    n = args.n_elements or 16
+    n = 16 if args.n_elements is None else args.n_elements
+    # the model is checked before the data, so a bad flag is named as such
+    problem = load_problem(args.problem, {"n_elements": n, **kw})
+    if problem.material.model != "kelvin_voigt":
+        raise _cli_error(f"kvrod calibrate: --problem {args.problem}: the fit is of the "
+                         f"Kelvin-Voigt tau, but this rod's material is "
+                         f"{problem.material.model}; give a Kelvin-Voigt rod, or fit a "
+                         "generalized Maxwell material to DMA data with --dma")
+    if args.tau0 is not None:
+        lo, hi = cal.tau_range(problem)
+        if not lo <= args.tau0 <= hi:
+            raise _cli_error(f"kvrod calibrate: --tau0 = {args.tau0:g} s is outside the "
+                             f"allowed range: {lo:g} ... {hi:.3g} s for this rod (below: no "
+                             "measurable damping; above: the viscous forces swamp the "
+                             "inertia)")
     try:
         if args.mode == "signal":
             data = cal.validate_signal(*cal.load_csv(args.data, ("t", "x")))
-            problem = load_problem(args.problem, {"n_elements": n, **kw})
             cal.check_record(data[0], data[1], problem)
         else:
             data = (cal.validate_decrements(*cal.load_csv(args.data, ("delta",))),)
-            problem = load_problem(args.problem, {"n_elements": n, **kw})
     except ValueError as exc:
         from runtime.errors import ParameterError
 

@@ -6,6 +6,7 @@ import math
 import sys
 from pathlib import Path
 
+from kvrod.outputs import safe_name
 from kvrod.problem_args import add_problem_arguments, problem_from_args
 from kvrod.runs import already_finished, run_and_write, static_and_write
 
@@ -59,7 +60,7 @@ def _cmd_simulate(args) -> int:
         raise CliError(f"kvrod simulate: --vtk = {args.vtk} would write "
                        f"{problem.simulation.t_end / args.vtk:.3g} frames (at most 100000; "
                        "t_end/--vtk)")
-    out = Path(args.out) if args.out else Path("results") / problem.name
+    out = Path(args.out) if args.out else Path("results") / safe_name(problem.name)
     if args.resume and already_finished(problem, out):
         print(f"{out}: this run has already finished (summary.json); nothing to resume")
         return 0
@@ -77,7 +78,7 @@ def _cmd_simulate(args) -> int:
 def _cmd_static(args) -> int:
     """`kvrod static PROBLEM --out DIR` (see :func:`static_and_write`)."""
     problem = problem_from_args(args, "static")
-    out = Path(args.out) if args.out else Path("results") / f"{problem.name}-static"
+    out = Path(args.out) if args.out else Path("results") / f"{safe_name(problem.name)}-static"
     summary, _, _ = static_and_write(problem, out, overwrite=args.overwrite)
     st = summary["static"]
     print("\n".join(_static_lines(st)))

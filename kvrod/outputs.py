@@ -39,3 +39,11 @@ def check_file_argument(path: Path, flag: str) -> Path:
         raise F.FolderError(f"{flag} {str(path)!r} is a folder, not a file")
     F.check_output_path(path.parent if str(path.parent) else Path("."), flag)
     return path
+
+
+def safe_name(name: str) -> str:
+    """A problem's name as one folder name under results/ (the default --out): letters,
+    digits, '-', '_' and '.' kept, anything else (a '/', '..') made '_', so a name such
+    as "../../etc" cannot place results outside results/."""
+    safe = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in name).strip(".")
+    return safe or "problem"

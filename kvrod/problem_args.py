@@ -4,8 +4,10 @@ Every command that runs a problem (simulate, static, modes, sweep points) takes 
 way: a problem file or built-in name, then overrides from ``--config`` (the earlier
 format), the short flags (``--tau``, ``--E``, ``--n-elements``, ...) and ``--set
 path=value`` (any key of the problem file, e.g. ``--set loads.0.time.start=0.5``), in
-that order. The values go through the problem schema's checks (one line naming the key,
-value and range).
+that order. A value may be an inline TOML table or array (``--set
+'loads.1={kind="force", vector=[0,0,1]}'``); the index one past an array's last entry
+appends an entry (:data:`SET_HELP`). The values go through the problem schema's checks
+(one line naming the key, value and range).
 """
 
 from __future__ import annotations
@@ -30,6 +32,16 @@ FLAGS: tuple[tuple[str, str, type, str], ...] = (
 )
 
 
+#: what --set does (its --help, and `kvrod problem-keys`)
+SET_HELP = ("set any key of the problem (repeatable; TOML values, in order): "
+            "--set material.tau=0.02, --set loads.0.vector=[0.1,0,0]; a whole table "
+            "or entry as an inline table: --set 'material={youngs_modulus=2e6, tau=0.01}' "
+            "replaces the material; an array of tables ([[loads]], "
+            "[[material.branches]]) is indexed from 0 and the index one past its last "
+            "entry appends one: --set 'loads.1={kind=\"force\", vector=[0,0,1]}' adds "
+            "a second load")
+
+
 def add_problem_arguments(p: argparse.ArgumentParser, required: bool = False) -> None:
     """PROBLEM, --config, the short flags, --set and --damping."""
     p.add_argument("problem", nargs=None if required else "?",
@@ -41,8 +53,7 @@ def add_problem_arguments(p: argparse.ArgumentParser, required: bool = False) ->
     p.add_argument("--damping", choices=("consistent", "naive"),
                    help="extensional viscosity eta_E (consistent) or eta~_E (naive)")
     p.add_argument("--set", dest="sets", action="append", default=[], metavar="PATH=VALUE",
-                   help="set any key of the problem, e.g. --set material.tau=0.02 or "
-                        "--set loads.0.vector=[0.1,0,0] (repeatable; TOML values)")
+                   help=SET_HELP.replace("%", "%%"))
 
 
 def parse_set(item: str) -> tuple[str, Any]:

@@ -85,7 +85,11 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
         from generated import rod_layout
         from runtime.io.results import CheckpointError
 
-        n = rod_layout.n_state(problem.rod.elements)
+        # the state holds the internal strains of a generalized Maxwell rod's relaxation
+        # terms too (as many as runtime.problem.assemble gives the rod's arrays)
+        terms = len(problem.material.rod_matrices(problem.section, np.array([0.5]))
+                    .get("theta", ()))
+        n = rod_layout.n_state(problem.rod.elements, terms)
         for key in ("y", "yp"):
             if np.shape(state[key]) != (n,) or not np.all(np.isfinite(state[key])):
                 raise CheckpointError(f"--resume: checkpoint {str(out / CHECKPOINT)!r} holds a "

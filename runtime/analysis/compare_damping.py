@@ -204,13 +204,72 @@ def _check_inputs(n_elements: int, tau_S: float, tau_B: float, cases: tuple[str,
         raise ValueError(f"axial_zeta = {axial_zeta!r} must be in (0, 1) (underdamped)")
 
 
+#: damping ratios of the first bending mode (either route) whose ratio the bending decay
+#: resolves: below ZETA_MIN the release's higher modes, barely damped, still beat in the
+#: later maxima (measured at N = 4 and 20: tau_S = 3e-3 s, zeta 0.004, is 3 to 12 % off the
+#: predicted ratio, tau_S = 1e-3 s up to 90 %; tau_S = 0.01 s, zeta 0.012, within 0.3 %);
+#: above ZETA_MAX the maxima of the 5 periods fall toward the integrator's tolerance
+ZETA_MIN, ZETA_MAX = 0.01, 0.5
+#: static tip deflection of the bending release, as a fraction of L: above
+#: DEFLECTION_MIN the decay is resolved above the integrator's tolerance (measured: the
+#: ratio is within 0.3 % down to 4e-8 L and off by 16 % at 4e-10 L), below DEFLECTION_MAX
+#: it is linear (measured: 0.3 % off at 0.36 L, 3 % at 1.8 L)
+DEFLECTION_MIN, DEFLECTION_MAX = 1e-6, 0.1
+
+
+def _check_ranges(base: Problem, tau_S: float, tau_B: float, poisson_ratio: float,
+                  tip_force: float, axial_zeta: float) -> None:
+    """The decays must be resolvable and linear (ValueError naming the parameter and its
+    range for this rod)."""
+    lp = base.linear_prediction()
+    omega = lp["omega_1"]
+    taus = {"consistent": float(retardation_time_extension(tau_B, tau_S, poisson_ratio)),
+            "naive": float(retardation_time_extension_naive(tau_B, tau_S))}
+    for route, tau in sorted(taus.items(), key=lambda kv: kv[0] != "naive"):
+        zeta = omega * tau / 2
+        if not ZETA_MIN <= zeta <= ZETA_MAX:
+            # the naive tau~_E depends on the retardation times only, tau_E on nu as well
+            name = ("tau_S" if tau_S >= tau_B else "tau_B") if route == "naive" else "nu"
+            value = {"tau_S": tau_S, "tau_B": tau_B, "nu": poisson_ratio}[name]
+            raise ValueError(
+                f"{name} = {value:g}{' s' if name != 'nu' else ''} is outside the allowed "
+                f"range (with tau_S = {tau_S:g} s, tau_B = {tau_B:g} s, nu = "
+                f"{poisson_ratio:g}): the first bending mode's "
+                f"damping ratio omega_1 tau_E / 2 must lie in [{ZETA_MIN}, {ZETA_MAX}] on both "
+                f"routes for a resolvable decay over the run (here {route}: tau_E = "
+                f"{tau:.3g} s, zeta = {zeta:.3g}; omega_1 = {omega:.4g} rad/s: tau_E = "
+                f"{2 * ZETA_MIN / omega:.3g} ... {2 * ZETA_MAX / omega:.3g} s)")
+    ratio = taus["consistent"] / taus["naive"]
+    if not ZETA_MIN <= axial_zeta * ratio <= ZETA_MAX:
+        raise ValueError(
+            f"tau_B = {tau_B:g} s with tau_S = {tau_S:g} s and nu = {poisson_ratio:g} give "
+            f"tau_E / tau~_E = {ratio:.3g}: the axial decay (naive zeta {axial_zeta}) needs "
+            f"a ratio in [{ZETA_MIN / axial_zeta:.3g}, {ZETA_MAX / axial_zeta:.3g}] to be "
+            "resolvable on both routes")
+    m = base._uniform_matrices()
+    EI = float(m["C_M"][0, 1])            # tip x along d1 bends about d2
+    L = base.rod.length
+    per_newton = L**3 / (3 * EI)          # Euler-Bernoulli tip deflection per N (m/N)
+    lo, hi = DEFLECTION_MIN * L / per_newton, DEFLECTION_MAX * L / per_newton
+    if not (math.isfinite(tip_force) and lo <= abs(tip_force) <= hi):
+        raise ValueError(
+            f"tip_force = {tip_force:g} N is outside the allowed range: {lo:.3g} ... "
+            f"{hi:.3g} N in magnitude for this rod (a static tip deflection F L^3 / (3 E I) "
+            f"of {DEFLECTION_MIN:g} ... {DEFLECTION_MAX:g} L: resolvable above the "
+            "integrator's tolerance and within the linear range the comparison assumes)")
+
+
 def check_inputs(n_elements: int = 20, tau_S: float = 0.04, tau_B: float = 0.0,
                  poisson_ratio: float = 0.3, tip_force: float = 0.001,
                  rtol: float = 1e-7) -> None:
     """Validate the parameters of :func:`compare_damping` (ValueError naming the first bad
-    one) without running anything."""
+    one and its range) without running anything."""
     _check_inputs(n_elements, tau_S, tau_B, CASES, 5.0, 6.0, 0.05)
-    _base(n_elements, tau_S, tau_B, poisson_ratio, tip_force, rtol)
+    if not (math.isfinite(rtol) and 0 < rtol <= 1e-4):
+        raise ValueError(f"rtol = {rtol!r} is outside the allowed range: 0 < rtol <= 1e-4 "
+                         "(the measured damping ratios need an accurate decay)")
+    _check_ranges(_base(n_elements, tau_S, tau_B, poisson_ratio, tip_force, rtol),
+                  tau_S, tau_B, poisson_ratio, tip_force, 0.05)
 
 
 def _base(n_elements, tau_S, tau_B, poisson_ratio, tip_force, rtol) -> Problem:
@@ -244,6 +303,7 @@ def compare_damping(n_elements: int = 20, tau_S: float = 0.04, tau_B: float = 0.
     cases = tuple(cases)
     _check_inputs(n_elements, tau_S, tau_B, cases, bending_cycles, axial_cycles, axial_zeta)
     base = _base(n_elements, tau_S, tau_B, poisson_ratio, tip_force, rtol)
+    _check_ranges(base, tau_S, tau_B, poisson_ratio, tip_force, axial_zeta)
     omega_eb = base.linear_prediction()["omega_1"]
     t_bend = bending_cycles * 2 * math.pi / omega_eb
     L, E, rho = base.rod.length, base.material.youngs_modulus, base.material.density

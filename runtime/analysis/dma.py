@@ -119,21 +119,38 @@ def load_dma(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
                          f"'frequency_hz' (Hz) or 'omega' (rad/s); columns: {', '.join(names)}")
     f, Ep, Epp = load_csv(path, (freq[0], *MODULUS_COLUMNS))
     omega = f * FREQUENCY_COLUMNS[freq[0]]
+    # the file's line of each data row and its cells (load_csv skips comments and blanks)
+    import csv
+
+    rows = [(i, r) for i, r in enumerate(csv.reader(path.read_text(encoding="utf-8")
+                                                    .splitlines()), 1)
+            if r and any(c.strip() for c in r) and not r[0].lstrip().startswith("#")][1:]
     for name, v in ((freq[0], f), ("storage", Ep), ("loss", Epp)):
         bad = np.flatnonzero(~np.isfinite(v) | (v <= 0) if name != "loss"
                              else ~np.isfinite(v) | (v < 0))
         if bad.size:
             k = int(bad[0])
-            raise ValueError(f"data file {str(path)!r}: row {k + 2}: {name} = {v[k]!r} is "
+            line, cells = rows[k] if k < len(rows) else (k + 2, [])
+            col = names.index(name)
+            text = cells[col].strip() if col < len(cells) else ""
+            shown = (f"{float(v[k]):g}" if np.isfinite(v[k]) else
+                     f"{text!r} (not a finite number)" if text else "missing")
+            raise ValueError(f"data file {str(path)!r}: line {line}: {name} = {shown} is "
                              f"outside the allowed range: a finite number "
                              f"{'>= 0' if name == 'loss' else '> 0'}")
     if omega.size < 3:
         raise ValueError(f"data file {str(path)!r} has {omega.size} rows; a fit needs at "
                          "least 3 frequencies")
     if np.any(np.diff(omega) <= 0):
-        k = int(np.flatnonzero(np.diff(omega) <= 0)[0])
-        raise ValueError(f"data file {str(path)!r}: row {k + 3}: the frequencies must "
-                         "increase strictly")
+        k = int(np.flatnonzero(np.diff(omega) <= 0)[0]) + 1
+        line = rows[k][0] if k < len(rows) else k + 2
+        raise ValueError(f"data file {str(path)!r}: line {line}: the frequencies must "
+                         f"increase strictly ({float(f[k - 1]):g} then {float(f[k]):g})")
+    span = math.log10(omega.max()) - math.log10(omega.min())
+    if span > 30:
+        raise ValueError(f"data file {str(path)!r}: the frequencies span {span:.3g} decades "
+                         f"({float(f.min()):g} ... {float(f.max()):g}); at most 30 "
+                         "(check the units of the frequency column)")
     return omega, Ep, Epp
 
 
@@ -162,7 +179,8 @@ def fit_prony(omega: np.ndarray, storage: np.ndarray, loss: np.ndarray, *,
     storage = np.asarray(storage, dtype=float)
     loss = np.asarray(loss, dtype=float)
     if not per_decade > 0:
-        raise ValueError(f"per_decade = {per_decade!r} is outside the allowed range: > 0")
+        raise ValueError(f"per_decade = {float(per_decade):g} is outside the allowed range: "
+                         "> 0")
     lo, hi = math.log10(1.0 / omega.max()) - 0.5, math.log10(1.0 / omega.min()) + 0.5
     n_terms = max(1, int(round((hi - lo) * per_decade)) + 1)
     theta = np.logspace(lo, hi, n_terms)

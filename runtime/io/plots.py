@@ -202,9 +202,26 @@ class LoadedRun:
     EMPTY = {"tip": (3, 0), "start": (3, 0), "centreline": (0, 3, 0), "reference": (3, 0)}
 
     def __init__(self, out: Path) -> None:
-        with np.load(Path(out) / "series.npz", allow_pickle=False) as f:
-            for k in self.KEYS:
-                setattr(self, k, f[k] if k in f.files else np.zeros(self.EMPTY.get(k, 0)))
+        import zipfile
+
+        path = Path(out) / "series.npz"
+        try:
+            with np.load(path, allow_pickle=False) as f:
+                for k in self.KEYS:
+                    setattr(self, k, np.asarray(f[k], dtype=float) if k in f.files else
+                            np.zeros(self.EMPTY.get(k, 0)))
+        except (OSError, ValueError, TypeError, EOFError, zipfile.BadZipFile) as exc:
+            raise ValueError(f"{path} is damaged ({type(exc).__name__}: "
+                             f"{' '.join(str(exc).split())[:120]}); run the problem again "
+                             "(DIR/problem.toml) to rewrite it") from None
+        nt = self.t.shape
+        bad = [k for k in ("tip", "start") if getattr(self, k).shape[1:] != nt] + [
+            k for k in ("kinetic", "elastic", "dissipated", "external_work")
+            if getattr(self, k).size and getattr(self, k).shape != nt]
+        if self.t.ndim != 1 or bad or self.peaks_t.shape != self.peaks_x.shape:
+            raise ValueError(f"{path} is damaged (arrays {', '.join(bad) or 't/peaks'} do not "
+                             f"match t of shape {nt}); run the problem again "
+                             "(DIR/problem.toml) to rewrite it")
 
 
 def plot_run_folder(out: Path) -> list[Path]:

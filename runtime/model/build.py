@@ -143,10 +143,13 @@ def _manifest_hash(text: str) -> str:
 def verify_manifest(gdir: Path | None = None, names: tuple[str, ...] | None = None) -> None:
     """Check generated files against generated/MANIFEST.json before anything uses them.
 
-    ``names``: the files to check (default: the C sources and headers and, when present in
-    the manifest, the serialised CasADi kernels). Raises :class:`GeneratedCodeError`
-    naming the file when the manifest is missing, unreadable or truncated, lacks an entry,
-    or a file is missing or does not match its recorded hash.
+    ``names``: the files to check (default: every file the manifest lists, the Python
+    formula modules ``constitutive.py`` and ``rod_layout.py`` as well as the C sources,
+    headers and serialised CasADi kernels, and the C sources and headers even if the
+    manifest lost their entries). Raises :class:`GeneratedCodeError` naming the file when
+    the manifest is missing, unreadable or truncated, lacks an entry, or a file is missing
+    or does not match its recorded hash (an edited ``constitutive.py`` would otherwise
+    change every material silently).
     """
     gdir = gdir or generated_dir()
     mpath = gdir / "MANIFEST.json"
@@ -163,7 +166,8 @@ def verify_manifest(gdir: Path | None = None, names: tuple[str, ...] | None = No
         raise GeneratedCodeError(f"{mpath} is unreadable or truncated ({type(exc).__name__}); "
                                  f"{regen}") from None
     if names is None:
-        names = SOURCES + HEADERS + tuple(sorted(n for n in files if n.endswith(".casadi")))
+        names = SOURCES + HEADERS + tuple(sorted(n for n in files
+                                                 if n not in SOURCES + HEADERS))
     for name in names:
         entry = files.get(name)
         if not isinstance(entry, dict) or "sha256" not in entry:
@@ -176,7 +180,7 @@ def verify_manifest(gdir: Path | None = None, names: tuple[str, ...] | None = No
         if _manifest_hash(text) != entry.get("sha256"):
             raise GeneratedCodeError(
                 f"generated/{name} does not match generated/MANIFEST.json (edited by hand or "
-                f"stale); {regen}")
+                f"stale); {regen} (or restore the file from version control)")
 
 
 @lru_cache(maxsize=1)

@@ -55,7 +55,7 @@ class ProblemDrive:
     #: steps per time scale of an active input at most (a ramp's duration, a harmonic's
     #: period, a table piece): the error test sees nothing to control in a rod at rest
     STEPS_PER_TIME_SCALE = 10
-    #: breakpoints closer than this (relative to max(1, |t|)) are one
+    #: breakpoints closer than this (relative to ``max(1, |t|)``) are one
     MERGE_RTOL = 1e-10
 
     def _inputs(self) -> list[tuple[TimeFunction, bool]]:

@@ -320,17 +320,27 @@ def _transport(t: np.ndarray, n0: np.ndarray) -> np.ndarray:
     return frames
 
 
-def points_curve(points: np.ndarray, normal=None, path: str = "rod.geometry.points") -> Curve:
+def points_curve(points: np.ndarray, normal=None, path: str = "rod.geometry.points",
+                 where: list[str] | None = None) -> Curve:
     """A :class:`Curve` through the polyline ``points`` (M, 3): a cubic spline in the chord
-    length, re-parametrised by arc length (so its frames and curvature are smooth)."""
+    length, re-parametrised by arc length (so its frames and curvature are smooth).
+
+    ``path`` names the points in errors (``rod.geometry.points`` or ``.file``) and
+    ``where[k]`` row k ("row 3 (from 0)", "pts.csv line 5"): a polyline whose spline
+    folds back (its tangent reverses, so it is no regular curve) is refused naming the
+    row where it does.
+    """
     from scipy.interpolate import CubicSpline
 
     P = np.asarray(points, dtype=float)
     if P.ndim != 2 or P.shape[1] != 3 or P.shape[0] < 2 or not np.all(np.isfinite(P)):
         raise ParameterError(path, "points", "at least 2 finite [x, y, z] points")
+    where = list(where or []) + [f"row {k} (from 0)" for k in range(len(where or []), len(P))]
     chord = np.linalg.norm(np.diff(P, axis=0), axis=1)
     if np.any(chord <= 0):
-        raise ParameterError(path, "points", "distinct consecutive points")
+        k = int(np.argmax(chord <= 0)) + 1
+        raise ParameterError(path, "points", f"distinct consecutive points ({where[k]} "
+                             f"repeats the point before it, {list(P[k])})")
     u = np.concatenate([[0.0], np.cumsum(chord)])
     spl = CubicSpline(u, P, bc_type="natural") if P.shape[0] > 2 else None
     fine = np.linspace(0.0, u[-1], 20001)
@@ -343,11 +353,27 @@ def points_curve(points: np.ndarray, normal=None, path: str = "rod.geometry.poin
     s_f = np.concatenate([[0.0], np.cumsum(ds)])
     length = float(s_f[-1])
 
+    if spl is not None:
+        # the spline in the chord parameter has speed ~1; where it drops toward 0 the
+        # curve turns back on itself (a cusp or loop), which no rod reference can follow
+        speed = np.linalg.norm(spl(fine, 1), axis=1)
+        j = int(np.argmin(speed))
+        if speed[j] < 0.5:
+            k = int(np.argmin(np.abs(u - fine[j])))
+            raise ParameterError(path, "points", "a polyline that does not fold back: the "
+                                 f"smooth curve through it reverses near {where[k]} "
+                                 f"({', '.join(f'{v:g}' for v in P[k])}); move or remove "
+                                 "that point")
+
     def function(s: np.ndarray) -> np.ndarray:
         uu = np.interp(s, s_f, fine)
         return (spl(uu) if spl is not None else P[0] + np.outer(uu / u[-1], P[1] - P[0])) - P[0]
 
-    return Curve(function=function, curve_length=length, normal=normal)
+    try:
+        return Curve(function=function, curve_length=length, normal=normal)
+    except ParameterError as exc:         # name the points, not the internal callable
+        raise ParameterError(path, "points", f"a smooth curve through the points: "
+                             f"{exc.allowed}") from None
 
 
 @dataclass(frozen=True)
@@ -419,9 +445,15 @@ def geometry_from_mapping(m: Mapping[str, Any] | None, length: float | None,
         if ("points" in m) == ("file" in m):
             raise ParameterError(f"{path}.points", m.get("points"),
                                  "either points = [[x, y, z], ...] or file = CSV")
-        pts = m["points"] if "points" in m else _read_points(f"{path}.file", m["file"], base)
+        if "points" in m:
+            pts, key = m["points"], f"{path}.points"
+            where = [f"row {k} (from 0)" for k in range(len(pts))] if isinstance(
+                pts, (list, tuple)) else []
+        else:
+            key = f"{path}.file"
+            pts, where = _read_points(key, m["file"], base)
         c = points_curve(np.asarray(pts, dtype=float) if _numeric_rows(pts) else
-                         _bad_points(f"{path}.points", pts), vec.get("normal"))
+                         _bad_points(key, pts), vec.get("normal"), key, where)
         g = Curve(function=c.function, curve_length=c.curve_length, normal=c.normal, **common)
         object.__setattr__(g, "_source", {"kind": "points", "points": [list(map(float, p))
                                                                         for p in pts]})
@@ -443,18 +475,48 @@ def _bad_points(path: str, pts: Any):
     raise ParameterError(path, pts, "at least 2 finite [x, y, z] points")
 
 
-def _read_points(path: str, file: Any, base: Path | None) -> list[list[float]]:
+def _read_points(path: str, file: Any, base: Path | None
+                 ) -> tuple[list[list[float]], list[str]]:
+    """(rows x, y, z, and where each row is in the file: "FILE line K") of a points CSV.
+
+    An optional header is the first line that is not a comment ('#'); every other row
+    must hold exactly three numbers (a row with a typo is refused, naming the file, line
+    and column, never skipped).
+    """
     name = C.string(path, file)
     f = Path(name) if Path(name).is_absolute() or base is None else base / name
     try:
         text = f.read_text()
     except OSError as exc:
         raise ParameterError(path, name, f"a readable CSV file ({exc.strerror})") from None
-    rows = []
-    for row in csv.reader(ln for ln in text.splitlines()
-                          if ln.strip() and not ln.lstrip().startswith("#")):
-        try:
-            rows.append([float(v) for v in row[:3]])
-        except ValueError:
-            continue                                   # a header
-    return rows
+    except UnicodeDecodeError as exc:
+        raise ParameterError(path, name, f"a UTF-8 text CSV file ({exc.reason})") from None
+    rows: list[list[float]] = []
+    where: list[str] = []
+    first = True
+    for lineno, line in enumerate(text.splitlines(), 1):
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        row = next(csv.reader([line]))
+        values = []
+        for col, v in enumerate(row, 1):
+            try:
+                values.append(float(v))
+            except ValueError:
+                values = None
+                bad = (col, v)
+                break
+        if values is None and first and not rows:
+            first = False
+            continue                                   # the header
+        first = False
+        if values is None:
+            col, v = bad
+            raise ParameterError(path, name, f"numbers x, y, z in every row: line {lineno} "
+                                 f"column {col} is {v.strip()!r}, not a number")
+        if len(values) != 3 or not all(math.isfinite(v) for v in values):
+            raise ParameterError(path, name, f"three finite numbers x, y, z in every row: "
+                                 f"line {lineno} holds {line.strip()!r}")
+        rows.append(values)
+        where.append(f"{name} line {lineno}")
+    return rows, where

@@ -59,8 +59,8 @@ KEYS: tuple[Key, ...] = (
     _k("", "name", "-", "file name", "text", "the problem's name (results folder default)"),
     _k("", "description", "-", '""', "text", "one line shown in reports"),
     # -- [rod] --------------------------------------------------------------------------
-    _k("rod", "length", "m", "required (straight)", "> 0; for other geometries their "
-       "length, or left out", "arc length L of the rod", invalid=-1.0),
+    _k("rod", "length", "m", "required (straight)", "1e-30 ... 1e30; for other "
+       "geometries their length, or left out", "arc length L of the rod", invalid=-1.0),
     _k("rod", "elements", "-", "50", "1 ... 200000", "number of elements N", invalid=0),
     _k("rod", "geometry", "-", "straight", "a table", "the reference centreline and frames "
        "(below)"),
@@ -74,7 +74,8 @@ KEYS: tuple[Key, ...] = (
        kinds=("straight", "points")),
     _k("rod.geometry", "twist", "rad/m", "0", "a number", "uniform twist of the directors "
        "about the tangent", invalid="fast"),
-    _k("rod.geometry", "origin", "m", "[0, 0, 0]", _VEC, "position of the start s = 0",
+    _k("rod.geometry", "origin", "m", "[0, 0, 0]", _VEC + ", |origin| <= 1e-8 (L/N)/eps",
+       "position of the start s = 0",
        invalid=[0, 0]),
     _k("rod.geometry", "radius", "m", "1.0", "> 0", "radius of the arc", invalid=0.0,
        kinds=("arc",)),
@@ -106,7 +107,7 @@ KEYS: tuple[Key, ...] = (
     # -- [section] ----------------------------------------------------------------------
     _k("section", "kind", "-", '"rectangle"', "rectangle, ellipse, circle, tube, stiffness",
        "shape of the cross-section, or stiffnesses given directly", invalid="hexagon"),
-    *(_k("section", n, "m", "required", "> 0" if n != "inner_radius" else
+    *(_k("section", n, "m", "required", "1e-30 ... 1e30" if n != "inner_radius" else
          ">= 0, < outer_radius", f"{kind}: {what}", invalid=-0.01, kinds=(kind,))
       for kind, dims in _SHAPES.items() for n, what in dims),
     *(_k("section", f"{n}_end", "m", "= the start value", "as the start value",
@@ -124,17 +125,21 @@ KEYS: tuple[Key, ...] = (
     _k("material", "density_end", "kg/m^3", "= density", "> 0", "density at s = L "
        "(linear variation)", invalid=0.0),
     _k("material", "youngs_modulus", "Pa", "1e6", "> 0 (Maxwell: >= 0, the equilibrium "
-       "spring E_inf)", "Young's modulus E", invalid=-1.0),
+       "spring E_inf; 0 needs simulation.initial = reference under loads; glassy moduli at "
+       "most 1e10 times the equilibrium ones)", "Young's modulus E", invalid=-1.0),
     _k("material", "youngs_modulus_end", "Pa", "= youngs_modulus", "> 0", "E at s = L "
        "(linear variation)", invalid=0.0, kinds=("kelvin_voigt",)),
     _k("material", "poisson_ratio", "-", "0.3", "-1 < nu <= 1/2 (Maxwell: < 1/2)",
        "Poisson's ratio nu", invalid=0.7),
-    _k("material", "tau", "s", "0", ">= 0; not with tau_S/tau_B or eta/zeta",
+    _k("material", "tau", "s", "0", ">= 0, tau omega_max^2 <= 0.1/eps (omega_max: the "
+       "stiffest element mode); not with tau_S/tau_B or eta/zeta",
        "retardation time tau_S = tau_B = tau (the paper's choice, tau_E = tau)",
        invalid=-0.01, kinds=("kelvin_voigt",)),
-    _k("material", "tau_S", "s", "0", ">= 0", "shear retardation time (eta = G tau_S)",
+    _k("material", "tau_S", "s", "0", ">= 0, as tau", "shear retardation time (eta = G "
+       "tau_S)",
        invalid=-0.01, kinds=("kelvin_voigt",)),
-    _k("material", "tau_B", "s", "0", ">= 0", "bulk retardation time (zeta = K tau_B)",
+    _k("material", "tau_B", "s", "0", ">= 0, as tau", "bulk retardation time (zeta = K "
+       "tau_B)",
        invalid=-0.01, kinds=("kelvin_voigt",)),
     _k("material", "eta", "Pa s", "0", ">= 0; not with tau, tau_S, tau_B",
        "shear viscosity (instead of tau_S)", invalid=-1.0, kinds=("kelvin_voigt",)),
@@ -146,8 +151,8 @@ KEYS: tuple[Key, ...] = (
     _k("material", "branches", "-", "required", "1 ... 12 tables [[material.branches]]",
        "the Maxwell branches (below)", invalid=[], kinds=("generalized_maxwell",)),
     # -- [[material.branches]] ----------------------------------------------------------
-    _k("material.branches", "tau", "s", "required", "> 0", "relaxation time of the branch",
-       invalid=0.0),
+    _k("material.branches", "tau", "s", "required", ">= 1e-12", "relaxation time of the "
+       "branch", invalid=0.0),
     _k("material.branches", "youngs_modulus", "Pa", "-", ">= 0; with poisson_ratio, not "
        "with shear/bulk_modulus", "the branch's spring as E", invalid=-1.0),
     _k("material.branches", "poisson_ratio", "-", "-", "-1 < nu < 1/2", "the branch's "
@@ -163,8 +168,9 @@ KEYS: tuple[Key, ...] = (
     *(_k(end, "motion", "-", "none", "a table (held ends)", "prescribed motion of a held "
          "end (below)", invalid=3) for end in ("start", "end")),
     *(k for end in ("start", "end") for k in (
-        _k(f"{end}.motion", "translation", "m", "[0, 0, 0]", _VEC, "displacement of the "
-           "end (spatial), times translation_time", invalid=[1, 2]),
+        _k(f"{end}.motion", "translation", "m", "[0, 0, 0]", _VEC + ", at most 1e-8 "
+           "(L/N)/eps", "displacement of the end (spatial), times translation_time",
+           invalid=[1, 2]),
         _k(f"{end}.motion", "translation_time", "-", "constant 1", "a time function "
            "(<time>), continuous", "scales translation", invalid={"kind": "step"}),
         _k(f"{end}.motion", "rotation_axis", "-", "[0, 0, 1]", _UNIT_VEC, "fixed spatial "
@@ -177,8 +183,10 @@ KEYS: tuple[Key, ...] = (
     _k("loads", "kind", "-", '"force"', "gravity, distributed, force, moment",
        "gravity (m/s^2), dead force per length (N/m), point force (N), point moment (N m)",
        invalid="torque"),
-    _k("loads", "vector", "see kind", "required", _VEC, "the load's vector (spatial, or in "
-       "the node's reference frame for a follower)", invalid=[1, 0]),
+    _k("loads", "vector", "see kind", "required", _VEC + "; times the time function's peak "
+       "at most a strain of 1e6 (|F| / min(EA, GA), |q| L / ..., rho A |g| L / ..., "
+       "rotation |M| L / min(EI, GJ))", "the load's vector (spatial, or in the node's "
+       "reference frame for a follower)", invalid=[1, 0]),
     _k("loads", "time", "-", "constant 1", "a time function (<time>)", "scales the load "
        "in time", invalid={"kind": "sometimes"}),
     _k("loads", "at", "-", '"end"', 'start, end, or a node 0 ... N', "where a point load "
@@ -200,7 +208,8 @@ KEYS: tuple[Key, ...] = (
        invalid=0.0, kinds=("ramp", "smooth_ramp")),
     _k("<time>", "amplitude", "-", "1", "a number", "offset + amplitude sin(2 pi f t + "
        "phase)", invalid="big", kinds=("harmonic",)),
-    _k("<time>", "frequency", "Hz", "0", ">= 0", "frequency f of the harmonic",
+    _k("<time>", "frequency", "Hz", "0", ">= 0, at most 1e6 periods in t_end",
+       "frequency f of the harmonic",
        invalid=-1.0, kinds=("harmonic",)),
     _k("<time>", "phase", "rad", "0", "a number", "phase of the harmonic", invalid="late",
        kinds=("harmonic",)),
@@ -212,7 +221,8 @@ KEYS: tuple[Key, ...] = (
     _k("<time>", "file", "-", "-", "a CSV file with columns t, value", "the points from a "
        "file", invalid="missing.csv", kinds=("table",)),
     # -- [simulation] -------------------------------------------------------------------
-    _k("simulation", "t_end", "s", "10", "> 0 (at most 1e6 first-mode periods)",
+    _k("simulation", "t_end", "s", "10", ">= sqrt(eps)/omega_max (omega_max: the stiffest "
+       "element mode), at most 1e6 first-mode periods",
        "end time of the run", invalid=0.0),
     _k("simulation", "rtol", "-", "1e-6", "2.2e-14 ... < 1", "relative tolerance of the "
        "BDF integrator", invalid=1e-16),
@@ -241,6 +251,21 @@ KEYS: tuple[Key, ...] = (
 )
 
 
+#: how the command line and the Python API change keys (shown by both renderings)
+OVERRIDES = (
+    "Any key can be changed without editing the file: on the command line with `--set "
+    "PATH=VALUE` (repeatable, TOML values: `--set material.tau=0.02`, `--set "
+    "loads.0.vector=[0,0,1]`), in Python with `load_problem(path, {PATH: value})` or "
+    "`Problem.with_overrides({PATH: value})`. PATH is the table path and key below; an "
+    "array of tables (`[[loads]]`, `[[material.branches]]`) is indexed from 0 "
+    "(`loads.0.time.start`). A whole table or entry is given as an inline table (a "
+    "dict in Python): `--set 'material={youngs_modulus=2e6, tau=0.01}'` replaces the "
+    "material. To append an entry, give the whole entry at the index one past the "
+    "last: `--set 'loads.1={kind=\"force\", vector=[0,0,1]}'` adds a second load to a "
+    "problem with one (a larger index is refused, naming the allowed range). Every "
+    "value is checked as in a problem file.")
+
+
 def by_table() -> dict[str, list[Key]]:
     """The catalogue grouped by table, in file order."""
     out: dict[str, list[Key]] = {}
@@ -251,7 +276,7 @@ def by_table() -> dict[str, list[Key]]:
 
 def markdown() -> str:
     """The reference as Markdown tables, one per table (what the documentation shows)."""
-    lines = []
+    lines = ["### Changing keys: `--set` and overrides", "", OVERRIDES, ""]
     for table, keys in by_table().items():
         head = ("top level" if not table else "time functions (`time = {...}` of a load, "
                 "`translation_time`/`rotation_time` of a motion)" if table == "<time>"
@@ -275,4 +300,9 @@ def text() -> str:
         kinds = f" [{', '.join(k.kinds)}]" if k.kinds else ""
         out.append(f"{path}{kinds}  unit: {k.unit}; default: {k.default}; allowed: "
                    f"{k.allowed}\n    {k.doc}")
+    import textwrap
+
+    out += ["", "changing keys (--set, overrides):",
+            textwrap.fill(OVERRIDES.replace("`", ""), 88, initial_indent="    ",
+                          subsequent_indent="    ")]
     return "\n".join(out)

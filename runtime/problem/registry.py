@@ -70,8 +70,15 @@ def problem_path(spec: str | Path) -> Path:
         if not p.exists():
             raise ProblemFileError(f"{p}: no such problem file")
         return p
-    if str(spec) in builtin_names():
-        return EXAMPLES_DIR / f"{spec}.toml"
+    # a built-in name is its own file: read that one (not every example, which a study
+    # of many points would otherwise parse once per point)
+    f = EXAMPLES_DIR / f"{spec}.toml"
+    if f.is_file():
+        try:
+            if _is_problem(tomllib.loads(f.read_text())):
+                return f
+        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+            pass
     names = ", ".join(builtin_names()) or "(none found)"
     raise ProblemFileError(f"unknown problem {str(spec)!r}; built-in problems: {names}; or "
                            "give a problem file (.toml)")
@@ -88,7 +95,15 @@ def load_problem(spec: str | Path | Problem,
         e.g. ``"cantilever"``) or a :class:`~runtime.problem.schema.Problem`.
     overrides : mapping, optional
         ``{"material.tau": 0.02, "rod.elements": 30}``: dotted paths or the command
-        line's short names (:data:`~runtime.problem.schema.ALIASES`).
+        line's short names (:data:`~runtime.problem.schema.ALIASES`), applied in order.
+        A value may be a whole table or array of tables, as a dict or a list of dicts:
+        ``{"material": {"density": 7800.0, "youngs_modulus": 2.1e11, "tau": 1e-4}}``
+        replaces the material, ``{"loads": [{"kind": "gravity", "vector": [0, 0, -9.81]}]}``
+        all loads; an array entry is named by its index (``"loads.0.vector"``), and the
+        index one past the last entry appends a whole entry
+        (``{"loads.1": {"kind": "force", "vector": [0, 0, 1.0]}}`` to a problem with one
+        load; the same for ``material.branches``). Every value is checked exactly as in
+        a problem file.
 
     Returns
     -------

@@ -47,6 +47,29 @@ MAX_FRAME_VALUES = 7e7          # frames x nodes x 3 (~0.5 GiB of stored positio
 #: smallest accepted tolerances (below them the error test works on round-off)
 RTOL_MIN = 100 * float(np.finfo(float).eps)
 ATOL_MIN = 1e-20
+#: fastest viscous rate tau omega_max^2 (1/s) of a discrete Kelvin-Voigt rod accepted:
+#: 0.1/eps. The integrator forms its iteration matrices (and the consistent initial
+#: accelerations) from the viscous and inertial terms together; where the viscous rate
+#: of the stiffest element mode exceeds 1/eps times the inertia, the inertia is lost to
+#: round-off (measured: cantilever N = 4 / 50 / 400 fails from tau = 1e9 / 1e8 / 1e6 s,
+#: rates 4e16 / 4e15 / 2e15 1/s; this bound keeps a 10 % margin below the first failure).
+VISCOUS_RATE_MAX = 0.1 / float(np.finfo(float).eps)
+#: largest load accepted, as the strain (or, for a moment, the rotation in rad) it would
+#: cause if the rod's softest stiffness carried it alone: ``|F| / min(EA, GA)``,
+#: ``|q| L / min(EA, GA)``, ``rho A |g| L / min(EA, GA)``, ``|M| L / min(EI, GJ)``. A
+#: linear rod law means nothing long before a strain of 1; the bound only keeps out loads
+#: whose solve cannot mean anything (1e300 N overflows the residual) while a merely too
+#: large load (1e6 N on the paper's cantilever, a strain of 3e4) still runs and fails with
+#: its own message.
+LOAD_STRAIN_MAX = 1e6
+#: below this Young's modulus (Pa; the softest real solids, gels, have 10 ... 100 Pa) a
+#: load beyond LOAD_STRAIN_MAX or a t_end below the fastest mode's round-off scale is
+#: blamed on the material, by the statics' own check (runtime.model.rigid)
+SOFT_E_MIN = 1.0
+_LOAD_UNITS = {"force": "N", "distributed": "N/m", "gravity": "m/s^2", "moment": "N m"}
+#: largest ratio of a generalized Maxwell solid's glassy to equilibrium shear or bulk modulus
+#: (real polymers: 1e2 ... 1e4; at 1e300 the static solve meets a singular Jacobian)
+GLASSY_RATIO_MAX = 1e10
 #: first root of 1 + cos(x) cosh(x) = 0 (clamped-free Euler-Bernoulli beam)
 BETA1_L = 1.8751040687119611
 
@@ -161,7 +184,12 @@ class Problem:
     base: Path | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
+        from runtime.problem.sections import LENGTH_MAX, LENGTH_MIN, LENGTH_RANGE
+
         N = self.rod.elements
+        if not LENGTH_MIN <= self.rod.length <= LENGTH_MAX:
+            raise ParameterError("rod.length", self.rod.length, LENGTH_RANGE)
+        self._check_matrices()
         for ld in self.loads:
             if ld.s is not None and ld.s > self.rod.length * (1 + 1e-12):
                 raise ParameterError("loads.s", ld.s, f"0 ... rod length {self.rod.length:g} m")
@@ -187,6 +215,200 @@ class Problem:
                 f"{getattr(self.material, 'youngs_modulus', float('nan')):g} Pa); the run "
                 f"would need more than {50 * periods:.2g} steps")
 
+        self._check_viscous_rate()
+        self._check_maxwell_springs()
+        self._check_load_magnitudes()
+        self._check_positions()
+        self._check_input_frequencies()
+        w_max = math.sqrt(self.element_rates()[0])
+        t_min = math.sqrt(float(np.finfo(float).eps)) / w_max
+        soft = (not isinstance(self.section, GivenStiffness)
+                and getattr(self.material, "youngs_modulus", 1.0) < SOFT_E_MIN)
+        if self.simulation.t_end < t_min and not soft:   # (soft: see SOFT_E_MIN)
+            raise ParameterError(
+                "simulation.t_end", self.simulation.t_end,
+                f">= sqrt(eps) / omega_max = {t_min:.3g} s for this rod (omega_max = "
+                f"{w_max:.4g} rad/s, its stiffest element mode at N = {self.rod.elements}, "
+                f"from length {self.rod.length:g} m, density "
+                f"{getattr(self.material, 'density', float('nan')):g} kg/m^3, "
+                f"material.youngs_modulus = "
+                f"{getattr(self.material, 'youngs_modulus', float('nan')):g} Pa): in a "
+                "shorter run not even that mode moves the rod by more than round-off (a "
+                "displacement ~ (omega t)^2 of its scale)")
+
+    def _check_maxwell_springs(self) -> None:
+        """A generalized Maxwell rod: without an equilibrium spring (a Maxwell fluid) no
+        static equilibrium exists under loads; and its instantaneous (glassy) modulus may
+        exceed the equilibrium one by at most GLASSY_RATIO_MAX, beyond which the relaxed
+        stiffness is lost to round-off next to the branches'."""
+        mat = self.material
+        if not isinstance(mat, GeneralizedMaxwell):
+            return
+        if mat.youngs_modulus == 0.0:
+            if self.loads and self.simulation.initial == "static":
+                raise ParameterError(
+                    "simulation.initial", "static", '"reference" for a Maxwell fluid '
+                    "(material.youngs_modulus = 0: no equilibrium spring, so no static "
+                    "equilibrium under the loads; start from the reference at rest)")
+            return
+        G_inf, K_inf, G_j, K_j, _ = mat.moduli       # of the 3-D solid (Pa)
+        with np.errstate(over="ignore", invalid="ignore"):
+            ratio = max((G_inf + float(np.sum(G_j))) / G_inf,
+                        (K_inf + float(np.sum(K_j))) / K_inf)
+        if not ratio <= GLASSY_RATIO_MAX:
+            k = int(np.argmax([b.shear_modulus + b.bulk_modulus for b in mat.branches]))
+            raise ParameterError(
+                f"material.branches.{k}", mat.branches[k].to_mapping(),
+                f"branches whose springs keep the glassy moduli at most "
+                f"{GLASSY_RATIO_MAX:.0e} times the equilibrium ones (G_inf = {G_inf:g} Pa, "
+                f"K_inf = {K_inf:g} Pa; here "
+                f"{ratio:.3g} times): beyond it the relaxed stiffness is lost to round-off")
+
+    def _check_matrices(self) -> None:
+        """The rod's stiffness and inertia must be finite and positive numbers."""
+        m = self._end_matrices()
+        for key in ("C_F", "C_M", "rhoA", "rhoI"):
+            v = np.asarray(m[key], dtype=float)
+            if not (np.all(np.isfinite(v)) and np.all(v > 0)):
+                what = "stiffness" if key.startswith("C") else "mass or rotary inertia"
+                raise ParameterError(
+                    "section", self.section.to_mapping(),
+                    f"a section and material whose {what} ({key}) is a finite number > 0 "
+                    f"(here {key} = {float(np.min(v)):.3g} ... {float(np.max(v)):.3g}; material "
+                    f"E = {getattr(self.material, 'youngs_modulus', float('nan')):g} Pa, "
+                    f"density {getattr(self.material, 'density', float('nan')):g} kg/m^3)")
+
+    def _check_positions(self) -> None:
+        """Positions (origin, prescribed translations) and clamp rotations small enough
+        that round-off leaves the element strains meaningful: |r| eps <= 1e-8 L/N (a
+        strain error of 1e-8), |angle| eps <= 1e-8 rad."""
+        eps = float(np.finfo(float).eps)
+        r_max = 1e-8 * self.rod.length / self.rod.elements / eps
+        origin = getattr(self.rod.geometry, "origin", (0.0, 0.0, 0.0))
+        if math.hypot(*origin) > r_max:
+            raise ParameterError("rod.geometry.origin", list(origin),
+                                 f"|origin| <= 1e-8 (L/N)/eps = {r_max:.3g} m for this rod: "
+                                 "farther out, round-off of the coordinates swamps the "
+                                 "elements' strains")
+        a_max = math.degrees(1e-8 / eps)
+        for name, end in (("start", self.start), ("end", self.end)):
+            mo = end.motion
+            if mo is None:
+                continue
+            with np.errstate(over="ignore"):
+                tr = math.hypot(*mo.translation) * _time_peak(mo.translation_time)
+                ang = abs(mo.rotation_angle) * _time_peak(mo.rotation_time)
+            if tr > r_max:
+                raise ParameterError(f"{name}.motion.translation", list(mo.translation),
+                                     f"|translation| x its time function's peak <= 1e-8 "
+                                     f"(L/N)/eps = {r_max:.3g} m for this rod (here "
+                                     f"{tr:.3g} m): farther, round-off of the coordinates "
+                                     "swamps the elements' strains")
+            if ang > a_max:
+                raise ParameterError(f"{name}.motion.rotation_angle", mo.rotation_angle,
+                                     f"|rotation_angle| x its time function's peak <= "
+                                     f"{a_max:.3g} deg (1e-8 rad / eps: the round-off of a "
+                                     "larger angle exceeds 1e-8 rad)")
+
+    def _check_input_frequencies(self) -> None:
+        """A harmonic input may hold at most MAX_PERIODS periods in t_end (a run resolves
+        each period with tens of steps, like the rod's own modes)."""
+        inputs = [(f"loads.{k}.time", ld.time) for k, ld in enumerate(self.loads)]
+        for name, end in (("start", self.start), ("end", self.end)):
+            if end.motion is not None:
+                inputs += [(f"{name}.motion.translation_time", end.motion.translation_time),
+                           (f"{name}.motion.rotation_time", end.motion.rotation_time)]
+        for name, tf in inputs:
+            if getattr(tf, "kind", "") != "harmonic":
+                continue
+            with np.errstate(over="ignore"):
+                periods = self.simulation.t_end * float(tf.frequency)
+            if periods > MAX_PERIODS:
+                raise ParameterError(f"{name}.frequency", tf.frequency,
+                                     f"at most {MAX_PERIODS:.0e} periods in t_end = "
+                                     f"{self.simulation.t_end:g} s, i.e. <= "
+                                     f"{MAX_PERIODS / self.simulation.t_end:.3g} Hz (each "
+                                     "period needs tens of integrator steps)")
+
+    def _check_load_magnitudes(self) -> None:
+        if (not isinstance(self.section, GivenStiffness)
+                and getattr(self.material, "youngs_modulus", 1.0) < SOFT_E_MIN):
+            # the material is the likely culprit, not the load: the statics refuse it
+            # naming material.youngs_modulus (runtime.model.rigid.check_stiffness)
+            return
+        m = self._end_matrices()
+        EA = float(np.min(m["C_F"]))
+        EI = float(np.min(m["C_M"]))
+        rhoA = float(np.max(m["rhoA"]))
+        L = self.rod.length
+        for k, ld in enumerate(self.loads):
+            size = math.hypot(*ld.vector)          # no overflow of the squares
+            peak = _time_peak(ld.time)
+            scale = {"force": 1 / EA, "distributed": L / EA, "gravity": rhoA * L / EA,
+                     "moment": L / EI}[ld.kind]
+            with np.errstate(over="ignore"):
+                measure = size * peak * scale
+            if measure <= LOAD_STRAIN_MAX:
+                continue
+            what = "rotation (rad) |M| L / min(EI, GJ)" if ld.kind == "moment" else (
+                "strain |F| / min(EA, GA)" if ld.kind == "force" else
+                "strain |q| L / min(EA, GA)" if ld.kind == "distributed" else
+                "strain rho A |g| L / min(EA, GA)")
+            name, value = ((f"loads.{k}.time", ld.time.to_mapping())
+                           if size * scale <= LOAD_STRAIN_MAX and peak > 1 else
+                           (f"loads.{k}.vector", list(ld.vector)))
+            raise ParameterError(
+                name, value, f"a load whose {what} stays below {LOAD_STRAIN_MAX:.0e} (this "
+                f"load: {measure:.3g}, its time function peaking at {peak:.3g}; the rod "
+                f"carries at most {LOAD_STRAIN_MAX / scale:.3g} {_LOAD_UNITS[ld.kind]} "
+                f"meaningfully: its softest stiffness is {EI if ld.kind == 'moment' else EA:.3g} "
+                f"{'N m^2' if ld.kind == 'moment' else 'N'}, from the section and "
+                f"material.youngs_modulus = {getattr(self.material, 'youngs_modulus', 0):g} "
+                "Pa)")
+
+    def element_rates(self) -> tuple[float, float]:
+        """(omega_max^2 in 1/s^2, viscous rate in 1/s) of the stiffest element mode: the
+        largest stiffness-to-inertia ratio over the rod's element modes (extension,
+        shear, bending and torsion of one element of length L/N, and the rotation of a
+        section against its shear stiffness, kappa G A / (rho I)), from C and from the
+        Kelvin-Voigt V = diag(tau) C (eqs. (7), (9)); evaluated at both ends and the middle
+        (tapers are linear). A generalized Maxwell material has no V: rate 0."""
+        m = self._end_matrices()
+        k2 = (self.rod.elements / self.rod.length) ** 2
+        rhoA, rhoI = m["rhoA"][:, None], m["rhoI"]
+        rhoI12 = np.min(rhoI[:, :2], axis=1)[:, None]
+
+        def rate(F: np.ndarray, M: np.ndarray) -> float:
+            with np.errstate(over="ignore", invalid="ignore"):
+                r = np.concatenate([(F / rhoA * k2).ravel(), (M / rhoI * k2).ravel(),
+                                    (F[:, :2] / rhoI12).ravel()])
+            return float(np.max(r)) if np.all(np.isfinite(r)) else math.inf
+
+        if "V_F" not in m or isinstance(self.material, GeneralizedMaxwell):
+            return rate(m["C_F"], m["C_M"]), 0.0
+        return rate(m["C_F"], m["C_M"]), rate(m["V_F"], m["V_M"])
+
+    def _check_viscous_rate(self) -> None:
+        if isinstance(self.material, GeneralizedMaxwell):
+            return
+        w2, lam = self.element_rates()
+        if lam <= VISCOUS_RATE_MAX:
+            return
+        mat = self.material
+        if mat.tau_S == mat.tau_B:
+            name, value = "material.tau", mat.tau_S
+        elif mat.tau_S > mat.tau_B:
+            name, value = "material.tau_S", mat.tau_S
+        else:
+            name, value = "material.tau_B", mat.tau_B
+        raise ParameterError(
+            name, value, f"retardation times with tau * omega_max^2 <= {VISCOUS_RATE_MAX:.2g} "
+            f"1/s, i.e. tau <= {VISCOUS_RATE_MAX / w2:.3g} s for this rod (N = "
+            f"{self.rod.elements} elements: its stiffest element mode has omega_max^2 = "
+            f"{w2:.3g} 1/s^2); beyond it the viscous forces exceed the inertia by more than "
+            "1/(10 eps) and the integrator loses the inertia to round-off (the first mode's "
+            f"damping ratio would be {self.characteristic_frequency() * value / 2:.3g})")
+
     # -- derived figures ---------------------------------------------------------------
     def bdf_max_order(self) -> int:
         """The highest BDF order of a run: ``simulation.max_order`` if given, else 5, and 2
@@ -208,8 +430,17 @@ class Problem:
         x = (np.arange(N) + 0.5) / N
         return self.material.rod_matrices(self.section, x)
 
+    def _end_matrices(self) -> dict[str, np.ndarray]:
+        """The rod matrices at the start, middle and end (x = 0, 1/2, 1), computed once
+        (the checks of every new problem use them)."""
+        m = self.__dict__.get("_m3")
+        if m is None:
+            m = self.material.rod_matrices(self.section, np.array([0.0, 0.5, 1.0]))
+            object.__setattr__(self, "_m3", m)
+        return m
+
     def _uniform_matrices(self) -> dict[str, np.ndarray]:
-        return self.material.rod_matrices(self.section, np.array([0.5]))
+        return {k: v[1:2] if k != "theta" else v for k, v in self._end_matrices().items()}
 
     def characteristic_frequency(self) -> float:
         """Euler-Bernoulli clamped-free first bending frequency (rad/s) of the rod at mid
@@ -316,24 +547,49 @@ class Problem:
         )
 
     def with_overrides(self, overrides: Mapping[str, Any]) -> Problem:
-        """A new problem with dotted-path values replaced (aliases allowed), all checked."""
+        """A new problem with dotted-path values replaced (aliases allowed), all checked.
+
+        Keys are applied in order: dotted paths (``"material.tau"``, ``"loads.0.vector"``),
+        the short :data:`ALIASES`, or a top-level table (``"material"``, ``"loads"``). A
+        value may be a whole table (dict) or array of tables (list of dicts); the index
+        one past an array's last entry appends a whole entry (``{"loads.1": {"kind":
+        "force", "vector": [0, 0, 1.0]}}``). The result is validated exactly as a problem
+        file would be (:meth:`from_mapping`); the caller's values are not modified.
+        """
         if not overrides:
             return self
         if isinstance(self.rod.geometry, Curve) and getattr(self.rod.geometry, "_source",
                                                            None) is None:
             raise ParameterError("rod.geometry", "curve", "a TOML-expressible geometry for "
                                  "overrides (a Python callable)")
-        m = copy.deepcopy(self.to_mapping())
+        base = self.__dict__.get("_mapping")
+        if base is None:                  # a study applies thousands of overrides to one
+            base = self.to_mapping()
+            object.__setattr__(self, "_mapping", base)
+        m = copy.deepcopy(base)
+        used: dict[str, str] = {}
         for key, value in overrides.items():
-            apply_override(m, key, value)
+            used[apply_override(m, key, value)] = key
         try:
             return Problem.from_mapping(m, base=self.base, name=self.name)
         except ParameterError as exc:   # name the value as the caller wrote it
-            used = {resolve_alias(k): k for k in overrides if k != "tip_force"}
             if exc.name in used and used[exc.name] != exc.name:
                 raise ParameterError(f"{used[exc.name]} ({exc.name})", exc.value,
                                      exc.allowed, exc.where) from None
             raise
+
+
+def _time_peak(tf: Any) -> float:
+    """The largest absolute value a time function takes (ramps, steps, releases: 1)."""
+    kind = getattr(tf, "kind", "constant")
+    with np.errstate(over="ignore"):
+        if kind == "constant":
+            return abs(float(tf.value))
+        if kind == "harmonic":
+            return abs(float(tf.offset)) + abs(float(tf.amplitude))
+        if kind == "table":
+            return max((abs(float(v)) for _, v in tf.points), default=0.0)
+    return 1.0
 
 
 def _settings(cls, path: str, m: Any):
@@ -360,22 +616,49 @@ ALIASES: dict[str, str] = {
 
 
 def resolve_alias(key: str) -> str:
-    """The dotted path of a key or alias (unknown single words are errors)."""
+    """The dotted path of a key or alias (unknown single words are errors); a top-level
+    table or key of a problem file (``material``, ``loads``, ``name``, ...) is its own
+    path."""
     if key in ALIASES:
         return ALIASES[key]
-    if "." in key:
+    if "." in key or key in TOP_KEYS:
         return key
-    raise ParameterError(key, None, "a dotted path (e.g. material.tau) or one of: "
-                         + ", ".join(sorted(ALIASES)))
+    raise ParameterError(key, None, "a dotted path (e.g. material.tau), a top-level key ("
+                         + ", ".join(TOP_KEYS) + ") or one of: " + ", ".join(sorted(ALIASES)))
 
 
-def apply_override(m: dict[str, Any], key: str, value: Any) -> None:
-    """Set ``key`` (dotted path or alias) in the problem mapping ``m`` in place."""
+def _list_index(path: str, part: str, size: int, append: bool) -> int:
+    """The index ``part`` of an array of ``size`` entries: 0 ... size - 1, or ``size``
+    (append a new entry) when the whole entry is given (``append``)."""
+    top = size if append else size - 1
+    if part.isdigit() and int(part) <= top:
+        return int(part)
+    allowed = f"an index 0 ... {top}" if top >= 0 else "no index: the array is empty"
+    if append:
+        allowed += f" ({size} appends a new entry)"
+    else:
+        allowed += (f"; to append an entry, set {path.rsplit('.', 1)[0]}.{size} to a whole "
+                    "table (e.g. --set loads.1={kind = \"force\", vector = [0, 0, 1]})")
+    raise ParameterError(path, part, allowed)
+
+
+def apply_override(m: dict[str, Any], key: str, value: Any) -> str:
+    """Set ``key`` (dotted path or alias) in the problem mapping ``m`` in place.
+
+    A path through an array (``loads.0.vector``) names an entry by its index; the whole
+    entry at index ``len(array)`` appends one (``loads.1 = {kind = "force", ...}`` to a
+    problem with one load). Values are deep-copied (the caller's dicts stay untouched).
+    Returns the dotted path the value went to (``tip_force``: that load's vector), the
+    name a rejected value is reported under.
+    """
+    value = copy.deepcopy(value)
     path = resolve_alias(key)
     if path == "tip_force":
-        _set_tip_force(m, value)
-        return
+        return _set_tip_force(m, value)
     parts = path.split(".")
+    if not all(parts):
+        raise ParameterError(path, value, "a dotted path without empty parts "
+                             "(e.g. loads.0.vector)")
     if parts[0] == "material" and len(parts) == 2:  # one way of giving the viscosity
         mat = m.setdefault("material", {})
         if parts[1] == "tau":
@@ -388,33 +671,83 @@ def apply_override(m: dict[str, Any], key: str, value: Any) -> None:
                 mat.setdefault("tau_B", t)
             mat.pop("eta", None)
             mat.pop("zeta", None)
+        elif parts[1] in ("eta", "zeta"):   # the viscosities replace the retardation times
+            _times_to_viscosities(mat, keep=parts[1])
+    if (parts[:2] == ["material", "branches"] and len(parts) == 4
+            and isinstance(m.get("material", {}).get("branches"), list)):
+        branches = m["material"]["branches"]
+        if parts[2].isdigit() and int(parts[2]) < len(branches):
+            _branch_spring_as(branches[int(parts[2])], parts[3])
     node: Any = m
     for i, part in enumerate(parts[:-1]):
+        here = ".".join(parts[:i + 1])
         if isinstance(node, list):
-            try:
-                node = node[int(part)]
-            except (ValueError, IndexError):
-                raise ParameterError(".".join(parts[:i + 1]), part,
-                                     f"an index 0 ... {len(node) - 1}") from None
+            node = node[_list_index(here, part, len(node), append=False)]
         else:
             if part not in node or not isinstance(node[part], (dict, list)):
                 node[part] = {}
             node = node[part]
     last = parts[-1]
+    if parts[0] == "loads" and len(parts) == 3 and isinstance(node, dict):
+        # a point load is placed by `at` or by `s`: the one given replaces the other
+        node.pop({"s": "at", "at": "s"}.get(last, ""), None)
     if isinstance(node, list):
-        try:
-            node[int(last)] = value
-        except (ValueError, IndexError):
-            raise ParameterError(path, last, f"an index 0 ... {len(node) - 1}") from None
+        k = _list_index(path, last, len(node), append=True)
+        if k == len(node):
+            node.append(value)
+        else:
+            node[k] = value
     else:
         node[last] = value
+    return path
 
 
-def _set_tip_force(m: dict[str, Any], value: Any) -> None:
+def _branch_spring_as(branch: Any, key: str) -> None:
+    """Before one spring constant of a Maxwell branch is set: its spring is rewritten in
+    the pair that key belongs to (E, nu or G, K: eq. of isotropic elasticity), so the
+    other constant keeps its meaning and the branch is given one way."""
+    if not isinstance(branch, dict):
+        return
+    try:
+        if key in ("youngs_modulus", "poisson_ratio") and "shear_modulus" in branch:
+            G, K = float(branch.pop("shear_modulus")), float(branch.pop("bulk_modulus", 0.0))
+            branch.setdefault("youngs_modulus", 9 * K * G / (3 * K + G) if 3 * K + G else 0.0)
+            branch.setdefault("poisson_ratio", (3 * K - 2 * G) / (2 * (3 * K + G))
+                              if 3 * K + G else 0.0)
+        elif key in ("shear_modulus", "bulk_modulus") and "youngs_modulus" in branch:
+            E, nu = float(branch.pop("youngs_modulus")), float(branch.pop("poisson_ratio", 0.3))
+            branch.setdefault("shear_modulus", E / (2 * (1 + nu)))
+            branch.setdefault("bulk_modulus", E / (3 * (1 - 2 * nu)))
+    except (TypeError, ValueError, ZeroDivisionError):
+        return                               # the parser names the bad value
+
+
+def _times_to_viscosities(mat: dict[str, Any], keep: str) -> None:
+    """Before ``material.eta`` or ``.zeta`` is set: the retardation times of the mapping
+    become viscosities (eta = G tau_S, zeta = K tau_B), so the one not set keeps its
+    value and the material is given one way (the parser refuses a mix)."""
+    if "tau" in mat:
+        t = mat.pop("tau")
+        mat.setdefault("tau_S", t)
+        mat.setdefault("tau_B", t)
+    tS, tB = mat.pop("tau_S", None), mat.pop("tau_B", None)
+    E, nu = mat.get("youngs_modulus", 1.0e6), mat.get("poisson_ratio", 0.3)
+    try:
+        G = float(E) / (2 * (1 + float(nu)))
+        K = math.inf if float(nu) >= 0.5 else float(E) / (3 * (1 - 2 * float(nu)))
+    except (TypeError, ValueError, ZeroDivisionError):
+        return                               # the parser names the bad E or nu
+    if keep == "eta" and tB is not None and "zeta" not in mat:
+        mat["zeta"] = 0.0 if math.isinf(K) else K * float(tB)
+    if keep == "zeta" and tS is not None and "eta" not in mat:
+        mat["eta"] = G * float(tS)
+
+
+def _set_tip_force(m: dict[str, Any], value: Any) -> str:
     """tip_force F: the first point force at the s = L end gets magnitude |F| along its
-    direction (the sign of F flips it)."""
+    direction (the sign of F flips it). Returns the path of that load's vector."""
     F = C.number("tip_force", value)
-    for ld in m.get("loads", []):
+    for k, ld in enumerate(m.get("loads", [])):
         if ld.get("kind", "force") == "force" and ld.get("at", "end") == "end" and "s" not in ld:
             v = np.array(ld.get("vector", [0.0, 0.0, 0.0]), dtype=float)
             nv = float(np.linalg.norm(v))
@@ -422,7 +755,7 @@ def _set_tip_force(m: dict[str, Any], value: Any) -> None:
                 raise ParameterError("tip_force", value, "a problem whose end force has a "
                                      "direction (its vector is zero)")
             ld["vector"] = list(F * v / nv)
-            return
+            return f"loads.{k}.vector"
     raise ParameterError("tip_force", value, "a problem with a point force at the end "
                          "(use --set loads.K.vector=... otherwise)")
 

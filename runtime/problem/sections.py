@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -62,9 +63,10 @@ class Shape:
         for d, suffix in ((got, ""), (dict(self.dims_end), "_end")):
             for n, v in d.items():
                 if self.kind == "tube" and n == "inner_radius":
-                    C.nonnegative(f"section.{n}{suffix}", v)
+                    C.number(f"section.{n}{suffix}", v, low=0.0, high=LENGTH_MAX)
                 else:
-                    C.positive(f"section.{n}{suffix}", v)
+                    C.number(f"section.{n}{suffix}", v, low=LENGTH_MIN, high=LENGTH_MAX,
+                             allowed=LENGTH_RANGE)
         if self.kind == "tube":
             for d, suffix in ((got, ""), ({**got, **dict(self.dims_end)}, "_end")):
                 if d["inner_radius"] >= d["outer_radius"]:
@@ -82,21 +84,12 @@ class Shape:
 
     def constants(self, nu: float, x: np.ndarray) -> dict[str, np.ndarray]:
         """Section constants (arrays over ``x``) from the generated formulas."""
-        c = _constitutive()
         dims = self.dimensions_at(x)
-        fn = {"rectangle": lambda d: c.rectangle_section(d["width"], d["height"], nu),
-              "ellipse": lambda d: c.ellipse_section(d["a"], d["b"], nu),
-              "circle": lambda d: c.circle_section(d["radius"], nu),
-              "tube": lambda d: _tube(c, d, nu)}[self.kind]
         # once per distinct dimension set: a uniform rod evaluates the formulas once (the
-        # rectangle's torsion series costs 0.5 ms, 0.5 s per run at N = 1000 before)
-        cache: dict[tuple, dict] = {}
-        rows = []
-        for i in range(np.size(x)):
-            key = tuple(float(v[i]) for v in dims.values())
-            if key not in cache:
-                cache[key] = fn(dict(zip(dims, key, strict=True)))
-            rows.append(cache[key])
+        # rectangle's torsion series costs 0.5 ms, 0.5 s per run at N = 1000 before), and
+        # the problems of a study (one per point) share them
+        rows = [_formulas(self.kind, tuple(dims), tuple(float(v[i]) for v in dims.values()),
+                          float(nu)) for i in range(np.size(x))]
         out = {k: np.array([float(r[k]) for r in rows]) for k in CONSTANTS}
         if not self.shear_correction:
             out.update(kappa_1=np.ones_like(out["A"]), kappa_2=np.ones_like(out["A"]),
@@ -108,6 +101,27 @@ class Shape:
         out.update({f"{k}_end": v for k, v in self.dims_end})
         out["shear_correction"] = self.shear_correction
         return out
+
+
+#: lengths of a rod and its section (m): far beyond any rod, and keeping their fourth
+#: powers (second moments, L^4 of the bending frequency) normal floating-point numbers
+LENGTH_MIN, LENGTH_MAX = 1e-30, 1e30
+LENGTH_RANGE = (f"a length {LENGTH_MIN:g} ... {LENGTH_MAX:g} m (beyond any rod; its fourth "
+                "power must stay a normal floating-point number)")
+
+
+@lru_cache(maxsize=4096)
+def _formulas(kind: str, names: tuple[str, ...], values: tuple[float, ...],
+              nu: float) -> dict:
+    """The generated section formulas of one shape (cached: pure functions of their
+    arguments)."""
+    c = _constitutive()
+    d = dict(zip(names, values, strict=True))
+    fn = {"rectangle": lambda: c.rectangle_section(d["width"], d["height"], nu),
+          "ellipse": lambda: c.ellipse_section(d["a"], d["b"], nu),
+          "circle": lambda: c.circle_section(d["radius"], nu),
+          "tube": lambda: _tube(c, d, nu)}[kind]
+    return fn()
 
 
 def _tube(c, d: dict, nu: float) -> dict:

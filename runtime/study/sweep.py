@@ -63,6 +63,7 @@ import socket
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -127,8 +128,10 @@ def _coerce(name: str, value: Any, where: str) -> Any:
         return int(value) if integer and value.is_integer() else value
     if isinstance(value, list):
         return [_coerce(name, v, where) for v in value]
+    if isinstance(value, dict):      # a whole table, e.g. an appended load (loads.1)
+        return {k: _coerce(f"{name}.{k}", v, where) for k, v in value.items()}
     raise StudyError(f"{where}: {name} = {value!r} has the wrong type (a number, string, "
-                     "boolean or list)")
+                     "boolean, list or table)")
 
 
 def _check_params(params: Mapping[str, Any], where: str) -> dict[str, Any]:
@@ -138,9 +141,28 @@ def _check_params(params: Mapping[str, Any], where: str) -> dict[str, Any]:
     return out
 
 
-def check_point(problem: str, params: Mapping[str, Any], where: str) -> None:
+def base_problem(problem: str) -> Any:
+    """The study's problem without overrides, read once per process and file version
+    (a study's points, thousands of them, share it: the registry and the problem file
+    are not read again for each; an edited file is read again)."""
+    from runtime.problem.registry import problem_path
+
+    path = problem_path(problem).resolve()
+    st = path.stat()
+    return _base_problem(problem, str(path), st.st_mtime_ns, st.st_size)
+
+
+@lru_cache(maxsize=16)
+def _base_problem(problem: str, path: str, mtime_ns: int, size: int) -> Any:
+    from runtime.problem.registry import load_problem
+
+    return load_problem(Path(path))
+
+
+def check_point(problem: Any, params: Mapping[str, Any], where: str) -> None:
     """Build the point's problem (every value checked by the schema) without running it;
-    StudyError naming the point and the parameter."""
+    StudyError naming the point and the parameter. ``problem``: a name or file, or the
+    study's :func:`base_problem`."""
     from runtime.errors import ParameterError
     from runtime.problem.registry import load_problem
 
@@ -247,6 +269,10 @@ def study_from_dict(data: Mapping[str, Any], name: str = "study", source: str = 
     varied: list[str] = list(grid_c)
     for p in raw_points:
         varied += [k for k in p if k not in varied]
+    try:
+        base = base_problem(scenario)       # the registry and the file: once per study
+    except ValueError as exc:                # the problem file itself is bad
+        raise StudyError(f"problem {scenario!r}: {exc}") from None
     points: dict[str, StudyPoint] = {}
     for p in raw_points:
         for a, b in ((("tau",), ("tau_S", "tau_B")), (("tau_S", "tau_B"), ("tau",))):
@@ -260,7 +286,7 @@ def study_from_dict(data: Mapping[str, Any], name: str = "study", source: str = 
         _check_params(params, "point")
         pid = point_id(params, varied)
         if pid not in points:   # every value checked by the problem schema before any run
-            check_point(scenario, params, f"point {pid}")
+            check_point(base, params, f"point {pid}")
         points.setdefault(pid, StudyPoint(pid, params))
     return Study(name=name, scenario=scenario, fixed=fixed, varied=tuple(varied),
                  points=tuple(points.values()), source=source)
@@ -331,7 +357,7 @@ def run_point(scenario: str, point_id: str, params: Mapping[str, Any]) -> PointO
         from runtime.problem.registry import load_problem
         from runtime.simulate.simulate import simulate
 
-        run = simulate(load_problem(scenario, params))
+        run = simulate(load_problem(base_problem(scenario), params))
         if run.interrupt is not None:      # Ctrl-C stops the study, it is no failed point
             raise run.interrupt
         status, message = run.status, run.message

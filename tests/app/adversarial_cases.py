@@ -61,6 +61,8 @@ DATA = Path(__file__).resolve().parent / "data" / "decay_tau50ms.csv"
 OUT_NAME = "res_adv"
 
 #: words of a parameter error that states the allowed range (any of them)
+#: (argv strings are formatted with the placeholders below: an inline TOML table's braces
+#: are doubled, {{...}})
 RANGE = ("range", "allowed", "at most", "at least", "between", "<", ">", "must be")
 
 
@@ -345,6 +347,8 @@ MODES = ("modes", "cantilever", "--n-elements", "4", "--count", "2")
 KILLED_T_END = "8"
 KILLED = ("simulate", "cantilever", "--n-elements", "4", "--t-end", KILLED_T_END)
 DELTAS = "delta\n0.45\n0.44\n0.46\n"
+#: a generalized Maxwell run long enough to be killed after its first checkpoint
+MAXWELL_KILLED = ("simulate", "maxwell_cantilever", "--n-elements", "4", "--t-end", "2000")
 
 
 class Templates:
@@ -381,11 +385,13 @@ class Templates:
         assert (summary := read_json(path / "summary.json")) and summary["status"] == "failed"
 
     def _make_killed(self, path: Path, extra: Sequence[str] = ()) -> None:
-        """A run SIGKILLed after its first checkpoint: summary "running" + checkpoint.npz."""
+        """A run SIGKILLed after its first checkpoint: summary "running" + checkpoint.npz
+        (``extra``: more flags, or a whole command line when it starts with "simulate")."""
         ctx = Ctx(tmp=self.root, out=path)
+        argv = list(extra) if extra[:1] == ("simulate",) else [*KILLED, *extra]
         for _ in range(5):
             shutil.rmtree(path, ignore_errors=True)
-            p = popen(ctx, [*KILLED, *extra, "--out", str(path)])
+            p = popen(ctx, [*argv, "--out", str(path)])
             wait_for(lambda: (path / "checkpoint.npz").exists(), 60, p, step=0.005)
             with contextlib.suppress(ProcessLookupError):
                 p.send_signal(signal.SIGKILL)
@@ -394,6 +400,11 @@ class Templates:
             if (path / "checkpoint.npz").exists() and s and s.get("status") == "running":
                 return
         raise AssertionError("could not produce a killed run with a checkpoint")
+
+    def _make_killed_maxwell(self, path: Path) -> None:
+        """A generalized Maxwell run (internal strains in its state) SIGKILLed after its
+        first checkpoint."""
+        self._make_killed(path, MAXWELL_KILLED)
 
     def _make_killed_vtk(self, path: Path) -> None:
         """A run with VTK output every second, SIGKILLed after its first checkpoint."""
@@ -559,6 +570,45 @@ def generated_copy(mutate: Callable[[Path], None]) -> Callable:
         ctx.pythonpath.insert(0, str(ctx.tmp / "gen"))
         ctx.env["KVROD_CACHE_DIR"] = str(ctx.tmp / "cache")
     return setup
+
+
+def _edit_constitutive(g: Path) -> None:
+    """tau_E x 1.5: a plausible hand edit of a formula module (not of the C sources)."""
+    with open(g / "constitutive.py", "a") as fh:
+        fh.write("\n\n_orig_tau_E = retardation_time_extension\n\n\n"
+                 "def retardation_time_extension(tau_B, tau_S, nu):  # edited by hand\n"
+                 "    return 1.5 * _orig_tau_E(tau_B, tau_S, nu)\n")
+
+
+def series_bytes(fn: Callable[[bytes], bytes]) -> Callable:
+    def setup(ctx: Ctx) -> None:
+        p = ctx.out / "series.npz"
+        p.write_bytes(fn(p.read_bytes()))
+    return setup
+
+
+def _reshaped_series(data: bytes) -> bytes:
+    """A valid NPZ whose tip history is shorter than its time axis."""
+    with np.load(io.BytesIO(data)) as f:
+        arrays = {k: f[k] for k in f.files}
+    arrays["tip"] = arrays["tip"][:, :3]
+    buf = io.BytesIO()
+    np.savez(buf, **arrays)
+    return buf.getvalue()
+
+
+def points_problem(points: str | None = None, file: str | None = None) -> Callable:
+    """{tmp}/rod.toml: a clamped-free rod through the given points (or a points file)."""
+    geo = f"points = {points}\n" if points is not None else f'file = "{file}"\n'
+    return write("rod.toml", '[rod]\nelements = 8\n[rod.geometry]\nkind = "points"\n' + geo
+                 + '[section]\nkind = "circle"\nradius = 0.005\n[simulation]\nt_end = 0.1\n')
+
+
+def _noisy(level: float, seed: int = 11) -> Callable:
+    def fn(t: np.ndarray, x: np.ndarray) -> tuple:
+        rng = np.random.default_rng(seed)
+        return t, x + level * rng.standard_normal(x.size)
+    return fn
 
 
 def _edit_kernel(g: Path) -> None:
@@ -820,6 +870,18 @@ def elapsed_below(seconds: float) -> Check:
     def check(ctx: Ctx, r: Result) -> str | None:
         return None if r.elapsed < seconds else f"took {r.elapsed:.1f} s (limit {seconds} s)"
     return check
+
+
+def no_text(*words: str) -> Check:
+    """None of ``words`` in stdout or stderr (e.g. a NumPy repr such as np.float64)."""
+    def check(ctx: Ctx, r: Result) -> str | None:
+        found = [w for w in words if w in r.stdout + r.stderr]
+        return f"the output shows {found}" if found else None
+    return check
+
+
+def summary_loads(n: int) -> Check:
+    return summary_is(lambda s: len(s["parameters"]["loads"]) == n, f"{n} loads")
 
 
 def checkpoint_kept(ctx: Ctx, r: Result) -> str | None:
@@ -1476,4 +1538,237 @@ CASES: list[Case] = [
     Case("simulate-vtk-every-nanosecond-refused", "hang",
          (*SIM, "--vtk", "1e-9", *OUT), 2, ("vtk",), (), (ABSENT,), mode="subproc",
          as_limit=3 << 29, timeout=HANG_TIMEOUT, slow=True, background=True),
+
+    # ==================================================================================
+    # issue 22: the hostile review (problem files, sections, ends, Maxwell, DMA, plots,
+    # sweeps, calibrate, compare-damping)
+    # ==================================================================================
+    Case("constitutive-edited-against-manifest", "wrong_answer", (*SIM, *OUT), 2,
+         ("constitutive.py", "kvrod generate"), (generated_copy(_edit_constitutive),),
+         (ABSENT,), mode="subproc", note="issue 22: tau_E x 1.5 ran without a word"),
+    Case("points-csv-letter-O-named", "wrong_answer",
+         ("static", "{tmp}/rod.toml", *OUT), 2, ("pts.csv", "line 3", "column 2"),
+         (write("pts.csv", "x,y,z\n0,0,0\n0.05,O,0.15\n0,0,0.3\n"),
+          points_problem(file="pts.csv")), (ABSENT,), **GUARDED,
+         note="issue 22: the row was dropped and the rod came out straight"),
+    Case("points-csv-four-columns-named", "wrong_answer",
+         ("static", "{tmp}/rod.toml", *OUT), 2, ("pts.csv", "line 2"),
+         (write("pts.csv", "0,0,0\n0.05,0,0.15,0.2\n0,0,0.3\n"),
+          points_problem(file="pts.csv")), (ABSENT,), **GUARDED,
+         note="a fourth column was cut off without a word"),
+    Case("points-fold-back-named", "message",
+         ("static", "{tmp}/rod.toml", *OUT), 2, ("rod.geometry.points", "row 2"),
+         (points_problem("[[0,0,0],[0,0,0.1],[0,0,0.2],[0,0,0.1],[0,0,0.3]]"),), (ABSENT,),
+         **GUARDED, note="issue 22: named as rod.geometry.function = <function ...>"),
+    Case("calibrate-n-elements-0-refused", "wrong_answer",
+         (*CAL_D[:-1], "0", *OUT), 2, ("n_elements", RANGE), (DELTA,), (ABSENT,), **GUARDED,
+         note="issue 22: silently used 16"),
+    Case("compare-damping-tip-force-0-refused", "wrong_answer",
+         ("compare-damping", "--n-elements", "4", "--tip-force", "0", *OUT), 2,
+         ("tip_force", RANGE), (), (ABSENT,), **GUARDED, note="issue 22: NaN ratios"),
+    Case("compare-damping-tip-force-1e-300-refused", "wrong_answer",
+         ("compare-damping", "--n-elements", "4", "--tip-force", "1e-300", *OUT), 2,
+         ("tip_force", RANGE), (), (ABSENT,), **GUARDED),
+    Case("compare-damping-tau-S-1e-300-refused", "wrong_answer",
+         ("compare-damping", "--n-elements", "4", "--tau-S", "1e-300", *OUT), 2,
+         ("tau_S", RANGE), (), (ABSENT,), **GUARDED, note="issue 22: a 300-digit ratio"),
+    Case("compare-damping-tau-S-1e-3-refused", "wrong_answer",
+         ("compare-damping", "--n-elements", "4", "--tau-S", "1e-3", *OUT), 2,
+         ("tau_S", RANGE), (), (ABSENT,), **GUARDED,
+         note="found: measured ratio 0.11 for a predicted 1.3 (undamped higher modes)"),
+    Case("compare-damping-no-consistent-damping-refused", "wrong_answer",
+         ("compare-damping", "--n-elements", "4", "--tau-S", "0", "--tau-B", "0.04", "--nu",
+          "0.5", *OUT), 2, ("tau_B", RANGE), (), (ABSENT,), **GUARDED,
+         note="found: tau_E = 0 on the consistent route, a ratio of noise"),
+    Case("simulate-resume-maxwell-continues", "data_loss",
+         (*MAXWELL_KILLED, "--resume", *OUT), 0, (), (template("killed_maxwell"),),
+         (status("finished"), lacks("checkpoint.npz"), series_covers(2000.0)),
+         slow=True, note="issue 22: 'checkpoint holds a state y of shape (201,)'"),
+    Case("simulate-tau-1e300-named", "traceback",
+         (*SIM, "--tau", "1e300", *OUT), 2, ("tau", RANGE), (), (ABSENT,), **GUARDED,
+         note="issue 22: internal error (consistent_initial)"),
+    Case("simulate-tau-S-1e300-named", "traceback",
+         (*SIM, "--tau-S", "1e300", *OUT), 2, ("tau_S", RANGE), (), (ABSENT,), **GUARDED),
+    Case("simulate-tau-B-1e300-named", "traceback",
+         (*SIM, "--tau-B", "1e300", *OUT), 2, ("tau_B", RANGE), (), (ABSENT,), **GUARDED),
+    Case("simulate-tau-1e9-at-n4-named", "traceback",
+         (*SIM, "--tau", "1e9", *OUT), 2, ("tau", RANGE), (), (ABSENT,), **GUARDED,
+         note="the bound follows the stiffest element mode, not only overflow"),
+    Case("simulate-tau-1e6-at-n4-runs", "traceback",
+         (*SIM, "--tau", "1e6", *OUT), 0, (), (), (status("finished"),),
+         note="control: an overdamped rod within the bound runs"),
+    Case("compare-damping-tau-B-1e300-named", "traceback",
+         ("compare-damping", "--n-elements", "4", "--tau-B", "1e300", *OUT), 2,
+         ("tau_B", RANGE), (), (ABSENT,), **GUARDED),
+    Case("calibrate-tip-force-1e300-named", "traceback",
+         (*CAL_S, "--tip-force", "1e300", *OUT), 2, ("tip_force", RANGE), (), (ABSENT,),
+         **GUARDED, note="issue 22: internal error (StaticSolveError)"),
+    Case("compare-damping-tip-force-1e300-named", "traceback",
+         ("compare-damping", "--n-elements", "4", "--tip-force", "1e300", *OUT), 2,
+         ("tip_force", RANGE), (), (ABSENT,), **GUARDED),
+    Case("plot-truncated-series-named", "traceback",
+         ("plot", "{out}"), 2, ("series.npz", "damaged"),
+         (template("finished"), series_bytes(lambda b: b[: len(b) // 2])), (UNCHANGED,),
+         note="issue 22: internal error BadZipFile"),
+    Case("plot-series-of-other-shape-named", "traceback",
+         ("plot", "{out}"), 2, ("series.npz", "damaged"),
+         (template("finished"), series_bytes(lambda b: _reshaped_series(b))), (UNCHANGED,)),
+    Case("modes-tau-1e300-named", "message",
+         (*MODES, "--tau", "1e300", *OUT), 2, ("tau", RANGE), (), (ABSENT,), **GUARDED,
+         note="issue 22: 'array must not contain infs or NaNs'"),
+    Case("calibrate-tau0-1e300-named", "message",
+         (*CAL_D, "--tau0", "1e300", *OUT), 2, ("tau0", RANGE), (DELTA,), (ABSENT,),
+         **GUARDED, note="issue 22: 'array must not contain infs or NaNs'"),
+    Case("calibrate-tau0-1e-300-named", "message",
+         (*CAL_D, "--tau0", "1e-300", *OUT), 2, ("tau0", RANGE), (DELTA,), (ABSENT,),
+         **GUARDED, note="issue 22: 'Initial guess is outside of provided bounds'"),
+    Case("simulate-tip-force-1e300-one-line", "message",
+         (*SIM, "--tip-force", "1e300", *OUT), 2, ("tip_force", RANGE), (), (ABSENT,),
+         **GUARDED, note="issue 22: a dozen RuntimeWarning lines before exit 1"),
+    Case("static-load-1e300-named", "message",
+         ("static", "cantilever", "--n-elements", "4", "--set", "loads.0.vector=[1e300,0,0]",
+          *OUT), 2, ("loads.0.vector", RANGE), (), (ABSENT,), **GUARDED),
+    Case("simulate-gravity-1e300-named", "message",
+         (*SIM, "--set", 'loads.1={{kind="gravity", vector=[0,0,1e300]}}', *OUT), 2,
+         ("loads.1.vector", RANGE), (), (ABSENT,), **GUARDED),
+    Case("simulate-harmonic-amplitude-1e300-named", "message",
+         (*SIM, "--set", 'loads.0.time={{kind="harmonic", amplitude=1e300, frequency=1}}',
+          *OUT), 2, ("loads.0.time", RANGE), (), (ABSENT,), **GUARDED),
+    Case("simulate-t-end-1e-300-refused", "message",
+         (*SIM[:-1], "1e-300", *OUT), 2, ("t_end", RANGE), (), (ABSENT,), **GUARDED,
+         note="issue 22: accepted, then 'step size 1e-303'"),
+    Case("calibrate-dma-nan-plain-number", "message",
+         ("calibrate", "--dma", "{tmp}/dma.csv", "--nu", "0.3", *OUT), 2,
+         ("dma.csv", "line 4", "storage"),
+         (write("dma.csv", "# a DMA test\nfrequency_hz,storage,loss\n0.1,1e6,1e5\n"
+                "1,nan,2e5\n10,3e6,1e5\n"),), (ABSENT, no_text("np.float64")),
+         note="issue 22: np.float64(nan) in the message"),
+    Case("calibrate-dma-text-cell-named", "message",
+         ("calibrate", "--dma", "{tmp}/dma.csv", "--nu", "0.3", *OUT), 2,
+         ("dma.csv", "line 3", "'abc'"),
+         (write("dma.csv", "frequency_hz,storage,loss\n0.1,1e6,1e5\n1,abc,2e5\n"
+                "10,3e6,1e5\n"),), (ABSENT, no_text("np.float64", "nan")),
+         note="a text cell was reported as nan"),
+    Case("calibrate-dma-600-decades-refused", "message",
+         ("calibrate", "--dma", "{tmp}/dma.csv", "--nu", "0.3", *OUT), 2,
+         ("dma.csv", "decades"),
+         (write("dma.csv", "frequency_hz,storage,loss\n1e-300,1e6,1e5\n1,2e6,1e5\n"
+                "1e300,3e6,1e5\n"),), (ABSENT,)),
+    Case("calibrate-dma-huge-moduli-one-line", "message",
+         ("calibrate", "--dma", "{tmp}/dma.csv", "--nu", "0.3", *OUT), (1, 2),
+         {1: ("fit rejected",), 2: ("dma.csv",)},
+         (write("dma.csv", "frequency_hz,storage,loss\n1,1e300,1e5\n2,2e300,1\n"
+                "3,1e308,1e5\n"),), (),
+         note="found: matplotlib's overflow RuntimeWarning before the line"),
+    Case("calibrate-heavy-noise-still-fits", "wrong_answer",
+         ("calibrate", "--data", "{tmp}/noisy.csv", "--n-elements", "4", *OUT), 0, (),
+         (data_file("noisy.csv", _noisy(0.03)),), (tau_near(0.05, 0.1),), mode="subproc",
+         timeout=HANG_TIMEOUT, slow=True, background=True,
+         note="issue 22: refused as 'check the units of t' (period from noise maxima)"),
+    Case("set-appends-a-load", "message",
+         (*SIM, "--set", 'loads.1={{kind="force", vector=[0,0,0.001], at="end"}}', *OUT), 0,
+         (), (), (status("finished"), summary_loads(2)),
+         note="issue 22: refused ('an index 0 ... 0')"),
+    Case("set-appends-a-maxwell-branch", "message",
+         ("simulate", "maxwell_cantilever", "--n-elements", "4", "--t-end", "0.1", "--set",
+          "material.branches.3={{tau=0.5, youngs_modulus=1e5, poisson_ratio=0.3}}", *OUT), 0,
+         (), (), (status("finished"), summary_is(
+             lambda s: len(s["parameters"]["material"]["branches"]) == 4, "4 branches"))),
+    Case("set-index-beyond-append-named", "message",
+         (*SIM, "--set", 'loads.2={{kind="force", vector=[0,0,1]}}', *OUT), 2,
+         ("loads.2", "0 ... 1"), (), (ABSENT,), **GUARDED),
+    Case("set-sub-key-of-missing-entry-says-append", "message",
+         (*SIM, "--set", "loads.1.vector=[0,0,1]", *OUT), 2, ("loads.1", "append"), (),
+         (ABSENT,), **GUARDED),
+    Case("set-whole-material-table", "message",
+         (*SIM, "--set", "material={{youngs_modulus=2e6, tau=0.01}}", *OUT), 0, (), (),
+         (status("finished"), summary_is(
+             lambda s: s["parameters"]["material"]["youngs_modulus"] == 2e6, "E = 2e6"))),
+    Case("set-load-position-s-replaces-at", "message",
+         (*SIM, "--set", "loads.0.s=0.15", *OUT), 0, (), (),
+         (status("finished"), summary_is(
+             lambda s: s["parameters"]["loads"][0].get("s") == 0.15
+             and "at" not in s["parameters"]["loads"][0], "the load at s = 0.15 m")),
+         note="found: refused, 'not together with at' (the resolved problem holds at)"),
+    Case("set-material-eta-replaces-tau", "message",
+         (*SIM, "--set", "material.eta=1000.0", *OUT), 0, (), (),
+         (status("finished"), summary_is(
+             lambda s: abs(s["parameters"]["material"]["tau_S"] - 0.0026) < 1e-12
+             and s["parameters"]["material"]["tau_B"] == 0.04, "tau_S = eta/G, tau_B kept")),
+         note="found: refused, 'not together with tau_S'"),
+    Case("set-maxwell-branch-youngs-modulus", "message",
+         ("simulate", "maxwell_cantilever", "--n-elements", "4", "--t-end", "0.1", "--set",
+          "material.branches.0.youngs_modulus=1e7", *OUT), 0, (), (), (status("finished"),),
+         note="found: refused, 'shear_modulus not together with youngs_modulus'"),
+    Case("simulate-origin-1e300-named", "wrong_answer",
+         (*SIM, "--set", "rod.geometry.origin=[1e300,0,0]", *OUT), 2,
+         ("rod.geometry.origin", RANGE), (), (ABSENT,), **GUARDED,
+         note="found: a failed static solve blamed on a 'limit point'"),
+    Case("simulate-clamp-translation-1e300-named", "wrong_answer",
+         (*SIM, "--set", "start.motion={{translation=[1e300,0,0]}}", *OUT), 2,
+         ("start.motion.translation", RANGE), (), (ABSENT,), **GUARDED),
+    Case("simulate-clamp-angle-1e300-named", "wrong_answer",
+         (*SIM, "--set", "start.motion={{rotation_angle=1e300}}", *OUT), 2,
+         ("start.motion.rotation_angle", RANGE), (), (ABSENT,), **GUARDED),
+    Case("simulate-section-width-1e300-named", "traceback",
+         (*SIM, "--set", "section.width=1e300", *OUT), 2, ("section.width", RANGE), (),
+         (ABSENT,), **GUARDED, note="found: internal error OverflowError"),
+    Case("simulate-section-width-1e-300-named", "message",
+         (*SIM, "--set", "section.width=1e-300", *OUT), 2, ("section.width", RANGE), (),
+         (ABSENT,), **GUARDED, note="found: named as parameter 'I2' = 0.0"),
+    Case("simulate-rod-length-1e300-named", "traceback",
+         (*SIM, "--set", "rod.length=1e300", *OUT), 2, ("rod.length", RANGE), (),
+         (ABSENT,), **GUARDED, note="found: internal error OverflowError"),
+    Case("simulate-harmonic-1e300-hz-refused", "hang",
+         (*SIM, "--set", 'loads.0.time={{kind="harmonic", frequency=1e300}}', *OUT), 2,
+         ("frequency", RANGE), (), (ABSENT,), **GUARDED,
+         note="found: ran for minutes (killed at 120 s)"),
+    Case("simulate-maxwell-branch-tau-1e-300-named", "traceback",
+         ("simulate", "maxwell_cantilever", "--n-elements", "4", "--t-end", "0.1", "--set",
+          "material.branches.0.tau=1e-300", *OUT), 2, ("material.branches", "tau", RANGE),
+         (), (ABSENT,), **GUARDED, note="found: internal error (consistent_initial)"),
+    Case("simulate-maxwell-branch-1e300-pa-named", "message",
+         ("simulate", "maxwell_cantilever", "--n-elements", "4", "--t-end", "0.1", "--set",
+          "material.branches.0.youngs_modulus=1e300", *OUT), 2,
+         ("material.branches.0", "glassy"), (), (ABSENT,), **GUARDED,
+         note="found: a failed static solve blamed on a 'limit point'"),
+    Case("simulate-maxwell-fluid-static-start-named", "message",
+         ("simulate", "maxwell_cantilever", "--n-elements", "4", "--t-end", "0.1", "--set",
+          "material.youngs_modulus=0", *OUT), 2, ("simulation.initial", "reference"), (),
+         (ABSENT,), **GUARDED,
+         note="found: named as parameter 'E' = 0.0, though documented as allowed"),
+    Case("simulate-maxwell-fluid-from-reference-runs", "message",
+         ("simulate", "maxwell_cantilever", "--n-elements", "4", "--t-end", "0.1", "--set",
+          "material.youngs_modulus=0", "--set", 'simulation.initial="reference"', *OUT), 0,
+         (), (), (status("finished"),)),
+    Case("simulate-name-with-dotdot-stays-in-results", "data_loss",
+         ("simulate", "{tmp}/rod.toml"), 0, (), (write("rod.toml", 'name = "../../escaped"\n'
+          '[rod]\nlength = 0.3\nelements = 4\n[section]\nkind = "circle"\nradius = 0.005\n'
+          '[simulation]\nt_end = 0.05\n'),),
+         (lambda ctx, r: None if (ctx.tmp / "results").is_dir()
+          and not (ctx.tmp.parent / "escaped").exists()
+          else "results written outside results/ (the problem's name held '../..')",),
+         mode="subproc", note="found: wrote results/../../escaped"),
+    Case("calibrate-maxwell-problem-named", "message",
+         (*CAL_D, "--problem", "maxwell_cantilever", *OUT), 2,
+         ("maxwell_cantilever", "--dma"), (DELTA,), (ABSENT,), **GUARDED,
+         note="found: 'tau (material.tau) ... a known key'"),
+    Case("compare-damping-nu-names-nu", "message",
+         ("compare-damping", "--n-elements", "4", "--nu", "-0.99", *OUT), 2, ("nu", RANGE),
+         (), (ABSENT,), **GUARDED, note="found: blamed tau_S"),
+    Case("sweep-appends-a-load-per-point", "message",
+         (*SWEEP, *OUT), 0, (),
+         (study('scenario = "cantilever"\n[fixed]\nn_elements = 4\nt_end = 0.2\n[grid]\n'
+                '"loads.1" = [{kind = "force", vector = [0, 0, 0.001]}]\n'),),
+         (csv_has(lambda rows: [r["status"] for r in rows] == ["finished"], "1 finished"),),
+         note="found: a table value was 'the wrong type'"),
+    Case("calibrate-record-typo-named-by-line", "message",
+         ("calibrate", "--data", "{tmp}/typo.csv", "--n-elements", "4", *OUT), 2,
+         ("typo.csv", "line 3", "'O.12'"),
+         (write("typo.csv", "t,x\n0,0.2\n0.01,O.12\n0.02,0.19\n"),), (ABSENT,), **GUARDED,
+         note="found: 'x contains NaN or inf (first at row 1)': the data row, not the line"),
+    Case("calibrate-record-gap-named-by-line", "message",
+         ("calibrate", "--data", "{tmp}/gap.csv", "--n-elements", "4", *OUT), 2,
+         ("gap.csv", "line 3", "empty"),
+         (write("gap.csv", "t,x\n0,0.2\n0.01,\n0.02,0.19\n"),), (ABSENT,), **GUARDED),
 ]

@@ -100,9 +100,16 @@ def test_bad_decrements(d, match):
 
 def test_load_csv(tmp_path):
     f = tmp_path / "d.csv"
-    f.write_text("# measured\nT,X\n0,0.2\n0.1,0.19\n0.2,\n")
+    f.write_text("# measured\nT,X\n0,0.2\n0.1,0.19\n0.2,0.18\n")
     t, x = cal.load_csv(f, ("t", "x"))
-    assert t.tolist() == [0, 0.1, 0.2] and np.isnan(x[2])
+    assert t.tolist() == [0, 0.1, 0.2] and x.tolist() == [0.2, 0.19, 0.18]
+    # a gap or a typo is refused naming the file's line and column (issue 22)
+    f.write_text("# measured\nT,X\n0,0.2\n0.1,0.19\n0.2,\n")
+    with pytest.raises(ValueError, match="line 5, column 'x': the cell is empty"):
+        cal.load_csv(f, ("t", "x"))
+    f.write_text("T,X\n0,0.2\n0.1,O.19\n")
+    with pytest.raises(ValueError, match="line 3, column 'x': 'O.19' is not a finite"):
+        cal.load_csv(f, ("t", "x"))
     g = tmp_path / "delta.csv"
     g.write_text("0.4\n0.42\n")
     (d,) = cal.load_csv(g, ("delta",))

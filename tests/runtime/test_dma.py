@@ -89,5 +89,5 @@ def test_cli_writes_material_and_refuses_bad_input(tmp_path):
     r = subprocess.run([sys.executable, "-m", "kvrod", "calibrate", "--dma", str(bad),
                         "--nu", "0.4", "--out", str(tmp_path / "y")], capture_output=True,
                        text=True)
-    assert r.returncode == 2 and "row 3" in r.stderr and "storage" in r.stderr
+    assert r.returncode == 2 and "line 3" in r.stderr and "storage" in r.stderr
     assert not (tmp_path / "y").exists()
