@@ -278,12 +278,31 @@ def _one_line(text: str) -> str:
     return " ".join(str(text).split())
 
 
+#: optional packages (top-level module -> the pyproject extra that installs it)
+OPTIONAL_PACKAGES = {"elastica": "bench", "vtk": "vtk", "sphinx": "docs", "myst_nb": "docs",
+                     "jupyter_cache": "docs", "furo": "docs", "pytest": "test",
+                     "hypothesis": "test", "sectionproperties": "test"}
+
+
+def missing_package_line(prefix: str, module: str) -> str:
+    """One line for a package that is not installed, with the command that installs it: an
+    optional extra of kvrod, or a reinstall of kvrod for a core dependency."""
+    top = module.split(".")[0]
+    extra = OPTIONAL_PACKAGES.get(top)
+    how = (f"pip install -e '.[{extra}]' (in a checkout; or pip install 'kvrod[{extra}]')"
+           if extra else "pip install -e . (a core dependency of kvrod is missing: "
+           "reinstall it)")
+    return f"{prefix}: the Python package {top!r} is not installed; install it with: {how}"
+
+
 def _error_line(prefix: str, exc: BaseException) -> tuple[str, int]:
     """(message, exit code) for an exception that reached the command line."""
     from runtime.errors import GeneratedCodeError
 
     if isinstance(exc, CliError):
         return str(exc), 2
+    if isinstance(exc, ModuleNotFoundError) and exc.name:
+        return missing_package_line(prefix, exc.name), 2
     if isinstance(exc, MemoryError):
         return (f"{prefix}: out of memory: the problem is too large for this machine "
                 "(reduce n_elements, t_end or the output density)"), 2

@@ -62,6 +62,8 @@ def _cmd_sweep(args) -> int:
         if not same:
             raise CliError(f"kvrod sweep: {str(out)!r} holds a different study (study.toml); "
                            "use --overwrite to replace it or choose another --out")
+    if not args.serial:           # the engine is importable before anything is written
+        import runtime.study.sweep_dask  # noqa: F401
     with F.claim(out, "sweep", overwrite=args.overwrite,
                  names=("study.toml", "study.csv", "progress.json", "summary.png",
                         "points")) as claimed:
@@ -76,7 +78,7 @@ def _run_sweep(args, study, out, points_to_run, run_study_serial) -> int:
     where = ("serial (this process)" if args.serial else
              f"scheduler {args.scheduler}" if args.scheduler else
              f"LocalCluster, {args.workers or 'one per core'} worker processes")
-    print(f"study {study.name!r}: {n} points of scenario {study.scenario!r} on {where}; "
+    print(f"study {study.name!r}: {n} points of problem {study.problem!r} on {where}; "
           f"results in {out}")
     todo = points_to_run(study, out, rerun_failed=not args.keep_failed)
     progress, close = _progress_bar(n, n - len(todo))
@@ -113,7 +115,7 @@ def add_commands(sub, parser_class) -> None:
     """Register `kvrod sweep` on the top-level subparsers."""
     s = sub.add_parser("sweep", help="run a parameter study (TOML) on Dask, local or cluster",
                        description=__doc__.splitlines()[0] if __doc__ else None)
-    s.add_argument("study", help="study file (TOML: scenario, [fixed], [grid] / [[points]])")
+    s.add_argument("study", help="study file (TOML: problem, [fixed], [grid] / [[points]])")
     s.add_argument("--scheduler", metavar="ADDRESS",
                    help="address of a running Dask scheduler, e.g. tcp://host:8786 "
                         "(default: start a LocalCluster on this machine)")

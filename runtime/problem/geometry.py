@@ -84,15 +84,19 @@ class Geometry:
 
 @dataclass(frozen=True)
 class Straight(Geometry):
-    """A straight rod of ``length`` (m) along ``direction``, first director ``normal``."""
+    """A straight rod of ``length`` (m) along ``direction``, first director ``normal``
+    (default: e1, or e2 for a rod within about 6 degrees of the x axis, see
+    :func:`default_normal`)."""
 
     rod_length: float = 1.0
     direction: tuple[float, float, float] = (0.0, 0.0, 1.0)
-    normal: tuple[float, float, float] = (1.0, 0.0, 0.0)
+    normal: tuple[float, float, float] | None = None
 
     def __post_init__(self) -> None:
         C.positive("rod.length", self.rod_length)
         d = np.array(C.unit_vector("rod.geometry.direction", self.direction))
+        if self.normal is None:
+            object.__setattr__(self, "normal", default_normal(d))
         n = np.array(C.vector("rod.geometry.normal", self.normal, nonzero=True))
         if np.linalg.norm(np.cross(d, n / np.linalg.norm(n))) < 1e-9:
             raise ParameterError("rod.geometry.normal", self.normal,
@@ -116,6 +120,15 @@ class Straight(Geometry):
     def to_mapping(self) -> dict[str, Any]:
         return {"kind": "straight", "direction": list(self.direction),
                 "normal": list(self.normal), "twist": self.twist, "origin": list(self.origin)}
+
+
+def default_normal(direction: np.ndarray) -> tuple[float, float, float]:
+    """The first director of a straight rod when none is given: e1, unless the rod runs
+    within about 6 degrees of the x axis (|d x e1| < 0.1), then e2 (d1 = e2, d2 = e3 for
+    a rod along +x)."""
+    d = np.asarray(direction, dtype=float) / np.linalg.norm(direction)
+    return (1.0, 0.0, 0.0) if np.linalg.norm(np.cross(d, [1.0, 0.0, 0.0])) >= 0.1 \
+        else (0.0, 1.0, 0.0)
 
 
 @dataclass(frozen=True)

@@ -69,7 +69,8 @@ KEYS: tuple[Key, ...] = (
        "shape of the stress-free centreline", invalid="spiral"),
     _k("rod.geometry", "direction", "-", "[0, 0, 1] (arc: [1, 0, 0])", _UNIT_VEC,
        "initial tangent", invalid=[0, 0, 0], kinds=("straight", "arc")),
-    _k("rod.geometry", "normal", "-", "[1, 0, 0]", _UNIT_VEC + ", not along the tangent",
+    _k("rod.geometry", "normal", "-", "[1, 0, 0] (e2 along x)",
+       _UNIT_VEC + ", not along the tangent",
        "first director d1 (the width direction of a rectangle)", invalid=[0, 0, 0],
        kinds=("straight", "points")),
     _k("rod.geometry", "twist", "rad/m", "0", "a number", "uniform twist of the directors "

@@ -1,10 +1,10 @@
 """Parameter studies: study definition, per-point runs, the study table.
 
-A study is a TOML file naming a scenario, fixed parameters and the varied ones, either as
+A study is a TOML file naming a problem, fixed parameters and the varied ones, either as
 a grid (Cartesian product, in the order the keys are written) or as an explicit list::
 
     name = "tau"                 # optional, used for the default output folder
-    scenario = "cantilever"
+    problem = "cantilever"       # a problem file or a built-in problem
 
     [fixed]                      # parameters shared by every point
     t_end = 3.0
@@ -201,14 +201,15 @@ class StudyPoint:
 
 @dataclass(frozen=True)
 class Study:
-    """A parameter study: scenario name, fixed parameters, varied names and the points.
+    """A parameter study: problem (file or built-in name), fixed parameters, varied names
+    and the points.
 
     ``points`` are unique by id (a point listed twice runs once) and ordered as written:
     the grid's Cartesian product first (last key fastest), then the explicit points.
     """
 
     name: str
-    scenario: str
+    problem: str
     fixed: dict[str, Any]
     varied: tuple[str, ...]
     points: tuple[StudyPoint, ...]
@@ -237,8 +238,8 @@ def study_from_dict(data: Mapping[str, Any], name: str = "study", source: str = 
                          f"allowed: {', '.join(STUDY_KEYS)}")
     if "scenario" in data and "problem" in data:
         raise StudyError("give either problem or scenario (its earlier name), not both")
-    scenario = data.get("problem", data.get("scenario", "cantilever"))
-    _check_problem(scenario)
+    problem = data.get("problem", data.get("scenario", "cantilever"))
+    _check_problem(problem)
     name = str(data.get("name", name))
     fixed_raw = data.get("fixed", {})
     grid = data.get("grid", {})
@@ -270,9 +271,9 @@ def study_from_dict(data: Mapping[str, Any], name: str = "study", source: str = 
     for p in raw_points:
         varied += [k for k in p if k not in varied]
     try:
-        base = base_problem(scenario)       # the registry and the file: once per study
+        base = base_problem(problem)        # the registry and the file: once per study
     except ValueError as exc:                # the problem file itself is bad
-        raise StudyError(f"problem {scenario!r}: {exc}") from None
+        raise StudyError(f"problem {problem!r}: {exc}") from None
     points: dict[str, StudyPoint] = {}
     for p in raw_points:
         for a, b in ((("tau",), ("tau_S", "tau_B")), (("tau_S", "tau_B"), ("tau",))):
@@ -288,7 +289,7 @@ def study_from_dict(data: Mapping[str, Any], name: str = "study", source: str = 
         if pid not in points:   # every value checked by the problem schema before any run
             check_point(base, params, f"point {pid}")
         points.setdefault(pid, StudyPoint(pid, params))
-    return Study(name=name, scenario=scenario, fixed=fixed, varied=tuple(varied),
+    return Study(name=name, problem=problem, fixed=fixed, varied=tuple(varied),
                  points=tuple(points.values()), source=source)
 
 
@@ -332,20 +333,20 @@ def _library_loads() -> int:
     return build._load_cached.cache_info().misses
 
 
-def _point_meta(scenario: str, point_id: str, params: Mapping[str, Any],
+def _point_meta(problem: str, point_id: str, params: Mapping[str, Any],
                 wall_time_s: float) -> dict[str, Any]:
-    return {"id": point_id, "scenario": scenario,
+    return {"id": point_id, "problem": problem,
             "parameters": json.loads(canonical_json(params)),
             "host": socket.gethostname(), "pid": os.getpid(), "computed_at": time.time(),
             "wall_time_s": wall_time_s}
 
 
-def run_point(scenario: str, point_id: str, params: Mapping[str, Any]) -> PointOutcome:
+def run_point(problem: str, point_id: str, params: Mapping[str, Any]) -> PointOutcome:
     """Run one point; never raises (an exception becomes status "failed" + its message).
 
     This is the function workers execute: a parameter dict in, a :class:`PointOutcome`
     (the bytes of summary.json and series.npz) out. The summary carries ``point`` =
-    {id, scenario, parameters, host, pid, computed_at, wall_time_s}, which the resume
+    {id, problem, parameters, host, pid, computed_at, wall_time_s}, which the resume
     check compares against the study.
     """
     import tempfile
@@ -357,14 +358,14 @@ def run_point(scenario: str, point_id: str, params: Mapping[str, Any]) -> PointO
         from runtime.problem.registry import load_problem
         from runtime.simulate.simulate import simulate
 
-        run = simulate(load_problem(base_problem(scenario), params))
+        run = simulate(load_problem(base_problem(problem), params))
         if run.interrupt is not None:      # Ctrl-C stops the study, it is no failed point
             raise run.interrupt
         status, message = run.status, run.message
     except Exception as exc:  # noqa: BLE001 - a failing point must not stop the study
         status, message = FAILED, f"{type(exc).__name__}: {exc}"
     wall = time.perf_counter() - t0
-    meta = _point_meta(scenario, point_id, params, wall)
+    meta = _point_meta(problem, point_id, params, wall)
     files: dict[str, bytes] = {}
     with tempfile.TemporaryDirectory(prefix="kvrod-point-") as tmp:
         if run is not None:
@@ -435,9 +436,9 @@ def points_to_run(study: Study, out: Path, rerun_failed: bool = True) -> list[St
     return todo
 
 
-def failure_outcome(scenario: str, point: StudyPoint, message: str) -> PointOutcome:
+def failure_outcome(problem: str, point: StudyPoint, message: str) -> PointOutcome:
     """Outcome recorded by the client when a task could not run (e.g. workers died)."""
-    meta = _point_meta(scenario, point.id, point.params, 0.0)
+    meta = _point_meta(problem, point.id, point.params, 0.0)
     summary = {"status": FAILED, "message": message, "parameters": dict(point.params),
                "wall_time_s": 0.0, "point": meta}
     return PointOutcome(point_id=point.id, params=dict(point.params), status=FAILED,
@@ -750,7 +751,7 @@ def run_study_serial(study: Study, out: Path,
     try:
         for p in rec.todo:
             rec.mark_running([p.id])
-            pr = rec.record(run_point(study.scenario, p.id, p.params))
+            pr = rec.record(run_point(study.problem, p.id, p.params))
             if progress is not None:
                 progress(pr)
     finally:

@@ -82,11 +82,11 @@ def _outcome(study: Study, point, future) -> PointOutcome:
         outcome = future.result()
         if isinstance(outcome, PointOutcome):
             return outcome
-        return failure_outcome(study.scenario, point, f"unexpected task result {outcome!r}")
+        return failure_outcome(study.problem, point, f"unexpected task result {outcome!r}")
     if future.status == "error":
         exc = future.exception()
-        return failure_outcome(study.scenario, point, f"task error: {type(exc).__name__}: {exc}")
-    return failure_outcome(study.scenario, point, f"task {future.status}")
+        return failure_outcome(study.problem, point, f"task error: {type(exc).__name__}: {exc}")
+    return failure_outcome(study.problem, point, f"task {future.status}")
 
 
 def default_workers() -> int:
@@ -181,7 +181,7 @@ def run_study_dask(study: Study, out: Path, *, client: Client | None = None,
             tag = uuid.uuid4().hex[:8]
             by_key = {}
             for p in rec.todo:
-                f = client.submit(run_point, study.scenario, p.id, p.params,
+                f = client.submit(run_point, study.problem, p.id, p.params,
                                   key=f"kvrod-point-{p.id}-{tag}", pure=False)
                 by_key[f.key] = p
                 futures.append(f)

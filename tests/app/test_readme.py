@@ -50,6 +50,16 @@ def test_generate_is_redirected(tmp_path):
     assert redirect_into([".venv/bin/kvrod", "generate", "--check"], tmp_path)[-1] == "--check"
 
 
+def test_readme_commands_do_not_collide_with_the_main_job():
+    """The main job writes results/reproduce and notes/; a README command run after it must
+    not need that folder empty (it would exit 2: the folder holds a result)."""
+    for cmd in readme_commands():
+        argv = shlex.split(cmd.split("#", 1)[0])
+        if argv[1:2] == ["reproduce"]:
+            assert "--out" in argv, cmd
+            assert argv[argv.index("--out") + 1].rstrip("/") != "results/reproduce", cmd
+
+
 def test_readme_has_commands_for_the_three_uses():
     cmds = readme_commands()
     assert any(" generate" in c for c in cmds)

@@ -108,3 +108,90 @@ def test_compile_native_reports_zero_when_cached():
     build.compile_native()                              # whatever it takes the first time
     spent = build.compile_native()
     assert spent == {build.ROD_KERNELS: 0.0, build.STEP_LOOP: 0.0}
+
+
+def test_a_missing_package_is_named_with_its_install_command(monkeypatch, capsys, tmp_path):
+    """A package that is not installed (here Dask's distributed, hidden) gives one line
+    naming it and the command that installs it, exit 2, never an internal error."""
+    import builtins
+
+    from kvrod.cli import main
+
+    real = builtins.__import__
+
+    def hide(name, *args, **kw):
+        if name == "distributed" or name.startswith("distributed."):
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+        return real(name, *args, **kw)
+
+    monkeypatch.setattr(builtins, "__import__", hide)
+    for mod in [m for m in sys.modules if m == "distributed" or m.startswith(
+            ("distributed.", "runtime.study.sweep_dask"))]:
+        monkeypatch.delitem(sys.modules, mod)
+    code = main(["sweep", str(ROOT / "examples" / "study_tau.toml"), "--out",
+                 str(tmp_path / "never-written")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2, err
+    assert len(err) == 1 and "'distributed'" in err[0] and "pip install" in err[0]
+    assert "internal error" not in err[0]
+    assert not (tmp_path / "never-written").exists()
+
+
+def test_optional_packages_name_their_extras():
+    import tomllib
+
+    from kvrod.cli import OPTIONAL_PACKAGES, missing_package_line
+
+    extras = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"][
+        "optional-dependencies"]
+    for module, extra in OPTIONAL_PACKAGES.items():
+        assert extra in extras, (module, extra)
+        assert f"[{extra}]" in missing_package_line("kvrod x", module)
+    assert "core dependency" in missing_package_line("kvrod x", "scipy.sparse")
+
+
+def test_a_rod_along_x_needs_no_normal():
+    """The default first director is e1, which a rod along x cannot take: then e2."""
+    from runtime.problem.assemble import build_model
+    from runtime.problem.schema import Problem
+
+    base = {"rod": {"length": 0.3, "elements": 4, "geometry": {"kind": "straight"}},
+            "section": {"kind": "circle", "radius": 0.005},
+            "material": {"density": 1000.0, "youngs_modulus": 1e6, "poisson_ratio": 0.3,
+                         "tau": 0.01},
+            "start": "clamped"}
+    for d, n in (([1.0, 0.0, 0.0], (0.0, 1.0, 0.0)), ([-1.0, 0.02, 0.0], (0.0, 1.0, 0.0)),
+                 ([0.0, 0.0, 1.0], (1.0, 0.0, 0.0)), ([0.0, 1.0, 0.0], (1.0, 0.0, 0.0))):
+        base["rod"]["geometry"]["direction"] = d
+        p = Problem.from_mapping(base)
+        assert p.rod.geometry.normal == n
+        R = build_model(p).frames(build_model(p).reference)[0]
+        assert np.allclose(R.T @ R, np.eye(3)) and np.linalg.det(R) == pytest.approx(1.0)
+        assert R[:, 2] == pytest.approx(np.asarray(d) / np.linalg.norm(d))
+        assert Problem.from_mapping(p.to_mapping()) == p         # the resolved normal
+
+
+def test_compare_damping_table_has_a_label_per_column():
+    from kvrod.analyses import compare_table
+
+    r = {"tau_E": 0.04, "measured_zeta": 0.07, "predicted_zeta": 0.071,
+         "predicted_zeta_continuum": 0.0713, "modal_zeta": 0.0712}
+    result = {"cases": {"bending": {"routes": {"consistent": r, "naive": r},
+                                    "measured_ratio": 1.0, "predicted_ratio": 1.0}}}
+    lines = compare_table(result).splitlines()
+    assert len(lines[0].split()) - lines[0].count("[s]") - lines[0].count(" tau/2") \
+        - lines[0].count(" meas.") - lines[0].count(" mod.") == len(lines[2].split())
+
+
+def test_documented_sag_of_clamped_both_is_the_reference():
+    """The numbers in examples/clamped_both.toml's comment are the reference's."""
+    import tomllib
+
+    from references.examples import clamped_both_reference
+
+    text = (ROOT / "examples" / "clamped_both.toml").read_text()
+    m = re.search(r"([0-9.]+) um of bending plus ([0-9.]+) um of shear", text)
+    ref = clamped_both_reference(tomllib.loads(text))
+    assert float(m.group(1)) == pytest.approx((ref["midspan"] - ref["shear_part"]) * 1e6,
+                                              abs=0.006)
+    assert float(m.group(2)) == pytest.approx(ref["shear_part"] * 1e6, abs=0.0006)

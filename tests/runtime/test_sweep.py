@@ -105,7 +105,7 @@ def test_grid_product_ids_and_coercion(tmp_path):
 
 def test_example_study_has_16_points():
     s = load_study(Path(__file__).resolve().parents[2] / "examples" / "study_tau.toml")
-    assert len(s.points) == 16 and s.scenario == "cantilever"
+    assert len(s.points) == 16 and s.problem == "cantilever"
 
 
 @pytest.mark.parametrize("data, words", [
