@@ -17,8 +17,8 @@ axial ones (eps33 = g3', gamma23 = g2', gamma13 = g1'). With the section matrice
 
 the Saint-Venant solutions for stress resultants theta = (T1, T2, T3, M1, M2, M3) that vary
 linearly along the rod, theta' = Q theta (rod equilibrium T' = 0, M' + d3 x T = 0), are
-g = X theta, psi = Y theta with (BECAS's two systems; D the six rigid modes of the warping,
-D^T g = 0 makes the split unique)
+g = X theta, psi = Y theta with (BECAS's two systems; D^T g = 0 removes the six rigid
+modes of the warping and makes the split unique; here D picks six pinned dofs, see _pins)
 
     [E R D; R^T A 0; D^T 0 0] [dX; dY; .] = [0; Q; 0],                       dX = X Q
     [E R D; R^T A 0; D^T 0 0] [X; Y; .]   = [(Cm - Cm^T) dX + L dY; I - L^T dX; 0].
@@ -168,6 +168,23 @@ class Solution:
     n_dofs: int
 
 
+def _pins(x: np.ndarray) -> np.ndarray:
+    """Six warping dofs held at zero: (g1, g2, g3) at a node a, at the node b farthest from
+    a the in-plane component across a-b and g3, and g3 at the node c farthest from the line
+    a-b. They remove the six rigid modes of the warping (three translations, the in-plane
+    rotation and the two tilts g3 = x2, g3 = -x1 that trade with the shear strains), as
+    BECAS's constraint D^T g = 0 does; the strain field, and so every result, does not
+    depend on which constraint is chosen (their multipliers vanish at the solution: the
+    loads of both systems are self-equilibrated), and pins keep the matrix sparse."""
+    a = int(np.argmin(np.hypot(*(x - x.mean(axis=0)).T)))
+    b = int(np.argmax(np.hypot(*(x - x[a]).T)))
+    d = (x[b] - x[a]) / np.linalg.norm(x[b] - x[a])
+    c = int(np.argmax(np.abs((x[:, 0] - x[a, 0]) * d[1] - (x[:, 1] - x[a, 1]) * d[0])))
+    across = 1 if abs(d[0]) >= abs(d[1]) else 0
+    return np.array(sorted({3 * a, 3 * a + 1, 3 * a + 2, 3 * b + across, 3 * b + 2,
+                            3 * c + 2}))
+
+
 def solve(mesh: Mesh, stiff: ElementMaterial, visc: ElementMaterial) -> Solution:
     """The Giavotto/BECAS solution on ``mesh`` (coordinates, C and V already scaled)."""
     g = geometry(mesh.nodes, mesh.elements)
@@ -192,29 +209,24 @@ def solve(mesh: Mesh, stiff: ElementMaterial, visc: ElementMaterial) -> Solution
     R = rect(stiff.form(g, B, Z))
     L = rect(stiff.form(g, S, Z))
     A = stiff.form(g, Z, Z).sum(axis=0)
-    x = mesh.nodes
-    D = np.zeros((n, 6))
-    D[0::3, 0] = 1.0
-    D[1::3, 1] = 1.0
-    D[2::3, 2] = 1.0
-    D[0::3, 3], D[1::3, 3] = -x[:, 1], x[:, 0]
-    D[2::3, 4] = x[:, 1]
-    D[2::3, 5] = -x[:, 0]
-    D /= np.linalg.norm(D, axis=0)
-    border = sp.csr_matrix(np.hstack([R, D]))
-    corner = np.zeros((12, 12))
-    corner[:6, :6] = A
-    Ksys = sp.bmat([[E, border], [border.T, sp.csr_matrix(corner)]], format="csc")
-    lu = spla.splu(Ksys)
-    rhs1 = np.zeros((n + 12, 6))
-    rhs1[n:n + 6] = Q_EQ
-    s1 = lu.solve(rhs1)
-    dX, dY = s1[:n], s1[n:n + 6]
-    rhs2 = np.zeros((n + 12, 6))
-    rhs2[:n] = (Cm - Cm.T) @ dX + L @ dY
-    rhs2[n:n + 6] = np.eye(6) - L.T @ dX
-    s2 = lu.solve(rhs2)
-    X, Y = s2[:n], s2[n:n + 6]
+    pins = _pins(mesh.nodes)
+    free = np.setdiff1d(np.arange(n), pins)
+    Ef = E[free][:, free].tocsc()
+    lu = spla.splu(Ef, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                   options={"SymmetricMode": True})
+    ER = lu.solve(R[free])
+    schur = A - R[free].T @ ER
+
+    def bordered(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """[E R; R^T A] [u; y] = [a; b] with the pinned dofs of u zero."""
+        ea = lu.solve(a[free])
+        y = np.linalg.solve(schur, b - R[free].T @ ea)
+        u = np.zeros((n, a.shape[1]))
+        u[free] = ea - ER @ y
+        return u, y
+
+    dX, dY = bordered(np.zeros((n, 6)), Q_EQ)
+    X, Y = bordered((Cm - Cm.T) @ dX + L @ dY, np.eye(6) - L.T @ dX)
     # strain of unit resultants at every point: W_theta (ne, nq, 6, 6)
     Xe, dXe = X[dofs], dX[dofs]                                  # (ne, 18, 6)
     W = (np.einsum("eqip,epk->eqik", B, Xe) + np.einsum("eqip,epk->eqik", S, dXe)

@@ -24,6 +24,10 @@ from runtime.section.regions import Region
 
 #: minimum angle of the triangles (degrees; Triangle guarantees termination below 20.7)
 MIN_ANGLE = 30.0
+#: mesh grading at corners and material junctions (where stresses are singular): points on
+#: circles of radius h q^k, k = 1..GRADING_LEVELS, around every such vertex
+GRADING_RATIO = 0.3
+GRADING_LEVELS = 4
 
 
 @dataclass(frozen=True)
@@ -74,9 +78,60 @@ def _pslg(regions: Sequence[Region], h: float):
     return polys, np.array(vertices), np.array(segments, dtype=np.int32), holes
 
 
+def _grading_points(vertices: np.ndarray, segments: np.ndarray, polys, h: float,
+                    curves) -> np.ndarray:
+    """Extra mesh vertices around the corners of the graph (a vertex whose segments are not
+    two collinear ones): rings of 8 points at radii h q^k, kept where they lie inside a region
+    and clear of every segment, so that Triangle grades the mesh towards the corner. The
+    warping and stresses are singular there; without grading a uniform refinement converges
+    slowly (e.g. at a box section's inner corners)."""
+    nv = vertices.shape[0]
+    nbr: list[list[int]] = [[] for _ in range(nv)]
+    for a, b in segments:
+        nbr[a].append(b)
+        nbr[b].append(a)
+    on_curve = np.zeros(nv, dtype=bool)
+    for c in curves:
+        r = np.hypot(*c.scaled(vertices).T)
+        on_curve |= np.abs(r - 1.0) < 1e-9
+    corners = []
+    for i, nb in enumerate(nbr):
+        if on_curve[i]:
+            continue                       # a vertex of a polygonised circle or ellipse
+        if len(nb) == 2:
+            d1, d2 = vertices[nb[0]] - vertices[i], vertices[nb[1]] - vertices[i]
+            cross = d1[0] * d2[1] - d1[1] * d2[0]
+            if abs(cross) <= 1e-3 * np.linalg.norm(d1) * np.linalg.norm(d2):
+                continue                   # a straight run or a polygonised curve
+        corners.append(i)
+    if not corners:
+        return np.zeros((0, 2))
+    union = unary_union(polys)
+    edges = shapely.MultiLineString([vertices[[a, b]] for a, b in segments])
+    t = 2 * np.pi * (np.arange(8) + 0.5) / 8
+    ring = np.column_stack([np.cos(t), np.sin(t)])
+    pts = []
+    for i in corners:
+        for k in range(1, GRADING_LEVELS + 1):
+            r = h * GRADING_RATIO**k
+            pts.append(vertices[i] + r * ring)
+    pts = np.concatenate(pts)
+    geo = shapely.points(pts)
+    keep = shapely.contains(union, geo)
+    dist = shapely.distance(edges, geo)
+    radius = np.repeat([h * GRADING_RATIO**k for _ in corners
+                        for k in range(1, GRADING_LEVELS + 1)], 8)
+    keep &= dist > 0.3 * radius
+    return pts[keep]
+
+
 def mesh_regions(regions: Sequence[Region], h: float) -> Mesh:
     """Mesh the regions with six-node triangles of edge length about ``h`` [m]."""
     polys, vertices, segments, holes = _pslg(regions, h)
+    curves = [c for r in regions for c in r.shape.curves(h)]
+    extra = _grading_points(vertices, segments, polys, h, curves)
+    if extra.size:
+        vertices = np.vstack([vertices, extra])
     area = h * h * math.sqrt(3.0) / 4.0
     control = []
     for i, p in enumerate(polys):
@@ -91,9 +146,8 @@ def mesh_regions(regions: Sequence[Region], h: float) -> Mesh:
     # Triangle's midside order is (1-2, 2-0, 0-1); ours is (0-1, 1-2, 2-0)
     elements = elements[:, [0, 1, 2, 5, 3, 4]]
     region = np.asarray(out["triangle_attributes"], dtype=float)[:, 0].round().astype(int)
-    for r in regions:
-        for curve in r.shape.curves(h):
-            nodes = curve.snap(nodes)
+    for curve in curves:
+        nodes = curve.snap(nodes)
     used = np.unique(elements)
     if used.size != nodes.shape[0]:           # drop vertices outside every element
         remap = -np.ones(nodes.shape[0], dtype=np.int64)
