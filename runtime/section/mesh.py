@@ -125,6 +125,17 @@ def _grading_points(vertices: np.ndarray, segments: np.ndarray, polys, h: float,
     return pts[keep]
 
 
+def _inverted(nodes: np.ndarray, elements: np.ndarray) -> np.ndarray:
+    """Elements whose isoparametric Jacobian is not positive at a corner or midside node."""
+    from runtime.section.fe import shape_functions  # fe imports this module
+
+    L = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [.5, .5, 0], [0, .5, .5], [.5, 0, .5]])
+    _, dN = shape_functions(L.astype(float))
+    J = np.einsum("qab,eac->eqcb", dN, nodes[elements])
+    det = J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0]
+    return np.any(det <= 0, axis=1)
+
+
 def mesh_regions(regions: Sequence[Region], h: float) -> Mesh:
     """Mesh the regions with six-node triangles of edge length about ``h`` [m]."""
     polys, vertices, segments, holes = _pslg(regions, h)
@@ -146,8 +157,18 @@ def mesh_regions(regions: Sequence[Region], h: float) -> Mesh:
     # Triangle's midside order is (1-2, 2-0, 0-1); ours is (0-1, 1-2, 2-0)
     elements = elements[:, [0, 1, 2, 5, 3, 4]]
     region = np.asarray(out["triangle_attributes"], dtype=float)[:, 0].round().astype(int)
+    chord = nodes
     for curve in curves:
         nodes = curve.snap(nodes)
+    # a node put on a curve must not turn an element inside out (a region's corner close
+    # to a curved interface): such elements keep their nodes on the chords
+    for _ in range(3):
+        bad = _inverted(nodes, elements)
+        if not bad.any():
+            break
+        idx = np.unique(elements[bad])
+        nodes = nodes.copy()
+        nodes[idx] = chord[idx]
     used = np.unique(elements)
     if used.size != nodes.shape[0]:           # drop vertices outside every element
         remap = -np.ones(nodes.shape[0], dtype=np.int64)

@@ -1,7 +1,9 @@
 """Regions of a composite section: a material name and a shape (``[[section.regions]]``).
 
 Regions must not overlap (touching along edges is how they are bonded); an overlap is an
-error naming both regions. Every region's material must be one of the named materials.
+error naming both regions. Together they must form one connected section (separate parts
+could slide along each other: the rod would have no single stiffness); holes are allowed.
+Every region's material must be one of the named materials.
 """
 
 from __future__ import annotations
@@ -9,6 +11,8 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
+
+from shapely.ops import unary_union
 
 from runtime.errors import ParameterError
 from runtime.section import _checks as ck
@@ -59,7 +63,8 @@ def check_regions(regions: Sequence[Region], materials: Mapping[str, SectionMate
             raise ParameterError(f"{path}[{i}].material", r.material, "one of the materials "
                                  + (", ".join(map(repr, materials)) or "(none given)"))
     size = max(r.shape.polygon(1e9).length for r in regions)
-    hh = h if h is not None else size / 64
+    hh0 = h if h is not None else size / 64
+    hh = hh0
     polys = [r.shape.polygon(hh) for r in regions]
     for i in range(len(polys)):
         for j in range(i + 1, len(polys)):
@@ -71,3 +76,12 @@ def check_regions(regions: Sequence[Region], materials: Mapping[str, SectionMate
                                      f"a shape that does not overlap region "
                                      f"{regions[i].name!r} (they share {ov:.4g} m^2; "
                                      f"region {regions[j].name!r} overlaps it)")
+    union = unary_union(polys)
+    parts = list(getattr(union, "geoms", [union]))
+    if len(parts) > 1:
+        groups = [[regions[i].name for i, p in enumerate(polys) if part.intersects(p)
+                   and part.intersection(p).area > 0] for part in parts]
+        raise ParameterError(path, " | ".join(", ".join(g) for g in groups),
+                             f"regions that form one connected section, bonded along "
+                             f"their edges (they form {len(parts)} separate parts: "
+                             + "; ".join("[" + ", ".join(g) + "]" for g in groups) + ")")
