@@ -47,6 +47,10 @@ class SectionResult:
     ``mass_per_length`` [kg/m], ``mass_centre`` [m], ``rotary_inertia`` about the mass
     centre [kg m]: I11 = <rho (x2 - c2)^2> (about d1), I22 = <rho (x1 - c1)^2> (about d2),
     I12 = <rho (x1 - c1)(x2 - c2)> (product), polar = I11 + I22; ``area`` [m^2].
+    ``compliance`` F = K^-1 about the elastic centroid; ``torsional_stiffness`` G J_T =
+    1/F[5, 5] [N m^2], the torque per twist without shear forces (independent of the
+    reference point; K[5, 5] about a point other than the shear centre is larger, by the
+    shear strain that twisting about that point implies).
     Convergence: ``mesh_size`` h [m] of the final mesh, ``n_elements``, ``n_nodes``,
     ``tolerance``, ``achieved_change`` (largest relative change of a diagonal entry from
     the previous mesh), ``converged``, ``history`` (h, change) per mesh; ``warnings``.
@@ -55,6 +59,8 @@ class SectionResult:
     stiffness: np.ndarray
     viscosity: np.ndarray
     viscosity_naive: np.ndarray
+    compliance: np.ndarray
+    torsional_stiffness: float
     elastic_centroid: tuple[float, float]
     shear_centre: tuple[float, float]
     mass_per_length: float
@@ -81,6 +87,7 @@ class SectionResult:
             "stiffness": self.stiffness.tolist(),
             "viscosity": self.viscosity.tolist(),
             "viscosity_naive": self.viscosity_naive.tolist(),
+            "torsional_stiffness": self.torsional_stiffness,
             "strain_order": list(STRAINS),
             "mass_per_length": self.mass_per_length,
             "mass_centre": list(self.mass_centre),
@@ -115,6 +122,7 @@ class _Level:
     h: float
     mesh: Mesh
     F: np.ndarray       # compliance about the reference origin, SI units
+    Fc: np.ndarray      # compliance about the elastic centroid
     K: np.ndarray
     V: np.ndarray
     Vn: np.ndarray
@@ -160,7 +168,7 @@ def _solve_level(regions: Sequence[Region], mats: Sequence[SectionMaterial], h: 
     Vno = NV @ Ko
     Vc = Pinv @ Vo @ Pinv.T
     Vnc = Pinv @ Vno @ Pinv.T
-    return _Level(h=h, mesh=mesh, F=F, K=Kc, V=0.5 * (Vc + Vc.T), Vn=Vnc,
+    return _Level(h=h, mesh=mesh, F=F, Fc=Fc, K=Kc, V=0.5 * (Vc + Vc.T), Vn=Vnc,
                   centroid=(float(ce[0] + origin[0]), float(ce[1] + origin[1])),
                   shear_centre=(float(sc[0] + origin[0]), float(sc[1] + origin[1])))
 
@@ -266,7 +274,8 @@ def analyse_section(regions: Sequence[Region] | Any,
     mass = _mass(best.mesh, used)
     del names
     return SectionResult(
-        stiffness=best.K, viscosity=best.V, viscosity_naive=best.Vn,
+        stiffness=best.K, viscosity=best.V, viscosity_naive=best.Vn, compliance=best.Fc,
+        torsional_stiffness=float(1.0 / best.Fc[5, 5]),
         elastic_centroid=best.centroid, shear_centre=best.shear_centre,
         mass_per_length=mass["mass"], mass_centre=mass["centre"],
         rotary_inertia=mass["inertia"], area=mass["area"], mesh_size=best.h,
