@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from shapely.ops import unary_union
 
 from runtime.errors import ParameterError
 from runtime.section import fe
@@ -238,16 +239,15 @@ def analyse_section(regions: Sequence[Region] | Any,
             and all(isinstance(r, Region) for r in regions)):
         regions = regions_from_mapping(regions)
     check_regions(regions, mats_map)
-    names = list(mats_map)
     used = [mats_map[r.material] for r in regions]
-    # regions -> mesh attribute index: one material per region
     total = sum(r.shape.area for r in regions)
     polys = [r.shape.polygon(math.sqrt(total) / 16) for r in regions]
-    origin = np.array(polys[0].centroid.coords[0]) if len(polys) == 1 else \
-        np.array(__import__("shapely").ops.unary_union(polys).centroid.coords[0])
+    origin = np.array(unary_union(polys).centroid.coords[0])
     L = math.sqrt(total)
     c0 = max(float(np.max(np.abs(m.stiffness))) for m in used)
     v0 = max([float(np.max(np.abs(m.viscosity))) for m in used] + [c0 * 1e-300, 1e-300])
+    if h is not None and not (isinstance(h, (int, float)) and 0 < h < math.inf):
+        raise ParameterError("h", h, "a mesh size in m (> 0)")
     if h is None:
         thin = min(2.0 * p.area / p.length for p in polys)        # ~ thickness of the thinnest
         h = min(L / 8.0, 1.5 * thin)
@@ -262,8 +262,8 @@ def analyse_section(regions: Sequence[Region] | Any,
             change = _change(lev, levels[-1])
         history.append((hk, change))
         levels.append(lev)
-        if change < tol or 3 * lev.mesh.nodes.shape[0] * 2 > 2 * MAX_NODES * 2:
-            break
+        if change < tol or 2 * lev.mesh.nodes.shape[0] > MAX_NODES:
+            break                          # converged, or the next mesh would be too large
         hk /= math.sqrt(2.0)
     best = levels[-1]
     converged = change < tol
@@ -272,7 +272,6 @@ def analyse_section(regions: Sequence[Region] | Any,
                         f"change of {change:.3g} (> tol = {tol:g}); the result is less "
                         "accurate than asked")
     mass = _mass(best.mesh, used)
-    del names
     return SectionResult(
         stiffness=best.K, viscosity=best.V, viscosity_naive=best.Vn, compliance=best.Fc,
         torsional_stiffness=float(1.0 / best.Fc[5, 5]),

@@ -58,6 +58,7 @@ def check_regions(regions: Sequence[Region], materials: Mapping[str, SectionMate
     """Every material is known and no two regions overlap (errors name the regions)."""
     if not regions:
         raise ParameterError(path, [], "at least one region")
+    names = [r.name or f"{path}[{i}]" for i, r in enumerate(regions)]
     for i, r in enumerate(regions):
         if r.material not in materials:
             raise ParameterError(f"{path}[{i}].material", r.material, "one of the materials "
@@ -72,14 +73,13 @@ def check_regions(regions: Sequence[Region], materials: Mapping[str, SectionMate
                 continue
             ov = polys[i].intersection(polys[j]).area
             if ov > OVERLAP_TOLERANCE * min(polys[i].area, polys[j].area) and ov > 0:
-                raise ParameterError(f"{path}[{j}].shape", regions[j].name,
-                                     f"a shape that does not overlap region "
-                                     f"{regions[i].name!r} (they share {ov:.4g} m^2; "
-                                     f"region {regions[j].name!r} overlaps it)")
+                raise ParameterError(f"{path}[{j}].shape", regions[j].shape.kind,
+                                     f"a shape that does not overlap region {names[i]!r} "
+                                     f"(region {names[j]!r} overlaps it by {ov:.4g} m^2)")
     union = unary_union(polys)
     parts = list(getattr(union, "geoms", [union]))
     if len(parts) > 1:
-        groups = [[regions[i].name for i, p in enumerate(polys) if part.intersects(p)
+        groups = [[names[i] for i, p in enumerate(polys) if part.intersects(p)
                    and part.intersection(p).area > 0] for part in parts]
         raise ParameterError(path, " | ".join(", ".join(g) for g in groups),
                              f"regions that form one connected section, bonded along "
