@@ -143,8 +143,9 @@ def _element_materials(mesh: Mesh, mats: Sequence[SectionMaterial], c0: float, v
 
 
 def _solve_level(regions: Sequence[Region], mats: Sequence[SectionMaterial], h: float,
-                 origin: np.ndarray, L: float, c0: float, v0: float) -> _Level:
-    mesh = mesh_regions(regions, h)
+                 factors: Sequence[float], origin: np.ndarray, L: float, c0: float,
+                 v0: float) -> _Level:
+    mesh = mesh_regions(regions, h, factors)
     scaled = Mesh(nodes=(mesh.nodes - origin) / L, elements=mesh.elements,
                   region=mesh.region, h=h / L)
     stiff, visc = _element_materials(mesh, mats, c0, v0)
@@ -216,8 +217,8 @@ def analyse_section(regions: Sequence[Region] | Any,
         Relative change of every diagonal entry of K, V and V_naive between two successive
         meshes below which the refinement stops (default 1e-4).
     h
-        Edge length of the first mesh [m] (default: sqrt(area) / 8, or finer where the
-        regions are thinner).
+        Edge length of the first mesh [m] (default: sqrt(area) / 8); a region thinner than
+        h / 1.5 takes elements of 1.5 times its thickness (2 area / perimeter).
     max_levels
         At most this many meshes (each with h / sqrt(2)).
 
@@ -248,16 +249,18 @@ def analyse_section(regions: Sequence[Region] | Any,
     v0 = max([float(np.max(np.abs(m.viscosity))) for m in used] + [c0 * 1e-300, 1e-300])
     if h is not None and not (isinstance(h, (int, float)) and 0 < h < math.inf):
         raise ParameterError("h", h, "a mesh size in m (> 0)")
+    # ~ thickness of each region (2 A / perimeter): thin regions get smaller elements
+    thin = [2.0 * p.area / p.length for p in polys]
     if h is None:
-        thin = min(2.0 * p.area / p.length for p in polys)        # ~ thickness of the thinnest
-        h = min(L / 8.0, 1.5 * thin)
+        h = L / 8.0
+    factors = [min(1.0, 1.5 * t / h) for t in thin]
     levels: list[_Level] = []
     history: list[tuple[float, float]] = []
     warnings = [w for m in used for w in m.warnings]
     change = math.inf
     hk = float(h)
     for _ in range(max_levels):
-        lev = _solve_level(regions, used, hk, origin, L, c0, v0)
+        lev = _solve_level(regions, used, hk, factors, origin, L, c0, v0)
         if levels:
             change = _change(lev, levels[-1])
         history.append((hk, change))

@@ -136,18 +136,21 @@ def _inverted(nodes: np.ndarray, elements: np.ndarray) -> np.ndarray:
     return np.any(det <= 0, axis=1)
 
 
-def mesh_regions(regions: Sequence[Region], h: float) -> Mesh:
-    """Mesh the regions with six-node triangles of edge length about ``h`` [m]."""
+def mesh_regions(regions: Sequence[Region], h: float,
+                 factors: Sequence[float] | None = None) -> Mesh:
+    """Mesh the regions with six-node triangles of edge length about ``h`` [m] (times
+    ``factors[i]`` <= 1 in region i: thin regions take smaller elements without refining
+    the whole section)."""
     polys, vertices, segments, holes = _pslg(regions, h)
     curves = [c for r in regions for c in r.shape.curves(h)]
     extra = _grading_points(vertices, segments, polys, h, curves)
     if extra.size:
         vertices = np.vstack([vertices, extra])
-    area = h * h * math.sqrt(3.0) / 4.0
     control = []
     for i, p in enumerate(polys):
+        hi = h * (1.0 if factors is None else factors[i])
         q = shapely.get_coordinates(p.representative_point())[0]
-        control.append([q[0], q[1], float(i), area])
+        control.append([q[0], q[1], float(i), hi * hi * math.sqrt(3.0) / 4.0])
     tri = {"vertices": vertices, "segments": segments, "regions": control}
     if holes:
         tri["holes"] = holes
