@@ -21,6 +21,35 @@ FORBIDDEN = {
 }
 
 
+#: runtime/section is a floor below runtime/problem: NumPy, SciPy, shapely, cytriangle and
+#: runtime.errors only (no SymPy, nothing else of runtime)
+SECTION_ALLOWED = {"numpy", "scipy", "shapely", "cytriangle", "runtime", "__future__",
+                   "math", "dataclasses", "collections", "typing"}
+
+
+def imported_modules(path: Path) -> set[str]:
+    tree = ast.parse(path.read_text(), filename=str(path))
+    names: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names |= {a.name for a in node.names}
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            names.add(node.module)
+    return names
+
+
+def test_section_layer():
+    bad = {}
+    for f in sorted((ROOT / "runtime" / "section").rglob("*.py")):
+        mods = imported_modules(f)
+        wrong = {m for m in mods if m.split(".")[0] not in SECTION_ALLOWED
+                 or (m.startswith("runtime") and not (m == "runtime.errors"
+                                                      or m.startswith("runtime.section")))}
+        if wrong:
+            bad[str(f.relative_to(ROOT))] = sorted(wrong)
+    assert not bad, f"runtime/section imports outside its floor: {bad}"
+
+
 def imported_top_levels(path: Path) -> set[str]:
     tree = ast.parse(path.read_text(), filename=str(path))
     names: set[str] = set()

@@ -1,0 +1,286 @@
+"""The cross-section analysis: 6x6 stiffness, consistent and naive viscosity, inertia.
+
+:func:`analyse_section` meshes the regions, solves the finite-element problem of
+:mod:`runtime.section.fe`, refines the mesh until every diagonal entry of the stiffness and
+of both viscosities changes by less than ``tol`` (relative) from one mesh to the next, and
+returns the result about the elastic centroid (tension centre).
+
+Conventions (kvrod's kernels, ``derive/steps/kinematics.py``): rod strains
+(Gamma1, Gamma2, Gamma3, K1, K2, K3): shears along d1, d2, extension, bending about d1 (axial
+strain x2 K1), bending about d2 (axial strain -x1 K2), torsion; resultants
+(T1, T2, T3, M1, M2, M3) with M1 = <x2 sigma33>, M2 = <-x1 sigma33>. A homogeneous
+isotropic section has K = diag(kappa1 G A, kappa2 G A, E A, E I1, E I2, G J_T) with
+I1 = <x2^2>, the shear factors being the energy-consistent ones of Saint-Venant flexure.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from shapely.ops import unary_union
+
+from runtime.errors import ParameterError
+from runtime.section import fe
+from runtime.section.materials import SectionMaterial, as_material_map
+from runtime.section.mesh import Mesh, mesh_regions
+from runtime.section.regions import Region, check_regions, regions_from_mapping
+
+#: strain and resultant names, in the order of the 6x6 matrices
+STRAINS = ("Gamma1", "Gamma2", "Gamma3", "K1", "K2", "K3")
+RESULTANTS = ("T1", "T2", "T3", "M1", "M2", "M3")
+DEFAULT_TOL = 1e-4
+MAX_LEVELS = 8
+MAX_NODES = 120_000
+
+
+@dataclass(frozen=True)
+class SectionResult:
+    """Cross-section properties about the elastic centroid (SI units).
+
+    ``stiffness`` K (6x6; N, N m, N m^2 blocks), ``viscosity`` (consistent, 6x6, the same
+    units times s), ``viscosity_naive`` (traction route, not symmetric in general), in
+    strain order (Gamma1, Gamma2, Gamma3, K1, K2, K3) and resultant order (T1, T2, T3, M1, M2,
+    M3); ``reference_point`` = ``elastic_centroid`` (x1, x2) [m]; ``shear_centre`` [m];
+    ``mass_per_length`` [kg/m], ``mass_centre`` [m], ``rotary_inertia`` about the mass
+    centre [kg m]: I11 = <rho (x2 - c2)^2> (about d1), I22 = <rho (x1 - c1)^2> (about d2),
+    I12 = <rho (x1 - c1)(x2 - c2)> (product), polar = I11 + I22; ``area`` [m^2].
+    ``compliance`` F = K^-1 about the elastic centroid; ``torsional_stiffness`` G J_T =
+    1/F[5, 5] [N m^2], the torque per twist without shear forces (independent of the
+    reference point; K[5, 5] about a point other than the shear centre is larger, by the
+    shear strain that twisting about that point implies).
+    Convergence: ``mesh_size`` h [m] of the final mesh, ``n_elements``, ``n_nodes``,
+    ``tolerance``, ``achieved_change`` (largest relative change of a diagonal entry from
+    the previous mesh), ``converged``, ``history`` (h, change) per mesh; ``warnings``.
+    """
+
+    stiffness: np.ndarray
+    viscosity: np.ndarray
+    viscosity_naive: np.ndarray
+    compliance: np.ndarray
+    torsional_stiffness: float
+    elastic_centroid: tuple[float, float]
+    shear_centre: tuple[float, float]
+    mass_per_length: float
+    mass_centre: tuple[float, float]
+    rotary_inertia: dict[str, float]
+    area: float
+    mesh_size: float
+    n_elements: int
+    n_nodes: int
+    tolerance: float
+    achieved_change: float
+    converged: bool
+    history: tuple[tuple[float, float], ...]
+    warnings: tuple[str, ...] = ()
+    mesh: Mesh | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def reference_point(self) -> tuple[float, float]:
+        return self.elastic_centroid
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready mapping (the keys of ``kvrod section``'s section.json)."""
+        return {
+            "stiffness": self.stiffness.tolist(),
+            "viscosity": self.viscosity.tolist(),
+            "viscosity_naive": self.viscosity_naive.tolist(),
+            "torsional_stiffness": self.torsional_stiffness,
+            "strain_order": list(STRAINS),
+            "mass_per_length": self.mass_per_length,
+            "mass_centre": list(self.mass_centre),
+            "rotary_inertia": dict(self.rotary_inertia),
+            "elastic_centroid": list(self.elastic_centroid),
+            "shear_centre": list(self.shear_centre),
+            "reference_point": list(self.reference_point),
+            "area": self.area,
+            "mesh": {"size": self.mesh_size, "elements": self.n_elements,
+                     "nodes": self.n_nodes, "tolerance": self.tolerance,
+                     "achieved_change": self.achieved_change, "converged": self.converged},
+            "warnings": list(self.warnings),
+        }
+
+
+def shift(c: tuple[float, float]) -> np.ndarray:
+    """P with theta_origin = P theta_c for resultants given at the point c (m):
+    M_origin = M_c + c x T."""
+    P = np.eye(6)
+    c1, c2 = c
+    P[3, 2], P[4, 2] = c2, -c1
+    P[5, 0], P[5, 1] = -c2, c1
+    return P
+
+
+def _scale_vector(L: float) -> np.ndarray:
+    return np.array([L, L, L, L * L, L * L, L * L])
+
+
+@dataclass
+class _Level:
+    h: float
+    mesh: Mesh
+    F: np.ndarray       # compliance about the reference origin, SI units
+    Fc: np.ndarray      # compliance about the elastic centroid
+    K: np.ndarray
+    V: np.ndarray
+    Vn: np.ndarray
+    centroid: tuple[float, float]
+    shear_centre: tuple[float, float]
+
+
+def _element_materials(mesh: Mesh, mats: Sequence[SectionMaterial], c0: float, v0: float
+                       ) -> tuple[fe.ElementMaterial, fe.ElementMaterial]:
+    r = mesh.region
+    C = np.stack([m.stiffness - m.bulk_excess * np.outer(fe.M_VOL, fe.M_VOL) for m in mats])
+    V = np.stack([m.viscosity - m.bulk_viscosity_excess * np.outer(fe.M_VOL, fe.M_VOL)
+                  for m in mats])
+    kx = np.array([m.bulk_excess for m in mats])
+    vx = np.array([m.bulk_viscosity_excess for m in mats])
+    return (fe.ElementMaterial(C[r] / c0, kx[r] / c0), fe.ElementMaterial(V[r] / v0, vx[r] / v0))
+
+
+def _solve_level(regions: Sequence[Region], mats: Sequence[SectionMaterial], h: float,
+                 factors: Sequence[float], origin: np.ndarray, L: float, c0: float,
+                 v0: float) -> _Level:
+    mesh = mesh_regions(regions, h, factors)
+    scaled = Mesh(nodes=(mesh.nodes - origin) / L, elements=mesh.elements,
+                  region=mesh.region, h=h / L)
+    stiff, visc = _element_materials(mesh, mats, c0, v0)
+    sol = fe.solve(scaled, stiff, visc)
+    s = _scale_vector(L)
+    # back to SI about the origin: forces scale with c0 s_i, strains with 1/s_j
+    F = sol.F / (c0 * np.outer(s, s))
+    FV = sol.FV * v0 / (c0 * c0 * np.outer(s, s))
+    NV = sol.NV * v0 / c0 * np.outer(s, 1.0 / s)
+    # elastic centroid: an axial force there gives no curvature (F about the origin)
+    a = np.array([[-F[3, 4], F[3, 3]], [-F[4, 4], F[4, 3]]])
+    ce = np.linalg.solve(a, -F[3:5, 2])
+    sc = np.array([-F[5, 1] / F[5, 5], F[5, 0] / F[5, 5]])
+    P = shift((float(ce[0]), float(ce[1])))
+    Pinv = np.linalg.inv(P)
+    Fc = P.T @ F @ P
+    Fc = 0.5 * (Fc + Fc.T)
+    Kc = np.linalg.inv(Fc)
+    Kc = 0.5 * (Kc + Kc.T)
+    Ko = np.linalg.inv(F)
+    Vo = Ko @ FV @ Ko
+    Vno = NV @ Ko
+    Vc = Pinv @ Vo @ Pinv.T
+    Vnc = Pinv @ Vno @ Pinv.T
+    return _Level(h=h, mesh=mesh, F=F, Fc=Fc, K=Kc, V=0.5 * (Vc + Vc.T), Vn=Vnc,
+                  centroid=(float(ce[0] + origin[0]), float(ce[1] + origin[1])),
+                  shear_centre=(float(sc[0] + origin[0]), float(sc[1] + origin[1])))
+
+
+def _change(new: _Level, old: _Level) -> float:
+    worst = 0.0
+    for a, b in ((new.K, old.K), (new.V, old.V), (new.Vn, old.Vn)):
+        da, db = np.diag(a), np.diag(b)
+        scale = np.maximum(np.abs(da), 1e-300)
+        if not np.any(da):
+            continue
+        mask = np.abs(da) > 1e-12 * np.max(np.abs(da))
+        worst = max(worst, float(np.max(np.abs(da - db)[mask] / scale[mask])))
+    return worst
+
+
+def _mass(mesh: Mesh, mats: Sequence[SectionMaterial]) -> dict[str, Any]:
+    g = fe.geometry(mesh.nodes, mesh.elements)
+    rho = np.array([m.density for m in mats])[mesh.region]
+    wr = g.w * rho[:, None]
+    m = float(wr.sum())
+    c = (wr[..., None] * g.x).sum(axis=(0, 1)) / m
+    d = g.x - c
+    I11 = float((wr * d[..., 1] ** 2).sum())
+    I22 = float((wr * d[..., 0] ** 2).sum())
+    I12 = float((wr * d[..., 0] * d[..., 1]).sum())
+    return {"mass": m, "centre": (float(c[0]), float(c[1])), "area": float(g.w.sum()),
+            "inertia": {"I11": I11, "I22": I22, "I12": I12, "polar": I11 + I22}}
+
+
+def analyse_section(regions: Sequence[Region] | Any,
+                    materials: Mapping[str, SectionMaterial] | Any, *,
+                    tol: float = DEFAULT_TOL, h: float | None = None,
+                    max_levels: int = MAX_LEVELS) -> SectionResult:
+    """Stiffness, consistent and naive viscosity and inertia of a composite section.
+
+    Parameters
+    ----------
+    regions
+        :class:`Region` objects, or the ``[[section.regions]]`` array of tables.
+    materials
+        {name: :class:`SectionMaterial`}, or the ``[materials]`` table.
+    tol
+        Relative change of every diagonal entry of K, V and V_naive between two successive
+        meshes below which the refinement stops (default 1e-4).
+    h
+        Edge length of the first mesh [m] (default: sqrt(area) / 8); a region thinner than
+        h / 1.5 takes elements of 1.5 times its thickness (2 area / perimeter).
+    max_levels
+        At most this many meshes (each with h / sqrt(2)).
+
+    Returns
+    -------
+    SectionResult
+        About the elastic centroid; not converged (with a warning) when ``max_levels``
+        meshes or the node limit did not reach ``tol``.
+
+    Raises
+    ------
+    ParameterError
+        Bad regions or materials (overlaps, unknown material names, bad values).
+    """
+    if not (isinstance(tol, (int, float)) and 1e-9 <= tol <= 0.1):
+        raise ParameterError("tol", tol, "a relative tolerance, 1e-9 ... 0.1")
+    mats_map = as_material_map(materials)
+    if not (isinstance(regions, Sequence) and regions
+            and all(isinstance(r, Region) for r in regions)):
+        regions = regions_from_mapping(regions)
+    check_regions(regions, mats_map)
+    used = [mats_map[r.material] for r in regions]
+    total = sum(r.shape.area for r in regions)
+    polys = [r.shape.polygon(math.sqrt(total) / 16) for r in regions]
+    origin = np.array(unary_union(polys).centroid.coords[0])
+    L = math.sqrt(total)
+    c0 = max(float(np.max(np.abs(m.stiffness))) for m in used)
+    v0 = max([float(np.max(np.abs(m.viscosity))) for m in used] + [c0 * 1e-300, 1e-300])
+    if h is not None and not (isinstance(h, (int, float)) and 0 < h < math.inf):
+        raise ParameterError("h", h, "a mesh size in m (> 0)")
+    # ~ thickness of each region (2 A / perimeter): thin regions get smaller elements
+    thin = [2.0 * p.area / p.length for p in polys]
+    if h is None:
+        h = L / 8.0
+    factors = [min(1.0, 1.5 * t / h) for t in thin]
+    levels: list[_Level] = []
+    history: list[tuple[float, float]] = []
+    warnings = [w for m in used for w in m.warnings]
+    change = math.inf
+    hk = float(h)
+    for _ in range(max_levels):
+        lev = _solve_level(regions, used, hk, factors, origin, L, c0, v0)
+        if levels:
+            change = _change(lev, levels[-1])
+        history.append((hk, change))
+        levels.append(lev)
+        if change < tol or 2 * lev.mesh.nodes.shape[0] > MAX_NODES:
+            break                          # converged, or the next mesh would be too large
+        hk /= math.sqrt(2.0)
+    best = levels[-1]
+    converged = change < tol
+    if not converged:
+        warnings.append(f"mesh refinement stopped at h = {best.h:.4g} m with a relative "
+                        f"change of {change:.3g} (> tol = {tol:g}); the result is less "
+                        "accurate than asked")
+    mass = _mass(best.mesh, used)
+    return SectionResult(
+        stiffness=best.K, viscosity=best.V, viscosity_naive=best.Vn, compliance=best.Fc,
+        torsional_stiffness=float(1.0 / best.Fc[5, 5]),
+        elastic_centroid=best.centroid, shear_centre=best.shear_centre,
+        mass_per_length=mass["mass"], mass_centre=mass["centre"],
+        rotary_inertia=mass["inertia"], area=mass["area"], mesh_size=best.h,
+        n_elements=int(best.mesh.elements.shape[0]), n_nodes=int(best.mesh.nodes.shape[0]),
+        tolerance=float(tol), achieved_change=float(change), converged=converged,
+        history=tuple(history), warnings=tuple(warnings), mesh=best.mesh)
