@@ -69,6 +69,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from runtime import native
 from runtime.model import build
 from runtime.problem.assemble import build_model
 from runtime.problem.registry import load_problem
@@ -224,7 +225,7 @@ def _symbolic(rod: ReleasedRod, form: str, sym) -> tuple[Any, ...]:
 
 def _cache_dir(cache_dir: Path | None) -> Path:
     return Path(cache_dir or os.environ.get("KVROD_BENCH_IDAS_CACHE")
-                or build.cache_dir() / "bench-idas")
+                or native.cache_dir() / "bench-idas")
 
 
 def _compile(cc: str, sources: list[Path], so: Path, include: Path | None = None,
@@ -244,7 +245,7 @@ def _compile(cc: str, sources: list[Path], so: Path, include: Path | None = None
 def kernels_library(cache_dir: Path | None = None) -> tuple[Path, float, bool]:
     """The compiled ``bench/idas_kernels.c`` with kvrod's generated C (one library for
     every N; cached by the sources' hash): (path, compile seconds, was cached)."""
-    cc = build.find_compiler()
+    cc = native.find_compiler()
     if cc is None:
         raise RuntimeError("no C compiler for the IDAS kernels build")
     gdir = build.generated_dir()
@@ -252,7 +253,7 @@ def kernels_library(cache_dir: Path | None = None) -> tuple[Path, float, bool]:
     h = hashlib.sha256()
     for f in (*sources, *(gdir / s for s in build.HEADERS)):
         h.update(f.read_bytes())
-    h.update("\0".join([BUILDER_VERSION, cc, *KERNEL_CFLAGS, build.host_id()]).encode())
+    h.update("\0".join([BUILDER_VERSION, cc, *KERNEL_CFLAGS, native.host_id()]).encode())
     so = _cache_dir(cache_dir) / f"rod_ode_kernels_{h.hexdigest()[:32]}.so"
     if so.exists():
         return so, 0.0, True
@@ -346,7 +347,7 @@ def build_function(rod: ReleasedRod, form: str = "ode", build_kind: str = "flat"
                         library=str(so), keep=keep)
     compiled = build_kind in ("flat", "map")
     if compiled:
-        cc = build.find_compiler()
+        cc = native.find_compiler()
         if cc is None:
             raise RuntimeError("no C compiler for the compiled IDAS opponent")
         key = _cache_key(rod, form, build_kind, cc)

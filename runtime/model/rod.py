@@ -379,8 +379,8 @@ class RodModel:
         return {end: quat_rotation(v[0]) for end, v in q.items()}
 
     def condensation_blocks(self) -> list[tuple[int, int, int, int, int]]:
-        """The kinematic blocks a Newton solve may eliminate (``runtime.solvers._bdf_c.
-        CondensedNewton``): per node, the rows phi' = v eliminate v (kept: phi; at a held
+        """The kinematic blocks a Newton solve may eliminate (``runtime.solvers.native.
+        condensed.CondensedNewton``): per node, the rows phi' = v eliminate v (kept: phi; at a held
         node the rows v = v(t)); per segment, the rows p' = 1/2 p*(0, Omega) eliminate p
         (kept: Omega). Each as
         ``(e_off, e_size, r_off, k_off, k_size)`` of contiguous state ranges."""

@@ -14,7 +14,7 @@ An observer implements any of
 They are called in the order given, so an observer may use the results of earlier ones
 (:class:`Sampler` reads the running integrals of :class:`EnergyIntegrator`).
 
-With the compiled step loop (``runtime/solvers/bdf_core.c``) the run loop lets many steps
+With the compiled step loop (``runtime/solvers/native/step_loop.c``) the run loop lets many steps
 pass between two calls of Python code. An observer that does not need every step says so
 with ``sparse = True`` and tells the loop when it must be called:
 

@@ -77,6 +77,7 @@ def test_compile_is_announced(tmp_path, monkeypatch, capsys):
     """A compilation of the rod kernels tells the observers when it starts and how long it
     took; the command line prints both on stderr (library code prints nothing)."""
     from kvrod.notices import install_compile_notices, remove_compile_notices
+    from runtime import native
     from runtime.model import build
 
     def fake_compiler(tail, compiler):     # writes a "library" where -o points
@@ -86,7 +87,7 @@ def test_compile_is_announced(tmp_path, monkeypatch, capsys):
 
     monkeypatch.setattr(build, "run_compiler", fake_compiler)
     events = []
-    build.add_compile_observer(lambda what, s: events.append((what, s)))
+    native.add_compile_observer(lambda what, s: events.append((what, s)))
     try:
         build.compile_library("cc", outdir=tmp_path)
         assert capsys.readouterr().err == ""            # no observer that prints
@@ -96,18 +97,19 @@ def test_compile_is_announced(tmp_path, monkeypatch, capsys):
         err = capsys.readouterr().err.splitlines()
     finally:
         remove_compile_notices()
-        build._observers.clear()
-    assert events[0] == (build.ROD_KERNELS, None) and events[1][1] >= 0
+        native._observers.clear()
+    assert events[0] == (native.ROD_KERNELS, None) and events[1][1] >= 0
     assert err[0] == "kvrod: compiling the rod kernels (first use, ~10 s; cached afterwards)..."
     assert re.fullmatch(r"kvrod: compiled the rod kernels in \d+\.\d s", err[1])
 
 
 def test_compile_native_reports_zero_when_cached():
+    from runtime import native
     from runtime.model import build
 
     build.compile_native()                              # whatever it takes the first time
     spent = build.compile_native()
-    assert spent == {build.ROD_KERNELS: 0.0, build.STEP_LOOP: 0.0}
+    assert spent == {native.ROD_KERNELS: 0.0, native.STEP_LOOP: 0.0}
 
 
 def test_a_missing_package_is_named_with_its_install_command(monkeypatch, capsys, tmp_path):
