@@ -13,6 +13,7 @@ from pathlib import Path
 
 from kvrod.analyses import compare_table, modes_table, run_modes, write_compare, write_modes
 from kvrod.outputs import safe_name
+from runtime.analysis.records import load_csv
 
 
 def _cli_error(message: str) -> Exception:
@@ -109,8 +110,8 @@ def _cmd_calibrate_dma(args) -> int:
 def _cmd_calibrate(args) -> int:
     """Validate the data and the model first, then lock the folder and fit."""
     from kvrod.outputs import results_folder
-    from runtime.analysis import calibration as cal
     from runtime.problem.registry import load_problem
+    from runtime.study import calibration as cal
 
     if args.dma is not None:
         return _cmd_calibrate_dma(args)
@@ -137,10 +138,10 @@ def _cmd_calibrate(args) -> int:
                              "inertia)")
     try:
         if args.mode == "signal":
-            data = cal.validate_signal(*cal.load_csv(args.data, ("t", "x")))
+            data = cal.validate_signal(*load_csv(args.data, ("t", "x")))
             cal.check_record(data[0], data[1], problem)
         else:
-            data = (cal.validate_decrements(*cal.load_csv(args.data, ("delta",))),)
+            data = (cal.validate_decrements(*load_csv(args.data, ("delta",))),)
     except ValueError as exc:
         from runtime.errors import ParameterError
 
@@ -154,8 +155,8 @@ def _cmd_calibrate(args) -> int:
 
 
 def _calibrate_into(args, out: Path, data: tuple, problem) -> int:
-    from runtime.analysis import calibration as cal
     from runtime.io.results import write_json
+    from runtime.study import calibration as cal
 
     if args.mode == "signal":
         res = cal.calibrate_signal(*data, problem=problem, tau0=args.tau0,
@@ -179,7 +180,7 @@ def _calibrate_into(args, out: Path, data: tuple, problem) -> int:
 
 
 # --------------------------------------------------------------------------------------
-# kvrod compare-damping (computation: runtime/analysis/compare_damping.py)
+# kvrod compare-damping (computation: runtime/study/compare_damping.py)
 # --------------------------------------------------------------------------------------
 
 
@@ -188,7 +189,7 @@ def _cmd_compare(args) -> int:
         raise _cli_error(f"kvrod compare-damping: --n-elements must be >= 2, got "
                          f"{args.n_elements}")
     from kvrod.outputs import results_folder
-    from runtime.analysis import compare_damping as cd
+    from runtime.study import compare_damping as cd
 
     cd.check_inputs(args.n_elements, args.tau_S, args.tau_B, args.nu, args.tip_force,
                     args.rtol)

@@ -122,12 +122,12 @@ class ComputationStarted(BaseException):  # noqa: N818 - not an error of the pro
 _GUARDED = (("runtime.simulate.simulate", "simulate"),
             ("runtime.analysis.modal", "modal_analysis"),
             ("runtime.solvers.statics", "solve_static"), ("runtime.study.sweep", "run_point"),
-            ("runtime.analysis.compare_damping", "compare_damping"),
-            ("runtime.analysis.calibration", "calibrate_signal"),
-            ("runtime.analysis.calibration", "calibrate_decrements"))
+            ("runtime.study.compare_damping", "compare_damping"),
+            ("runtime.study.calibration", "calibrate_signal"),
+            ("runtime.study.calibration", "calibrate_decrements"))
 _PREIMPORT = ("runtime.simulate.simulate", "runtime.analysis.modal", "runtime.solvers.statics",
-              "runtime.study.sweep", "runtime.analysis.calibration",
-              "runtime.analysis.compare_damping", "kvrod.reproduce", "kvrod.beyond",
+              "runtime.study.sweep", "runtime.study.calibration",
+              "runtime.study.compare_damping", "kvrod.reproduce", "kvrod.beyond",
               "kvrod.cli_beyond", "kvrod.cli_runtime", "kvrod.cli_sweep")
 
 

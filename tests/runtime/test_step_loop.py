@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 
 from runtime.problem.registry import load_problem
-from runtime.simulate import loop
 from runtime.simulate.simulate import simulate
+from runtime.solvers import driver
 from runtime.solvers.bdf import BDF, IntegrationError
 from runtime.solvers.integrator import consistent_initial
 from runtime.solvers.native.loader import load
@@ -171,7 +171,7 @@ def test_failures_are_reported_alike(compiled):
 def _simulate(problem, python: bool, monkeypatch, **kw):
     with monkeypatch.context() as mp:
         if python:
-            mp.setattr(loop, "BDF", partial(BDF, compiled_loop=False))
+            mp.setattr(driver, "BDF", partial(BDF, compiled_loop=False))
         return simulate(problem, **kw)
 
 
@@ -223,7 +223,7 @@ def test_the_compiled_loop_calls_python_rarely_unless_an_observer_needs_every_st
 
     m = run.model
     y0, yp0 = _released(m)
-    res = loop.run_loop(m, 0.0, y0, yp0, 0.5, rtol=1e-6, atol=1e-8, observers=[EveryStep()])
+    res = driver.run_loop(m, 0.0, y0, yp0, 0.5, rtol=1e-6, atol=1e-8, observers=[EveryStep()])
     assert res.status == "finished" and len(seen) == res.counters["nstep"] > 10
 
 
