@@ -21,11 +21,11 @@ from functools import lru_cache
 from pathlib import Path
 
 import casadi as ca
-import jinja2
 
 from derive import cache, codegen_lanes
 from derive import discrete_rod as dr
 from derive.artifact import Artifact, sha256_text
+from derive.templating import render
 
 STEP = "discrete_rod"
 TEMPLATES = Path(__file__).resolve().parent / "templates"
@@ -35,12 +35,6 @@ CODEGEN_OPTIONS = {"with_header": True, "indent": 2, "casadi_int": "long long in
 #: residual and of the Jacobian
 X4_KERNELS = ("rod_segment_forces", "rod_joint_torques", "rod_segment_forces_jac",
               "rod_joint_torques_jac")
-
-
-def _env() -> jinja2.Environment:
-    return jinja2.Environment(loader=jinja2.FileSystemLoader(str(TEMPLATES)),
-                              undefined=jinja2.StrictUndefined, keep_trailing_newline=True,
-                              autoescape=False)
 
 
 def _signature(f: ca.Function) -> dict:
@@ -152,7 +146,7 @@ def _context() -> dict:
 
 
 def _render(template: str, ctx: dict) -> str:
-    return _env().get_template(template).render(**ctx)
+    return render(TEMPLATES, template, **ctx)
 
 
 def artifacts() -> list[Artifact]:

@@ -127,8 +127,8 @@ _GUARDED = (("runtime.simulate.simulate", "simulate"),
             ("runtime.study.calibration", "calibrate_decrements"))
 _PREIMPORT = ("runtime.simulate.simulate", "runtime.analysis.modal", "runtime.solvers.statics",
               "runtime.study.sweep", "runtime.study.calibration",
-              "runtime.study.compare_damping", "kvrod.reproduce", "kvrod.beyond",
-              "kvrod.cli_beyond", "kvrod.cli_runtime", "kvrod.cli_sweep")
+              "runtime.study.compare_damping", "reports.reproduction", "reports.damping_studies",
+              "kvrod.cli_analysis", "kvrod.cli_notes", "kvrod.cli_runtime", "kvrod.cli_sweep")
 
 
 def _install_guard(monkeypatch) -> None:

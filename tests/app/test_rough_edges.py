@@ -34,7 +34,7 @@ def test_version(capsys):
 
 def test_version_says_when_the_tree_differs_from_its_manifest(tmp_path, monkeypatch):
     import generated
-    from kvrod.cli import version_text
+    from runtime.version import version_text
 
     copy = tmp_path / "generated"
     shutil.copytree(ROOT / "generated", copy, ignore=shutil.ignore_patterns("__pycache__"))
@@ -174,7 +174,7 @@ def test_a_rod_along_x_needs_no_normal():
 
 
 def test_compare_damping_table_has_a_label_per_column():
-    from kvrod.analyses import compare_table
+    from reports.analyses import compare_table
 
     r = {"tau_E": 0.04, "measured_zeta": 0.07, "predicted_zeta": 0.071,
          "predicted_zeta_continuum": 0.0713, "modal_zeta": 0.0712}

@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from kvrod import cli_beyond
+from kvrod import cli_analysis
 from kvrod.cli import CliError, _Parser
 from runtime.analysis.decay import damping_ratios
 from runtime.analysis.records import load_csv
@@ -19,7 +19,7 @@ from runtime.study import calibration as cal
 def parse(argv):
     p = _Parser(prog="kvrod")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    cli_beyond.add_commands(sub, _Parser)
+    cli_analysis.add_commands(sub, _Parser)
     return p.parse_args(argv)
 
 

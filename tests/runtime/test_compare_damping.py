@@ -108,7 +108,7 @@ def test_outputs(no_bulk, tmp_path):
 
 def test_cli_compare_damping(no_bulk, tmp_path, monkeypatch, capsys):
     """`kvrod compare-damping` formats and writes the library's result (JSON, MD, PNG)."""
-    from kvrod import cli_beyond
+    from kvrod import cli_analysis
     from kvrod.cli import _Parser
 
     seen = {}
@@ -120,7 +120,7 @@ def test_cli_compare_damping(no_bulk, tmp_path, monkeypatch, capsys):
     monkeypatch.setattr("runtime.study.compare_damping.compare_damping", fake)
     p = _Parser(prog="kvrod")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    cli_beyond.add_commands(sub, _Parser)
+    cli_analysis.add_commands(sub, _Parser)
     args = p.parse_args(["compare-damping", "--n-elements", "12", "--out", str(tmp_path)])
     assert args.func(args) == 0
     assert seen["n_elements"] == 12 and seen["tau_B"] == 0.0 and seen["poisson_ratio"] == 0.3
@@ -135,7 +135,7 @@ def test_cli_compare_damping(no_bulk, tmp_path, monkeypatch, capsys):
 
 def test_notes_beyond_small(no_bulk, tmp_path, monkeypatch):
     """`kvrod notes-beyond` end to end with small settings (the template renders strictly)."""
-    from kvrod import beyond
+    from reports import damping_studies as beyond
 
     monkeypatch.setattr("runtime.study.compare_damping.compare_damping", lambda **kw: no_bulk)
     for name, value in (("MODES_N", 8), ("CAL_DATA_N", 8), ("CAL_MODEL_N", 8),

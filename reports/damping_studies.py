@@ -20,9 +20,9 @@ import math
 import shutil
 from pathlib import Path
 
-import jinja2
 import numpy as np
 
+from derive.templating import render
 from runtime.analysis.records import load_csv
 from runtime.io.atomic import write_text
 
@@ -53,7 +53,7 @@ def _rel(p: Path) -> str:
 
 
 def _compare(out: Path) -> dict:
-    from kvrod.analyses import write_compare
+    from reports.analyses import write_compare
     from runtime.problem.registry import load_problem
     from runtime.study import compare_damping as cd
 
@@ -88,9 +88,9 @@ def _compare(out: Path) -> dict:
 
 def _write_modes(res: dict, out: Path) -> list[Path]:
     """modes.json and mode_shapes.png (with modes.npz, mode_shapes_3d.png) as `kvrod
-    modes` writes them (``kvrod.analyses.write_modes``); returns [modes.json,
+    modes` writes them (``reports.analyses.write_modes``); returns [modes.json,
     mode_shapes.png]."""
-    from kvrod.analyses import write_modes
+    from reports.analyses import write_modes
 
     paths = write_modes(res, out)
     return [paths[0], *[p for p in paths if p.name == "mode_shapes.png"]]
@@ -108,7 +108,7 @@ def _distinct(modes: list, count: int, rtol: float = 1e-6) -> list[list]:
 
 
 def _modes(out: Path) -> dict:
-    from kvrod.analyses import run_modes
+    from reports.analyses import run_modes
     from runtime.analysis.modal import family_retardation_time
     from runtime.problem.registry import load_problem
 
@@ -213,7 +213,7 @@ def write_beyond_notes(path: Path = Path("notes/beyond.md"),
     ``beyond_``; the measurements of this run (``command``) go to ``out/run-info.md``.
     Returns the notes path. Raises RuntimeError if a simulation fails.
     """
-    from kvrod.run_info import Timings
+    from reports.run_info import Timings
 
     path, out = Path(path), Path(out)
     timings = Timings(command)
@@ -238,9 +238,7 @@ def write_beyond_notes(path: Path = Path("notes/beyond.md"),
         links[key] = f"figures/{dst.name}"
     ctx = {"compare": compare, "modes": modes, "cal": calib, "fig": links,
            "out": _rel(out), "notes": _rel(path)}
-    env = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATE_DIR),
-                             undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
-    text = env.get_template("beyond.md.jinja").render(**ctx)
+    text = render(TEMPLATE_DIR, "beyond.md.jinja", **ctx)
     write_text(path, text)
     timings.write(out)
     return path

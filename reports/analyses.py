@@ -57,7 +57,7 @@ def run_modes(problem, count: int = 10, deformed: bool = False) -> dict:
     """
     from dataclasses import replace
 
-    from kvrod import continuum
+    from reports import continuum
     from runtime.analysis.modal import modal_analysis
     from runtime.problem.assemble import build_model
     from runtime.simulate.simulate import static_equilibrium
