@@ -66,7 +66,8 @@ def compile_time() -> float:
 
 def run() -> dict:
     gdir = build.generated_dir()
-    sizes = {f: (gdir / f).stat().st_size for f in (*build.SOURCES, *build.HEADERS)}
+    sizes = {f.name: f.stat().st_size
+             for f in (*build.source_paths(gdir), *build.header_paths(gdir))}
     rows = []
     for N in SIZES:
         m = build_model(load_problem("cantilever", {"n_elements": N}))

@@ -1,8 +1,10 @@
 """Compile and load the generated rod C code.
 
-On first use the C sources in ``generated/`` (``rod_kernels.c``, ``rod_assembly.c``) are
-compiled with the system C compiler into a shared library in a cache folder keyed by the
-sha256 of the sources, the flags and the compiler path. The cache folder is
+On first use the generated kernels (``generated/rod_kernels.c``, ``rod_kernels_x4.c``, with
+the layout header ``rod_layout.h``) and the assembly written by hand
+(``runtime/model/native/rod_assembly.c``) are compiled with the system C compiler into a
+shared library in a cache folder keyed by the sha256 of the sources, the flags and the
+compiler path. The cache folder is
 ``$KVROD_CACHE_DIR`` when set, else the platformdirs user cache dir of ``kvrod``.
 The library is built under a unique temporary name in the cache folder and moved into
 place with :func:`os.replace`, so concurrent first uses from several processes cannot
@@ -47,8 +49,30 @@ from runtime.native import (
     run_compiler,
 )
 
-SOURCES = ("rod_kernels.c", "rod_kernels_x4.c", "rod_assembly.c")
-HEADERS = ("rod_kernels.h", "rod_kernels_x4.h", "rod_assembly.h")
+#: the generated C (checked against generated/MANIFEST.json before it is compiled)
+SOURCES = ("rod_kernels.c", "rod_kernels_x4.c")
+HEADERS = ("rod_kernels.h", "rod_kernels_x4.h", "rod_layout.h")
+#: the assembly, written by hand, compiled with them
+NATIVE_DIR = Path(__file__).resolve().parent / "native"
+ASSEMBLY_SOURCES = ("rod_assembly.c",)
+ASSEMBLY_HEADERS = ("rod_assembly.h",)
+
+
+def source_paths(gdir: Path | None = None) -> list[Path]:
+    """Every C source of the rod library: the generated kernels and the assembly."""
+    gdir = gdir or generated_dir()
+    return [gdir / s for s in SOURCES] + [NATIVE_DIR / s for s in ASSEMBLY_SOURCES]
+
+
+def header_paths(gdir: Path | None = None) -> list[Path]:
+    """Every header the rod library is compiled with."""
+    gdir = gdir or generated_dir()
+    return [gdir / s for s in HEADERS] + [NATIVE_DIR / s for s in ASSEMBLY_HEADERS]
+
+
+def include_flags(gdir: Path | None = None) -> list[str]:
+    """``-I`` flags for the generated and the hand-written headers."""
+    return ["-I", str(gdir or generated_dir()), "-I", str(NATIVE_DIR)]
 
 _warned = False
 
@@ -137,10 +161,9 @@ def require_generated() -> None:
 
 def library_key(compiler: str, gdir: Path | None = None) -> str:
     """sha256 of sources, headers, flags, compiler path and host CPU (the cache key)."""
-    gdir = gdir or generated_dir()
     h = hashlib.sha256()
-    for name in SOURCES + HEADERS:
-        h.update(name.encode() + b"\0" + (gdir / name).read_bytes() + b"\0")
+    for path in (*source_paths(gdir), *header_paths(gdir)):
+        h.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
     h.update(" ".join((*compile_command(compiler), *LIBS, host_id())).encode())
     return h.hexdigest()
 
@@ -160,7 +183,7 @@ def compile_library(compiler: str, gdir: Path | None = None, outdir: Path | None
     fd, tmp = tempfile.mkstemp(prefix=target.name + ".", suffix=".tmp", dir=outdir)
     os.close(fd)
     try:
-        tail = ["-I", str(gdir), "-o", tmp, *(str(gdir / s) for s in SOURCES), *LIBS]
+        tail = [*include_flags(gdir), "-o", tmp, *(str(p) for p in source_paths(gdir)), *LIBS]
         with compiling(ROD_KERNELS):
             proc = run_compiler(tail, compiler)
         if proc.returncode != 0:
@@ -177,7 +200,7 @@ def compile_library(compiler: str, gdir: Path | None = None, outdir: Path | None
 
 
 def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
-    """Argument and result types of the C API (generated/rod_assembly.h)."""
+    """Argument and result types of the C API (runtime/model/native/rod_assembly.h)."""
     i, d, p = ctypes.c_int, ctypes.c_double, ctypes.c_void_p
     lib.kvrod_residual.argtypes = [p, d, p, p, p]
     lib.kvrod_jacobian_band.argtypes = [p, d, p, p, d, d, i, p]

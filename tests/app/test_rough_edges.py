@@ -40,7 +40,7 @@ def test_version_says_when_the_tree_differs_from_its_manifest(tmp_path, monkeypa
     shutil.copytree(ROOT / "generated", copy, ignore=shutil.ignore_patterns("__pycache__"))
     monkeypatch.setattr(generated, "__file__", str(copy / "__init__.py"))
     assert "differ" not in version_text()
-    (copy / "rod_assembly.c").write_text((copy / "rod_assembly.c").read_text() + "\n")
+    (copy / "rod_kernels.c").write_text((copy / "rod_kernels.c").read_text() + "\n")
     assert "1 file(s) differ from it" in version_text()
 
 

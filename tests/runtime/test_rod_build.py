@@ -70,7 +70,7 @@ def test_manifest_mismatch_tells_the_user_to_regenerate(tmp_path):
     (tmp_path / "MANIFEST.json").write_text(json.dumps(man))
     names = build.SOURCES + build.HEADERS
     build.verify_manifest(tmp_path, names)  # consistent: no error
-    with open(tmp_path / "rod_assembly.c", "a") as fh:
+    with open(tmp_path / "rod_kernels.c", "a") as fh:
         fh.write("/* hand edit */\n")
     with pytest.raises(GeneratedCodeError, match="kvrod generate"):
         build.verify_manifest(tmp_path, names)
