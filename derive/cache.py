@@ -1,6 +1,6 @@
 """The derivation cached on disk: inspecting it takes a second, not a minute.
 
-Deriving every step (:func:`derive.pipeline.derive_all`) takes tens of seconds of SymPy.
+Deriving every step (:func:`derive.catalogue.derive_all`) takes tens of seconds of SymPy.
 The records are pure functions of the code in derive/ and of the tools, so they are kept in
 the user's cache folder (never in the checkout):
 
@@ -50,7 +50,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from derive.pipeline import STEP_NAMES, Progress, derive_all
+from derive.catalogue import STEP_NAMES, Progress, derive_all
 
 if TYPE_CHECKING:
     from derive.step import Step

@@ -98,8 +98,8 @@ def _cmd_static(args) -> int:
 
 
 def _cmd_plot(args) -> int:
-    """The pictures of a results folder, written next to its results (runtime/io/plot_folder.py)."""
-    from runtime.io.plot_folder import plot_folder
+    """The pictures of a results folder, written next to its results (reports/plot_folder.py)."""
+    from reports.plot_folder import plot_folder
 
     done = plot_folder(Path(args.folder), animate=args.animate)
     print(f"{args.folder}: {done.kind} result; wrote "

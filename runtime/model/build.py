@@ -236,6 +236,13 @@ def _load_cached() -> ctypes.CDLL | None:
     return None
 
 
+def library_loads() -> int:
+    """How many times this process has loaded (or tried to load) the rod library: 1 after
+    the first use, more only after :func:`clear_cache` (a sweep's workers report it: each
+    loads once, however many points it runs)."""
+    return _load_cached.cache_info().misses
+
+
 def load_library() -> ctypes.CDLL | None:
     """The compiled rod library (ctypes), or None for the in-process CasADi fallback."""
     return _load_cached()
