@@ -5,8 +5,8 @@ model, and its evaluation from scratch.
 consumes and where its function lives. It is plain data, so listing the steps (``kvrod
 derive list``) imports no SymPy and derives nothing; the title and equations of each
 :class:`~derive.step.Step` record come from here (:func:`derive.step.make_step`).
-:func:`derive_all` evaluates the steps in order, each once; :mod:`derive.pipeline` keeps the
-records for the process and the derivation cache (:mod:`derive.cache`) between processes.
+:func:`derive_all` evaluates the steps in order, each once; ``derive.pipeline`` keeps the
+records for the process and the derivation cache (``derive.cache``) between processes.
 """
 
 from __future__ import annotations
@@ -141,7 +141,7 @@ def derive_all(progress: Progress | None = None) -> dict[str, Any]:
     """Evaluate the whole pipeline in order, from scratch; returns {name: step record}
     (:class:`derive.step.Step`).
 
-    ``progress`` (optional) is told which step starts (see :data:`Progress`); library code
+    ``progress`` (optional) is told which step starts (see ``Progress``); library code
     never prints, the command line draws the progress from it.
     """
     done: dict[str, Any] = {}

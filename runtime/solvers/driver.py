@@ -1,10 +1,10 @@
 """The one run driver: the integrator's steps with observers, breakpoints, checkpoints.
 
-:func:`run_loop` integrates any :class:`~runtime.solvers.protocols.ResidualProblem` from
+:func:`run_loop` integrates any ``ResidualProblem`` (``runtime/solvers/protocols.py``) from
 consistent initial values with the variable-order BDF of :mod:`runtime.solvers.bdf`,
 piece by piece between the breakpoints of its inputs (:mod:`runtime.solvers.schedule`),
 and calls its observers (:class:`Observer`) on the way; it hands a checkpoint (the
-solver's state plus every observer's :meth:`Observer.state`) to ``checkpoint`` every
+solver's state plus every observer's ``state()``) to ``checkpoint`` every
 ``checkpoint_every`` simulated seconds. It never raises for a solver failure or an
 interruption: the returned :class:`LoopResult` says ``finished``, ``stopped`` (an
 observer asked for it: a terminal event), ``failed`` or ``interrupted``, why, and keeps
