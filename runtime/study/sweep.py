@@ -572,9 +572,9 @@ def write_plots(out: Path, study: Study, rows: Mapping[str, Mapping[str, Any]]) 
         groups.setdefault(key, []).append((float(p.params[x]), row))
     if not groups:
         return None
-    from runtime.io.plots import _plt, _save
+    from runtime.io.figures import pyplot, save
 
-    plt = _plt()
+    plt = pyplot()
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.5))
     for key, pts in groups.items():
         pts.sort(key=lambda t: t[0])
@@ -597,7 +597,7 @@ def write_plots(out: Path, study: Study, rows: Mapping[str, Mapping[str, Any]]) 
     if others:
         ax2.legend(fontsize=7)
     fig.suptitle(f"study {study.name}: {sum(len(v) for v in groups.values())} finished points")
-    return _save(fig, Path(out) / "summary.png")
+    return save(fig, Path(out) / "summary.png", dpi=120, bbox_inches="tight")
 
 
 # --------------------------------------------------------------------------------------
