@@ -33,7 +33,8 @@ from typing import Any, Protocol
 import numpy as np
 
 from runtime.errors import INTERRUPTS
-from runtime.solvers.bdf import BDF, BDFDenseOutput, IntegrationError
+from runtime.solvers.bdf import BDF, IntegrationError
+from runtime.solvers.dense import BDFDenseOutput
 from runtime.solvers.schedule import Pieces, Restart
 
 

@@ -25,7 +25,8 @@ import numpy as np
 
 from runtime.solvers.protocols import ResidualProblem
 
-from .bdf import BDF, BDFDenseOutput, IntegrationError
+from .bdf import BDF, IntegrationError
+from .dense import BDFDenseOutput
 from .driver import run_loop
 from .initial import consistent_initial
 from .observers import DenseSolution, Events, OutputGrid, ProgressCallback, StepOutputs

@@ -9,7 +9,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from runtime.solvers.bdf import BDFDenseOutput
+from runtime.solvers.dense import BDFDenseOutput
 from runtime.solvers.roots import bracketed_root
 
 

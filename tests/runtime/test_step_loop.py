@@ -271,7 +271,7 @@ def test_interpolation_in_c_sums_like_numpy_at_every_size_and_alignment(n, k):
     + ... and y' = 0 + d_1 phi_1 + ... summed in j order: NumPy's sums term by term."""
     import ctypes
 
-    from runtime.solvers.bdf import _interp_coefficients
+    from runtime.solvers.dense import _interp_coefficients
 
     lib = load()
     rng = np.random.default_rng(n + k)
