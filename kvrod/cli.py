@@ -252,6 +252,9 @@ def build_parser() -> argparse.ArgumentParser:
         cli_beyond = None
     if cli_beyond is not None:
         cli_beyond.add_commands(sub, _Parser)
+    from kvrod import cli_section
+
+    cli_section.add_commands(sub, _Parser)
     b = sub.add_parser("bench", help="run the benchmarks in bench/ (JSON + Markdown)")
     b.add_argument("--quick", action="store_true", help="small sizes only (< 1 min)")
     b.add_argument("--out", default="bench/results", help="results folder")
@@ -324,7 +327,7 @@ def _error_line(prefix: str, exc: BaseException) -> tuple[str, int]:
 
 
 #: commands that never compile C (and should not import the runtime to say so)
-_NO_COMPILE = ("derive", "generate", "problem-keys")
+_NO_COMPILE = ("derive", "generate", "problem-keys", "section", "notes-sections")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
