@@ -9,7 +9,7 @@ viscosities ``eta`` (shear, Pa s) and ``zeta`` (bulk, Pa s). The rod viscosity r
 ``"consistent"`` (eta_E from the dissipation function, eqs. (4)-(9)) or ``"naive"`` (the
 stress-resultant route's eta~_E), is the key ``section.damping``; ``material.damping``, its
 place before composite sections, is still read, and the problem keeps the route here
-(:attr:`KelvinVoigt.damping`). ``density_end`` and ``youngs_modulus_end`` make them vary
+(``KelvinVoigt.damping``). ``density_end`` and ``youngs_modulus_end`` make them vary
 linearly along the rod. The rod's matrices C_F, C_M (eq. (7)) and V_F, V_M (eq. (9)) come from
 ``generated/constitutive.py``.
 

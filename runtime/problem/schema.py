@@ -269,9 +269,9 @@ class Problem:
         return getattr(self.material, "damping", "consistent")
 
     def check_simulable(self) -> None:
-        """Raise :class:`ParameterError` (naming ``section.kind``) for a problem today's rod
-        kernels cannot run: a composite section (see
-        :data:`runtime.problem.sections.COMPOSITE_REFUSAL`). Every command that simulates,
+        """Raise :class:`~runtime.errors.ParameterError` (naming ``section.kind``) for a
+        problem today's rod kernels cannot run: a composite section (the message:
+        ``runtime.problem.sections.COMPOSITE_REFUSAL``). Every command that simulates,
         solves statically, analyses modes or sweeps calls it before it writes anything;
         the rod matrices refuse the same way."""
         if isinstance(self.section, Composite):

@@ -4,12 +4,12 @@ A *section file* holds only ``[section]`` with ``[materials.NAME]`` (a composite
 or ``[section]`` (a closed-form shape) with ``[material]``, besides ``name`` and
 ``description``; a *problem file* (with ``[rod]``) is read as a whole (every key checked)
 and its section taken. Both go through the problem's parsers
-(:func:`runtime.problem.schema.section_and_material`), so a section means the same in
+(``runtime.problem.schema.section_and_material``), so a section means the same in
 either file.
 
 :func:`analyse_problem_section` runs the finite-element section analysis
-(:func:`runtime.section.analyse_section`): of the composite's regions, or of the closed-form
-shape as one region of the problem's Kelvin-Voigt material. Its result carries, besides
+(:func:`runtime.section.analysis.analyse_section`): of the composite's regions, or of the
+closed-form shape as one region of the problem's Kelvin-Voigt material. Its result carries, besides
 the 6x6 stiffness and viscosities about the elastic centroid, ``info`` (merged into
 ``SectionResult.to_dict()``): the source, the kind, the damping route and the viscosity the
 rod takes by it, the regions and materials, and for a closed-form shape the diagonal rod
@@ -185,7 +185,7 @@ def analyse_problem_section(spec: str | Path | Problem | Mapping[str, Any] | Sec
 
     Returns
     -------
-    runtime.section.SectionResult
+    runtime.section.analysis.SectionResult
         Stiffness, consistent and naive viscosity (6x6, strain order Gamma1, Gamma2,
         Gamma3, K1, K2, K3; SI) about the elastic centroid, centres, inertia, mesh and
         convergence; ``info`` holds the source, kind, damping route, the viscosity the

@@ -27,7 +27,8 @@ The torsion factor kappa_3 = J_T / I3 is exact either way.
 and a ``shape``: circle, rectangle, ellipse, tube, polygon with holes; see
 :mod:`runtime.section`). Its 6x6 stiffness and viscosity come from the finite-element
 section analysis (``kvrod section``); the rod kernels take diagonal matrices today, so a
-composite problem is analysed but not simulated (:meth:`Composite.refuse_simulation`).
+composite problem is analysed but not simulated
+(:meth:`runtime.problem.schema.Problem.check_simulable`).
 
 ``damping`` (every kind): which rod viscosity the section gives, ``"consistent"`` (the
 dissipation on the section's elastic deformation, eta_E of eq. (5)) or ``"naive"`` (the
@@ -287,14 +288,14 @@ COMPOSITE_REFUSAL = (
 
 @dataclass(frozen=True, eq=False)
 class Composite:
-    """A composite section: ``regions`` (:class:`runtime.section.Region`: a material name
+    """A composite section: ``regions`` (:class:`runtime.section.regions.Region`: a material name
     and a shape each) of the named ``materials`` ({name: SectionMaterial} as pairs), and
     the rod viscosity route ``damping``. Checked on construction: every region's material
     is named, no two regions overlap, together they are one connected section.
 
     Its properties come from the finite-element section analysis
     (:func:`runtime.problem.section_analysis.analyse_problem_section`, ``kvrod section``),
-    about the elastic centroid. Not simulated yet (:data:`COMPOSITE_REFUSAL`).
+    about the elastic centroid. Not simulated yet (``COMPOSITE_REFUSAL``).
     """
 
     regions: tuple[Any, ...]

@@ -245,9 +245,11 @@ def analyse_section(regions: Sequence[Region] | Any,
     Parameters
     ----------
     regions
-        :class:`Region` objects, or the ``[[section.regions]]`` array of tables.
+        :class:`~runtime.section.regions.Region` objects, or the ``[[section.regions]]``
+        array of tables.
     materials
-        {name: :class:`SectionMaterial`}, or the ``[materials]`` table.
+        {name: :class:`~runtime.section.materials.SectionMaterial`}, or the
+        ``[materials]`` table.
     tol
         Relative change of every diagonal entry of K, V and V_naive between two successive
         meshes below which the refinement stops (default 1e-4).
