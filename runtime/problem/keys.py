@@ -128,7 +128,8 @@ KEYS: tuple[Key, ...] = (
        "factors of Saint-Venant flexure (what BECAS and VABS give and composite sections "
        "use), computed by the section analysis of the shape at the material's nu (< 1/2) "
        "and cached per aspect ratio (0.2 ... 2 s the first time): lower than Cowper's for "
-       "nu > 0 (circle, nu = 0.3: 0.851 against 0.886); false all factors 1 (eq. (2))",
+       "nu > 0 (circle, nu = 0.3: 0.851 against 0.886; far lower for a wide section "
+       "sheared across its depth: a 20:1 strip 0.049); false all factors 1 (eq. (2))",
        invalid="yes", kinds=tuple(_SHAPES)),
     *(_k("section", n, u, "required", "> 0", what, invalid=0.0, kinds=("stiffness",))
       for n, (u, what) in _STIFF.items()),

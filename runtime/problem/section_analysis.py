@@ -197,6 +197,9 @@ def analyse_problem_section(spec: str | Path | Problem | Mapping[str, Any] | Sec
 
     from runtime.section import analyse_section
 
+    if isinstance(spec, SectionSpec) and overrides:
+        raise ParameterError("overrides", dict(overrides), "none with a SectionSpec (give "
+                             "them to load_section, which checks them)")
     s = spec if isinstance(spec, SectionSpec) else load_section(spec, overrides)
     regions, mats = s.regions_and_materials()
     res = analyse_section(regions, mats, tol=tol)

@@ -14,7 +14,8 @@ Their transverse shear factors (eq. (7)), ``shear_correction``:
   finite-element section analysis (``runtime/section``) of the shape with the material's
   Poisson ratio; they depend only on the shape's aspect ratio and nu, and are cached per
   (shape, aspect, nu): the first costs 0.2 ... 2 s. Equal to Cowper's at nu = 0 and below
-  them for nu > 0 (circle at nu = 0.3: 0.851 against 0.886);
+  them for nu > 0 (circle at nu = 0.3: 0.851 against 0.886; a strip 20 times wider than
+  deep, sheared across its depth: 0.049 against 0.850);
 - ``false``: every factor 1 (the paper's eq. (2) instead of (7)).
 
 The torsion factor kappa_3 = J_T / I3 is exact either way.
@@ -187,8 +188,10 @@ def energy_shear_factors(kind: str, dims: dict[str, np.ndarray], nu: float
     ``dims`` (arrays of its dimensions in m), from the section analysis (see the module
     docstring). A taper whose aspect ratio takes more than ENERGY_DIRECT values is
     interpolated between ENERGY_NODES analyses at Chebyshev points of the aspect ratio's
-    range (in its logarithm for a rectangle or ellipse): the factors are smooth in it, and
-    an analysis per segment would cost seconds each."""
+    range (in its logarithm for a rectangle or ellipse; log kappa is interpolated: a wide
+    section's factor falls like a power of the ratio): the factors are smooth in it, and
+    an analysis per segment would cost seconds each. Measured against direct analyses:
+    1e-5 over ratios 1 ... 3, 1e-4 over 1 ... 20."""
     if not nu < 0.5:
         raise ParameterError("section.shear_correction", "energy", "true or false for an "
                              f"incompressible material (poisson_ratio = {nu:g}): the "
@@ -212,10 +215,10 @@ def energy_shear_factors(kind: str, dims: dict[str, np.ndarray], nu: float
     vals = np.array([_energy_factors_at(kind, float(f"{(np.exp(v) if log else v):.12g}"),
                                         float(nu)) for v in nodes])
     out = []
-    for j in range(2):
-        cheb = np.polynomial.Chebyshev.fit(nodes, vals[:, j], ENERGY_NODES - 1,
+    for j in range(2):           # log kappa: a wide section's factor falls like a power
+        cheb = np.polynomial.Chebyshev.fit(nodes, np.log(vals[:, j]), ENERGY_NODES - 1,
                                            domain=[lo, hi])
-        out.append(cheb(u))
+        out.append(np.exp(cheb(u)))
     return out[0], out[1]
 
 
