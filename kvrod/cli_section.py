@@ -1,5 +1,5 @@
-"""`kvrod section FILE.toml --out DIR` (the cross-section analysis) and `kvrod
-notes-sections` (notes/sections.md).
+"""`kvrod section FILE.toml --out DIR`: the cross-section analysis (section.json,
+section.png, a table on the terminal).
 
 Wired into `kvrod/cli.py` by ``add_commands(subparsers, parser_class)``. Heavy imports
 happen inside the commands; library code never prints, these commands do.
@@ -14,8 +14,6 @@ from typing import Any
 
 import numpy as np
 
-#: what `kvrod section` writes into its results folder
-SECTION_FILES = ("section.json", "section.png")
 _ROWS = ("T1", "T2", "T3", "M1", "M2", "M3")
 _COLS = ("Gamma1", "Gamma2", "Gamma3", "K1", "K2", "K3")
 
@@ -90,8 +88,9 @@ def section_table(res: Any) -> str:
 
 def _cmd_section(args) -> int:
     from kvrod.errors import CliError
-    from kvrod.outputs import results_folder, safe_name
     from kvrod.problem_args import parse_set
+    from runtime.io.folder import results_folder, safe_name
+    from runtime.io.section_files import SECTION_FILES, write_section
     from runtime.problem.section_analysis import analyse_problem_section, load_section
 
     if not (math.isfinite(args.tol) and 1e-9 <= args.tol <= 0.1):
@@ -111,42 +110,9 @@ def _cmd_section(args) -> int:
     return 0
 
 
-def write_section(res: Any, out: Path, spec: Any, command: str) -> list[Path]:
-    """``section.json`` (:meth:`SectionResult.to_dict` with the command and the kvrod
-    version) and ``section.png`` (:func:`runtime.io.section_figure.draw_section`)."""
-    import json
-
-    from kvrod.cli import version_text
-    from runtime.io.atomic import write_text
-    from runtime.io.section_figure import draw_section
-
-    regions, _ = spec.regions_and_materials()
-    doc = {"command": command, "kvrod": version_text(), **res.to_dict()}
-    out.mkdir(parents=True, exist_ok=True)
-    paths = [write_text(out / "section.json", json.dumps(doc, indent=1) + "\n")]
-    paths.append(draw_section(res, regions, out / "section.png",
-                              title=f"{spec.name}: {res.n_elements} six-node triangles"))
-    return paths
-
-
-def _cmd_notes_sections(args) -> int:
-    from kvrod.cli_beyond import _notes_names, _notes_paths
-    from kvrod.outputs import results_folder
-    from kvrod.sections_notes import RESULTS, write_sections_notes
-
-    path, out = _notes_paths(args, "sections", "notes/sections.md", "results/sections")
-    with results_folder(out, "notes-sections",
-                        markers=tuple(f"{n}/section.json" for n in RESULTS),
-                        overwrite=args.overwrite, names=_notes_names(path, out, *RESULTS)):
-        path = write_sections_notes(path, out, command=getattr(args, "command_line",
-                                                               "kvrod notes-sections"))
-    print(f"wrote {path} (results under {out}/)")
-    return 0
-
-
 def add_commands(sub, parser_class) -> None:
-    """Add `section` and `notes-sections` to ``sub`` (parser_class: kept for symmetry with
-    the other command modules)."""
+    """Add `section` to ``sub`` (parser_class: kept for symmetry with the other command
+    modules)."""
     _ = parser_class
     s = sub.add_parser("section", help="cross-section analysis: 6x6 stiffness, consistent and "
                                        "naive viscosity, centres, inertia of a section")
@@ -164,15 +130,3 @@ def add_commands(sub, parser_class) -> None:
     s.add_argument("--overwrite", action="store_true",
                    help="replace a result already in --out (default: refuse)")
     s.set_defaults(func=_cmd_section)
-
-    q = sub.add_parser("notes-sections", help="composite and anisotropic sections: the "
-                       "consistent against the naive viscosity, viscous couplings; writes "
-                       "notes/sections.md")
-    q.add_argument("--out-notes", dest="out_notes",
-                   help="notes file (default notes/sections.md, or DIR/sections.md with "
-                        "--out DIR; figures go to its figures/ folder)")
-    q.add_argument("--out", help="results folder (default results/sections; run time goes "
-                                 "to its run-info.md)")
-    q.add_argument("--overwrite", action="store_true",
-                   help="replace the results of an earlier run in --out")
-    q.set_defaults(func=_cmd_notes_sections)

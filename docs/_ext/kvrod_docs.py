@@ -275,9 +275,9 @@ def _compile_kernels() -> None:
     from runtime.model import build
 
     build.load_library()
-    from runtime.solvers import _bdf_c
+    from runtime.solvers.native import loader
 
-    _bdf_c.load()
+    loader.load()
 
 
 def render(srcdir: Path) -> None:

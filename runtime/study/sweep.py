@@ -330,7 +330,7 @@ class PointOutcome:
 def _library_loads() -> int:
     from runtime.model import build
 
-    return build._load_cached.cache_info().misses
+    return build.library_loads()
 
 
 def _point_meta(problem: str, point_id: str, params: Mapping[str, Any],

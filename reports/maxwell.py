@@ -22,9 +22,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-import jinja2
 import numpy as np
 
+from derive.templating import render
 from runtime.io.atomic import save_figure, write_text
 
 TEMPLATE_DIR = Path(__file__).parent / "templates"
@@ -81,7 +81,7 @@ def _problems() -> tuple[Any, Any]:
 
 def _modes(kv, mx, out: Path) -> list[dict]:
     """Damped modes of both rods at N = MODES_N (one row per distinct bending pair)."""
-    from kvrod.analyses import run_modes, write_modes
+    from reports.analyses import run_modes, write_modes
 
     rows: dict[int, dict] = {}
     for label, problem in (("kv", kv), ("mx", mx)):
@@ -106,14 +106,14 @@ def _modes(kv, mx, out: Path) -> list[dict]:
 
 
 def _simulate(kv, mx, out: Path) -> dict:
-    from kvrod.runs import run_and_write
+    from runtime.io.runs import run_and_write
 
     res = {}
     for label, problem in (("kv", kv), ("mx", mx)):
         p = problem.with_overrides({"rod.elements": SIM_N, "simulation.t_end": SIM_T_END})
         t0 = time.perf_counter()
         result, summary = run_and_write(p, out / f"simulate-{label}", p.name,
-                                        overwrite=True, progress=False)
+                                        overwrite=True)
         wall = time.perf_counter() - t0
         if summary["status"] != "finished":
             raise RuntimeError(f"{p.name}: {summary['message']}")
@@ -127,8 +127,8 @@ def _simulate(kv, mx, out: Path) -> dict:
 
 
 def _dma(mx, out: Path) -> dict:
-    from kvrod.analyses import write_dma_fit
     from references import viscoelastic_material as vm
+    from reports.analyses import write_dma_fit
     from runtime.analysis import dma
 
     G, K, Gj, Kj, tj = mx.material.moduli
@@ -199,7 +199,7 @@ def write_maxwell_notes(path: Path = Path("notes/maxwell.md"),
     ``out/run-info.md``)."""
     import shutil
 
-    from kvrod.run_info import Timings, decade
+    from reports.run_info import Timings, decade
 
     path, out = Path(path), Path(out)
     figs = path.parent / "figures"
@@ -237,9 +237,6 @@ def write_maxwell_notes(path: Path = Path("notes/maxwell.md"),
         "figs": {k: Path(v).relative_to(path.parent).as_posix() for k, v in
                  (("modes", fig_modes), ("release", fig_release), ("dma", fig_dma))},
     }
-    env = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATE_DIR),
-                             keep_trailing_newline=True, autoescape=False,
-                             undefined=jinja2.StrictUndefined)
-    write_text(path, env.get_template("maxwell.md.jinja").render(**ctx))
+    write_text(path, render(TEMPLATE_DIR, "maxwell.md.jinja", **ctx))
     timings.write(out)
     return path

@@ -1,7 +1,12 @@
 /*
- * Assembly of the discrete rod from the per-element CasADi kernels in rod_kernels.c.
- * The loops are the only place that knows the cell-by-cell layout (generated/rod_layout.py);
- * their size does not depend on the number of elements N.
+ * Assembly of the discrete rod from the per-element CasADi kernels (generated/rod_kernels.c,
+ * rod_kernels_x4.c): residual, banded Jacobian, energies and diagnostics of the whole rod.
+ * Written by hand (the loops are the project's own), compiled with the generated kernels
+ * and the generated layout header (generated/rod_layout.h: cell sizes, offsets, band
+ * widths, parameter offsets), so the loops are the only place that knows the cell-by-cell
+ * layout; their size does not depend on the number of elements N. The CasADi MX assembly
+ * (runtime/model/casadi_oracle.py) is the same rod for machines without a compiler and the
+ * oracle this one is tested against.
  *
  * All functions return 0 on success and a negative code on bad arguments
  * (-1: N < 1, -2: ldab too small, -3: kernel failure, -4: cells outside the rod or
@@ -10,39 +15,8 @@
 #include <string.h>
 #include "rod_kernels.h"
 #include "rod_kernels_x4.h"
+#include "rod_layout.h"
 #include "rod_assembly.h"
-
-/* cell sizes and field offsets for nb relaxation terms: base + per * nb */
-#define CELL0_BASE {{ cell0_base }}
-#define CELL0_PER {{ cell0_per }}
-#define CELL_BASE {{ cell_base }}
-#define CELL_PER {{ cell_per }}
-#define KL0 {{ kl_formula[0][0] }}
-#define KL1 {{ kl_formula[0][1] }}
-#define KU0 {{ kl_formula[1][0] }}
-#define KU1 {{ kl_formula[1][1] }}
-#define MAX_NB {{ max_branches }}
-#define NSEG {{ n_segment }}
-#define NJNT {{ n_joint }}
-#define NNL {{ n_node_load }}
-#define NSL {{ n_segment_load }}
-#define NDIAG {{ n_diag_scalars }}
-#define NDIAG_E {{ n_diag_energies }}   /* energies and powers; then the reactions */
-{% for name, off in param_offsets.items() %}
-#define PAR_{{ name.upper() }} {{ off }}
-{%- endfor %}
-{% for name, off in segment_offsets.items() %}
-#define SEG_{{ name.upper() }} {{ off }}
-{%- endfor %}
-{% for name, off in joint_offsets.items() %}
-#define JNT_{{ name.upper() }} {{ off }}
-{%- endfor %}
-{% for name, off in node_load_offsets.items() %}
-#define NL_{{ name.upper() }} {{ off }}
-{%- endfor %}
-{% for name, off in segment_load_offsets.items() %}
-#define SL_{{ name.upper() }} {{ off }}
-{%- endfor %}
 
 /* indices of the fields of node i / segment i (i >= 1) / joint j in y */
 static inline int c0size(const kvrod_rod* r) { return CELL0_BASE + CELL0_PER * r->nb; }
@@ -50,25 +24,27 @@ static inline int csize(const kvrod_rod* r) { return CELL_BASE + CELL_PER * r->n
 static inline int cs(const kvrod_rod* r, int i) {
   return i == 0 ? 0 : c0size(r) + csize(r) * (i - 1);
 }
-{%- for name, fn in (("phi", "i_phi"), ("v", "i_v")) %}
-static inline int {{ fn }}(const kvrod_rod* r, int i) {
-  return i == 0 ? {{ cell0_offsets_b[name][0] }} + {{ cell0_offsets_b[name][1] }} * r->nb
-                : cs(r, i) + {{ cell_offsets_b[name][0] }} + {{ cell_offsets_b[name][1] }} * r->nb;
+static inline int i_phi(const kvrod_rod* r, int i) {
+  return i == 0 ? CELL0_PHI_BASE + CELL0_PHI_PER * r->nb
+                : cs(r, i) + CELL_PHI_BASE + CELL_PHI_PER * r->nb;
 }
-{%- endfor %}
+static inline int i_v(const kvrod_rod* r, int i) {
+  return i == 0 ? CELL0_V_BASE + CELL0_V_PER * r->nb
+                : cs(r, i) + CELL_V_BASE + CELL_V_PER * r->nb;
+}
 static inline int i_p(const kvrod_rod* r, int i) {
-  return cs(r, i) + {{ cell_offsets_b.p[0] }} + {{ cell_offsets_b.p[1] }} * r->nb;
+  return cs(r, i) + CELL_P_BASE + CELL_P_PER * r->nb;
 }
 static inline int i_om(const kvrod_rod* r, int i) {
-  return cs(r, i) + {{ cell_offsets_b.Omega[0] }} + {{ cell_offsets_b.Omega[1] }} * r->nb;
+  return cs(r, i) + CELL_OMEGA_BASE + CELL_OMEGA_PER * r->nb;
 }
 /* internal strains: segment i's 3 nb values and joint j's 3 nb values (term b at 3b) */
 static inline int i_qs(const kvrod_rod* r, int i) {
-  return cs(r, i) + {{ cell_offsets_b.q_segment[0] }} + {{ cell_offsets_b.q_segment[1] }} * r->nb;
+  return cs(r, i) + CELL_Q_SEGMENT_BASE + CELL_Q_SEGMENT_PER * r->nb;
 }
 static inline int i_qj(const kvrod_rod* r, int j) {
-  return j == 0 ? {{ cell0_offsets_b.q_joint[0] }} + {{ cell0_offsets_b.q_joint[1] }} * r->nb
-                : cs(r, j) + {{ cell_offsets_b.q_joint[0] }} + {{ cell_offsets_b.q_joint[1] }} * r->nb;
+  return j == 0 ? CELL0_Q_JOINT_BASE + CELL0_Q_JOINT_PER * r->nb
+                : cs(r, j) + CELL_Q_JOINT_BASE + CELL_Q_JOINT_PER * r->nb;
 }
 
 /* per-element data: segment i = 1..N, joint j = 0..N, node i = 0..N */
@@ -135,11 +111,7 @@ static void jnt_lane(const kvrod_rod* r, int j, const double* y, const double** 
   a4[16 + l] = jntp(r, j); a4[20 + l] = mq;
 }
 
-/* work memory large enough for every kernel */
-#define MAXW {{ max_w }}
-#define MAXIW {{ max_iw }}
-#define MAXARG {{ max_arg }}
-#define MAXRES {{ max_res }}
+/* work memory large enough for every kernel (sizes: rod_layout.h) */
 typedef struct {
   const double* arg[MAXARG];
   double* res[MAXRES];
@@ -233,9 +205,9 @@ static int joint_args(const kvrod_rod* r, int j, const double* y, work_t* W) {
 }
 
 int kvrod_n_state(int N, int nb) { return CELL0_BASE + CELL0_PER * nb + (CELL_BASE + CELL_PER * nb) * N; }
-int kvrod_kl(int N, int nb) { return KL0 + KL1 * nb - (N == 1 ? {{ kl_n1_delta }} : 0); }
-int kvrod_ku(int N, int nb) { return KU0 + KU1 * nb - (N == 1 ? {{ ku_n1_delta }} : 0); }
-int kvrod_n_params(void) { return {{ n_params }}; }
+int kvrod_kl(int N, int nb) { return KL0 + KL1 * nb - (N == 1 ? KL_N1 : 0); }
+int kvrod_ku(int N, int nb) { return KU0 + KU1 * nb - (N == 1 ? KU_N1 : 0); }
+int kvrod_n_params(void) { return NPAR; }
 
 /* a rod the assembly can work on: N >= 1, 0 <= nb <= MAX_NB, its band at least the
  * layout's (a wider band is fine) */
@@ -579,7 +551,7 @@ int kvrod_jacobian_band_cells(const kvrod_rod* rod, double t, const double* y,
   if (ldab < 2 * rod->kl + rod->ku + 1) return -2;
   if (i0 < 0 || i1 > N || col0 < 0 || col0 > cs(rod, i0 > 0 ? i0 - 1 : 0)) return -4;
   work_t W;
-  double J[{{ max_jac }}];
+  double J[MAXJAC];
   const band_t band = {ab, ldab, col0}, *B = &band;
   int i, b, k, l, g0 = -1, gj = 0;
   /* the segment and joint kernels of elements g0..g0+3, four per call (x4, bit for bit
@@ -651,7 +623,7 @@ static int energies_one(const kvrod_rod* rod, const double* y, const double* yp,
                         double* e, double* out_el, work_t* W) {
   const int N = rod->N;
   double Tk, Wel, Dd, S3[3], R3[3], Q[9], T6[6], f[3], m, nq[3], dX[3];
-  double Fint[2][3] = {{ '{{0, 0, 0}, {0, 0, 0}}' }};
+  double Fint[2][3] = {{0, 0, 0}, {0, 0, 0}};
   double* oV = out_el;
   double* oF = out_el ? oV + 3 * N : 0;
   double* oU = out_el ? oF + 3 * N : 0;

@@ -15,7 +15,7 @@ sweep              study.toml                          summary.png (a point: DIR
 compare-damping, calibrate and calibrate --dma folders come with their figures and do
 not store the series behind them; a folder of such folders (reproduce, notes-*) holds no
 result itself. For those, and for anything else, :func:`plot_folder` raises
-:class:`~kvrod.errors.CliError` with one line saying what the folder holds and what can be
+:class:`~runtime.io.folder.FolderError` with one line saying what the folder holds and what can be
 plotted. Everything is checked before anything is drawn. Nothing here prints.
 """
 
@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from kvrod.errors import CliError
+from runtime.io.folder import FolderError
 
 PREFIX = "kvrod plot"
 #: folders whose figures come with the command that wrote them: marker -> (command,
@@ -90,54 +90,54 @@ def _result_subfolders(folder: Path) -> list[str]:
 
 
 def _check(folder: Path, animate: str | None) -> str:
-    """The folder's kind, after every check (CliError naming the folder otherwise)."""
+    """The folder's kind, after every check (FolderError naming the folder otherwise)."""
     from runtime.io.folder import LOCK_NAME, lock_holder
 
     where = repr(str(folder))
     if not folder.exists():
-        raise CliError(f"{PREFIX}: {where} does not exist")
+        raise FolderError(f"{PREFIX}: {where} does not exist")
     if not folder.is_dir():
-        raise CliError(f"{PREFIX}: {where} is not a folder (give a results folder)")
+        raise FolderError(f"{PREFIX}: {where} is not a folder (give a results folder)")
     holder = lock_holder(folder)
     if holder is not None:
-        raise CliError(f"{PREFIX}: {where} is in use by process {holder} (lock file "
+        raise FolderError(f"{PREFIX}: {where} is in use by process {holder} (lock file "
                        f"{LOCK_NAME}): plot it when that command has finished")
     kind = folder_kind(folder)
     if kind is None:
         subs = _result_subfolders(folder)
         if subs:
             shown = ", ".join(subs[:8]) + (", ..." if len(subs) > 8 else "")
-            raise CliError(f"{PREFIX}: {where} holds no result itself; its subfolders "
+            raise FolderError(f"{PREFIX}: {where} holds no result itself; its subfolders "
                            f"{shown} do: plot one of them, e.g. kvrod plot "
                            f"{folder / subs[0]}")
-        raise CliError(f"{PREFIX}: {where} holds no kvrod result (a run: summary.json + "
+        raise FolderError(f"{PREFIX}: {where} holds no kvrod result (a run: summary.json + "
                        "series.npz; a static result: static.npz; modes: modes.json; a "
                        "sweep: study.toml)")
     if kind == "running":
         status = _summary(folder).get("status", "unknown")
-        raise CliError(f"{PREFIX}: {where} holds a run without series.npz (status "
+        raise FolderError(f"{PREFIX}: {where} holds a run without series.npz (status "
                        f"{status!r}): nothing to plot until it has stopped; an "
                        "interrupted run continues with kvrod simulate ... --resume")
     if kind in FIGURES_ONLY:
         command, figs, why = FIGURES_ONLY[kind]
         have = [f for f in figs if (folder / f).is_file()]
-        raise CliError(f"{PREFIX}: {where} is a `{command}` result: its figures "
+        raise FolderError(f"{PREFIX}: {where} is a `{command}` result: its figures "
                        f"({', '.join(have) or ', '.join(figs) + ': missing'}) are drawn by "
                        f"that command and {why}, so kvrod plot has nothing to add; it "
                        "draws runs, static results, modes and sweeps")
     if animate is not None:
         if kind != "run":
-            raise CliError(f"{PREFIX}: --animate draws a run (series.npz with centreline "
+            raise FolderError(f"{PREFIX}: --animate draws a run (series.npz with centreline "
                            f"frames); {where} is a {kind} result")
         from runtime.io.shapes import animation_unavailable
 
         why = animation_unavailable(animate)
         if why is not None:
-            raise CliError(f"{PREFIX}: --animate {animate}: {why}")
+            raise FolderError(f"{PREFIX}: --animate {animate}: {why}")
         with np.load(folder / "series.npz", allow_pickle=False) as f:
             frames = f["centreline"].shape[0] if "centreline" in f.files else 0
         if frames < 2:
-            raise CliError(f"{PREFIX}: --animate: the run in {where} kept no centreline "
+            raise FolderError(f"{PREFIX}: --animate: the run in {where} kept no centreline "
                            "frames (simulation.centreline_frames = 0, or written before kvrod "
                            "kept them); run it again with simulation.centreline_frames >= 2")
     return kind
@@ -182,7 +182,7 @@ def _plot_modes(folder: Path) -> Plotted:
     try:
         mf = read_modes(folder)
     except ModesFileError as exc:
-        raise CliError(f"{PREFIX}: {exc}") from None
+        raise FolderError(f"{PREFIX}: {exc}") from None
     out = Plotted("modes", [plot_mode_components(mf, folder / "mode_shapes.png"),
                             plot_mode_shapes_3d(mf, folder / "mode_shapes_3d.png")])
     if len(mf.modes) > MAX_MODES:
@@ -206,7 +206,7 @@ def _plot_sweep(folder: Path) -> Plotted:
     try:
         study = load_study(folder / "study.toml")
     except (StudyError, ValueError) as exc:
-        raise CliError(f"{PREFIX}: the study in {str(folder / 'study.toml')!r} cannot be "
+        raise FolderError(f"{PREFIX}: the study in {str(folder / 'study.toml')!r} cannot be "
                        f"read: {' '.join(str(exc).split())}") from None
     rows = {p.id: table_row(study, p, read_summary(folder, p)) for p in study.points}
     out = Plotted("sweep")
@@ -223,7 +223,7 @@ def _plot_sweep(folder: Path) -> Plotted:
 
 def plot_folder(folder: Path, animate: str | None = None) -> Plotted:
     """Draw what results folder ``folder`` holds (module docstring); ``animate``: "gif"
-    or "mp4" for an animation of a run. Raises CliError (one line naming the folder and
+    or "mp4" for an animation of a run. Raises FolderError (one line naming the folder and
     what it can plot) before drawing anything when there is nothing to draw."""
     folder = Path(folder)
     kind = _check(folder, animate)

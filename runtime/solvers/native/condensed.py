@@ -1,204 +1,18 @@
-"""Optional C helpers for :mod:`runtime.solvers.bdf` (compiled on first use, cached; else None).
-
-Why C here (measured on the 10 s cantilever release, ``bench/integrators.py``):
-
-- Denormals. The Newton correction of a long rod is the solution of a banded system with a
-  local right-hand side; it decays exponentially along the rod and reaches subnormal
-  numbers (< 2.2e-308) in far cells at N >= ~500. Subnormal arithmetic is ~100x slower on
-  x86, in LAPACK's solve and in every NumPy operation on the history arrays afterwards:
-  N = 1000 took 40 s instead of ~4 s. These helpers run with flush-to-zero /
-  denormals-are-zero set in MXCSR *only for their own duration* (saved and restored, so
-  the caller's floating-point mode is untouched); subnormal corrections become 0, which
-  is far below any tolerance.
-  The weighted norms of the error test are computed here for the same reason: squares
-  of tiny (normal) entries underflow.
-- Call overhead. One call does the band solve (``dgbtrs`` semantics on ``dgbtrf``'s
-  factors), the scaling by 2/(1 + cj ratio), the weighted RMS norm and the updates of the
-  correction, y and y' -- nine NumPy/f2py calls of 1-5 us each per Newton iteration
-  before. ``kv_gbtrf`` factorises into a preallocated pivot array (no f2py wrapper, no
-  allocation, flush-to-zero during the factorisation too) with LAPACK's unblocked
-  ``dgbtf2`` algorithm written out in C (what ``dgbtrf`` itself runs for bands narrower
-  than its block size 32, i.e. kvrod's). Not calling SciPy's LAPACK keeps
-  ``scipy.linalg`` (0.18-0.27 s to import) out of every run.
-- Memory traffic. At large N the solves are memory bound (the LU factors are 5.6 MB at
-  N = 1000, 11 MB at N = 2000, streamed twice per Newton iteration). ``kv_gbtrf`` records
-  the nonzero profile of each factor column (U rarely uses the kl rows of fill-in room
-  that partial pivoting reserves) and the solve reads only that: Newton solves -22 % at
-  N = 1000, -39 % at N = 2000 (LAPACK's dgbtrs reads the whole band). (Fusing the predictor and
-  the history update into C as well was measured and gave nothing at N = 50: a ctypes
-  call with many arguments costs about as much as the few NumPy calls it replaces.)
-- Condensed Newton systems (``CondensedNewton``, ``kv_cond`` in bdf_helpers.c): the
-  kinematic rows eliminate v and p, leaving 6 unknowns per cell of the rod, and the
-  condensed matrix is block tridiagonal in the cells (nearest-neighbour coupling). Its
-  block LU (dense 6 x 6 blocks, pivoting inside them) is assembled per cell straight
-  from J, and its solve is two sweeps of fixed-size products with the Newton update
-  fused in: at N = 1000 factorisation 1190 -> 480 us, Newton update 205 -> 85 us per
-  call (the band LU of the condensed matrix, kept for other structures, needs a cleared
-  band storage, an index scatter and a pivoting band elimination).
-
-``load()`` returns None without a C compiler (or with ``KVROD_NO_COMPILER=1``); the BDF
-then uses the NumPy/f2py path with the same results up to rounding.
-"""
+"""The Newton systems of a BDF step condensed by the kinematic rows (``kv_cond`` in
+condensed.c): block tridiagonal in the rod's cells, else a band LU of the condensed
+matrix."""
 
 from __future__ import annotations
 
 import ctypes
-import hashlib
-import os
-import platform
-import subprocess
-import tempfile
-from pathlib import Path
-from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:
-    import numpy as np
+import numpy as np
 
-#: the C sources, kept as files beside this module: bdf_core.c (the step loop) includes
-#: bdf_helpers.c (band LU, condensed Newton systems, norms, interpolation), one unit
-FILES = ("bdf_core.c", "bdf_helpers.c")
-SOURCES = {name: Path(__file__).with_name(name).read_text() for name in FILES}
-SOURCE = "".join(SOURCES.values())
-
-# Flags as for the rod kernels (runtime/model/build.py: -O3, -march=native with the host
-# CPU in the cache key, plain flags if the compiler rejects them); -ffp-contract=off
-# matters here too: no fused multiply-adds, so the C step loop rounds like the NumPy
-# path of bdf.py (compared step by step in the tests). Measured at N = 1000
-# (kv_cond_factor / kv_cond_newton timed in C, us; GCC 12, AMD EPYC Zen 4): -O2 711 /
-# 112; -O3 477 / 88 (complete unrolling and vectorisation of the fixed-size 6 x 6
-# kernels of the block path); -O3 -march=native 537 / 70 (AVX2: fewer vector
-# instructions in the products, but GCC's AVX-512 code of the pivoting and gathering
-# kernels is slower here), so -mno-avx512f on x86-64: 468 / 72.
-_EXTRA = ("-mno-avx512f",) if platform.machine().lower() in ("x86_64", "amd64") else ()
-_lib: ctypes.CDLL | None = None
-_tried = False
-
-
-def _compile(cc: str, dest: Path) -> None:
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(dir=dest.parent) as tmp:
-        for name, text in SOURCES.items():
-            (Path(tmp) / name).write_text(text)
-        out = Path(tmp) / dest.name
-        from runtime.model import build
-
-        with build.compiling(build.STEP_LOOP):
-            proc = build.run_compiler([*_EXTRA, str(Path(tmp) / FILES[0]), "-o", str(out),
-                                       "-lm"], cc)
-        if proc.returncode != 0:
-            raise subprocess.SubprocessError(proc.stderr)
-        os.replace(out, dest)
-
-
-def load() -> ctypes.CDLL | None:
-    """The compiled helpers (cached per source hash), or None if they cannot be built."""
-    global _lib, _tried
-    if _tried:
-        return _lib
-    _tried = True
-    from runtime.model import build
-
-    cc = build.find_compiler()
-    if cc is None:
-        return None
-    key = hashlib.sha256((SOURCE + " ".join((*build.compile_command(cc), *_EXTRA))
-                          + build.host_id()).encode()).hexdigest()[:16]
-    path = build.cache_dir() / f"kvrod_bdf_{key}.so"
-    try:
-        if not path.exists():
-            _compile(cc, path)
-        lib = ctypes.CDLL(str(path))
-    except (OSError, subprocess.SubprocessError):
-        return None
-    return _declare(lib)
-
-
-def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
-    global _lib
-    P, I, D = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
-    lib.kv_gbtrf.argtypes = [I, I, I, P, I, P, P]
-    lib.kv_gbtrf.restype = I
-    lib.kv_gbtrs.argtypes = [I, I, I, P, I, P, P, P]
-    lib.kv_gbtrs.restype = None
-    lib.kv_newton.argtypes = [I, I, I, P, I, P, P, P, D, P, P, P, P, D]
-    lib.kv_newton.restype = D
-    lib.kv_interp.argtypes = [I, I, I, D, P, P, P, P, P]
-    lib.kv_interp.restype = None
-    lib.kv_cond_factor.argtypes = [P, P]
-    lib.kv_cond_factor.restype = I
-    lib.kv_cond_solve.argtypes = [P, P, P]
-    lib.kv_cond_solve.restype = None
-    lib.kv_cond_newton.argtypes = [P, P, P, D, P, P, P, P, D]
-    lib.kv_cond_newton.restype = D
-    lib.kv_wrms.argtypes = [I, P, P, P]
-    lib.kv_wrms.restype = D
-    lib.kv_ida_sizeof.argtypes = []
-    lib.kv_ida_sizeof.restype = ctypes.c_size_t
-    lib.kv_ida_advance.argtypes = [P, D, ctypes.c_longlong]
-    lib.kv_ida_advance.restype = I
-    lib.kv_ida_watch_reset.argtypes = [P]
-    lib.kv_ida_watch_reset.restype = None
-    if lib.kv_ida_sizeof() != ctypes.sizeof(CoreStruct):
-        raise RuntimeError("kv_ida (bdf_core.c) and CoreStruct (_bdf_c.py) differ in size: "
-                           "the mirror is out of date")
-    _lib = lib
-    return lib
-
-
-
-class BandLU:
-    """The LU factors of a band matrix in LAPACK storage ``ab`` (overwritten), by the
-    compiled helpers or else SciPy's LAPACK (imported only then); ``info`` is LAPACK's
-    (> 0: singular, column ``info`` 1-based), :meth:`solve` returns a new array."""
-
-    def __init__(self, ab, kl: int, ku: int) -> None:
-        import numpy as np
-
-        self.ab, self.kl, self.ku = ab, kl, ku
-        self._lib = load()
-        n = ab.shape[1]
-        if self._lib is None:
-            from scipy.linalg.lapack import dgbtrf
-
-            _, self._ipiv, info = dgbtrf(ab, kl, ku, overwrite_ab=1)
-            self.info = int(info)
-            return
-        if not (ab.flags.f_contiguous and ab.dtype == np.float64):
-            raise ValueError("BandLU: ab must be a Fortran-ordered float64 array")
-        self._ipiv = np.zeros(max(n, 1), dtype=np.int32)
-        self._prof = np.zeros(2 * max(n, 1), dtype=np.int32)
-        self.info = int(self._lib.kv_gbtrf(n, kl, ku, ab.ctypes.data, ab.shape[0],
-                                           self._ipiv.ctypes.data, self._prof.ctypes.data))
-
-    def solve(self, b):
-        """``A^-1 b`` (b unchanged)."""
-        import numpy as np
-
-        if self.info != 0:
-            raise ValueError(f"BandLU.solve: the matrix is singular (info {self.info})")
-        if self._lib is None:
-            from scipy.linalg.lapack import dgbtrs
-
-            return dgbtrs(self.ab, self.kl, self.ku, np.asarray(b, dtype=float),
-                          self._ipiv)[0]
-        x = np.array(b, dtype=float)
-        self._lib.kv_gbtrs(self.ab.shape[1], self.kl, self.ku, self.ab.ctypes.data,
-                           self.ab.shape[0], self._ipiv.ctypes.data, self._prof.ctypes.data,
-                           x.ctypes.data)
-        return x
-
-
-def band_solve(ab, kl: int, ku: int, b):
-    """``(x, info)`` of ``A x = b`` for A in band storage ``ab`` (overwritten by its LU;
-    x is a new array, b unchanged; info > 0: singular, x is then a copy of b)."""
-    import numpy as np
-
-    lu = BandLU(ab, kl, ku)
-    return (lu.solve(b) if lu.info == 0 else np.array(b, dtype=float)), lu.info
+from .loader import load
 
 
 class _CondStruct(ctypes.Structure):
-    """Mirror of ``kv_cond`` in bdf_helpers.c."""
+    """Mirror of ``kv_cond`` in condensed.c."""
 
     _fields_ = [(name, ctypes.c_int) for name in
                 ("n", "kl", "ku", "ldab", "nc", "klc", "kuc", "ldc", "nb")] + [
@@ -213,7 +27,7 @@ class _CondStruct(ctypes.Structure):
 
 class CondensedNewton:
     """The Newton systems of a BDF step, condensed by eliminating kinematic blocks (see
-    ``kv_cond`` in bdf_helpers.c): ``factor(ab)`` condenses and factorises the full band
+    ``kv_cond`` in condensed.c): ``factor(ab)`` condenses and factorises the full band
     J (which it leaves intact), ``kv_cond_newton(ptr, ...)`` is ``kv_newton`` through
     those factors.
 
@@ -423,7 +237,7 @@ def _diagonal_blocks(pattern, kl: int, ku: int, b):
 def _cell_tables(n: int, kl: int, ku: int, b, keep_row, keep_col, col2c, cells, pattern,
                  diag):
     """The per-cell tables of the block tridiagonal path (see ``kv_cond`` in
-    bdf_helpers.c) and None, or None and why the condensed matrix is not block
+    condensed.c) and None, or None and why the condensed matrix is not block
     tridiagonal in ``cells``. ``diag``: per block, structurally diagonal."""
     import numpy as np
 
@@ -500,66 +314,3 @@ def _cell_tables(n: int, kl: int, ku: int, b, keep_row, keep_col, col2c, cells, 
                 F=np.zeros(max(int(fsize.sum()), 1)), X=np.zeros(max(int(xsize.sum()), 1)),
                 ge=np.zeros(max(int(es.sum()), 1)), T=np.zeros(mmax * (2 * mmax + 3)),
                 rp=i32(rp), run=i32(run.ravel()), ecol=i32(ecol), kv6=i32(kv6)), None
-
-# ---- the C step loop (bdf_core.c) ------------------------------------------------------
-#: return codes of kv_ida_advance
-TSTOP, WATCH, FINISHED, MAXSTEPS = 0, 1, 2, 3
-FAIL_CONV, FAIL_ERR, FAIL_STALL, FAIL_HMIN, FAIL_FIXED, CALLBACK, NONFINITE = range(-1, -8, -1)
-MAXWATCH = 8
-NH = 7          # history rows: max order 5 + 2
-
-RES_FN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_double, ctypes.c_void_p,
-                          ctypes.c_void_p, ctypes.c_void_p)
-JAC_FN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_double, ctypes.c_void_p,
-                          ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_int,
-                          ctypes.c_void_p)
-DRIVE_FN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_double)
-
-
-def _fields(kind, *names):
-    return [(name, kind) for name in names]
-
-
-class CoreStruct(ctypes.Structure):
-    """Mirror of ``kv_ida`` in bdf_core.c (field for field; the size is checked at load)."""
-
-    _I, _P, _D, _L = ctypes.c_int, ctypes.c_void_p, ctypes.c_double, ctypes.c_longlong
-    _fields_ = (
-        _fields(_I, "n", "kl", "ku", "ldab")
-        + _fields(_P, "res", "jac", "en")
-        + _fields(_I, "nen")
-        + _fields(_P, "ctx", "drive")
-        + _fields(_D, "drive_lo", "drive_hi", "drive_t")
-        + _fields(_P, "cond", "phi", "y", "yp", "yy", "ypw", "ee", "res_v", "tmp", "ewt",
-                  "ewt_err", "errmask", "atol", "ab", "ipiv", "prof")
-        + _fields(_D, "rtol", "t_bound", "direction", "hmax_inv", "min_step", "fixed_step")
-        + _fields(_I, "max_order", "maxcor", "max_conv_fails", "max_error_fails")
-        + _fields(_D * NH, "psi", "alpha", "beta", "sigma", "gamma")
-        + _fields(_I, "kk", "kused", "knew", "ns", "phase", "have_lu")
-        + _fields(_D, "hh", "hused", "cj", "cjold", "cjlast", "cjratio", "ss", "oldnrm",
-                  "rr", "t", "t_old")
-        + _fields(_I, "started")
-        + _fields(_L, "nstep", "nfev", "njev", "nlu", "nni", "netf", "ncfn", "nst0")
-        + _fields(_I, "fail_index", "fail_count", "fail_nflag")
-        + _fields(_D, "fail_t")
-        + _fields(_I, "nwatch")
-        + _fields(_I * MAXWATCH, "watch_idx")
-        + _fields(_D * MAXWATCH, "watch_dir", "watch_old")
-        + _fields(_I, "watch_hit", "audit")
-        + _fields(_D * 3, "gl_x")
-        + _fields(_D * 9, "fit")
-        + _fields(_D, "dissipated", "external_work")
-        + _fields(_D * 6, "coef")
-        + _fields(_P, "wy", "wyp")
-        + _fields(_I, "nsamp", "m_out", "k_out", "rec_w", "rec_cap", "rec_n")
-        + _fields(_P, "samp_idx", "t_out", "rec", "flush", "sy", "syp")
-        + _fields(_I, "timing")
-        + _fields(_D * 6, "sec")
-        + _fields(_I, "stop")
-        + _fields(_P, "jac_cells", "jwin")
-        + _fields(_I, "jwin_cols", "jchunk")
-        + _fields(_I, "nexact")
-        + _fields(_P, "exact", "exact_res")
-    )
-    #: names of the entries of ``sec`` (seconds per part when ``timing`` is set)
-    SECTIONS = ("residual", "jacobian", "lu", "newton_solve_update", "energies", "drive")

@@ -1,11 +1,13 @@
-"""The whole rod as CasADi MX functions over the serialised per-element kernels.
+"""The whole rod as CasADi MX functions over the serialised per-element kernels: the
+oracle of the C assembly and its fallback.
 
-This is the one CasADi assembly of the rod (the compiled C assembly in
-``generated/rod_assembly.c`` is the other, fast one; tests hold them equal to rounding). It
-serves as the in-process fallback when no C compiler is available (residual, Jacobian and
-energies evaluated through CasADi), for SUNDIALS IDAS cross-checks and benchmarks (the
-residual expanded to SX and compiled flat), and for anything that needs derivatives of the
-whole rod.
+The rod has two assemblies of the same generated kernels: the C one
+(``runtime/model/native/rod_assembly.c``, fast, what runs) and this CasADi MX one, built
+independently from the layout tables (tests hold them equal to rounding: the oracle of
+the C loops). It also serves as the in-process fallback when no C compiler is available
+(residual, Jacobian and energies evaluated through CasADi), for SUNDIALS IDAS cross-checks
+and benchmarks (the residual expanded to SX and compiled flat), and for anything that needs
+derivatives of the whole rod.
 
 The functions take the arrays of :class:`runtime.model.arrays.RodArrays` as inputs
 (``par``; ``seg``, ``jnt``, ``nload``, ``sload`` transposed: one column per element), so
@@ -37,7 +39,7 @@ def _r(start: int, size: int) -> list[int]:
     return list(range(start, start + size))
 
 
-class CasadiRod:
+class CasadiOracle:
     """MX functions of one rod structure (N elements, its held and clamped ends).
 
     ``residual(t, y, yp, par, seg, jnt, nload, sload) -> F`` (n,);

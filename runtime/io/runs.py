@@ -1,33 +1,11 @@
-"""Run a problem into a results folder: the work behind `kvrod simulate` and `kvrod static`,
-shared by those commands, `kvrod reproduce` and the example notes."""
+"""Run a problem into a results folder (the results-folder protocol of a run): the work
+behind `kvrod simulate` and `kvrod static`, shared by those commands and the notes."""
 
 from __future__ import annotations
 
 import contextlib
-import sys
+from collections.abc import Callable
 from pathlib import Path
-
-
-def progress_bar(t_end: float, desc: str):
-    """A tqdm bar over simulated time, redrawn at most every 0.2 s; returns (callback,
-    close). Not shown (and tqdm not even imported) when stderr is not a terminal."""
-    if not sys.stderr.isatty():
-        return (lambda t: None), (lambda: None)
-    from tqdm import tqdm
-
-    bar = tqdm(total=round(t_end, 6), desc=desc, unit="s sim", leave=False, mininterval=0.2,
-               disable=not sys.stderr.isatty(),
-               bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.2f}/{total:.2f} s [{elapsed}]")
-    step = t_end / 200.0
-    last = [0.0]
-
-    def update(t: float) -> None:
-        if t - last[0] >= step or t >= t_end:
-            last[0] = t
-            bar.n = round(min(t, t_end), 6)
-            bar.refresh() if not bar.disable else None
-
-    return update, bar.close
 
 
 def already_finished(problem, out: Path) -> bool:
@@ -47,9 +25,13 @@ def already_finished(problem, out: Path) -> bool:
             and data.get("parameters") == jsonable(problem.to_mapping()))
 
 
+#: a progress display of a run: ``progress(t_end, label) -> (callback(t), close())``
+ProgressDisplay = Callable[[float, str], tuple[Callable[[float], object], Callable[[], object]]]
+
+
 def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: bool = False,
                   vtk_every: float | None = None, checkpoint_every: float = 1.0,
-                  overwrite: bool = False, progress: bool = True) -> tuple:
+                  overwrite: bool = False, progress: ProgressDisplay | None = None) -> tuple:
     """Run one problem into results folder ``out`` and write its results.
 
     Everything that can be checked is checked before anything is written (parameters, the
@@ -123,7 +105,7 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
 
             model = build_model(problem)          # one model: the run's and the frames'
             series = VtkSeries(out / "vtk", model, resume_from=t_start if state else None)
-        cb, close = (progress_bar(problem.simulation.t_end, label) if progress
+        cb, close = (progress(problem.simulation.t_end, label) if progress is not None
                      else (None, lambda: None))
         try:
             run = simulate(problem, progress=cb, checkpoint=on_checkpoint,
@@ -182,7 +164,7 @@ def static_and_write(problem, out: Path, overwrite: bool = False) -> tuple[dict,
     state (status "failed")."""
     import time
 
-    from kvrod.outputs import results_folder
+    from runtime.io.folder import results_folder
     from runtime.io.results import jsonable, write_json, write_npz, write_problem
     from runtime.model import build
     from runtime.model.statics import largest_displacement

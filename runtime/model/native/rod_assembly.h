@@ -1,5 +1,6 @@
 /*
- * C API of the discrete rod (layout: generated/rod_layout.py).
+ * C API of the discrete rod (runtime/model/native/rod_assembly.c; layout:
+ * generated/rod_layout.h and generated/rod_layout.py).
  *
  * A rod is described by kvrod_rod: N elements, the global parameter vector (PARAMS), the
  * per-segment parameters (N rows of SEGMENT_PARAMS), the per-joint parameters (N+1 rows of
@@ -11,7 +12,7 @@
  * F(t, y, y') (same length). Band storage is LAPACK dgbtrf's with the rod's kl, ku
  * (at least kvrod_kl(N, nb), kvrod_ku(N, nb)): ab has ldab >= 2*kl+ku+1 rows and n
  * columns (Fortran order), element (i, j) at ab[kl + ku + i - j + j*ldab].
- * Return value 0 on success, negative on error (-1: N < 1 or nb outside 0..{{ max_branches }},
+ * Return value 0 on success, negative on error (-1: N < 1 or nb outside 0..MAX_NB (rod_layout.h),
  * -2: band too narrow, -3: kernel failure, -4: cells outside the rod or the storage).
  */
 #ifndef KVROD_ROD_ASSEMBLY_H
@@ -24,11 +25,11 @@ typedef struct {
   int N;                  /* number of elements (segments) */
   int nb;                 /* number of relaxation terms (0: Kelvin-Voigt) */
   int kl, ku;             /* band widths of the caller's band storage */
-  const double* par;      /* global parameters: {{ n_params }} values */
-  const double* seg;      /* N x {{ n_segment }} segment parameters */
-  const double* jnt;      /* (N+1) x {{ n_joint }} joint parameters */
-  const double* nload;    /* (N+1) x {{ n_node_load }} node loads */
-  const double* sload;    /* N x {{ n_segment_load }} segment loads */
+  const double* par;      /* global parameters: NPAR values (rod_layout.h) */
+  const double* seg;      /* N x NSEG segment parameters */
+  const double* jnt;      /* (N+1) x NJNT joint parameters */
+  const double* nload;    /* (N+1) x NNL node loads */
+  const double* sload;    /* N x NSL segment loads */
   const double* theta;    /* nb relaxation times (s) */
   const double* segb;     /* N x nb x 3 moduli of the relaxation terms on segments (N) */
   const double* jntb;     /* (N+1) x nb x 3 moduli on joints (N m^2) */
@@ -59,12 +60,13 @@ int kvrod_jacobian_band_cells(const kvrod_rod* rod, double t, const double* y,
                               const double* yp, double cy, double cj, int ldab, double* ab,
                               int col0, int i0, int i1);
 
-/* out <- [kinetic, elastic, 2D, external power, boundary power, V (3N), F (3N),
+/* out <- [the NDIAG scalars: kinetic, elastic, 2D, external power, boundary power, then the
+ *         supports' force and moment at s = 0 and s = L (12, spatial); V (3N), F (3N),
  *         U (3(N+1)), M (3(N+1))] */
 int kvrod_diagnostics(const kvrod_rod* rod, double t, const double* y, const double* yp,
                       double* out);
 
-/* out[k] <- [kinetic, elastic, 2D, external power, boundary power] of the m states
+/* out[k] <- the NDIAG scalars of kvrod_diagnostics of the m states
  * ys[k*n .. (k+1)*n), yps[...] (the energy quadrature of a step in one call) */
 int kvrod_energies(const kvrod_rod* rod, int m, const double* ts, const double* ys,
                    const double* yps, double* out);

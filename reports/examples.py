@@ -15,9 +15,9 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-import jinja2
 import numpy as np
 
+from derive.templating import render
 from references import examples as RX
 from runtime.io.atomic import write_text
 
@@ -255,8 +255,8 @@ def write_examples_notes(path: Path = Path("notes/examples.md"),
     Figures go to ``path.parent / "figures"`` as ``examples_*.png``; the measurements of
     this run (``command``) to ``out/run-info.md``. Raises RuntimeError when a run fails
     (its folder keeps what was computed)."""
-    from kvrod.run_info import Timings, bound, decade
-    from kvrod.runs import run_and_write, static_and_write
+    from reports.run_info import Timings, bound, decade
+    from runtime.io.runs import run_and_write, static_and_write
     from runtime.problem.registry import load_problem
 
     path, out = Path(path), Path(out)
@@ -322,8 +322,7 @@ def write_examples_notes(path: Path = Path("notes/examples.md"),
     runs = {}
     for name in DYNAMIC:
         with timings.phase(f"simulate {name}"):
-            run, summary = run_and_write(load_problem(name), out / name, name, overwrite=True,
-                                         progress=False)
+            run, summary = run_and_write(load_problem(name), out / name, name, overwrite=True)
         timings.run(name, summary)
         if run.status != "finished":
             raise RuntimeError(f"{name}: {run.message}")
@@ -358,8 +357,6 @@ def write_examples_notes(path: Path = Path("notes/examples.md"),
     fig_links["base_excitation"] = _fig_base(run, ref, figs / "examples_base_excitation.png")
 
     ctx["fig"] = {k: f"figures/{Path(v).name}" for k, v in fig_links.items()}
-    env = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATE_DIR),
-                             undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
-    write_text(path, env.get_template("examples.md.jinja").render(**ctx))
+    write_text(path, render(TEMPLATE_DIR, "examples.md.jinja", **ctx))
     timings.write(out)
     return path

@@ -1,5 +1,6 @@
-"""Beyond the paper: `kvrod modes`, `calibrate`, `compare-damping`, `notes-beyond`,
-`notes-examples`, `notes-maxwell`.
+"""`kvrod modes`, `kvrod calibrate` and `kvrod compare-damping`: the analyses of a rod
+beyond a single run (computations in runtime/analysis and runtime/study; tables and files
+in reports/analyses.py).
 
 Wired into `kvrod/cli.py` by ``add_commands(subparsers, parser_class)``. Heavy imports
 happen inside the commands; library code never prints, these commands do.
@@ -11,8 +12,9 @@ import math
 import sys
 from pathlib import Path
 
-from kvrod.analyses import compare_table, modes_table, run_modes, write_compare, write_modes
-from kvrod.outputs import safe_name
+from reports.analyses import compare_table, modes_table, run_modes, write_compare, write_modes
+from runtime.analysis.records import load_csv
+from runtime.io.folder import safe_name
 
 
 def _cli_error(message: str) -> Exception:
@@ -38,7 +40,7 @@ def _cmd_modes(args) -> int:
                          f"freedom of {problem.rod.elements} elements")
     out = Path(args.out) if args.out else Path("results") / (
         f"modes-{safe_name(problem.name)}" + ("-deformed" if args.deformed else ""))
-    from kvrod.outputs import results_folder
+    from runtime.io.folder import results_folder
 
     with results_folder(out, "modes", markers=("modes.json",), overwrite=args.overwrite,
                         names=("modes.json", "modes.npz")):
@@ -67,9 +69,9 @@ def _modes_into(args, problem, out: Path) -> int:
 def _cmd_calibrate_dma(args) -> int:
     """`kvrod calibrate --dma FILE --nu NU`: a Prony series from storage and loss moduli;
     everything is checked before the folder is locked."""
-    from kvrod.analyses import write_dma_fit
-    from kvrod.outputs import results_folder
+    from reports.analyses import write_dma_fit
     from runtime.analysis import dma
+    from runtime.io.folder import results_folder
     from runtime.problem.materials import material_from_mapping
 
     if args.nu is None:
@@ -108,9 +110,9 @@ def _cmd_calibrate_dma(args) -> int:
 
 def _cmd_calibrate(args) -> int:
     """Validate the data and the model first, then lock the folder and fit."""
-    from kvrod.outputs import results_folder
-    from runtime.analysis import calibration as cal
+    from runtime.io.folder import results_folder
     from runtime.problem.registry import load_problem
+    from runtime.study import calibration as cal
 
     if args.dma is not None:
         return _cmd_calibrate_dma(args)
@@ -137,10 +139,10 @@ def _cmd_calibrate(args) -> int:
                              "inertia)")
     try:
         if args.mode == "signal":
-            data = cal.validate_signal(*cal.load_csv(args.data, ("t", "x")))
+            data = cal.validate_signal(*load_csv(args.data, ("t", "x")))
             cal.check_record(data[0], data[1], problem)
         else:
-            data = (cal.validate_decrements(*cal.load_csv(args.data, ("delta",))),)
+            data = (cal.validate_decrements(*load_csv(args.data, ("delta",))),)
     except ValueError as exc:
         from runtime.errors import ParameterError
 
@@ -154,8 +156,8 @@ def _cmd_calibrate(args) -> int:
 
 
 def _calibrate_into(args, out: Path, data: tuple, problem) -> int:
-    from runtime.analysis import calibration as cal
     from runtime.io.results import write_json
+    from runtime.study import calibration as cal
 
     if args.mode == "signal":
         res = cal.calibrate_signal(*data, problem=problem, tau0=args.tau0,
@@ -179,7 +181,7 @@ def _calibrate_into(args, out: Path, data: tuple, problem) -> int:
 
 
 # --------------------------------------------------------------------------------------
-# kvrod compare-damping (computation: runtime/analysis/compare_damping.py)
+# kvrod compare-damping (computation: runtime/study/compare_damping.py)
 # --------------------------------------------------------------------------------------
 
 
@@ -187,8 +189,8 @@ def _cmd_compare(args) -> int:
     if args.n_elements < 2:
         raise _cli_error(f"kvrod compare-damping: --n-elements must be >= 2, got "
                          f"{args.n_elements}")
-    from kvrod.outputs import results_folder
-    from runtime.analysis import compare_damping as cd
+    from runtime.io.folder import results_folder
+    from runtime.study import compare_damping as cd
 
     cd.check_inputs(args.n_elements, args.tau_S, args.tau_B, args.nu, args.tip_force,
                     args.rtol)
@@ -205,86 +207,12 @@ def _cmd_compare(args) -> int:
 
 
 # --------------------------------------------------------------------------------------
-# kvrod notes-beyond (kvrod/beyond.py)
-# --------------------------------------------------------------------------------------
-
-
-def _notes_paths(args, name: str, notes: str, out: str) -> tuple[Path, Path]:
-    """(notes file, results folder) of a notes command: the defaults ``notes``, ``out``;
-    ``--out DIR`` alone puts the notes into DIR as well (``DIR/NAME.md``, figures in
-    DIR/figures), so only the default run rewrites the committed notes (which quote their
-    results folder)."""
-    from kvrod.outputs import check_file_argument
-
-    results = Path(args.out or out)
-    path = Path(args.out_notes or (results / f"{name}.md" if args.out else notes))
-    check_file_argument(path, "--out-notes")
-    return path, results
-
-
-def _notes_names(path: Path, results: Path, *names: str) -> tuple[str, ...]:
-    """What a notes command writes into its results folder (removed by --overwrite)."""
-    from kvrod.run_info import FILES
-
-    inside = (path.name,) if path.parent.resolve() == results.resolve() else ()
-    return (*names, *FILES, *inside)
-
-
-def _cmd_notes_beyond(args) -> int:
-    from kvrod.beyond import write_beyond_notes
-    from kvrod.outputs import results_folder
-
-    path, out = _notes_paths(args, "beyond", "notes/beyond.md", "results/beyond")
-    with results_folder(out, "notes-beyond",
-                        markers=("compare-damping/compare_damping.json", "modes/modes.json",
-                                 "calibration/calibration.json"),
-                        overwrite=args.overwrite,
-                        names=_notes_names(path, out, "compare-damping", "calibration",
-                                           "modes", "modes-deformed")):
-        path = write_beyond_notes(path, out, command=getattr(args, "command_line", "kvrod"))
-    print(f"wrote {path} (results under {out}/)")
-    return 0
-
-
-def _cmd_notes_examples(args) -> int:
-    from kvrod.examples_notes import DYNAMIC, STATIC, write_examples_notes
-    from kvrod.outputs import results_folder
-
-    path, out = _notes_paths(args, "examples", "notes/examples.md", "results/examples")
-    names = STATIC + DYNAMIC
-    with results_folder(out, "notes-examples",
-                        markers=tuple(f"{n}/summary.json" for n in names),
-                        overwrite=args.overwrite, names=_notes_names(path, out, *names)):
-        path = write_examples_notes(path, out, command=getattr(args, "command_line", "kvrod"))
-    print(f"wrote {path} (results under {out}/)")
-    return 0
-
-
-def _cmd_notes_maxwell(args) -> int:
-    from kvrod.maxwell_notes import write_maxwell_notes
-    from kvrod.notices import derivation
-    from kvrod.outputs import results_folder
-
-    path, out = _notes_paths(args, "maxwell", "notes/maxwell.md", "results/maxwell")
-    with results_folder(out, "notes-maxwell",
-                        markers=("simulate-mx/summary.json", "dma/fit/dma.json"),
-                        overwrite=args.overwrite,
-                        names=_notes_names(path, out, "modes-kv", "modes-mx", "simulate-kv",
-                                           "simulate-mx", "dma")):
-        derivation("kvrod notes-maxwell")       # the notes show derived results
-        path = write_maxwell_notes(path, out, command=getattr(args, "command_line", "kvrod"))
-    print(f"wrote {path} (results under {out}/)")
-    return 0
-
-
-# --------------------------------------------------------------------------------------
 # wiring
 # --------------------------------------------------------------------------------------
 
 
 def add_commands(sub, parser_class) -> None:
-    """Add `modes`, `calibrate`, `compare-damping`, `notes-beyond`, `notes-examples` and
-    `notes-maxwell` to ``sub``.
+    """Add `modes`, `calibrate` and `compare-damping` to ``sub``.
 
     parser_class is the one-line-error parser the caller created ``sub`` with (kept for
     symmetry with the other command modules; argparse passes it on to the subparsers).
@@ -352,25 +280,3 @@ def add_commands(sub, parser_class) -> None:
     d.add_argument("--overwrite", action="store_true",
                    help="replace a result already in --out (default: refuse)")
     d.set_defaults(func=_cmd_compare)
-
-    def notes_parser(name: str, text: str, notes: str, out: str):
-        q = sub.add_parser(name, help=text)
-        q.add_argument("--out-notes", dest="out_notes",
-                       help=f"notes file (default {notes}, or DIR/{Path(notes).name} with --out "
-                            "DIR; figures go to its figures/ folder)")
-        q.add_argument("--out", help=f"results folder (default {out}; run time, compile time "
-                                     "and solver counters go to its run-info.md)")
-        q.add_argument("--overwrite", action="store_true",
-                       help="replace the results of an earlier run in --out")
-        return q
-
-    notes_parser("notes-beyond", "run compare-damping, modes and calibration (modest "
-                 "settings) and write notes/beyond.md", "notes/beyond.md",
-                 "results/beyond").set_defaults(func=_cmd_notes_beyond)
-    x = notes_parser("notes-examples", "run every example in examples/ against its "
-                     "reference and write notes/examples.md", "notes/examples.md",
-                     "results/examples")
-    x.set_defaults(func=_cmd_notes_examples)
-    notes_parser("notes-maxwell", "the generalized Maxwell rod: derivation, Kelvin-Voigt "
-                 "against Maxwell cantilever, a DMA fit; writes notes/maxwell.md",
-                 "notes/maxwell.md", "results/maxwell").set_defaults(func=_cmd_notes_maxwell)

@@ -2,16 +2,16 @@
 
 The notes hold what a rerun reproduces (rounded to what the integration error leaves
 stable); wall times, the first C compilation, solver counters and the machine go to
-``timings.json`` and ``run-info.md`` in the results folder (:mod:`kvrod.run_info`).
+``timings.json`` and ``run-info.md`` in the results folder (:mod:`reports.run_info`).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-import jinja2
 import numpy as np
 
+from derive.templating import render
 from runtime.io.atomic import write_text
 
 TEMPLATE_DIR = Path(__file__).parent / "templates"
@@ -60,20 +60,22 @@ def _bench_energy_audit() -> dict | None:
 def reproduce(out: Path, n_elements: int = 100, t_end: float = 10.0,
               notes: Path = Path("notes/reproduction.md"), rtol: float = 1e-7,
               derive: bool = True, overwrite: bool = False,
-              command: str = "kvrod reproduce", derive_progress=None) -> Path:
+              command: str = "kvrod reproduce", derive_progress=None,
+              progress=None) -> Path:
     """Run the three tau values, the E = 4 MPa comparison, write figures and notes.
 
     Every run folder under ``out`` is checked before the first run starts: one that holds
     a result is refused unless ``overwrite``. The C code is compiled first (if it is not
     yet), so that no run's wall time includes it; ``command`` is how the measurements in
     ``out/run-info.md`` were made; ``derive_progress`` is told of the derivation's steps
-    when they must be derived for notes/derivation.md (:data:`derive.pipeline.Progress`).
+    when they must be derived for notes/derivation.md (:data:`derive.pipeline.Progress`);
+    ``progress``: a progress display of each run (``runtime.io.runs.ProgressDisplay``).
     """
-    from kvrod.outputs import check_file_argument
-    from kvrod.run_info import Timings, bound, decade
-    from kvrod.runs import run_and_write
+    from reports.run_info import Timings, bound, decade
     from runtime.io import folder as F
     from runtime.io import plots as P
+    from runtime.io.folder import check_file_argument
+    from runtime.io.runs import run_and_write
     from runtime.problem.registry import load_problem
 
     timings = Timings(command)
@@ -97,7 +99,8 @@ def reproduce(out: Path, n_elements: int = 100, t_end: float = 10.0,
                                          "t_end": t_end, "rtol": rtol})
         with timings.phase(f"run tau_{tau:g}"):
             runs[tau], summaries[tau] = run_and_write(sc, out / f"tau_{tau:g}",
-                                                      f"tau_E = {tau:g} s", overwrite=overwrite)
+                                                      f"tau_E = {tau:g} s", overwrite=overwrite,
+                                                      progress=progress)
         timings.run(f"tau_{tau:g}", summaries[tau])
     # E = 4 MPa: tau halved; exact coincidence needs the tip force x 4 as well
     stiff = {}
@@ -107,7 +110,7 @@ def reproduce(out: Path, n_elements: int = 100, t_end: float = 10.0,
                                          "t_end": t_end / 2, "rtol": rtol})
         with timings.phase(f"run {label}"):
             stiff[label] = run_and_write(sc, out / label, f"E = 4 MPa, F = {force} N",
-                                         overwrite=overwrite)
+                                         overwrite=overwrite, progress=progress)
         timings.run(label, stiff[label][1])
     figs = out / "figures"
     with timings.phase("figures"):
@@ -147,9 +150,7 @@ def reproduce(out: Path, n_elements: int = 100, t_end: float = 10.0,
     if reference and reference.get("reissner"):
         rx, rz = reference["reissner"]
         ctx["static_err_rel"] = abs(stat[0] - rx) / abs(rx)
-    env = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATE_DIR),
-                             undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
-    text = env.get_template("reproduction.md.jinja").render(**ctx)
+    text = render(TEMPLATE_DIR, "reproduction.md.jinja", **ctx)
     notes.parent.mkdir(parents=True, exist_ok=True)
     write_text(notes, text)
     import shutil

@@ -1,4 +1,5 @@
-"""`kvrod notes-sections`: composite and anisotropic cross-sections in notes/sections.md.
+"""`kvrod notes-sections` (kvrod/cli_notes.py): composite and anisotropic cross-sections in
+notes/sections.md.
 
 Three sections, each analysed as ``kvrod section`` does (its section.json and section.png in
 the results folder, under the name in :data:`RESULTS`):
@@ -29,9 +30,9 @@ import math
 from pathlib import Path
 from typing import Any
 
-import jinja2
 import numpy as np
 
+from derive.templating import render
 from runtime.io.atomic import write_text
 
 TEMPLATE_DIR = Path(__file__).parent / "templates"
@@ -116,7 +117,7 @@ def _norm(M: np.ndarray, i: int, j: int) -> float:
 
 def _analyse(spec: Any, overrides: dict, out: Path, command: str, timings: Any,
              label: str) -> tuple[Any, Any]:
-    from kvrod.cli_section import write_section
+    from runtime.io.section_files import write_section
     from runtime.problem.section_analysis import analyse_problem_section, load_section
 
     s = load_section(spec, overrides)
@@ -232,7 +233,7 @@ def write_sections_notes(path: Path = Path("notes/sections.md"),
     ``out/run-info.md``)."""
     import shutil
 
-    from kvrod.run_info import Timings
+    from reports.run_info import Timings
     from runtime.problem.registry import EXAMPLES_DIR
 
     path, out = Path(path), Path(out)
@@ -266,9 +267,6 @@ def write_sections_notes(path: Path = Path("notes/sections.md"),
         "cable_mesh": {"elements": cab.n_elements, "tol": _g(cab.tolerance)},
         "figs": {k: Path(v).relative_to(path.parent).as_posix() for k, v in pictures.items()},
     }
-    env = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATE_DIR),
-                             keep_trailing_newline=True, autoescape=False,
-                             undefined=jinja2.StrictUndefined)
-    write_text(path, env.get_template("sections.md.jinja").render(**ctx))
+    write_text(path, render(TEMPLATE_DIR, "sections.md.jinja", **ctx))
     timings.write(out)
     return path

@@ -1,11 +1,11 @@
 """`kvrod notes-beyond`: three analyses beyond the paper with modest settings, and
 notes/beyond.md.
 
-1. eta_E against eta~_E in simulation (runtime/analysis/compare_damping.py) at N = 20;
+1. eta_E against eta~_E in simulation (runtime/study/compare_damping.py) at N = 20;
 2. damped modal analysis of the paper's cantilever at N = 50 (runtime/analysis/modal.py), straight
    and pre-deformed by the static tip load;
 3. calibration of tau from a synthetic tip signal with known tau plus noise
-   (runtime/analysis/calibration.py).
+   (runtime/study/calibration.py).
 
 Every result is written to a results folder in the same form as the command quoted next
 to it in the notes (``kvrod compare-damping``, ``kvrod modes``, ``kvrod calibrate``), so
@@ -20,9 +20,10 @@ import math
 import shutil
 from pathlib import Path
 
-import jinja2
 import numpy as np
 
+from derive.templating import render
+from runtime.analysis.records import load_csv
 from runtime.io.atomic import write_text
 
 TEMPLATE_DIR = Path(__file__).parent / "templates"
@@ -52,9 +53,9 @@ def _rel(p: Path) -> str:
 
 
 def _compare(out: Path) -> dict:
-    from kvrod.analyses import write_compare
-    from runtime.analysis import compare_damping as cd
+    from reports.analyses import write_compare
     from runtime.problem.registry import load_problem
+    from runtime.study import compare_damping as cd
 
     res = cd.compare_damping(n_elements=COMPARE_N)
     paths = write_compare(res, out)
@@ -87,9 +88,9 @@ def _compare(out: Path) -> dict:
 
 def _write_modes(res: dict, out: Path) -> list[Path]:
     """modes.json and mode_shapes.png (with modes.npz, mode_shapes_3d.png) as `kvrod
-    modes` writes them (``kvrod.analyses.write_modes``); returns [modes.json,
+    modes` writes them (``reports.analyses.write_modes``); returns [modes.json,
     mode_shapes.png]."""
-    from kvrod.analyses import write_modes
+    from reports.analyses import write_modes
 
     paths = write_modes(res, out)
     return [paths[0], *[p for p in paths if p.name == "mode_shapes.png"]]
@@ -107,7 +108,7 @@ def _distinct(modes: list, count: int, rtol: float = 1e-6) -> list[list]:
 
 
 def _modes(out: Path) -> dict:
-    from kvrod.analyses import run_modes
+    from reports.analyses import run_modes
     from runtime.analysis.modal import family_retardation_time
     from runtime.problem.registry import load_problem
 
@@ -160,10 +161,10 @@ def _modes(out: Path) -> dict:
 
 
 def _calibration(out: Path) -> dict:
-    from runtime.analysis import calibration as cal
     from runtime.io.results import write_json
     from runtime.problem.registry import load_problem
     from runtime.simulate.simulate import simulate
+    from runtime.study import calibration as cal
 
     out.mkdir(parents=True, exist_ok=True)
     sc = load_problem("cantilever", {"tau": CAL_TAU, "n_elements": CAL_DATA_N,
@@ -181,7 +182,7 @@ def _calibration(out: Path) -> dict:
     lines += [f"{a:.6f},{b:.10e}" for a, b in zip(t, x, strict=True)]
     write_text(data, "\n".join(lines) + "\n")
     # exactly what `kvrod calibrate --data synthetic.csv` does (the cantilever, N = 16)
-    td, xd = cal.load_csv(data, ("t", "x"))
+    td, xd = load_csv(data, ("t", "x"))
     res = cal.calibrate_signal(td, xd, problem=load_problem("cantilever"),
                                n_elements=CAL_MODEL_N)
     write_json(out / "calibration.json", {"data": str(data), **res.summary()})
@@ -212,7 +213,7 @@ def write_beyond_notes(path: Path = Path("notes/beyond.md"),
     ``beyond_``; the measurements of this run (``command``) go to ``out/run-info.md``.
     Returns the notes path. Raises RuntimeError if a simulation fails.
     """
-    from kvrod.run_info import Timings
+    from reports.run_info import Timings
 
     path, out = Path(path), Path(out)
     timings = Timings(command)
@@ -237,9 +238,7 @@ def write_beyond_notes(path: Path = Path("notes/beyond.md"),
         links[key] = f"figures/{dst.name}"
     ctx = {"compare": compare, "modes": modes, "cal": calib, "fig": links,
            "out": _rel(out), "notes": _rel(path)}
-    env = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATE_DIR),
-                             undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
-    text = env.get_template("beyond.md.jinja").render(**ctx)
+    text = render(TEMPLATE_DIR, "beyond.md.jinja", **ctx)
     write_text(path, text)
     timings.write(out)
     return path

@@ -85,7 +85,7 @@ class Timings:
         self.runs[label] = {k: v for k, v in row.items() if v is not None}
 
     def doc(self) -> dict[str, Any]:
-        from kvrod.cli import version_text
+        from runtime.version import version_text
 
         return {"command": self.command, "kvrod": version_text(), "machine": machine(),
                 "compile_s": self.compile_s, "wall_s": self.phases,

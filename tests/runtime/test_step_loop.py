@@ -1,4 +1,4 @@
-"""The compiled step loop (runtime/solvers/bdf_core.c) against the Python path of bdf.py.
+"""The compiled step loop (runtime/solvers/native/step_loop.c) against the Python path of bdf.py.
 
 The two implement the same algorithm statement for statement and round alike, so they
 must take *identical* steps: same times, states, orders and counters after every step,
@@ -18,15 +18,15 @@ import numpy as np
 import pytest
 
 from runtime.problem.registry import load_problem
-from runtime.simulate import loop
 from runtime.simulate.simulate import simulate
-from runtime.solvers import _bdf_c
+from runtime.solvers import driver
 from runtime.solvers.bdf import BDF, IntegrationError
 from runtime.solvers.integrator import consistent_initial
+from runtime.solvers.native.loader import load
 from tests.rods import MAXWELL, rod_model
 from tests.runtime.problems import KVChain, Oscillator, Robertson, Scalar
 
-pytestmark = pytest.mark.skipif(_bdf_c.load() is None, reason="no C compiler")
+pytestmark = pytest.mark.skipif(load() is None, reason="no C compiler")
 
 
 def _pair(problem, y0, yp0, t_end, **kw) -> tuple[BDF, BDF]:
@@ -88,9 +88,9 @@ _KV, _MAXWELL, _PINNED = dict(), dict(tau=None, **MAXWELL), dict(start="pinned",
                                       (_MAXWELL, None), (_PINNED, 1), (_PINNED, None)])
 def test_same_steps_on_the_rod_kernels(kw, chunk, monkeypatch):
     """Also: the compiled loop evaluates J element by element and factors each cell
-    behind the sweep (bdf_core.c's jac_factor_cells), with windows slid after every
+    behind the sweep (step_loop.c's jac_factor_cells), with windows slid after every
     1 or 2 elements or by the default chunk; the Python path stores the whole J first."""
-    from runtime.solvers.bdf_core import CoreLink
+    from runtime.solvers.native.step_loop import CoreLink
 
     if chunk is not None:
         monkeypatch.setattr(CoreLink, "JAC_CHUNK", chunk)
@@ -171,7 +171,7 @@ def test_failures_are_reported_alike(compiled):
 def _simulate(problem, python: bool, monkeypatch, **kw):
     with monkeypatch.context() as mp:
         if python:
-            mp.setattr(loop, "BDF", partial(BDF, compiled_loop=False))
+            mp.setattr(driver, "BDF", partial(BDF, compiled_loop=False))
         return simulate(problem, **kw)
 
 
@@ -223,14 +223,14 @@ def test_the_compiled_loop_calls_python_rarely_unless_an_observer_needs_every_st
 
     m = run.model
     y0, yp0 = _released(m)
-    res = loop.run_loop(m, 0.0, y0, yp0, 0.5, rtol=1e-6, atol=1e-8, observers=[EveryStep()])
+    res = driver.run_loop(m, 0.0, y0, yp0, 0.5, rtol=1e-6, atol=1e-8, observers=[EveryStep()])
     assert res.status == "finished" and len(seen) == res.counters["nstep"] > 10
 
 
 def test_samples_pass_through_a_small_buffer_unchanged(monkeypatch):
     """The compiled loop hands its output rows to Python whenever its buffer is full (the
     memory of a long run stays bounded): a 5-row buffer gives the same series."""
-    from runtime.solvers.bdf_core import CoreLink
+    from runtime.solvers.native.step_loop import CoreLink
 
     p = load_problem("cantilever", {"rod.elements": 6, "simulation.t_end": 1.0})
     ref = simulate(p)
@@ -273,7 +273,7 @@ def test_interpolation_in_c_sums_like_numpy_at_every_size_and_alignment(n, k):
 
     from runtime.solvers.bdf import _interp_coefficients
 
-    lib = _bdf_c.load()
+    lib = load()
     rng = np.random.default_rng(n + k)
     phi = rng.standard_normal((k + 1, n))
     psi = np.cumsum(rng.uniform(0.01, 0.02, 6))

@@ -1,8 +1,8 @@
-"""The link between :class:`runtime.solvers.bdf.BDF` and its compiled step loop.
+"""The compiled step loop (``step_loop.c``) and its link to :class:`runtime.solvers.bdf.BDF`.
 
-``bdf_core.c`` runs IDA's step (the algorithm of ``bdf.py``, statement for statement) on a
+``step_loop.c`` runs IDA's step (the algorithm of ``bdf.py``, statement for statement) on a
 struct that holds the solver's scalar state and the addresses of its NumPy arrays
-(``CoreStruct`` in ``runtime/solvers/_bdf_c.py``). :class:`CoreLink` builds that struct from a
+(:class:`CoreStruct` below). :class:`CoreLink` builds that struct from a
 solver, gives the C code the problem's functions and runs ``kv_ida_advance``:
 
 * a problem with compiled kernels (``problem.c_kernels()``, a
@@ -28,8 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _bdf_c
-from .protocols import CKernels
+from ..protocols import CKernels
 
 #: a runtime.solvers.bdf.BDF (not imported here: bdf.py imports this module)
 BDF = Any
@@ -64,6 +63,69 @@ def _call_holding_signals(s, fn, *args):
             signal.signal(sig, old)
 
 
+#: return codes of kv_ida_advance
+TSTOP, WATCH, FINISHED, MAXSTEPS = 0, 1, 2, 3
+FAIL_CONV, FAIL_ERR, FAIL_STALL, FAIL_HMIN, FAIL_FIXED, CALLBACK, NONFINITE = range(-1, -8, -1)
+MAXWATCH = 8
+NH = 7          # history rows: max order 5 + 2
+
+RES_FN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_double, ctypes.c_void_p,
+                          ctypes.c_void_p, ctypes.c_void_p)
+JAC_FN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_double, ctypes.c_void_p,
+                          ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_int,
+                          ctypes.c_void_p)
+DRIVE_FN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_double)
+
+
+def _fields(kind, *names):
+    return [(name, kind) for name in names]
+
+
+class CoreStruct(ctypes.Structure):
+    """Mirror of ``kv_ida`` in step_loop.c (field for field; the size is checked at load)."""
+
+    _I, _P, _D, _L = ctypes.c_int, ctypes.c_void_p, ctypes.c_double, ctypes.c_longlong
+    _fields_ = (
+        _fields(_I, "n", "kl", "ku", "ldab")
+        + _fields(_P, "res", "jac", "en")
+        + _fields(_I, "nen")
+        + _fields(_P, "ctx", "drive")
+        + _fields(_D, "drive_lo", "drive_hi", "drive_t")
+        + _fields(_P, "cond", "phi", "y", "yp", "yy", "ypw", "ee", "res_v", "tmp", "ewt",
+                  "ewt_err", "errmask", "atol", "ab", "ipiv", "prof")
+        + _fields(_D, "rtol", "t_bound", "direction", "hmax_inv", "min_step", "fixed_step")
+        + _fields(_I, "max_order", "maxcor", "max_conv_fails", "max_error_fails")
+        + _fields(_D * NH, "psi", "alpha", "beta", "sigma", "gamma")
+        + _fields(_I, "kk", "kused", "knew", "ns", "phase", "have_lu")
+        + _fields(_D, "hh", "hused", "cj", "cjold", "cjlast", "cjratio", "ss", "oldnrm",
+                  "rr", "t", "t_old")
+        + _fields(_I, "started")
+        + _fields(_L, "nstep", "nfev", "njev", "nlu", "nni", "netf", "ncfn", "nst0")
+        + _fields(_I, "fail_index", "fail_count", "fail_nflag")
+        + _fields(_D, "fail_t")
+        + _fields(_I, "nwatch")
+        + _fields(_I * MAXWATCH, "watch_idx")
+        + _fields(_D * MAXWATCH, "watch_dir", "watch_old")
+        + _fields(_I, "watch_hit", "audit")
+        + _fields(_D * 3, "gl_x")
+        + _fields(_D * 9, "fit")
+        + _fields(_D, "dissipated", "external_work")
+        + _fields(_D * 6, "coef")
+        + _fields(_P, "wy", "wyp")
+        + _fields(_I, "nsamp", "m_out", "k_out", "rec_w", "rec_cap", "rec_n")
+        + _fields(_P, "samp_idx", "t_out", "rec", "flush", "sy", "syp")
+        + _fields(_I, "timing")
+        + _fields(_D * 6, "sec")
+        + _fields(_I, "stop")
+        + _fields(_P, "jac_cells", "jwin")
+        + _fields(_I, "jwin_cols", "jchunk")
+        + _fields(_I, "nexact")
+        + _fields(_P, "exact", "exact_res")
+    )
+    #: names of the entries of ``sec`` (seconds per part when ``timing`` is set)
+    SECTIONS = ("residual", "jacobian", "lu", "newton_solve_update", "energies", "drive")
+
+
 class CoreLink:
     """The compiled step loop of one :class:`~runtime.solvers.bdf.BDF` (see the module
     docstring). Built by the solver when the C helpers are available."""
@@ -71,7 +133,7 @@ class CoreLink:
     def __init__(self, lib: ctypes.CDLL, solver: BDF) -> None:
         self._lib = lib
         self._solver = solver
-        s = _bdf_c.CoreStruct()
+        s = CoreStruct()
         self.s = s
         self.ptr = ctypes.addressof(s)
         self._error: BaseException | None = None
@@ -106,10 +168,12 @@ class CoreLink:
             self.has_energies = False
             s.nen = 5
         s.drive_t = math.nan
-        s.cond = solver._cond.ptr if solver._cond is not None else None
-        if kern is not None and kern.jacobian_cells and solver._cond is not None \
-                and solver._cond.block_tridiagonal:
-            self._jacobian_by_cells(kern.jacobian_cells, solver._cond.cell_starts)
+        newton = solver._newton
+        cond = getattr(newton, "cond", None)           # the condensed systems, if any
+        s.cond = newton.cond_ptr
+        if kern is not None and kern.jacobian_cells and cond is not None \
+                and cond.block_tridiagonal:
+            self._jacobian_by_cells(kern.jacobian_cells, cond.cell_starts)
         p = lambda a: a.ctypes.data if a is not None else None  # noqa: E731
         s.phi = p(solver._phi)
         s.y, s.yp, s.yy, s.ypw = p(solver._y), p(solver._yp), p(solver._yy), p(solver._ypw)
@@ -119,7 +183,7 @@ class CoreLink:
         s.exact_res = p(solver._exact_res)
         s.errmask = p(solver._errmask)
         s.atol = p(solver.atol)
-        s.ab, s.ipiv, s.prof = p(solver._ab), p(solver._ipiv), p(solver._prof)
+        s.ab, s.ipiv, s.prof = p(solver._ab), p(newton.ipiv), p(newton.prof)
         s.rtol, s.t_bound, s.direction = solver.rtol, solver.t_bound, solver.direction
         s.hmax_inv, s.min_step = solver._hmax_inv, solver.min_step
         s.fixed_step = solver.fixed_step or 0.0
@@ -163,7 +227,7 @@ class CoreLink:
             s.drive_lo, s.drive_hi = drive(t)
 
         self._go = go
-        cb = _bdf_c.DRIVE_FN(self._guard(go))
+        cb = DRIVE_FN(self._guard(go))
         self._keep.append(cb)
         s.drive = ctypes.cast(cb, ctypes.c_void_p).value
         s.drive_lo = s.drive_hi = math.nan          # nothing is known to hold yet
@@ -179,8 +243,8 @@ class CoreLink:
             ab.fill(0.0)
             problem.jacobian_band(t, arrays[py], arrays[pyp], cj, ab)
 
-        r = _bdf_c.RES_FN(self._guard(residual))
-        j = _bdf_c.JAC_FN(self._guard(jacobian))
+        r = RES_FN(self._guard(residual))
+        j = JAC_FN(self._guard(jacobian))
         self._keep += [r, j]
         self._callbacks = True
         s.res = ctypes.cast(r, ctypes.c_void_p).value
@@ -228,7 +292,7 @@ class CoreLink:
 
     def advance(self, t_stop: float, max_steps: int) -> int:
         """Run kv_ida_advance and copy the state back into the solver; returns the code
-        (``_bdf_c.TSTOP`` ...). Re-raises the exception of a callback, then delivers the
+        (``TSTOP`` ...). Re-raises the exception of a callback, then delivers the
         signals held meanwhile (their handlers raise KeyboardInterrupt, Terminated)."""
         self._error = None
         s = self.s
@@ -301,7 +365,7 @@ class CoreLink:
         s.sy, s.syp = self._sy.ctypes.data, self._syp.ctypes.data
         s.nsamp, s.m_out, s.k_out = self._idx.size, self._t_out.size, k_out
         s.rec_w, s.rec_cap, s.rec_n = self._rec.shape[1], self.SAMPLE_ROWS, 0
-        cb = _bdf_c.DRIVE_FN(self._guard(lambda t: self.flush_samples()))
+        cb = DRIVE_FN(self._guard(lambda t: self.flush_samples()))
         self._keep.append(cb)
         self._callbacks = True
         s.flush = ctypes.cast(cb, ctypes.c_void_p).value
@@ -317,8 +381,8 @@ class CoreLink:
     def set_watches(self, watches: list[tuple[int, float]]) -> None:
         """Stop after any step in which ``y[index]`` changes sign in ``direction`` (< 0:
         from > 0 to <= 0; > 0: from < 0 to >= 0)."""
-        if len(watches) > _bdf_c.MAXWATCH:
-            raise ValueError(f"at most {_bdf_c.MAXWATCH} watched components")
+        if len(watches) > MAXWATCH:
+            raise ValueError(f"at most {MAXWATCH} watched components")
         s = self.s
         s.nwatch = len(watches)
         for k, (i, d) in enumerate(watches):

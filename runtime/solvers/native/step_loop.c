@@ -1,4 +1,4 @@
-/* The IDA-style BDF step loop of runtime/solvers/bdf.py in C: one call integrates up to
+/* The IDA-style BDF step loop of runtime/solvers/bdf.py in C (step_loop.py links it): one call integrates up to
    a stop time (an output, a checkpoint, a snapshot), a watched sign change, or a failure,
    with the energy audit and the output samples of every step on the way.
 
@@ -7,7 +7,7 @@
    ~40 NumPy and ctypes calls a step makes, plus ~70 us per step for the energy audit's
    interpolation and quadrature. The algorithm is the one of bdf.py (the pure-Python path
    kept for machines without a C compiler), statement for statement, so that both take
-   the same steps up to rounding (tests/runtime/test_bdf_core.py checks that). Function
+   the same steps up to rounding (tests/runtime/test_step_loop.py checks that). Function
    names follow IDA's (IDASetCoeffs, IDANls, IDATestError, IDACompleteStep, ...).
 
    The problem comes as function pointers: the rod's compiled kernels (kvrod_residual,
@@ -17,7 +17,8 @@
    callback ("drive") only when t leaves the interval on which they are constant. */
 #define _POSIX_C_SOURCE 199309L     /* clock_gettime under -std=c99 */
 #include <time.h>
-#include "bdf_helpers.c"
+#include "band.c"
+#include "condensed.c"
 
 typedef int (*kv_res_fn)(const void *ctx, double t, const double *y, const double *yp,
                          double *res);
@@ -52,7 +53,7 @@ enum { KV_TSTOP = 0, KV_WATCH = 1, KV_FINISHED = 2, KV_MAXSTEPS = 3,
 enum { NLS_OK = 0, NLS_CONV_FAIL = 1, NLS_ERR_FAIL = 2, NLS_CALLBACK = 3, NLS_NONFINITE = 4 };
 
 /* The solver: problem, arrays (owned by Python), settings, IDA's scalar state, counters,
-   audit and sampling. Mirrored field for field by _CoreStruct in _bdf_c.py (checked by
+   audit and sampling. Mirrored field for field by CoreStruct in step_loop.py (checked by
    kv_ida_sizeof at load). */
 typedef struct {
     /* problem */

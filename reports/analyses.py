@@ -57,7 +57,7 @@ def run_modes(problem, count: int = 10, deformed: bool = False) -> dict:
     """
     from dataclasses import replace
 
-    from kvrod import continuum
+    from reports import continuum
     from runtime.analysis.modal import modal_analysis
     from runtime.problem.assemble import build_model
     from runtime.simulate.simulate import static_equilibrium
@@ -124,8 +124,8 @@ def compare_markdown(result) -> str:
 
 def write_compare(result, out: Path) -> list[Path]:
     """compare_damping.json, compare_damping.md, compare_signals.png, compare_zeta.png."""
-    from runtime.analysis.compare_damping import plot_compare, summary
     from runtime.io.results import write_json
+    from runtime.study.compare_damping import plot_compare, summary
 
     out = Path(out)
     paths = [write_json(out / "compare_damping.json", summary(result))]
@@ -141,11 +141,11 @@ def write_dma_fit(fit, table: dict, out: Path, command: str) -> list[Path]:
     ``command``) and ``dma.png``."""
     import tomli_w
 
-    from runtime.analysis import dma
     from runtime.io.atomic import write_text
+    from runtime.io.plots import plot_dma
     from runtime.io.results import write_json
 
     write_json(out / "dma.json", {"command": command, **fit.summary(), "material": table})
     write_text(out / "material.toml", f"# {command}: paste into a problem file\n"
                + tomli_w.dumps({"material": table}))
-    return [out / "dma.json", out / "material.toml", dma.plot_dma(fit, out / "dma.png")]
+    return [out / "dma.json", out / "material.toml", plot_dma(fit, out / "dma.png")]
