@@ -209,12 +209,13 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--out", help="target folder (default: the generated/ package)")
     g.set_defaults(func=_cmd_generate)
 
-    from kvrod import cli_analysis, cli_notes, cli_runtime, cli_sweep
+    from kvrod import cli_analysis, cli_notes, cli_runtime, cli_section, cli_sweep
 
     cli_runtime.add_commands(sub, _Parser)
     cli_sweep.add_commands(sub, _Parser)
     cli_analysis.add_commands(sub, _Parser)
     cli_notes.add_commands(sub, _Parser)
+    cli_section.add_commands(sub, _Parser)
     b = sub.add_parser("bench", help="run the benchmarks in bench/ (JSON + Markdown)")
     b.add_argument("--quick", action="store_true", help="small sizes only (< 1 min)")
     b.add_argument("--out", default="bench/results", help="results folder")
@@ -287,7 +288,7 @@ def _error_line(prefix: str, exc: BaseException) -> tuple[str, int]:
 
 
 #: commands that never compile C (and should not import the runtime to say so)
-_NO_COMPILE = ("derive", "generate", "problem-keys")
+_NO_COMPILE = ("derive", "generate", "problem-keys", "section", "notes-sections")
 
 
 def main(argv: Sequence[str] | None = None) -> int:

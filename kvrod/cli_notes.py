@@ -1,5 +1,6 @@
-"""`kvrod reproduce`, `notes-beyond`, `notes-examples`, `notes-maxwell`: the notes that run
-studies and write Markdown with their figures (the generators are in reports/).
+"""`kvrod reproduce`, `notes-beyond`, `notes-examples`, `notes-maxwell`, `notes-sections`:
+the notes that run studies and write Markdown with their figures (the generators are in
+reports/).
 
 Wired into `kvrod/cli.py` by ``add_commands(subparsers, parser_class)``.
 """
@@ -83,6 +84,20 @@ def _cmd_notes_maxwell(args) -> int:
     return 0
 
 
+def _cmd_notes_sections(args) -> int:
+    from reports.sections import RESULTS, write_sections_notes
+    from runtime.io.folder import results_folder
+
+    path, out = _notes_paths(args, "sections", "notes/sections.md", "results/sections")
+    with results_folder(out, "notes-sections",
+                        markers=tuple(f"{n}/section.json" for n in RESULTS),
+                        overwrite=args.overwrite, names=_notes_names(path, out, *RESULTS)):
+        path = write_sections_notes(path, out, command=getattr(args, "command_line",
+                                                               "kvrod notes-sections"))
+    print(f"wrote {path} (results under {out}/)")
+    return 0
+
+
 # --------------------------------------------------------------------------------------
 # kvrod reproduce (reports/reproduction.py)
 # --------------------------------------------------------------------------------------
@@ -114,7 +129,8 @@ def _cmd_reproduce(args) -> int:
 
 
 def add_commands(sub, parser_class) -> None:
-    """Add `reproduce`, `notes-beyond`, `notes-examples` and `notes-maxwell` to ``sub``."""
+    """Add `reproduce`, `notes-beyond`, `notes-examples`, `notes-maxwell` and
+    `notes-sections` to ``sub``."""
     _ = parser_class
     r = sub.add_parser("reproduce", help="reproduce the paper's Sect. 5 (figures + notes)")
     r.add_argument("--out", help="results folder (default results/reproduce; when given, "
@@ -152,3 +168,7 @@ def add_commands(sub, parser_class) -> None:
     notes_parser("notes-maxwell", "the generalized Maxwell rod: derivation, Kelvin-Voigt "
                  "against Maxwell cantilever, a DMA fit; writes notes/maxwell.md",
                  "notes/maxwell.md", "results/maxwell").set_defaults(func=_cmd_notes_maxwell)
+    notes_parser("notes-sections", "composite and anisotropic sections (a cable, a "
+                 "fibre-reinforced strip): consistent against naive viscosity, viscous "
+                 "couplings; writes notes/sections.md", "notes/sections.md",
+                 "results/sections").set_defaults(func=_cmd_notes_sections)

@@ -39,6 +39,7 @@ FIGURES_ONLY = {
     "calibration.json": ("kvrod calibrate", ("calibration.png",),
                          "the fitted curve is not stored"),
     "dma.json": ("kvrod calibrate --dma", ("dma.png",), "the fitted series is not stored"),
+    "section.json": ("kvrod section", ("section.png",), "its mesh is not stored"),
 }
 
 

@@ -167,7 +167,7 @@ def check_point(problem: Any, params: Mapping[str, Any], where: str) -> None:
     from runtime.problem.registry import load_problem
 
     try:
-        load_problem(problem, params)
+        load_problem(problem, params).check_simulable()
     except ParameterError as exc:
         raise StudyError(f"{where}: {exc}") from None
 

@@ -124,11 +124,13 @@ _GUARDED = (("runtime.simulate.simulate", "simulate"),
             ("runtime.solvers.statics", "solve_static"), ("runtime.study.sweep", "run_point"),
             ("runtime.study.compare_damping", "compare_damping"),
             ("runtime.study.calibration", "calibrate_signal"),
-            ("runtime.study.calibration", "calibrate_decrements"))
+            ("runtime.study.calibration", "calibrate_decrements"),
+            ("runtime.section.analysis", "analyse_section"))
 _PREIMPORT = ("runtime.simulate.simulate", "runtime.analysis.modal", "runtime.solvers.statics",
               "runtime.study.sweep", "runtime.study.calibration",
               "runtime.study.compare_damping", "reports.reproduction", "reports.damping_studies",
-              "kvrod.cli_analysis", "kvrod.cli_notes", "kvrod.cli_runtime", "kvrod.cli_sweep")
+              "kvrod.cli_analysis", "kvrod.cli_notes", "kvrod.cli_runtime", "kvrod.cli_sweep",
+              "runtime.section", "runtime.problem.section_analysis", "kvrod.cli_section")
 
 
 def _install_guard(monkeypatch) -> None:
