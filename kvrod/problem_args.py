@@ -29,6 +29,9 @@ FLAGS: tuple[tuple[str, str, type, str], ...] = (
     ("--rtol", "rtol", float, "relative tolerance"),
     ("--atol", "atol", float, "absolute tolerance (default: scaled per field by the motion)"),
     ("--max-order", "max_order", int, "highest BDF order 1-5"),
+    ("--error-control", "error_control", str, "what the BDF error test controls: auto "
+     "(default), state (every unknown, velocities included) or configuration (positions, "
+     "rotations, internal strains)"),
 )
 
 

@@ -295,6 +295,29 @@ class RodModel:
         y[self.q_joint_index] = np.broadcast_to(dU[:, None, :], self.q_joint_index.shape)
         return y
 
+    def glassy_decay_rate(self) -> float:
+        """Slowest decay rate sigma_g (1/s) of the rod's glassy modes (math.inf for a
+        Kelvin-Voigt rod).
+
+        A mode whose frequency is far above every 1/theta_b sees each relaxation term as
+        a spring k_b (the instantaneous stiffness k_g = C_F) with a small loss:
+        k*(omega) = k_g + i sum_b k_b / (omega theta_b) + O((omega theta)^-2), a loss factor
+        sum_b k_b/(omega theta_b k_g) and a damping ratio half of it, so its amplitude
+        decays like exp(-sigma t) with sigma = sum_b (k_b/theta_b) / (2 k_g), whatever the
+        frequency. The slowest over the stiffnesses that relax (shear, extension, bending,
+        torsion; every segment and joint) is returned: after ln(1/rtol)/sigma_g a
+        ringing the start or a restart excited has decayed below the tolerance."""
+        if not self.branches:
+            return math.inf
+        a = self.arrays
+        rates = []
+        for glassy, moduli in ((a.seg_field("C_F"), a.segb), (a.jnt_field("C_M"), a.jntb)):
+            relax = np.tensordot(moduli, 1.0 / a.theta, axes=([1], [0]))   # sum_b k_b/theta_b
+            live = (glassy > 0.0) & (relax > 0.0)
+            if live.any():
+                rates.append(float(np.min(relax[live] / (2.0 * glassy[live]))))
+        return min(rates) if rates else math.inf
+
     # -- states -------------------------------------------------------------------------
     def initial_state(self, t: float = 0.0) -> np.ndarray:
         """The reference configuration at rest, with held nodes at their targets at t."""

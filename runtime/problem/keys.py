@@ -323,8 +323,13 @@ KEYS: tuple[Key, ...] = (
        "--help)", "1e-20 ... < 1", "absolute tolerance", invalid=0.0),
     _k("simulation", "output_step", "s", "0.005", "> 0, at most 1e7 samples",
        "sampling of the series", invalid=0.0),
-    _k("simulation", "max_order", "-", "5 (generalized Maxwell: 2)", "1 ... 5",
-       "highest BDF order", invalid=6),
+    _k("simulation", "max_order", "-", "5", "1 ... 5", "highest BDF order (3-5 only on "
+       "steps that damp a Maxwell rod's glassy modes)", invalid=6),
+    _k("simulation", "error_control", "-", '"auto"', "auto, state, configuration",
+       "what the BDF error test controls: every unknown (state), or positions, rotations "
+       "and internal strains with the velocities left to the corrector (configuration); "
+       "auto: configuration for a generalized Maxwell rod, state otherwise",
+       invalid="velocity"),
     _k("simulation", "min_step", "s", "0", "0 ... t_end", "smallest step before the run "
        "is declared failed", invalid=-1.0),
     _k("simulation", "initial", "-", '"static"', "static, reference", "start from the "

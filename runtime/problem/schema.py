@@ -54,6 +54,8 @@ MAX_ELEMENTS = 200_000          # ~1 GiB of band storage and work arrays
 MAX_SAMPLES = 10_000_000        # output samples t_end / output_step
 MAX_PERIODS = 1e6               # first-mode periods in t_end (~50 steps each)
 MAX_FRAMES = 10_000             # centreline frames of a run
+#: what the BDF error test may control (Simulation.error_control)
+ERROR_CONTROLS = ("auto", "state", "configuration")
 MAX_FRAME_VALUES = 7e7          # frames x nodes x 3 (~0.5 GiB of stored positions)
 #: smallest accepted tolerances (below them the error test works on round-off)
 RTOL_MIN = 100 * float(np.finfo(float).eps)
@@ -108,6 +110,10 @@ class Simulation:
     """The dynamic run: end time (s), tolerances, output sampling (s), BDF settings and
     the initial state ("static": equilibrium under the loads at t = 0-; "reference": the
     stress-free reference at rest). ``max_order`` None: :meth:`Problem.bdf_max_order`.
+    ``error_control``: what the BDF local error test controls, "state" (every unknown),
+    "configuration" (positions, rotations, internal strains; the velocities are left to
+    the corrector, as IDA's suppressalg leaves algebraic unknowns) or "auto"
+    (:meth:`Problem.error_control`: configuration for a generalized Maxwell rod).
     ``centreline_frames``: node positions kept at this many equally spaced times from 0
     to t_end (the deformed centreline for ``kvrod plot``; 0: none)."""
 
@@ -119,6 +125,7 @@ class Simulation:
     min_step: float = 0.0
     initial: str = "static"
     centreline_frames: int = 101
+    error_control: str = "auto"
 
     def __post_init__(self) -> None:
         C.positive("simulation.t_end", self.t_end)
@@ -134,6 +141,7 @@ class Simulation:
             C.integer("simulation.max_order", self.max_order, low=1, high=5)
         C.number("simulation.min_step", self.min_step, low=0.0, high=self.t_end)
         C.choice("simulation.initial", self.initial, ("static", "reference"))
+        C.choice("simulation.error_control", self.error_control, ERROR_CONTROLS)
         if C.integer("simulation.centreline_frames", self.centreline_frames, low=0,
                      high=MAX_FRAMES) == 1:
             raise ParameterError("simulation.centreline_frames", 1,
@@ -451,19 +459,40 @@ class Problem:
             f"damping ratio would be {self.characteristic_frequency() * value / 2:.3g})")
 
     # -- derived figures ---------------------------------------------------------------
-    def bdf_max_order(self) -> int:
-        """The highest BDF order of a run: ``simulation.max_order`` if given, else 5, and 2
-        for a generalized Maxwell material.
+    def error_control(self) -> str:
+        """What the BDF error test controls: ``simulation.error_control``, "auto" resolved
+        to "configuration" for a generalized Maxwell material and "state" otherwise.
 
-        Why 2 there: a Maxwell rod's glassy high-frequency modes are lightly damped
-        (zeta ~ E_k / (2 E' omega tau_k)); BDF3-5 are not A-stable, and near the imaginary
-        axis their error control holds the step at those modes' periods, while BDF2 is
-        A-stable. Measured on examples/maxwell_cantilever.toml (N = 50, 10 s): 157694
-        steps and 35 s at order 5, 26816 steps and 11 s at order 2, same decrements.
+        Why: a Maxwell rod's glassy high-frequency modes are stiff and lightly damped
+        (decay rate sum_b (E_b/tau_b) / (2 E_glassy), whatever their frequency); a release
+        sets them ringing with velocities of the order of the motion's, and an error
+        test on those velocities resolves the ringing (h ~ 1e-6 s at N = 50) long after
+        the positions have stopped noticing it. Structural integrators control the
+        configuration; the velocities follow from it through the corrector. For a
+        Kelvin-Voigt rod every mode above the first few is overdamped and the velocity
+        test costs nothing, while leaving it out loosened the energy audit (measured:
+        2.3e-4 against 2.45e-5 on the paper's cantilever), so the state is controlled.
+        docs/design.md, "Maxwell rods at matched accuracy", has the measurements.
+        """
+        choice = self.simulation.error_control
+        if choice != "auto":
+            return choice
+        return "configuration" if isinstance(self.material, GeneralizedMaxwell) else "state"
+
+    def bdf_max_order(self) -> int:
+        """The highest BDF order of a run: ``simulation.max_order`` if given, else 5.
+
+        A generalized Maxwell rod's glassy high-frequency modes are lightly damped and
+        BDF3-5 are not A-stable: on steps too small to damp them (|h| sigma_g < D_k) the
+        integrator itself keeps the order at 2
+        (:class:`~runtime.solvers.bdf.BDF`'s ``stiff_decay_rate``). Before that bound the
+        default here was 2 for a Maxwell rod (157694 steps at order 5, 26816 at order 2
+        on examples/maxwell_cantilever.toml, N = 50, 10 s); with it the state-controlled
+        run takes 24556 steps at order 5, the configuration-controlled default 3261.
         """
         if self.simulation.max_order is not None:
             return self.simulation.max_order
-        return 2 if isinstance(self.material, GeneralizedMaxwell) else 5
+        return 5
 
     def segment_matrices(self) -> dict[str, np.ndarray]:
         """Per segment: C_F, C_M, V_F, V_M diagonals (N, 3), rhoA (N,), rhoI (N, 3)."""
@@ -704,6 +733,7 @@ ALIASES: dict[str, str] = {
     "width": "section.width", "height": "section.height", "radius": "section.radius",
     "t_end": "simulation.t_end", "rtol": "simulation.rtol", "atol": "simulation.atol",
     "output_step": "simulation.output_step", "max_order": "simulation.max_order",
+    "error_control": "simulation.error_control",
     "min_step": "simulation.min_step", "load_steps": "statics.load_steps",
     "shear_correction": "section.shear_correction",
     "tip_force": "tip_force",

@@ -112,6 +112,8 @@ class SimulationResult:
     t_last: float = 0.0
     y_last: np.ndarray | None = None
     atol: np.ndarray | None = None
+    #: what the error test controlled (:func:`error_control`)
+    control: ErrorControl | None = None
     model: RodModel | None = None
     interrupt: BaseException | None = None
     snapshots: list = field(default_factory=list)
@@ -249,6 +251,7 @@ class SimulationResult:
             "tau_E": float(self.problem.material.tau_E),
             "linear_prediction": self.problem.linear_prediction(),
             "bdf_max_order": self.problem.bdf_max_order(),
+            "error_control": None if self.control is None else self.control.describe(),
             "static": {
                 "tip": None if st is None else [float(v) for v in st.tip],
                 "newton_iterations": 0 if st is None else int(st.iterations),
@@ -389,6 +392,41 @@ def _linear_response(problem: Problem) -> tuple[float, float]:
     return (float(np.max(np.linalg.norm(dx[st.phi_cols], axis=1))),
             float(np.max(np.linalg.norm(dx[st.theta_cols], axis=1))) if st.theta_cols.size
             else 0.0)
+
+
+@dataclass(frozen=True)
+class ErrorControl:
+    """What a run's BDF error test controls (:meth:`Problem.error_control`): ``what``
+    ("state" or "configuration"), the mask of the unknowns in the test (None: all), and
+    the slowest decay rate (1/s) of the rod's glassy modes (0: none), which bounds the
+    BDF order on small steps (``stiff_decay_rate`` of :class:`~runtime.solvers.bdf.BDF`)."""
+
+    what: str
+    error_mask: np.ndarray | None
+    stiff_decay_rate: float = 0.0
+
+    def describe(self) -> str:
+        """One line for the summary: what the error test controls."""
+        if self.what == "state":
+            text = "state (every unknown, velocities included)"
+        else:
+            text = ("configuration (positions, rotations, internal strains; the velocities "
+                    "are left to the corrector)")
+        if self.stiff_decay_rate > 0.0:
+            text += (f"; BDF order 3-5 only on steps above D_k/sigma_g, the glassy modes' "
+                     f"decay rate sigma_g = {self.stiff_decay_rate:.4g} 1/s")
+        return text
+
+
+def error_control(problem: Problem, model: RodModel) -> ErrorControl:
+    """The error control of a run of ``problem`` on ``model``: the unknowns in the error
+    test (:meth:`Problem.error_control`) and the glassy modes' decay rate
+    (:meth:`RodModel.glassy_decay_rate`; a Kelvin-Voigt rod has none)."""
+    sigma = model.glassy_decay_rate()
+    rate = sigma if math.isfinite(sigma) else 0.0
+    if problem.error_control() == "state":
+        return ErrorControl("state", None, rate)
+    return ErrorControl("configuration", ~model.velocity_mask, rate)
 
 
 def default_atol(problem: Problem, model: RodModel, y0: np.ndarray) -> np.ndarray:
@@ -607,11 +645,14 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
                      static_iterations_per_step=np.array([] if st is None else st.per_step))
         checkpoint(state)
 
+    control = res.control = error_control(problem, model)
     out = run_loop(model, t_start, y0, yp0, sim.t_end, rtol=sim.rtol, atol=atol,
                    observers=observers, min_step=sim.min_step, max_order=problem.bdf_max_order(),
                    max_steps=max_steps, checkpoint=on_checkpoint if checkpoint else None,
                    checkpoint_every=checkpoint_every, counters0=counters0,
-                   describe_dof=model.describe_dof)
+                   describe_dof=model.describe_dof,
+                   solver_options={"error_mask": control.error_mask,
+                                   "stiff_decay_rate": control.stiff_decay_rate})
     res.status, res.message, res.interrupt = out.status, out.message, out.interrupt
     res.t_last, res.y_last, res.counters = out.t_last, out.y_last, out.counters
     a = sampler.arrays()

@@ -15,6 +15,7 @@ Units: ``t`` and ``h`` are in the problem's time unit (s for the rod); ``y`` is 
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -41,6 +42,7 @@ from .newton import NewtonSystem, newton_system
 __all__ = ["BDF", "BDFDenseOutput", "IntegrationError"]
 
 # IDA's constants.
+MAX_ORDER = 5     # the highest BDF order (the compiled loop's KV_MAXORD)
 _EPS_NEWT = 0.33  # Newton tolerance, relative to the error-test norm (IDA's epcon)
 _TOL_DEL = 1e-4 * _EPS_NEWT  # first-correction tolerance for immediate acceptance
 _RATE_MAX = 0.9  # Newton convergence-rate bound
@@ -92,6 +94,28 @@ class IntegrationError(RuntimeError):
         self.worst_index = worst_index
 
 
+@functools.cache
+def stability_extents() -> dict[int, float]:
+    """D_k for BDF orders k = 1..5: how far the unstable region of BDF-k reaches into the
+    left half-plane, ``max -Re z`` on its boundary locus ``z(theta) = sum_j (1 -
+    exp(-i theta))^j / j`` (j = 1..k). A mode with ``Re(h lambda) <= -D_k`` is damped by
+    BDF-k whatever its frequency. D_1 = D_2 = 0 (A-stable), D_3 = 1/12, D_4 = 2/3,
+    D_5 = 2.327 (Hairer and Wanner, Solving ODEs II, Sect. V.2)."""
+    def re_z(theta: np.ndarray, k: int) -> np.ndarray:
+        w = 1.0 - np.exp(-1j * theta)
+        return sum(w**j / j for j in range(1, k + 1)).real
+
+    out = {}
+    for k in range(1, MAX_ORDER + 1):
+        grid = np.linspace(0.0, np.pi, 4001)
+        for _ in range(3):          # zoom in on the minimum: theta to ~1e-9, D_k to ~1e-18
+            i = int(np.argmin(re_z(grid, k)))
+            grid = np.linspace(grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)], 4001)
+        extent = -float(re_z(grid, k).min())
+        out[k] = extent if extent > 1e-12 else 0.0      # BDF1-2: the locus touches 0
+    return out
+
+
 class BDF:
     """IDA-style variable-order (1..5) variable-step BDF solver for ``F(t, y, y') = 0``.
 
@@ -117,6 +141,19 @@ class BDF:
         Largest step size magnitude.
     suppress_alg : bool
         Exclude algebraic components from the local error test.
+    error_mask : ndarray of bool, optional
+        The unknowns in the local error test (default: all; with ``suppress_alg`` the
+        algebraic ones are left out too). The others are left to the corrector, as IDA's
+        suppressalg leaves the algebraic unknowns: a structural model can control its
+        configuration and leave the velocities out.
+    stiff_decay_rate : float
+        Slowest decay rate sigma (1/s) of the problem's stiff, lightly damped modes
+        (default 0: none). Order k >= 3 is then chosen only on steps with
+        ``|h| sigma >= D_k`` (:func:`stability_extents`): BDF3-5 are not A-stable, and
+        a mode ``h lambda`` with ``Re(h lambda) > -D_k`` near the imaginary axis may fall
+        in their unstable lobe, where its growth, caught by the error test only, holds
+        the step at the stability limit (CVODE's STALD detects this after the fact;
+        here the spectrum is known).
     fixed_step : float, optional
         Take steps of exactly this size without error control (the order rises by one
         per step up to ``max_order``; ``max_step`` is ignored); for convergence studies.
@@ -155,6 +192,8 @@ class BDF:
         first_step: float | None = None,
         max_step: float = np.inf,
         suppress_alg: bool = False,
+        error_mask: np.ndarray | None = None,
+        stiff_decay_rate: float = 0.0,
         *,
         fixed_step: float | None = None,
         max_nonlinear_iter: int = 4,
@@ -191,6 +230,14 @@ class BDF:
         self.rtol = float(rtol)
         self.atol = atol_arr
         self.max_order = int(max_order)
+        if not (math.isfinite(stiff_decay_rate) and stiff_decay_rate >= 0.0):
+            raise ParameterError("stiff_decay_rate", stiff_decay_rate, "finite, >= 0 (1/s)")
+        #: smallest |h| at which order k may be chosen (index k; 0: no bound)
+        self._stab_hmin = [0.0] * (MAX_ORDER + 2)
+        if stiff_decay_rate > 0.0:
+            for k, extent in stability_extents().items():
+                if k >= 3:
+                    self._stab_hmin[k] = extent / stiff_decay_rate
         self.max_step = float(max_step)
         self.suppress_alg = bool(suppress_alg)
         self.fixed_step = None if fixed_step is None else abs(float(fixed_step))
@@ -221,8 +268,15 @@ class BDF:
                                            dtype=np.int32).ravel()
         self._exact_res = np.zeros(max(self._exact.size, 1))
         diff = np.asarray(problem.differential, dtype=bool)
-        self._errmask = diff.astype(float) if self.suppress_alg else None
-        self._ewt_err = np.empty(n) if self.suppress_alg else self._ewt
+        mask = np.ones(n, dtype=bool) if error_mask is None else np.asarray(error_mask, bool)
+        if mask.shape != (n,) or not mask.any():
+            raise ParameterError("error_mask", error_mask, f"a bool array of shape ({n},) "
+                                 "with at least one True")
+        if self.suppress_alg:
+            mask = mask & diff
+        masked = self.suppress_alg or error_mask is not None
+        self._errmask = mask.astype(float) if masked else None
+        self._ewt_err = np.empty(n) if masked else self._ewt
         self._ab = band_storage(n, self.kl, self.ku)
         self._have_lu = False
         # The compiled helpers (runtime/solvers/native: flush-to-zero band and condensed
@@ -793,7 +847,10 @@ class BDF:
         kdiff = kk - self._kused
         self._kused = kk
         self._hused = self._hh
-        mo = self.max_order
+        mo = self.max_order     # lowered where the step is below an order's stability bound
+        if self.fixed_step is None:
+            while mo > 2 and abs(self._hh) < self._stab_hmin[mo]:
+                mo -= 1
         phi, ee = self._phi, self._ee
 
         if self.fixed_step is not None:
@@ -801,7 +858,7 @@ class BDF:
                 self._kk = kk + 1
             self._hh = self.direction * self.fixed_step
         else:
-            if self._knew == kk - 1 or kk == mo:
+            if self._knew == kk - 1 or kk >= mo:
                 self._phase = 1
             if self._phase == 0:
                 if self.nstep - self._nst0 > 1:
@@ -814,7 +871,7 @@ class BDF:
             else:
                 action = 0  # -1 lower, 0 maintain, +1 raise
                 err_kp1 = 0.0
-                if self._knew == kk - 1:
+                if self._knew == kk - 1 or kk > mo:
                     action = -1
                 elif kk == mo or kk + 1 >= self._ns or kdiff == 1:
                     action = 0
@@ -855,7 +912,7 @@ class BDF:
                 self._hh = hnew
 
         kused = self._kused
-        if kused < mo:
+        if kused < self.max_order:
             np.copyto(phi[kused + 1], ee)
         phi[kused] += ee
         for j in range(kused - 1, -1, -1):

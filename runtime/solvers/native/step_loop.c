@@ -75,6 +75,8 @@ typedef struct {
     /* settings */
     double rtol, t_bound, direction, hmax_inv, min_step, fixed_step;   /* fixed_step 0: none */
     int max_order, maxcor, max_conv_fails, max_error_fails;
+    double stab_hmin[KV_NH];    /* order k is chosen only on steps |h| >= stab_hmin[k]
+                                   (zeros: no stability bound; bdf.py explains) */
     /* IDA's state */
     double psi[KV_NH], alpha[KV_NH], beta[KV_NH], sigma[KV_NH], gamma[KV_NH];
     int kk, kused, knew, ns, phase, have_lu;
@@ -575,7 +577,10 @@ static int handle_failure(kv_ida *S, int nflag, int ncf, int nef, double err_k,
 
 static void complete_step(kv_ida *S, double tnew, double err_k, double err_km1)
 {
-    const int n = S->n, mo = S->max_order;
+    const int n = S->n;
+    int mo = S->max_order;      /* lowered where the step is below an order's stability bound */
+    if (S->fixed_step <= 0.0)
+        while (mo > 2 && fabs(S->hh) < S->stab_hmin[mo]) --mo;
     S->nstep++;
     const int kk = S->kk;
     const int kdiff = kk - S->kused;
@@ -586,7 +591,7 @@ static void complete_step(kv_ida *S, double tnew, double err_k, double err_km1)
         if (S->nstep - S->nst0 > 1 && kk < mo) S->kk = kk + 1;
         S->hh = S->direction * S->fixed_step;
     } else {
-        if (S->knew == kk - 1 || kk == mo) S->phase = 1;
+        if (S->knew == kk - 1 || kk >= mo) S->phase = 1;
         if (S->phase == 0) {
             if (S->nstep - S->nst0 > 1) {
                 S->kk = kk + 1;
@@ -598,7 +603,7 @@ static void complete_step(kv_ida *S, double tnew, double err_k, double err_km1)
         } else {
             int action = 0;
             double err_kp1 = 0.0;
-            if (S->knew == kk - 1) {
+            if (S->knew == kk - 1 || kk > mo) {
                 action = -1;
             } else if (kk == mo || kk + 1 >= S->ns || kdiff == 1) {
                 action = 0;
@@ -647,7 +652,7 @@ static void complete_step(kv_ida *S, double tnew, double err_k, double err_km1)
     double *restrict ewt = S->ewt;
     for (int q = 0; q < n; ++q) {
         const double e = ee[q];
-        if (ku < mo) PHI(ku + 1)[q] = e;
+        if (ku < S->max_order) PHI(ku + 1)[q] = e;
         double v = PHI(ku)[q] + e;
         PHI(ku)[q] = v;
         for (int j = ku - 1; j >= 0; --j) {

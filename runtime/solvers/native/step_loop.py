@@ -95,6 +95,7 @@ class CoreStruct(ctypes.Structure):
                   "ewt_err", "errmask", "atol", "ab", "ipiv", "prof")
         + _fields(_D, "rtol", "t_bound", "direction", "hmax_inv", "min_step", "fixed_step")
         + _fields(_I, "max_order", "maxcor", "max_conv_fails", "max_error_fails")
+        + _fields(_D * NH, "stab_hmin")
         + _fields(_D * NH, "psi", "alpha", "beta", "sigma", "gamma")
         + _fields(_I, "kk", "kused", "knew", "ns", "phase", "have_lu")
         + _fields(_D, "hh", "hused", "cj", "cjold", "cjlast", "cjratio", "ss", "oldnrm",
@@ -188,6 +189,7 @@ class CoreLink:
         s.hmax_inv, s.min_step = solver._hmax_inv, solver.min_step
         s.fixed_step = solver.fixed_step or 0.0
         s.max_order, s.maxcor = solver.max_order, solver.max_nonlinear_iter
+        s.stab_hmin[:] = solver._stab_hmin
         s.max_conv_fails, s.max_error_fails = solver.max_conv_fails, solver.max_error_fails
         self.push(solver)
 
