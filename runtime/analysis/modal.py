@@ -64,13 +64,13 @@ damped eigenvalues, refined by block shift-invert iteration on the sparse pencil
 Rayleigh functional step on the second-order problem with the internal strains eliminated
 per frequency): N = 4000 Kelvin-Voigt (eight modes) or the Maxwell cantilever at N = 1000
 in about 2 s. The ``count`` lowest modes, or with ``target`` the ``count`` nearest a
-natural frequency (:func:`_select`). Dense LAPACK (``scipy.linalg.eig`` of the whole
+natural frequency (the rule of ``_select``). Dense LAPACK (``scipy.linalg.eig`` of the whole
 pencil, QZ for a Maxwell rod) is the test oracle, used up to ``dense_max`` reduced unknowns
 (default 0) and for problems too small for ARPACK.
 
 Degenerate pairs (the two bending families of a circular or square section) are solved
 together: one M-orthonormal pair of undamped shapes from Lanczos, rotated to the two
-bending families (:func:`_separate_degenerate`), and their damped eigenvalues as Ritz
+bending families (``_separate_degenerate``), and their damped eigenvalues as Ritz
 values of one small projected problem, so the twins' zeta agree to round-off (1e-9 at
 N = 4000). They are listed in the order that rotation gives (ascending bending-1 energy:
 bending-2 first).
@@ -740,12 +740,12 @@ def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int =
     dense_max : int
         Largest reduced size ``nq`` solved with dense LAPACK, every eigenvalue of the
         pencil (the test oracle; a generalized Maxwell rod up to
-        :data:`MAXWELL_DENSE_MAX` unknowns). Default 0: the sparse method
+        ``MAXWELL_DENSE_MAX`` unknowns). Default 0: the sparse method
         (:mod:`runtime.analysis.modal_sparse`) at every size where it applies (``count``
         + 6 modes fewer than the unknowns), dense below.
     target : float, optional
         Natural angular frequency (rad/s, >= 0): the ``count`` modes whose natural
-        frequency is nearest to it instead of the lowest (:func:`_select`). Their
+        frequency is nearest to it instead of the lowest (module docstring). Their
         ``index`` and ``family_index`` then count within the modes returned.
 
     Returns

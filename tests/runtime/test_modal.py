@@ -588,3 +588,32 @@ def test_sparse_runs_are_identical():
         assert x.eigenvalues == pytest.approx(y.eigenvalues, rel=1e-12)
         np.testing.assert_allclose(x.displacement, y.displacement,
                                    atol=1e-10 * np.abs(x.displacement).max())
+
+
+def test_cli_modes_near_a_frequency(tmp_path, capsys):
+    """`kvrod modes --near HZ`: the modes nearest that frequency, recorded in modes.json
+    (target_omega), without the continuum column (family_index counts within them); a
+    negative or non-finite frequency is one line naming --near, exit 2, nothing written."""
+    import json
+
+    from kvrod.cli import main
+
+    out = tmp_path / "near"
+    assert main(["modes", "cantilever", "--n-elements", "40", "--count", "3", "--near", "15",
+                 "--out", str(out)]) == 0
+    js = json.loads((out / "modes.json").read_text())
+    assert js["target_omega"] == pytest.approx(2 * math.pi * 15)
+    assert [m["family"] for m in js["modes"]] == ["torsion", "bending-2", "bending-1"]
+    assert [m["index"] for m in js["modes"]] == [1, 2, 3]
+    assert all(m["analytic_omega"] is None for m in js["modes"])
+    low = modal_analysis(RodModel(rod_problem(40, loads=False, tau=0.04, section={
+        "kind": "rectangle", "width": 0.01, "height": 0.01})), count=9)
+    assert [m["omega"] for m in js["modes"]] == pytest.approx([m.omega for m in low[6:9]],
+                                                              rel=1e-9)
+    capsys.readouterr()
+    for bad in ("-1", "nan"):
+        assert main(["modes", "cantilever", "--near", bad, "--out",
+                     str(tmp_path / "bad")]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("kvrod") and "--near" in err[0]
+        assert not (tmp_path / "bad").exists()
