@@ -460,9 +460,9 @@ def sparse_modes(lin: Linearization, wanted: np.ndarray, w2: np.ndarray, Phi: np
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Damped eigenvalues (one per conjugate pair, Im >= 0; for a Maxwell rod the
     oscillatory ones only), their eigenvectors' q parts (nq, k) and backward errors in
-    the pencil (:func:`refine`) for the undamped modes
-    ``wanted`` (indices into Phi's columns), by modal projection and refinement (module
-    docstring, steps 2 and 3); ``w2``, ``Phi``: the undamped modes
+    the pencil (:func:`refine`) for the undamped modes ``wanted`` (indices into Phi's
+    columns), by modal projection and refinement (module docstring, steps 2 to 4);
+    ``w2``, ``Phi``: the undamped modes
     (:func:`undamped_modes`), computed with the deflated rigid motions Zn at ``shift``."""
     m = Phi.shape[1]
     Zn = np.zeros((lin.nq, 0)) if Zn is None else Zn
@@ -509,7 +509,8 @@ def sparse_modes(lin: Linearization, wanted: np.ndarray, w2: np.ndarray, Phi: np
         lam, X, res = refine(Ad, Ed, s, X0[:, grp])
         if so.ok:
             fixed = so.polish(lam, X[: lin.nq])
-            # a correction beyond the refinement's own doubt: a left vector gone astray
+            # a step far beyond the pencil's own accuracy went to another eigenvalue of
+            # T: the pencil's eigenvalue stands
             good = np.abs(fixed - lam) <= 1e-4 * np.abs(lam)
             lam = np.where(good, fixed, lam)
         for la_, x, err in zip(lam, X.T, res, strict=True):
