@@ -3,8 +3,8 @@
  * Build "kernels" of bench/idas_script.py: CasADi external functions `rod_ode` and its
  * Jacobian `jac_rod_ode` (CasADi's external-function C API, integrator signature
  * (t, x, z, p, u) -> (ode, alg, quad, zero)) over kvrod_residual and kvrod_jacobian_band
- * of generated/rod_assembly.c, compiled together with generated/rod_kernels.c and
- * generated/rod_assembly.c into one shared library whose size does not depend on N.
+ * of runtime/model/native/rod_assembly.c, compiled together with generated/rod_kernels.c
+ * (and rod_kernels_x4.c) into one shared library whose size does not depend on N.
  *
  * The rod (its arrays), the scaling and the Jacobian pattern are handed over at run time
  * by kv_setup (from Python, ctypes) before casadi.external loads the library; each rod

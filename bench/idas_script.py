@@ -8,7 +8,7 @@ that does what a strong CasADi user would do with kvrod's rod, and prints the ti
    deflection under the tip force (kvrod's ``static_equilibrium``); the force is then
    released (``model.at(0.0)``) and the consistent (y0, y0') taken from
    ``consistent_initial``;
-2. the rod's residual F(t, y, y') from :class:`runtime.model.casadi_rod.CasadiRod` (MX over
+2. the rod's residual F(t, y, y') from :class:`runtime.model.casadi_oracle.CasadiOracle` (MX over
    the per-element kernels) with the released arrays as constants, expanded to SX;
 3. the **ODE form** (the default): F is linear in y' with a constant diagonal D = dF/dy'
    (F = D y' + g(t, y)) and only the clamped node's velocity is algebraic (and constant,
@@ -69,6 +69,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from runtime import native
 from runtime.model import build
 from runtime.problem.assemble import build_model
 from runtime.problem.registry import load_problem
@@ -197,12 +198,12 @@ def _cache_key(rod: ReleasedRod, form: str, build_kind: str, cc: str) -> str:
 
 def _symbolic(rod: ReleasedRod, form: str, sym) -> tuple[Any, ...]:
     """(t, x, z, ode, alg, xs, s, zs) in SX or MX (``sym``) with the arrays as constants."""
-    from runtime.model.casadi_rod import CasadiRod
+    from runtime.model.casadi_oracle import CasadiOracle
 
     m = rod.model
-    cr = CasadiRod(m.arrays)
+    cr = CasadiOracle(m.arrays)
     res = cr.residual.expand() if sym is ca.SX else cr.residual
-    args = [ca.DM(np.asarray(v)) for v in CasadiRod.args(m.arrays)]
+    args = [ca.DM(np.asarray(v)) for v in CasadiOracle.args(m.arrays)]
     t = sym.sym("t")
     di, ai = rod.di, rod.ai
     if form == "ode":
@@ -224,17 +225,17 @@ def _symbolic(rod: ReleasedRod, form: str, sym) -> tuple[Any, ...]:
 
 def _cache_dir(cache_dir: Path | None) -> Path:
     return Path(cache_dir or os.environ.get("KVROD_BENCH_IDAS_CACHE")
-                or build.cache_dir() / "bench-idas")
+                or native.cache_dir() / "bench-idas")
 
 
-def _compile(cc: str, sources: list[Path], so: Path, include: Path | None = None,
+def _compile(cc: str, sources: list[Path], so: Path, include: list[str] | None = None,
              flags: tuple[str, ...] = CFLAGS) -> float:
     """gcc the sources into ``so`` (atomically: temporary name, then rename); seconds."""
     so.parent.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory(dir=so.parent, prefix="build_") as tmp:
         out = Path(tmp) / so.name
-        inc = ["-I", str(include)] if include else []
+        inc = list(include or [])
         subprocess.run([cc, *flags, *inc, *map(str, sources), "-o", str(out), "-lm"],
                        check=True, capture_output=True)
         os.replace(out, so)
@@ -244,19 +245,20 @@ def _compile(cc: str, sources: list[Path], so: Path, include: Path | None = None
 def kernels_library(cache_dir: Path | None = None) -> tuple[Path, float, bool]:
     """The compiled ``bench/idas_kernels.c`` with kvrod's generated C (one library for
     every N; cached by the sources' hash): (path, compile seconds, was cached)."""
-    cc = build.find_compiler()
+    cc = native.find_compiler()
     if cc is None:
         raise RuntimeError("no C compiler for the IDAS kernels build")
     gdir = build.generated_dir()
-    sources = [KERNELS_C, *(gdir / s for s in build.SOURCES)]
+    sources = [KERNELS_C, *build.source_paths(gdir)]
     h = hashlib.sha256()
-    for f in (*sources, *(gdir / s for s in build.HEADERS)):
+    for f in (*sources, *build.header_paths(gdir)):
         h.update(f.read_bytes())
-    h.update("\0".join([BUILDER_VERSION, cc, *KERNEL_CFLAGS, build.host_id()]).encode())
+    h.update("\0".join([BUILDER_VERSION, cc, *KERNEL_CFLAGS, native.host_id()]).encode())
     so = _cache_dir(cache_dir) / f"rod_ode_kernels_{h.hexdigest()[:32]}.so"
     if so.exists():
         return so, 0.0, True
-    return so, _compile(cc, sources, so, include=gdir, flags=KERNEL_CFLAGS), False
+    return so, _compile(cc, sources, so, include=build.include_flags(gdir),
+                        flags=KERNEL_CFLAGS), False
 
 
 _COPIES: list[str] = []
@@ -346,7 +348,7 @@ def build_function(rod: ReleasedRod, form: str = "ode", build_kind: str = "flat"
                         library=str(so), keep=keep)
     compiled = build_kind in ("flat", "map")
     if compiled:
-        cc = build.find_compiler()
+        cc = native.find_compiler()
         if cc is None:
             raise RuntimeError("no C compiler for the compiled IDAS opponent")
         key = _cache_key(rod, form, build_kind, cc)

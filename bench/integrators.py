@@ -57,7 +57,7 @@ import scipy.sparse as sp
 from scipy.integrate import solve_ivp
 
 from bench.idas_script import Opponent, ReleasedRod, build_function, integrate, released_rod
-from runtime.model import build
+from runtime import native
 from runtime.solvers.integrator import solve
 
 TIP_TOL = 1e-5  # m, matched accuracy: max tip-x error over the run
@@ -208,7 +208,7 @@ def _jit_options() -> dict:
     """CasADi integrator options to jit-compile its DAE functions (gcc -O2, cached by
     source hash for this process)."""
     global _JIT_DIR
-    cc = build.find_compiler()
+    cc = native.find_compiler()
     if cc is None:
         raise RuntimeError("no C compiler for CasADi's jit")
     if _JIT_DIR is None:
@@ -482,11 +482,11 @@ def breakdown(N: int, T: float, rtol: float) -> dict:
     solve and updates), the drive (loads re-applied at a new t) and the integrator's own
     arithmetic (predictor, coefficients, error test, history, weights, norms, the loop).
 
-    The parts are timed inside the compiled step loop (``timing`` in bdf_core.c: two
+    The parts are timed inside the compiled step loop (``timing`` in native/step_loop.c: two
     clock reads per call); output handling is left out (no t_eval). The Python path of
     the same algorithm (same steps) is timed beside it for comparison."""
-    from runtime.solvers._bdf_c import CoreStruct
     from runtime.solvers.bdf import BDF
+    from runtime.solvers.native.step_loop import CoreStruct
 
     r = rod(N, T)
     m = r.model

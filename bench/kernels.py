@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from bench.meta import metadata, target, targets_md
+from runtime import native
 from runtime.model import build
 from runtime.problem.assemble import build_model
 from runtime.problem.registry import load_problem
@@ -54,7 +55,7 @@ def _best_per_call(fn, min_time: float = 0.3, repeat: int = 5) -> float:
 
 def compile_time() -> float:
     """Seconds to compile the generated C into an empty cache."""
-    cc = build.find_compiler()
+    cc = native.find_compiler()
     if cc is None:
         return float("nan")
     with tempfile.TemporaryDirectory() as tmp:
@@ -65,7 +66,8 @@ def compile_time() -> float:
 
 def run() -> dict:
     gdir = build.generated_dir()
-    sizes = {f: (gdir / f).stat().st_size for f in (*build.SOURCES, *build.HEADERS)}
+    sizes = {f.name: f.stat().st_size
+             for f in (*build.source_paths(gdir), *build.header_paths(gdir))}
     rows = []
     for N in SIZES:
         m = build_model(load_problem("cantilever", {"n_elements": N}))
@@ -90,7 +92,7 @@ def run() -> dict:
     worst_res = max(r["residual_us_per_cell"] for r in rows)
     worst_both = max(r["residual_plus_jacobian_us_per_cell"] for r in rows)
     return {"machine": {"platform": platform.platform(), "cpus": os.cpu_count(),
-                        "compiler": build.find_compiler(), "cflags": list(build.CFLAGS)},
+                        "compiler": native.find_compiler(), "cflags": list(native.CFLAGS)},
             "generated_bytes": sizes, "generated_bytes_total": sum(sizes.values()),
             "compile_seconds": comp, "results": rows,
             "targets": [target("residual <= 0.1 us/cell (worst N)", worst_res, 0.1),

@@ -1,11 +1,11 @@
 """The derivation cached on disk: inspecting it takes a second, not a minute.
 
-Deriving every step (:func:`derive.pipeline.derive_all`) takes tens of seconds of SymPy.
+Deriving every step (:func:`derive.catalogue.derive_all`) takes tens of seconds of SymPy.
 The records are pure functions of the code in derive/ and of the tools, so they are kept in
 the user's cache folder (never in the checkout):
 
 * folder: ``$KVROD_CACHE_DIR/derivation``, else ``<platformdirs user cache dir of
-  kvrod>/derivation``, the root the compiled kernels use (``runtime.model.build.cache_dir``;
+  kvrod>/derivation``, the root the compiled kernels use (``runtime.native.cache_dir``;
   derive/ may not import runtime/, so the rule is repeated here and a test checks both agree);
 * key: sha256 of every file in derive/ (sources and templates, by relative path and
   bytes), the Python implementation and version and the versions of SymPy, mpmath, CasADi
@@ -50,7 +50,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from derive.pipeline import STEP_NAMES, Progress, derive_all
+from derive.catalogue import STEP_NAMES, Progress, derive_all
 
 if TYPE_CHECKING:
     from derive.step import Step
@@ -80,7 +80,7 @@ def enabled() -> bool:
 
 def cache_root() -> Path:
     """$KVROD_CACHE_DIR, else the platformdirs user cache dir of kvrod (the folder of the
-    compiled kernels, ``runtime.model.build.cache_dir``)."""
+    compiled kernels, ``runtime.native.cache_dir``)."""
     env = os.environ.get("KVROD_CACHE_DIR")
     if env:
         return Path(env)

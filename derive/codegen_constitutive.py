@@ -5,7 +5,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-import jinja2
 import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 
@@ -39,6 +38,7 @@ from derive.symbols import (
     tau_j,
     tau_S,
 )
+from derive.templating import render
 
 TEMPLATE_DIR = Path(__file__).parent / "templates"
 TEMPLATE = "constitutive.py.jinja"
@@ -234,11 +234,8 @@ def _context() -> dict:
 
 def render_constitutive() -> tuple[str, str]:
     """(module text, sha256 of its inputs: template text and the rendering context)."""
-    env = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATE_DIR),
-                             keep_trailing_newline=True, autoescape=False,
-                             undefined=jinja2.StrictUndefined)
     ctx = _context()
-    text = env.get_template(TEMPLATE).render(**ctx)
+    text = render(TEMPLATE_DIR, TEMPLATE, **ctx)
     template_text = (TEMPLATE_DIR / TEMPLATE).read_text()
     return text, sha256_text(template_text, repr(sorted((k, repr(v)) for k, v in ctx.items())))
 

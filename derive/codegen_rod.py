@@ -1,4 +1,4 @@
-"""Generate the discrete rod's C kernels, assembly loop, layout module and serialised
+"""Generate the discrete rod's C kernels, layout header and module and serialised
 CasADi functions (docs/design.md, section 3).
 
 Files (all in ``generated/``):
@@ -7,9 +7,10 @@ Files (all in ``generated/``):
   through one ``casadi.CodeGenerator`` (size independent of N);
 * ``rod_kernels_x4.c`` / ``rod_kernels_x4.h``: the hottest kernels four elements per
   call (:mod:`derive.codegen_lanes`, from their SX algorithms; bit for bit the scalar ones);
-* ``rod_assembly.c`` / ``rod_assembly.h``: the C API (residual, banded Jacobian,
-  diagnostics) rendered from ``templates/rod_assembly.*.jinja``;
-* ``rod_layout.py``: state/parameter layout (``templates/rod_layout.py.jinja``);
+* ``rod_layout.h``: the layout the C assembly (``runtime/model/native/rod_assembly.c``,
+  written by hand) is compiled with: cell sizes, field and parameter offsets, band
+  widths, kernel work sizes (``templates/rod_layout.h.jinja``);
+* ``rod_layout.py``: the same layout for Python (``templates/rod_layout.py.jinja``);
 * ``rod_<kernel>.casadi``: each kernel serialised (in-process fallback, IDAS cross-check).
 """
 
@@ -21,11 +22,11 @@ from functools import lru_cache
 from pathlib import Path
 
 import casadi as ca
-import jinja2
 
 from derive import cache, codegen_lanes
 from derive import discrete_rod as dr
 from derive.artifact import Artifact, sha256_text
+from derive.templating import render
 
 STEP = "discrete_rod"
 TEMPLATES = Path(__file__).resolve().parent / "templates"
@@ -35,12 +36,6 @@ CODEGEN_OPTIONS = {"with_header": True, "indent": 2, "casadi_int": "long long in
 #: residual and of the Jacobian
 X4_KERNELS = ("rod_segment_forces", "rod_joint_torques", "rod_segment_forces_jac",
               "rod_joint_torques_jac")
-
-
-def _env() -> jinja2.Environment:
-    return jinja2.Environment(loader=jinja2.FileSystemLoader(str(TEMPLATES)),
-                              undefined=jinja2.StrictUndefined, keep_trailing_newline=True,
-                              autoescape=False)
 
 
 def _signature(f: ca.Function) -> dict:
@@ -152,7 +147,7 @@ def _context() -> dict:
 
 
 def _render(template: str, ctx: dict) -> str:
-    return _env().get_template(template).render(**ctx)
+    return render(TEMPLATES, template, **ctx)
 
 
 def artifacts() -> list[Artifact]:
@@ -177,8 +172,7 @@ def artifacts() -> list[Artifact]:
                      x4_hash),
             Artifact("rod_kernels_x4.h", codegen_lanes.header(x4),
                      "derive.codegen_lanes.header", STEP, x4_hash)]
-    for tpl, path in (("rod_assembly.c.jinja", "rod_assembly.c"),
-                      ("rod_assembly.h.jinja", "rod_assembly.h"),
+    for tpl, path in (("rod_layout.h.jinja", "rod_layout.h"),
                       ("rod_layout.py.jinja", "rod_layout.py")):
         text = _render(tpl, ctx)
         out.append(Artifact(path, text, "derive/templates/" + tpl, STEP,

@@ -102,7 +102,8 @@ _table: dict | None = None
 
 
 def forget() -> None:
-    """Drop the table kept for this process (with :func:`derive.pipeline.forget`)."""
+    """Drop the table kept for this process (:func:`derive.pipeline.forget` drops the
+    records it is computed from)."""
     global _table
     _table = None
 

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import jinja2
 import sympy as sp
 
 from derive import symbols as S
 from derive.formulas import formulas
 from derive.pipeline import run
+from derive.templating import render
 
 TEMPLATE_DIR = Path(__file__).parent / "templates"
 #: results larger than this many characters of LaTeX are shown abbreviated in the notes
@@ -90,10 +90,7 @@ def render_derivation_notes() -> str:
         "kv_tau_D": latex(f["kv_tau_D"]),
         "kv_remainder": latex(steps["kelvin_voigt_uniaxial"].results["remainder_in_tau_D"]),
     }
-    env = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATE_DIR),
-                             keep_trailing_newline=True, autoescape=False,
-                             undefined=jinja2.StrictUndefined)
-    return env.get_template("derivation.md.jinja").render(
+    return render(TEMPLATE_DIR, "derivation.md.jinja",
         steps=rows, n_steps=len(rows), n_checks=n_checks, n_match=n_match, latex=tex)
 
 

@@ -113,12 +113,12 @@ def make_step(
     """Build a :class:`Step`, comparing each stated form with the derived result.
 
     ``title`` and ``equations`` default to the step's entry in the pipeline catalogue
-    (:data:`derive.pipeline.PIPELINE`, where every step of the pipeline has them).
+    (:data:`derive.catalogue.PIPELINE`, where every step of the pipeline has them).
     """
     import sympy as sp
 
     if title is None or equations is None:
-        from derive.pipeline import entry
+        from derive.catalogue import entry
 
         e = entry(name)
         title = e.title if title is None else title

@@ -1,7 +1,7 @@
 # GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 # source: derive/templates/rod_layout.py.jinja
 # derivation step: discrete_rod
-# inputs sha256: 0ba18acaad71db84989aefcbf7841d040e746f2d6f3e113c8cf8bc680c09bb30
+# inputs sha256: 75b5b259b39cc4d36ae9e84e1a588787e2c0ddde70cbd69ea10a1d5398e6cd17
 # tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 """State, parameter and diagnostics layout of the discrete rod (the one place that owns it).
@@ -39,7 +39,7 @@ Static problem (reduced coordinates, rows = force/torque balance):
 cell 0: phi(3); cell i: theta(3) phi(3)
 (theta: rotation increment, p <- p*exp(theta/2)); bandwidths STATIC_KL, STATIC_KU.
 
-C API (generated/rod_assembly.h): kvrod_residual, kvrod_jacobian_band, kvrod_diagnostics,
+C API (runtime/model/native/rod_assembly.h): kvrod_residual, kvrod_jacobian_band, kvrod_diagnostics,
 kvrod_energies, each on a kvrod_rod struct (N, B, the band and pointers to the arrays);
 per-element CasADi kernels in generated/rod_kernels.c and generated/rod_<kernel>.casadi.
 """

@@ -168,41 +168,10 @@ def _cmd_problem_keys(args) -> int:
     return 0
 
 
-def version_text() -> str:
-    """``kvrod VERSION (generated/ TREE-HASH)``: the package version from its metadata and
-    the first 12 hex digits of the sha256 of generated/MANIFEST.json (which holds the hash
-    of every generated file); a tree that differs from its manifest is said to."""
-    import hashlib
-    from importlib import metadata
-
-    import generated
-
-    try:
-        version = metadata.version("kvrod")
-    except metadata.PackageNotFoundError:  # pragma: no cover - run from a bare source tree
-        from kvrod import __version__ as version
-    gdir = Path(generated.__file__).resolve().parent
-    try:
-        text = (gdir / "MANIFEST.json").read_text()
-        files = json.loads(text)["files"]
-    except (OSError, ValueError, KeyError):
-        return f"kvrod {version} (generated/ has no readable MANIFEST.json)"
-    tree = hashlib.sha256(text.encode()).hexdigest()[:12]
-    changed = []
-    for name, entry in sorted(files.items()):
-        try:  # the manifest's convention: sha256 of the text followed by NUL
-            digest = hashlib.sha256((gdir / name).read_text().encode() + b"\0").hexdigest()
-        except OSError:
-            digest = None
-        if digest != entry.get("sha256"):
-            changed.append(name)
-    note = (f"; {len(changed)} file(s) differ from it: run `kvrod generate --check`"
-            if changed else "")
-    return f"kvrod {version} (generated/ {tree}{note})"
-
-
 class _VersionAction(argparse.Action):
     def __call__(self, parser, namespace, values, option_string=None):
+        from runtime.version import version_text
+
         print(version_text())
         parser.exit()
 
@@ -240,18 +209,13 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--out", help="target folder (default: the generated/ package)")
     g.set_defaults(func=_cmd_generate)
 
-    from kvrod import cli_runtime
+    from kvrod import cli_analysis, cli_notes, cli_runtime, cli_section, cli_sweep
 
     cli_runtime.add_commands(sub, _Parser)
-    from kvrod import cli_sweep
-
     cli_sweep.add_commands(sub, _Parser)
-    try:  # modal analysis, calibration
-        from kvrod import cli_beyond
-    except ImportError:  # pragma: no cover - while it does not exist
-        cli_beyond = None
-    if cli_beyond is not None:
-        cli_beyond.add_commands(sub, _Parser)
+    cli_analysis.add_commands(sub, _Parser)
+    cli_notes.add_commands(sub, _Parser)
+    cli_section.add_commands(sub, _Parser)
     b = sub.add_parser("bench", help="run the benchmarks in bench/ (JSON + Markdown)")
     b.add_argument("--quick", action="store_true", help="small sizes only (< 1 min)")
     b.add_argument("--out", default="bench/results", help="results folder")
@@ -324,7 +288,7 @@ def _error_line(prefix: str, exc: BaseException) -> tuple[str, int]:
 
 
 #: commands that never compile C (and should not import the runtime to say so)
-_NO_COMPILE = ("derive", "generate", "problem-keys")
+_NO_COMPILE = ("derive", "generate", "problem-keys", "section", "notes-sections")
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -1,4 +1,4 @@
-"""`kvrod simulate`, `kvrod static`, `kvrod plot` and `kvrod reproduce`."""
+"""`kvrod simulate`, `kvrod static` and `kvrod plot`."""
 
 from __future__ import annotations
 
@@ -6,9 +6,10 @@ import math
 import sys
 from pathlib import Path
 
-from kvrod.outputs import safe_name
 from kvrod.problem_args import add_problem_arguments, problem_from_args
-from kvrod.runs import already_finished, run_and_write, static_and_write
+from kvrod.progress import progress_bar
+from runtime.io.folder import safe_name
+from runtime.io.runs import already_finished, run_and_write, static_and_write
 
 
 def _static_lines(st: dict) -> list[str]:
@@ -65,6 +66,7 @@ def _cmd_simulate(args) -> int:
         print(f"{out}: this run has already finished (summary.json); nothing to resume")
         return 0
     run, s = run_and_write(problem, out, problem.name, plots=args.plots, resume=args.resume,
+                           progress=progress_bar,
                            vtk_every=args.vtk, overwrite=args.overwrite)
     _print_summary(s, out, args.vtk is not None, args.plots)
     for w in s.get("warnings", []):
@@ -96,33 +98,14 @@ def _cmd_static(args) -> int:
 
 
 def _cmd_plot(args) -> int:
-    """The pictures of a results folder, written next to its results (kvrod/plotting.py)."""
-    from kvrod.plotting import plot_folder
+    """The pictures of a results folder, written next to its results (reports/plot_folder.py)."""
+    from reports.plot_folder import plot_folder
 
     done = plot_folder(Path(args.folder), animate=args.animate)
     print(f"{args.folder}: {done.kind} result; wrote "
           f"{', '.join(str(p) for p in done.paths) or 'nothing'}")
     for note in done.notes:
         print(f"  {note}")
-    return 0
-
-
-def _cmd_reproduce(args) -> int:
-    from kvrod.reproduce import reproduce
-
-    # --out alone keeps the notes with the results: only the default run rewrites the
-    # committed notes/ (the notes quote their results folder)
-    out = Path(args.out or "results/reproduce")
-    notes = Path(args.notes or (out / "reproduction.md" if args.out else
-                                "notes/reproduction.md"))
-    from kvrod.notices import DerivationProgress
-
-    out = reproduce(out, n_elements=args.n_elements, t_end=args.t_end,
-                    notes=notes, rtol=args.rtol, derive=not args.skip_derive,
-                    overwrite=args.overwrite, derive_progress=DerivationProgress(
-                        "kvrod reproduce"),
-                    command=getattr(args, "command_line", "kvrod reproduce"))
-    print(f"wrote {out}")
     return 0
 
 
@@ -155,19 +138,4 @@ def add_commands(sub, parser_class) -> None:
                          ".mp4 (needs ffmpeg on PATH)")
     pl.set_defaults(func=_cmd_plot)
 
-    r = sub.add_parser("reproduce", help="reproduce the paper's Sect. 5 (figures + notes)")
-    r.add_argument("--out", help="results folder (default results/reproduce; when given, "
-                                 "the notes are written into it unless --notes says where)")
-    r.add_argument("--notes", help="notes file to write (default notes/reproduction.md, or "
-                                   "DIR/reproduction.md with --out DIR); notes/derivation.md "
-                                   "goes beside it")
-    r.add_argument("--n-elements", dest="n_elements", type=int, default=100)
-    r.add_argument("--t-end", dest="t_end", type=float, default=10.0)
-    r.add_argument("--rtol", type=float, default=1e-7,
-                   help="relative tolerance (1e-7: energy audits below 1e-5; see the note)")
-    r.add_argument("--overwrite", action="store_true",
-                   help="replace the results of an earlier reproduction in --out")
-    r.add_argument("--skip-derive", action="store_true",
-                   help="do not regenerate notes/derivation.md")
-    r.set_defaults(func=_cmd_reproduce)
     _ = parser_class

@@ -1,6 +1,6 @@
 """What the command line says on stderr during long phases: the first derivation (step by
 step) and the first C compilation. The library only calls back (derive.pipeline.Progress,
-runtime.model.build.add_compile_observer); the words are printed here."""
+runtime.native.add_compile_observer); the words are printed here."""
 
 from __future__ import annotations
 
@@ -53,7 +53,7 @@ def derivation(command: str = "kvrod") -> dict:
 
 
 def _compile_notice(what: str, seconds: float | None) -> None:
-    from runtime.model.build import TYPICAL_SECONDS
+    from runtime.native import TYPICAL_SECONDS
 
     if seconds is None:
         typical = TYPICAL_SECONDS.get(what)
@@ -65,14 +65,14 @@ def _compile_notice(what: str, seconds: float | None) -> None:
 
 def install_compile_notices() -> None:
     """Print a line on stderr when a C compilation starts and ends."""
-    from runtime.model import build
+    from runtime import native
 
-    build.add_compile_observer(_compile_notice)
+    native.add_compile_observer(_compile_notice)
 
 
 def remove_compile_notices() -> None:
     """Undo :func:`install_compile_notices` (the CLI's main does, so that calling it
     in-process, e.g. from tests, leaves no observer behind)."""
-    mod = sys.modules.get("runtime.model.build")
+    mod = sys.modules.get("runtime.native")
     if mod is not None:
         mod.remove_compile_observer(_compile_notice)

@@ -72,7 +72,8 @@ def parse_set(item: str) -> tuple[str, Any]:
 
 
 def problem_from_args(args, command: str):
-    """The problem named on the command line with all overrides applied (checked)."""
+    """The problem named on the command line with all overrides applied (checked), one the
+    rod kernels can run (simulate, static, modes)."""
     from kvrod.errors import CliError
     from runtime.problem.registry import load_config, load_problem
 
@@ -105,4 +106,6 @@ def problem_from_args(args, command: str):
     for item in args.sets:
         k, v = parse_set(item)
         overrides[k] = v
-    return load_problem(spec, overrides)
+    problem = load_problem(spec, overrides)
+    problem.check_simulable()          # a composite section: before anything is written
+    return problem

@@ -1,1 +1,2 @@
-"""kvrod runtime: implicit integrator, static solver, scenarios, analysis and I/O."""
+"""kvrod runtime: problems, the rod model over the generated kernels, integrator and static
+solver, simulation, analyses, studies and I/O (floors: docs/design.md, tests/test_layering.py)."""

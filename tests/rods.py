@@ -92,12 +92,12 @@ def energy_rate_function(m: RodModel):
     import casadi as ca
 
     from generated import rod_layout as L
-    from runtime.model.casadi_rod import CasadiRod
+    from runtime.model.casadi_oracle import CasadiOracle
 
-    cr = CasadiRod(m.arrays)
+    cr = CasadiOracle(m.arrays)
     ys, ds = ca.MX.sym("y", m.n), ca.MX.sym("d", m.n)
     ps = ca.MX.sym("par", m.arrays.par.size)
-    out = cr.energies(0.0, ys, ds, ps, *CasadiRod.args(m.arrays)[1:])
+    out = cr.energies(0.0, ys, ds, ps, *CasadiOracle.args(m.arrays)[1:])
     dpar = np.zeros(m.arrays.par.size)
     for name in ("start", "end"):
         k = L.PARAM_OFFSETS["p_" + name]

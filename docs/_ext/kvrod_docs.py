@@ -42,7 +42,7 @@ from sphinx.errors import ExtensionError
 import kvrod
 
 ROOT = Path(kvrod.__file__).resolve().parents[1]
-NOTES = ("reproduction", "examples", "beyond", "maxwell")
+NOTES = ("reproduction", "examples", "beyond", "maxwell", "sections")
 
 #: what the executed pages (tutorials, command outputs) depend on: kvrod's packages and
 #: the example problems (built-in problem names resolve to examples/*.toml)
@@ -65,6 +65,7 @@ VALIDATION = (
     ("examples", "Rod problems against independent references"),
     ("beyond", "Consistent against naive damping, damped modes, calibration"),
     ("maxwell", "Generalized Maxwell rods"),
+    ("sections", "Composite and anisotropic sections: consistent against naive viscosity"),
 )
 
 
@@ -134,8 +135,9 @@ def keys_markdown() -> str:
             "Every key of a problem file (TOML), generated at every docs build from "
             "`runtime/problem/keys.py`, which a test checks against the parsers: the keys "
             "each parser accepts and the ranges it enforces. `kvrod problem-keys` prints "
-            "the same. The kinds column names the `kind` (or material `model`) a key "
-            "belongs to. Examples: `examples/*.toml`.\n\n" + keys.markdown())
+            "the same. The kinds column names the `kind` (or material `model`, or whether "
+            "a named material is isotropic or anisotropic) a key belongs to. Examples: "
+            "`examples/*.toml`.\n\n" + keys.markdown())
 
 
 def _repo_links_as_code(text: str) -> str:
@@ -273,9 +275,9 @@ def _compile_kernels() -> None:
     from runtime.model import build
 
     build.load_library()
-    from runtime.solvers import _bdf_c
+    from runtime.solvers.native import loader
 
-    _bdf_c.load()
+    loader.load()
 
 
 def render(srcdir: Path) -> None:

@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from runtime.analysis.calibration import load_csv
+from runtime.analysis.records import load_csv
 
 #: a fit with a relative RMS residual above this is doubtful (5 %)
 MAX_REL_RMS = 0.05
@@ -216,28 +216,3 @@ def fit_prony(omega: np.ndarray, storage: np.ndarray, loss: np.ndarray, *,
                   theta=theta[keep - 1], E=coef[keep], std_E_inf=float(std[0]),
                   std_E=std[1:], theta_grid=theta, rel_rms=rel_rms,
                   poisson_ratio=float(poisson_ratio), doubts=doubts)
-
-
-def plot_dma(fit: DmaFit, path: Path) -> Path:
-    """E' and E'' against frequency: data and fitted series (log-log)."""
-    from runtime.io.atomic import save_figure
-    from runtime.io.figures import pyplot
-
-    plt = pyplot()
-
-    w = np.logspace(math.log10(fit.omega.min()) - 0.3, math.log10(fit.omega.max()) + 0.3, 200)
-    Ep, Epp = fit.moduli(w)
-    fig, ax = plt.subplots(figsize=(5.6, 4.0))
-    ax.loglog(fit.omega, fit.storage, "C0o", ms=4, label="E' (data)")
-    ax.loglog(fit.omega, np.maximum(fit.loss, 1e-300), "C1s", ms=4, label="E'' (data)")
-    ax.loglog(w, Ep, "C0-", lw=1, label=f"E' (Prony, {fit.theta.size} terms)")
-    ax.loglog(w, Epp, "C1-", lw=1, label="E'' (Prony)")
-    ax.set_xlabel("omega [rad/s]")
-    ax.set_ylabel("modulus [Pa]")
-    ax.legend(fontsize=7)
-    ax.set_title(f"DMA fit (relative RMS {fit.rel_rms:.2g})")
-    fig.tight_layout()
-    try:
-        return save_figure(fig, path, dpi=110)
-    finally:
-        plt.close(fig)

@@ -254,3 +254,38 @@ def claim(path: Path, command: str, *, overwrite: bool = False,
 def is_disk_full(exc: BaseException) -> bool:
     """True for the OSErrors of a full disk or quota."""
     return isinstance(exc, OSError) and exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
+
+
+@contextlib.contextmanager
+def results_folder(out: Path, command: str, *, markers: Iterable[str], overwrite: bool,
+                   names: Iterable[str], patterns: Iterable[str] = ("*.png", ".*.tmp")
+                   ) -> Iterator[Path]:
+    """Check, refuse-or-overwrite and lock ``out`` for ``kvrod COMMAND`` before anything is
+    computed; yields the path.
+
+    ``markers``: the files whose presence means "this folder holds a result";
+    ``names``/``patterns``: what the command writes (removed by ``overwrite``).
+    """
+    out = Path(out)
+    check_output_path(out)
+    refuse_existing(out, command, tuple(markers), overwrite=overwrite)
+    with claim(out, command, overwrite=overwrite, names=names, patterns=patterns) as c:
+        yield out
+        c.keep()
+
+
+def check_file_argument(path: Path, flag: str) -> Path:
+    """An output file given on the command line: not a folder, its folder writable."""
+    path = Path(path)
+    if path.is_dir():
+        raise FolderError(f"{flag} {str(path)!r} is a folder, not a file")
+    check_output_path(path.parent if str(path.parent) else Path("."), flag)
+    return path
+
+
+def safe_name(name: str) -> str:
+    """A problem's name as one folder name under results/ (the default --out): letters,
+    digits, '-', '_' and '.' kept, anything else (a '/', '..') made '_', so a name such
+    as "../../etc" cannot place results outside results/."""
+    safe = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in name).strip(".")
+    return safe or "problem"

@@ -249,3 +249,22 @@ def plot_run_folder(out: Path) -> list[Path]:
         paths.append(plot_run_centreline(run.centreline_t, run.centreline, run.reference,
                                          out / "centreline.png", title=name))
     return paths
+
+
+def plot_dma(fit, path: Path) -> Path:
+    """E' and E'' of a DMA fit (``runtime.analysis.dma.DmaFit``) against frequency: data
+    and fitted series (log-log)."""
+    plt = _plt()
+    w = np.logspace(math.log10(fit.omega.min()) - 0.3, math.log10(fit.omega.max()) + 0.3, 200)
+    Ep, Epp = fit.moduli(w)
+    fig, ax = plt.subplots(figsize=(5.6, 4.0))
+    ax.loglog(fit.omega, fit.storage, "C0o", ms=4, label="E' (data)")
+    ax.loglog(fit.omega, np.maximum(fit.loss, 1e-300), "C1s", ms=4, label="E'' (data)")
+    ax.loglog(w, Ep, "C0-", lw=1, label=f"E' (Prony, {fit.theta.size} terms)")
+    ax.loglog(w, Epp, "C1-", lw=1, label="E'' (Prony)")
+    ax.set_xlabel("omega [rad/s]")
+    ax.set_ylabel("modulus [Pa]")
+    ax.legend(fontsize=7)
+    ax.set_title(f"DMA fit (relative RMS {fit.rel_rms:.2g})")
+    fig.tight_layout()
+    return save(fig, path, dpi=110)

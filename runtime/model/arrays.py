@@ -30,7 +30,7 @@ from generated import rod_layout as L
 
 
 class RodStruct(ctypes.Structure):
-    """``kvrod_rod`` of generated/rod_assembly.h."""
+    """``kvrod_rod`` of runtime/model/native/rod_assembly.h."""
 
     _fields_ = [("N", ctypes.c_int), ("nb", ctypes.c_int), ("kl", ctypes.c_int),
                 ("ku", ctypes.c_int), ("par", ctypes.c_void_p), ("seg", ctypes.c_void_p),

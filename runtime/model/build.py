@@ -1,8 +1,10 @@
 """Compile and load the generated rod C code.
 
-On first use the C sources in ``generated/`` (``rod_kernels.c``, ``rod_assembly.c``) are
-compiled with the system C compiler into a shared library in a cache folder keyed by the
-sha256 of the sources, the flags and the compiler path. The cache folder is
+On first use the generated kernels (``generated/rod_kernels.c``, ``rod_kernels_x4.c``, with
+the layout header ``rod_layout.h``) and the assembly written by hand
+(``runtime/model/native/rod_assembly.c``) are compiled with the system C compiler into a
+shared library in a cache folder keyed by the sha256 of the sources, the flags and the
+compiler path. The cache folder is
 ``$KVROD_CACHE_DIR`` when set, else the platformdirs user cache dir of ``kvrod``.
 The library is built under a unique temporary name in the cache folder and moved into
 place with :func:`os.replace`, so concurrent first uses from several processes cannot
@@ -12,79 +14,67 @@ If no compiler is found, compilation fails, or ``KVROD_NO_COMPILER=1``, :func:`l
 returns ``None`` after ONE ``warnings.warn``; callers then evaluate the serialised CasADi
 kernels (``generated/rod_*.casadi``) in-process instead.
 
-A first compilation takes tens of seconds. Library code never prints: whoever wants to say
-so registers an observer (:func:`add_compile_observer`; the command line prints one line
-on stderr), and :func:`compile_native` compiles (or finds) both libraries up front, so a
-timed run does not pay for it (the notes report compile and run times apart).
+The compiler, its flags, the cache folder and the compile observers are
+``runtime/native.py``'s; :func:`compile_native` compiles (or finds) this library and the
+integrator's step loop up front, so a timed run does not pay for it (the notes report
+compile and run times apart).
 """
 
 from __future__ import annotations
 
-import contextlib
 import ctypes
 import hashlib
 import json
 import os
-import shutil
-import subprocess
 import sys
 import tempfile
-import time
 import warnings
-from collections.abc import Callable, Iterator
 from functools import lru_cache
 from pathlib import Path
 
 import generated
 from runtime.errors import GeneratedCodeError
+from runtime.native import (
+    LIBS,
+    ROD_KERNELS,
+    STEP_LOOP,
+    add_compile_observer,
+    cache_dir,
+    compile_command,
+    compiling,
+    file_hash,
+    find_compiler,
+    host_id,
+    remove_compile_observer,
+    run_compiler,
+)
 
-SOURCES = ("rod_kernels.c", "rod_kernels_x4.c", "rod_assembly.c")
-HEADERS = ("rod_kernels.h", "rod_kernels_x4.h", "rod_assembly.h")
-# -O3 -march=native: the kernels and the step loop are compiled on the machine that runs
-# them (measured at N = 1000 against -O2: residual -8 %, Jacobian -9 %, energies -23 %).
-# The cache key then carries the CPU's identity (host_id), since a cache folder may be
-# shared by the machines of a cluster. -ffp-contract=off: no fused multiply-adds (the
-# rounding stays that of -O2 and of the NumPy fallback).
-CFLAGS = ("-O3", "-fPIC", "-shared", "-std=c99", "-ffp-contract=off")
-NATIVE = ("-march=native",)
-LIBS = ("-lm",)
+#: the generated C (checked against generated/MANIFEST.json before it is compiled)
+SOURCES = ("rod_kernels.c", "rod_kernels_x4.c")
+HEADERS = ("rod_kernels.h", "rod_kernels_x4.h", "rod_layout.h")
+#: the assembly, written by hand, compiled with them
+NATIVE_DIR = Path(__file__).resolve().parent / "native"
+ASSEMBLY_SOURCES = ("rod_assembly.c",)
+ASSEMBLY_HEADERS = ("rod_assembly.h",)
+
+
+def source_paths(gdir: Path | None = None) -> list[Path]:
+    """Every C source of the rod library: the generated kernels and the assembly."""
+    gdir = gdir or generated_dir()
+    return [gdir / s for s in SOURCES] + [NATIVE_DIR / s for s in ASSEMBLY_SOURCES]
+
+
+def header_paths(gdir: Path | None = None) -> list[Path]:
+    """Every header the rod library is compiled with."""
+    gdir = gdir or generated_dir()
+    return [gdir / s for s in HEADERS] + [NATIVE_DIR / s for s in ASSEMBLY_HEADERS]
+
+
+def include_flags(gdir: Path | None = None) -> list[str]:
+    """``-I`` flags for the generated and the hand-written headers."""
+    return ["-I", str(gdir or generated_dir()), "-I", str(NATIVE_DIR)]
 
 _warned = False
-
-#: what is compiled, as the observers are told
-ROD_KERNELS = "the rod kernels"
-STEP_LOOP = "the BDF step loop"
-#: rough first-build wall times (s) for the observers' messages (measured on 2 shared cores:
-#: 6 s and 9.5 s with GCC)
-TYPICAL_SECONDS = {ROD_KERNELS: 10, STEP_LOOP: 10}
-
-CompileObserver = Callable[[str, "float | None"], None]
-_observers: list[CompileObserver] = []
-
-
-def add_compile_observer(observer: CompileObserver) -> None:
-    """Call ``observer(what, None)`` when a compilation of ``what`` (:data:`ROD_KERNELS`,
-    :data:`STEP_LOOP`) starts and ``observer(what, seconds)`` when it ends (wall time)."""
-    if observer not in _observers:
-        _observers.append(observer)
-
-
-def remove_compile_observer(observer: CompileObserver) -> None:
-    """Stop calling ``observer`` (no error if it was not registered)."""
-    with contextlib.suppress(ValueError):
-        _observers.remove(observer)
-
-
-@contextlib.contextmanager
-def compiling(what: str) -> Iterator[None]:
-    """Tell the observers that ``what`` is being compiled, and how long it took."""
-    for obs in list(_observers):
-        obs(what, None)
-    t0 = time.perf_counter()
-    yield
-    seconds = time.perf_counter() - t0
-    for obs in list(_observers):
-        obs(what, seconds)
 
 
 def compile_native() -> dict[str, float]:
@@ -93,7 +83,7 @@ def compile_native() -> dict[str, float]:
     Returns the wall time (s) spent compiling each (0.0 when it came from the cache or
     cannot be built: then the in-process fallbacks are used, with their warning).
     """
-    from runtime.solvers import _bdf_c
+    from runtime.solvers.native import loader
 
     spent = {ROD_KERNELS: 0.0, STEP_LOOP: 0.0}
 
@@ -104,7 +94,7 @@ def compile_native() -> dict[str, float]:
     add_compile_observer(record)
     try:
         load_library()
-        _bdf_c.load()
+        loader.load()
     finally:
         remove_compile_observer(record)
     return spent
@@ -113,26 +103,6 @@ def compile_native() -> dict[str, float]:
 def generated_dir() -> Path:
     """The ``generated/`` package folder."""
     return Path(generated.__file__).resolve().parent
-
-
-def cache_dir() -> Path:
-    """Cache folder for compiled libraries ($KVROD_CACHE_DIR or the user cache dir)."""
-    env = os.environ.get("KVROD_CACHE_DIR")
-    if env:
-        return Path(env)
-    import platformdirs
-
-    return Path(platformdirs.user_cache_dir("kvrod"))
-
-
-def find_compiler() -> str | None:
-    """Path of the C compiler ($CC, cc, gcc, clang) or None; None if KVROD_NO_COMPILER=1."""
-    if os.environ.get("KVROD_NO_COMPILER", "") not in ("", "0"):
-        return None
-    for cand in (os.environ.get("CC"), "cc", "gcc", "clang"):
-        if cand and (path := shutil.which(cand)):
-            return path
-    return None
 
 
 def _manifest_hash(text: str) -> str:
@@ -189,49 +159,11 @@ def require_generated() -> None:
     verify_manifest()
 
 
-@lru_cache(maxsize=1)
-def host_id() -> str:
-    """The CPU that native code is compiled for: the machine type and, on Linux, the
-    model name and instruction-set flags of /proc/cpuinfo (part of every cache key)."""
-    import platform
-
-    parts = [platform.machine(), platform.system()]
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8", errors="replace") as f:
-            for line in f:
-                key = line.split(":", 1)[0].strip()
-                if key in ("model name", "flags", "Features", "CPU part"):
-                    parts.append(line.strip())
-                elif not line.strip() and len(parts) > 2:
-                    break                      # the first processor is enough
-    except OSError:
-        pass
-    return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:16]
-
-
-def compile_command(compiler: str, native: bool = True) -> list[str]:
-    """The compiler and flags (with -march=native unless ``native`` is False)."""
-    return [compiler, *CFLAGS, *(NATIVE if native else ())]
-
-
-def run_compiler(cmd_tail: list[str], compiler: str) -> subprocess.CompletedProcess:
-    """Compile with the native flags, or without them if the compiler rejects them."""
-    proc = subprocess.run(compile_command(compiler) + cmd_tail, capture_output=True,
-                          text=True)
-    if proc.returncode != 0:
-        retry = subprocess.run(compile_command(compiler, native=False) + cmd_tail,
-                               capture_output=True, text=True)
-        if retry.returncode == 0:
-            return retry
-    return proc
-
-
 def library_key(compiler: str, gdir: Path | None = None) -> str:
     """sha256 of sources, headers, flags, compiler path and host CPU (the cache key)."""
-    gdir = gdir or generated_dir()
     h = hashlib.sha256()
-    for name in SOURCES + HEADERS:
-        h.update(name.encode() + b"\0" + (gdir / name).read_bytes() + b"\0")
+    for path in (*source_paths(gdir), *header_paths(gdir)):
+        h.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
     h.update(" ".join((*compile_command(compiler), *LIBS, host_id())).encode())
     return h.hexdigest()
 
@@ -244,21 +176,21 @@ def compile_library(compiler: str, gdir: Path | None = None, outdir: Path | None
     suffix = ".dll" if sys.platform == "win32" else ".so"
     target = outdir / f"kvrod_rod_{library_key(compiler, gdir)[:32]}{suffix}"
     sidecar = target.with_name(target.name + ".sha256")
-    if target.exists() and sidecar.exists() and sidecar.read_text().strip() == _file_hash(target):
+    if target.exists() and sidecar.exists() and sidecar.read_text().strip() == file_hash(target):
         return target
     # missing, or a library whose bytes do not match the hash recorded when it was built
     # (corrupted or replaced): rebuild, never load it
     fd, tmp = tempfile.mkstemp(prefix=target.name + ".", suffix=".tmp", dir=outdir)
     os.close(fd)
     try:
-        tail = ["-I", str(gdir), "-o", tmp, *(str(gdir / s) for s in SOURCES), *LIBS]
+        tail = [*include_flags(gdir), "-o", tmp, *(str(p) for p in source_paths(gdir)), *LIBS]
         with compiling(ROD_KERNELS):
             proc = run_compiler(tail, compiler)
         if proc.returncode != 0:
             raise RuntimeError(f"C compilation failed ({' '.join(proc.args)}):\n"
                                f"{proc.stderr}")
         side_tmp = Path(tmp + ".sha256")
-        side_tmp.write_text(_file_hash(Path(tmp)) + "\n")
+        side_tmp.write_text(file_hash(Path(tmp)) + "\n")
         os.replace(side_tmp, sidecar)
         os.replace(tmp, target)
     finally:
@@ -267,12 +199,8 @@ def compile_library(compiler: str, gdir: Path | None = None, outdir: Path | None
     return target
 
 
-def _file_hash(path: Path) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
-
-
 def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
-    """Argument and result types of the C API (generated/rod_assembly.h)."""
+    """Argument and result types of the C API (runtime/model/native/rod_assembly.h)."""
     i, d, p = ctypes.c_int, ctypes.c_double, ctypes.c_void_p
     lib.kvrod_residual.argtypes = [p, d, p, p, p]
     lib.kvrod_jacobian_band.argtypes = [p, d, p, p, d, d, i, p]
@@ -306,6 +234,13 @@ def _load_cached() -> ctypes.CDLL | None:
                       "(same results, much slower)", RuntimeWarning, stacklevel=3)
         _warned = True
     return None
+
+
+def library_loads() -> int:
+    """How many times this process has loaded (or tried to load) the rod library: 1 after
+    the first use, more only after :func:`clear_cache` (a sweep's workers report it: each
+    loads once, however many points it runs)."""
+    return _load_cached.cache_info().misses
 
 
 def load_library() -> ctypes.CDLL | None:

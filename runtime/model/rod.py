@@ -5,7 +5,7 @@
 ``generated/rod_layout.py``), its banded iteration matrix ``cy dF/dy + cj dF/dy'`` in
 LAPACK band storage, energies and powers, strains and stress resultants. It evaluates
 the compiled C assembly through ctypes (``runtime.model.build``) or, without a C
-compiler, the CasADi MX assembly (``runtime.model.casadi_rod``) with the same numbers
+compiler, the CasADi MX assembly (``runtime.model.casadi_oracle``) with the same numbers
 up to rounding. The rod's numbers live in a ``runtime.model.arrays.RodArrays``;
 a :class:`Drive` (loads with time functions, moving ends) updates them when the time or
 the load factor changes, so the model knows nothing about any particular problem.
@@ -121,9 +121,9 @@ class RodModel:
         self._sp = None
         self._casadi = None
         if lib is None:
-            from runtime.model.casadi_rod import CasadiRod
+            from runtime.model.casadi_oracle import CasadiOracle
 
-            self._casadi = CasadiRod(arrays)
+            self._casadi = CasadiOracle(arrays)
         self._ptrs = _PointerCache()
         self._zeros = np.zeros(self.n)
         self._ab = np.zeros((self.ldab, self.n), order="F")
@@ -379,8 +379,8 @@ class RodModel:
         return {end: quat_rotation(v[0]) for end, v in q.items()}
 
     def condensation_blocks(self) -> list[tuple[int, int, int, int, int]]:
-        """The kinematic blocks a Newton solve may eliminate (``runtime.solvers._bdf_c.
-        CondensedNewton``): per node, the rows phi' = v eliminate v (kept: phi; at a held
+        """The kinematic blocks a Newton solve may eliminate (``runtime.solvers.native.
+        condensed.CondensedNewton``): per node, the rows phi' = v eliminate v (kept: phi; at a held
         node the rows v = v(t)); per segment, the rows p' = 1/2 p*(0, Omega) eliminate p
         (kept: Omega). Each as
         ``(e_off, e_size, r_off, k_off, k_size)`` of contiguous state ranges."""

@@ -106,19 +106,110 @@ KEYS: tuple[Key, ...] = (
        "the problem file)", "the points from a file", invalid="missing.csv",
        kinds=("points",)),
     # -- [section] ----------------------------------------------------------------------
-    _k("section", "kind", "-", '"rectangle"', "rectangle, ellipse, circle, tube, stiffness",
-       "shape of the cross-section, or stiffnesses given directly", invalid="hexagon"),
+    _k("section", "kind", "-", '"rectangle"', "rectangle, ellipse, circle, tube, stiffness, "
+       "composite", "shape of the cross-section, stiffnesses given directly, or a composite "
+       "section of named materials ([[section.regions]], [materials.NAME]; analysed by "
+       "kvrod section, not simulated yet: the rod kernels take diagonal matrices)",
+       invalid="hexagon"),
+    _k("section", "damping", "-", '"consistent"', "consistent, naive; with "
+       "material.damping (its earlier place, still read) the same route",
+       "the rod viscosity: from the dissipation on the section's elastic deformation "
+       "(eta_E, eq. (5); for a composite the consistent 6x6 V) or the naive traction route "
+       "(eta~_E; the naive V~); one key for every section kind", invalid="viscous"),
     *(_k("section", n, "m", "required", "1e-30 ... 1e30" if n != "inner_radius" else
          ">= 0, < outer_radius", f"{kind}: {what}", invalid=-0.01, kinds=(kind,))
       for kind, dims in _SHAPES.items() for n, what in dims),
     *(_k("section", f"{n}_end", "m", "= the start value", "as the start value",
          f"{kind}: {what} at s = L (linear taper)", invalid=-0.01, kinds=(kind,))
       for kind, dims in _SHAPES.items() for n, what in dims),
-    _k("section", "shear_correction", "-", "true", "true, false", "shear factors of the "
-       "shape (eq. (7)); false: all factors 1 (eq. (2))", invalid="yes",
-       kinds=tuple(_SHAPES)),
+    _k("section", "shear_correction", "-", "true", 'true, false, "energy"', "transverse shear "
+       "factors of the shape (eq. (7)): true Cowper's (the paper's reference, the default, so "
+       "the reproduction of the paper is unchanged); \"energy\" the energy-consistent "
+       "factors of Saint-Venant flexure (what BECAS and VABS give and composite sections "
+       "use), computed by the section analysis of the shape at the material's nu (< 1/2) "
+       "and cached per aspect ratio (0.2 ... 2 s the first time): lower than Cowper's for "
+       "nu > 0 (circle, nu = 0.3: 0.851 against 0.886; far lower for a wide section "
+       "sheared across its depth: a 20:1 strip 0.049); false all factors 1 (eq. (2))",
+       invalid="yes", kinds=tuple(_SHAPES)),
     *(_k("section", n, u, "required", "> 0", what, invalid=0.0, kinds=("stiffness",))
       for n, (u, what) in _STIFF.items()),
+    _k("section", "regions", "-", "required", "at least one table [[section.regions]]; "
+       "no two overlap, together one connected section", "the regions of a composite "
+       "section (below)", invalid=[], kinds=("composite",)),
+    # -- [[section.regions]] ------------------------------------------------------------
+    _k("section.regions", "material", "-", "required", "the NAME of a [materials.NAME] "
+       "table", "the region's material", invalid="unobtainium"),
+    _k("section.regions", "shape", "-", "required", "a table { kind = ..., ... } (below)",
+       "the region's shape in the section's (x1, x2) along (d1, d2)",
+       invalid={"kind": "hexagon"}),
+    _k("section.regions", "name", "-", "section.regions[i]", "a non-empty text", "how "
+       "errors, reports and pictures call the region", invalid=""),
+    # -- shape = {...} of a region ------------------------------------------------------
+    _k("section.regions.shape", "kind", "-", "required", "circle, rectangle, ellipse, "
+       "tube, polygon", "the shape", invalid="hexagon"),
+    _k("section.regions.shape", "centre", "m", "[0, 0]", "[x1, x2], finite", "centre of "
+       "the shape", invalid=[0.0], kinds=("circle", "rectangle", "ellipse", "tube")),
+    _k("section.regions.shape", "radius", "m", "required", "> 0", "circle: radius",
+       invalid=-1.0, kinds=("circle",)),
+    _k("section.regions.shape", "width", "m", "required", "> 0", "rectangle: width along "
+       "d1 (before the angle)", invalid=-1.0, kinds=("rectangle",)),
+    _k("section.regions.shape", "height", "m", "required", "> 0", "rectangle: height "
+       "along d2 (before the angle)", invalid=0.0, kinds=("rectangle",)),
+    _k("section.regions.shape", "angle", "deg", "0", "a number", "rotation "
+       "counterclockwise from d1", invalid="steep", kinds=("rectangle", "ellipse")),
+    _k("section.regions.shape", "a", "m", "required", "> 0", "ellipse: half axis along d2 "
+       "(before the angle)", invalid=-1.0, kinds=("ellipse",)),
+    _k("section.regions.shape", "b", "m", "required", "> 0", "ellipse: half axis along d1",
+       invalid=0.0, kinds=("ellipse",)),
+    _k("section.regions.shape", "outer_radius", "m", "required", "> 0", "tube: outer "
+       "radius", invalid=-1.0, kinds=("tube",)),
+    _k("section.regions.shape", "inner_radius", "m", "required", "0 < inner_radius < "
+       "outer_radius", "tube: inner radius", invalid=0.0, kinds=("tube",)),
+    _k("section.regions.shape", "points", "m", "required", "at least 3 points [[x1, x2], "
+       "...], a simple polygon of positive area", "polygon: its outline",
+       invalid=[[0.0, 0.0], [1.0, 0.0]], kinds=("polygon",)),
+    _k("section.regions.shape", "holes", "m", "[]", "point lists inside the outline",
+       "polygon: its holes", invalid="none", kinds=("polygon",)),
+    # -- [materials.NAME] ---------------------------------------------------------------
+    _k("materials.NAME", "model", "-", '"kelvin_voigt"', "kelvin_voigt (generalized "
+       "Maxwell regions are not supported yet)", "constitutive model of the region's 3-D "
+       "material", invalid="generalized_maxwell"),
+    _k("materials.NAME", "density", "kg/m^3", "required", "> 0", "mass density",
+       invalid=0.0),
+    _k("materials.NAME", "youngs_modulus", "Pa", "required", "> 0", "isotropic: Young's "
+       "modulus E", invalid=-1.0, kinds=("isotropic",)),
+    _k("materials.NAME", "poisson_ratio", "-", "required", "-1 < nu < 1/2 (rubber: e.g. "
+       "0.4999; nearly incompressible regions are integrated without locking)",
+       "isotropic: Poisson's ratio", invalid=0.5, kinds=("isotropic",)),
+    _k("materials.NAME", "tau", "s", "0 (elastic)", ">= 0; not with tau_S/tau_B or "
+       "eta/zeta", "isotropic: tau_S = tau_B = tau", invalid=-0.01, kinds=("isotropic",)),
+    _k("materials.NAME", "tau_S", "s", "0", ">= 0", "isotropic: shear retardation time "
+       "(eta = G tau_S)", invalid=-0.01, kinds=("isotropic",)),
+    _k("materials.NAME", "tau_B", "s", "0", ">= 0", "isotropic: bulk retardation time "
+       "(zeta = K tau_B)", invalid=-0.01, kinds=("isotropic",)),
+    _k("materials.NAME", "eta", "Pa s", "0", ">= 0; not with tau, tau_S, tau_B",
+       "isotropic: shear viscosity", invalid=-1.0, kinds=("isotropic",)),
+    _k("materials.NAME", "zeta", "Pa s", "0", ">= 0", "isotropic: bulk viscosity",
+       invalid=-1.0, kinds=("isotropic",)),
+    _k("materials.NAME", "stiffness_matrix", "Pa", "required (anisotropic)", "6x6, "
+       "symmetric positive definite", "anisotropic: Voigt stiffness C in the material's "
+       "axes, order 11, 22, 33, 23, 13, 12 (axis 3 along the rod before the orientation), "
+       "engineering shear strains (C44 = G when isotropic)",
+       invalid=[[1.0e9 if i == j else 0.0 for j in range(6)] for i in range(5)]
+       + [[0.0] * 5 + [-1.0e9]], kinds=("anisotropic",)),
+    _k("materials.NAME", "viscosity_matrix", "Pa s", "0 (elastic)", "6x6, symmetric "
+       "positive semi-definite", "anisotropic: Voigt viscosity V (viscous stress V "
+       "d(eps)/dt), order and axes as stiffness_matrix", invalid=[[-1.0] * 6] * 6,
+       kinds=("anisotropic",)),
+    _k("materials.NAME", "orientation", "deg", "{ rotation = 0, off_axis = 0 }", "a table "
+       "(below)", "anisotropic: the material's axes in the section", invalid="along",
+       kinds=("anisotropic",)),
+    _k("materials.NAME.orientation", "off_axis", "deg", "0", "-90 ... 90", "the material's "
+       "axis 3 (e.g. its fibre) tilts from the rod axis towards d1 by this angle (turned "
+       "about d2)", invalid=120.0),
+    _k("materials.NAME.orientation", "rotation", "deg", "0", "a number", "then the tilt "
+       "turns about the rod axis towards cos(rotation) d1 + sin(rotation) d2 (a fibre wound "
+       "in a wall: the angle of the wall's tangent from d1)", invalid="north"),
     # -- [material] ---------------------------------------------------------------------
     _k("material", "model", "-", '"kelvin_voigt"', "kelvin_voigt, generalized_maxwell",
        "constitutive model", invalid="elastic"),
@@ -146,8 +237,9 @@ KEYS: tuple[Key, ...] = (
        "shear viscosity (instead of tau_S)", invalid=-1.0, kinds=("kelvin_voigt",)),
     _k("material", "zeta", "Pa s", "0", ">= 0 (0 if nu = 1/2)", "bulk viscosity (instead "
        "of tau_B)", invalid=-1.0, kinds=("kelvin_voigt",)),
-    _k("material", "damping", "-", '"consistent"', "consistent, naive", "extensional "
-       "viscosity eta_E from the dissipation function (eq. (5)) or the naive eta~_E",
+    _k("material", "damping", "-", '"consistent"', "consistent, naive", "the earlier place "
+       "of section.damping, still read (both given must agree): extensional viscosity eta_E "
+       "from the dissipation function (eq. (5)) or the naive eta~_E",
        invalid="viscous", kinds=("kelvin_voigt",)),
     _k("material", "branches", "-", "required", "1 ... 12 tables [[material.branches]]",
        "the Maxwell branches (below)", invalid=[], kinds=("generalized_maxwell",)),
@@ -281,7 +373,9 @@ def markdown() -> str:
     for table, keys in by_table().items():
         head = ("top level" if not table else "time functions (`time = {...}` of a load, "
                 "`translation_time`/`rotation_time` of a motion)" if table == "<time>"
-                else f"`[[{table}]]`" if table in ("loads", "material.branches")
+                else "`shape = {...}` of a region" if table == "section.regions.shape"
+                else f"`[[{table}]]`" if table in ("loads", "material.branches",
+                                                   "section.regions")
                 else f"`[{table}]`")
         lines += [f"### {head}", "", "| key | kinds | unit | default | allowed | meaning |",
                   "|---|---|---|---|---|---|"]

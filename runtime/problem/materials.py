@@ -5,10 +5,12 @@ Two models (TOML ``[material] model = ...``):
 ``kelvin_voigt`` (the paper): ``density`` (kg/m^3), ``youngs_modulus`` E (Pa),
 ``poisson_ratio`` nu, and the viscosity as retardation times ``tau_S`` (shear) and
 ``tau_B`` (bulk) in s, or ``tau`` (the paper's convention tau_S = tau_B = tau), or the
-viscosities ``eta`` (shear, Pa s) and ``zeta`` (bulk, Pa s); ``damping = "consistent"``
-(eta_E from the dissipation function, eqs. (4)-(9)) or ``"naive"`` (the stress-resultant
-route's eta~_E). ``density_end`` and ``youngs_modulus_end`` make them vary linearly along
-the rod. The rod's matrices C_F, C_M (eq. (7)) and V_F, V_M (eq. (9)) come from
+viscosities ``eta`` (shear, Pa s) and ``zeta`` (bulk, Pa s). The rod viscosity route,
+``"consistent"`` (eta_E from the dissipation function, eqs. (4)-(9)) or ``"naive"`` (the
+stress-resultant route's eta~_E), is the key ``section.damping``; ``material.damping``, its
+place before composite sections, is still read, and the problem keeps the route here
+(``KelvinVoigt.damping``). ``density_end`` and ``youngs_modulus_end`` make them vary
+linearly along the rod. The rod's matrices C_F, C_M (eq. (7)) and V_F, V_M (eq. (9)) come from
 ``generated/constitutive.py``.
 
 ``generalized_maxwell`` (the paper's future work, Sect. 6): the 3-D solid of an equilibrium
@@ -34,9 +36,22 @@ import numpy as np
 
 from runtime.errors import ParameterError
 from runtime.problem import coerce as C
-from runtime.problem.sections import GivenStiffness, Section, Shape
+from runtime.problem.sections import (
+    COMPOSITE_REFUSAL,
+    DAMPING_ROUTES,
+    Composite,
+    GivenStiffness,
+    Section,
+    Shape,
+)
 
-DAMPING_ROUTES = ("consistent", "naive")
+#: DAMPING_ROUTES lives in runtime.problem.sections (the key is section.damping); imported
+#: here for the material's own checks and the older imports
+
+
+def _refuse_composite(section: Section) -> None:
+    if isinstance(section, Composite):
+        raise ParameterError("section.kind", "composite", COMPOSITE_REFUSAL)
 
 
 def _constitutive():
@@ -97,6 +112,7 @@ class KelvinVoigt:
     def rod_matrices(self, section: Section, x: np.ndarray) -> dict[str, np.ndarray]:
         """Per segment (at fractions x of the length): diagonals C_F, C_M, V_F, V_M (n, 3)
         and rhoA (n,), rhoI (n, 3)."""
+        _refuse_composite(section)
         c = _constitutive()
         nu = self.poisson_ratio
         x = np.atleast_1d(np.asarray(x, dtype=float))
@@ -261,6 +277,7 @@ class GeneralizedMaxwell:
         """As :meth:`KelvinVoigt.rod_matrices`, with C_F, C_M the instantaneous
         stiffnesses (equilibrium plus every term), V_F = V_M = 0, and the terms:
         ``theta`` (B,), ``segb`` (n, B, 3), ``jntb`` (n, B, 3) (N and N m^2)."""
+        _refuse_composite(section)
         if isinstance(section, GivenStiffness):
             raise ParameterError("section.kind", "stiffness", "a shape (rectangle, ellipse, "
                                  "circle, tube) for a generalized_maxwell material: its "

@@ -4,8 +4,8 @@ A :class:`Problem` is a frozen tree of dataclasses::
 
     name, description
     rod         Rod(geometry, elements)             [rod], [rod.geometry]
-    section     Shape | GivenStiffness              [section]
-    material    KelvinVoigt | GeneralizedMaxwell    [material]
+    section     Shape | GivenStiffness | Composite  [section] (+ [materials.NAME])
+    material    KelvinVoigt | GeneralizedMaxwell    [material] (None: composite section)
     start, end  End(kind, motion)                   [start], [end]
     loads       tuple[Load, ...]                    [[loads]]
     simulation  Simulation(t_end, rtol, atol, ...)  [simulation]
@@ -35,8 +35,19 @@ from runtime.errors import ParameterError
 from runtime.problem import coerce as C
 from runtime.problem.geometry import Curve, Geometry, Straight, geometry_from_mapping
 from runtime.problem.loads import End, Load, end_from_mapping, load_from_mapping
-from runtime.problem.materials import GeneralizedMaxwell, Material, material_from_mapping
-from runtime.problem.sections import GivenStiffness, Section, section_from_mapping
+from runtime.problem.materials import (
+    GeneralizedMaxwell,
+    Material,
+    material_from_mapping,
+)
+from runtime.problem.sections import (
+    COMPOSITE_REFUSAL,
+    DAMPING_ROUTES,
+    Composite,
+    GivenStiffness,
+    Section,
+    section_from_mapping,
+)
 
 #: guards against runs that cannot finish on one machine
 MAX_ELEMENTS = 200_000          # ~1 GiB of band storage and work arrays
@@ -73,8 +84,8 @@ GLASSY_RATIO_MAX = 1e10
 #: first root of 1 + cos(x) cosh(x) = 0 (clamped-free Euler-Bernoulli beam)
 BETA1_L = 1.8751040687119611
 
-TOP_KEYS = ("name", "description", "rod", "section", "material", "start", "end", "loads",
-            "simulation", "statics", "analysis")
+TOP_KEYS = ("name", "description", "rod", "section", "material", "materials", "start", "end",
+            "loads", "simulation", "statics", "analysis")
 
 
 @dataclass(frozen=True)
@@ -174,7 +185,9 @@ class Problem:
     rod: Rod = field(default_factory=Rod)
     section: Section = field(default_factory=lambda: section_from_mapping(
         {"kind": "rectangle", "width": 0.01, "height": 0.01}))
-    material: Material = field(default_factory=lambda: material_from_mapping({}))
+    #: None: the default Kelvin-Voigt material for a homogeneous section; a composite
+    #: section has none (its regions name their materials)
+    material: Material | None = None
     start: End = field(default_factory=lambda: End("clamped"))
     end: End = field(default_factory=End)
     loads: tuple[Load, ...] = ()
@@ -186,10 +199,16 @@ class Problem:
     def __post_init__(self) -> None:
         from runtime.problem.sections import LENGTH_MAX, LENGTH_MIN, LENGTH_RANGE
 
+        composite = isinstance(self.section, Composite)
+        if self.material is None and not composite:
+            object.__setattr__(self, "material", material_from_mapping({}))
+        if composite and self.material is not None:
+            raise ParameterError("material", self.material.to_mapping(), BESIDE_COMPOSITE)
         N = self.rod.elements
         if not LENGTH_MIN <= self.rod.length <= LENGTH_MAX:
             raise ParameterError("rod.length", self.rod.length, LENGTH_RANGE)
-        self._check_matrices()
+        if not composite:
+            self._check_matrices()
         for ld in self.loads:
             if ld.s is not None and ld.s > self.rod.length * (1 + 1e-12):
                 raise ParameterError("loads.s", ld.s, f"0 ... rod length {self.rod.length:g} m")
@@ -204,6 +223,12 @@ class Problem:
                                  f"0 ... {int(MAX_FRAME_VALUES // (3 * (N + 1)))} for "
                                  f"{N} elements (at most {MAX_FRAME_VALUES:.0e} stored "
                                  "node coordinates)")
+        if composite:
+            # the checks below need the rod's matrices, which a composite section does not
+            # give the kernels yet (check_simulable refuses its runs)
+            self._check_positions()
+            self._check_input_frequencies()
+            return
         periods = self.simulation.t_end * self.characteristic_frequency() / (2 * math.pi)
         if periods > MAX_PERIODS:
             raise ParameterError(
@@ -235,6 +260,22 @@ class Problem:
                 f"{getattr(self.material, 'youngs_modulus', float('nan')):g} Pa): in a "
                 "shorter run not even that mode moves the rod by more than round-off (a "
                 "displacement ~ (omega t)^2 of its scale)")
+
+    @property
+    def damping(self) -> str:
+        """The rod viscosity route, ``section.damping``: "consistent" or "naive"."""
+        if isinstance(self.section, Composite):
+            return self.section.damping
+        return getattr(self.material, "damping", "consistent")
+
+    def check_simulable(self) -> None:
+        """Raise :class:`~runtime.errors.ParameterError` (naming ``section.kind``) for a
+        problem today's rod kernels cannot run: a composite section (the message:
+        ``runtime.problem.sections.COMPOSITE_REFUSAL``). Every command that simulates,
+        solves statically, analyses modes or sweeps calls it before it writes anything;
+        the rod matrices refuse the same way."""
+        if isinstance(self.section, Composite):
+            raise ParameterError("section.kind", "composite", COMPOSITE_REFUSAL)
 
     def _check_maxwell_springs(self) -> None:
         """A generalized Maxwell rod: without an equilibrium spring (a Maxwell fluid) no
@@ -426,6 +467,7 @@ class Problem:
 
     def segment_matrices(self) -> dict[str, np.ndarray]:
         """Per segment: C_F, C_M, V_F, V_M diagonals (N, 3), rhoA (N,), rhoI (N, 3)."""
+        self.check_simulable()
         N = self.rod.elements
         x = (np.arange(N) + 0.5) / N
         return self.material.rod_matrices(self.section, x)
@@ -435,6 +477,7 @@ class Problem:
         (the checks of every new problem use them)."""
         m = self.__dict__.get("_m3")
         if m is None:
+            self.check_simulable()
             m = self.material.rod_matrices(self.section, np.array([0.0, 0.5, 1.0]))
             object.__setattr__(self, "_m3", m)
         return m
@@ -503,8 +546,15 @@ class Problem:
         rod: dict[str, Any] = {"elements": self.rod.elements, "geometry": g.to_mapping()}
         if isinstance(g, Straight):
             rod["length"] = g.rod_length
+        section = {**self.section.to_mapping(), "damping": self.damping}
+        if isinstance(self.section, Composite):
+            stuff: dict[str, Any] = {"materials": self.section.materials_mapping()}
+        else:
+            material = self.material.to_mapping()
+            material.pop("damping", None)               # the key is section.damping
+            stuff = {"material": material}
         return {"name": self.name, "description": self.description, "rod": rod,
-                "section": self.section.to_mapping(), "material": self.material.to_mapping(),
+                "section": section, **stuff,
                 "start": self.start.to_mapping(), "end": self.end.to_mapping(),
                 "loads": [ld.to_mapping() for ld in self.loads],
                 "simulation": {k: v for k, v in vars(self.simulation).items()
@@ -531,12 +581,13 @@ class Problem:
             raise ParameterError("loads", loads_m, "an array of tables [[loads]]")
         loads = tuple(load_from_mapping(f"loads[{i}]", ld, base)
                       for i, ld in enumerate(loads_m))
+        section, material = section_and_material(m)
         return cls(
             name=C.string("name", m.get("name", name)),
             description=str(m.get("description", "")),
             rod=rod,
-            section=section_from_mapping(m.get("section")),
-            material=material_from_mapping(m.get("material")),
+            section=section,
+            material=material,
             start=end_from_mapping("start", m.get("start", "clamped"), base),
             end=end_from_mapping("end", m.get("end", "free"), base),
             loads=loads,
@@ -579,6 +630,50 @@ class Problem:
             raise
 
 
+BESIDE_COMPOSITE = ("no [material] beside [section] kind = 'composite': a composite section "
+                    "takes its materials from its regions (section.regions[i].material "
+                    "names a [materials.NAME] table); [material] is the material of a "
+                    "homogeneous rod")
+
+
+def section_and_material(m: Mapping[str, Any]) -> tuple[Section, Material | None]:
+    """The section and material of a problem (or section) file's table: ``[section]``
+    with ``[material]`` (homogeneous) or with ``[materials.NAME]`` (composite; then no
+    ``[material]``), and the damping route ``section.damping`` (or the older
+    ``material.damping``; both given must agree), kept with a Kelvin-Voigt material or a
+    composite section."""
+    sec_m = dict(C.table("section", m["section"] if m.get("section") is not None else {}))
+    has_material = m.get("material") is not None
+    if sec_m.get("kind") == "composite" and has_material:
+        raise ParameterError("material", m["material"], BESIDE_COMPOSITE)
+    if "materials" in m and sec_m.get("kind") != "composite":
+        raise ParameterError("materials", m["materials"], "[materials.NAME] tables only "
+                             "with [section] kind = 'composite' (whose regions name them); "
+                             "a homogeneous rod takes its material from [material]")
+    mat_m = dict(C.table("material", m["material"] if has_material else {}))
+    new, old = sec_m.get("damping"), mat_m.get("damping")
+    if new is not None:
+        C.choice("section.damping", new, DAMPING_ROUTES)
+    if old is not None:
+        C.choice("material.damping", old, DAMPING_ROUTES)
+    if new is not None and old is not None and new != old:
+        raise ParameterError("section.damping", new, f"the route of material.damping = "
+                             f"{old!r} (the key's earlier place, still read), or give one "
+                             "of them only")
+    route = new if new is not None else old
+    section = section_from_mapping(sec_m, m.get("materials"))
+    if isinstance(section, Composite):
+        return section, None
+    if route is not None:
+        if mat_m.get("model", "kelvin_voigt") == "kelvin_voigt":
+            mat_m["damping"] = route
+        elif route != "consistent":
+            raise ParameterError("section.damping" if new is not None else "material.damping",
+                                 route, "'consistent' for a generalized Maxwell material "
+                                 "(the naive route is a Kelvin-Voigt notion)")
+    return section, material_from_mapping(mat_m)
+
+
 def _time_peak(tf: Any) -> float:
     """The largest absolute value a time function takes (ramps, steps, releases: 1)."""
     kind = getattr(tf, "kind", "constant")
@@ -604,7 +699,7 @@ ALIASES: dict[str, str] = {
     "tau": "material.tau", "tau_S": "material.tau_S", "tau_B": "material.tau_B",
     "youngs_modulus": "material.youngs_modulus", "E": "material.youngs_modulus",
     "poisson_ratio": "material.poisson_ratio", "nu": "material.poisson_ratio",
-    "density": "material.density", "damping": "material.damping",
+    "density": "material.density", "damping": "section.damping",
     "n_elements": "rod.elements", "elements": "rod.elements", "length": "rod.length",
     "width": "section.width", "height": "section.height", "radius": "section.radius",
     "t_end": "simulation.t_end", "rtol": "simulation.rtol", "atol": "simulation.atol",
@@ -659,20 +754,31 @@ def apply_override(m: dict[str, Any], key: str, value: Any) -> str:
     if not all(parts):
         raise ParameterError(path, value, "a dotted path without empty parts "
                              "(e.g. loads.0.vector)")
+    if path in ("material.damping", "section.damping"):
+        # one place for the route: the key set replaces the other (the older one is read)
+        other = m.get("section" if path == "material.damping" else "material")
+        if isinstance(other, dict):
+            other.pop("damping", None)
+    mat: Any = None
     if parts[0] == "material" and len(parts) == 2:  # one way of giving the viscosity
         mat = m.setdefault("material", {})
-        if parts[1] == "tau":
+    elif (parts[0] == "materials" and len(parts) == 3
+          and isinstance(m.get("materials"), dict)
+          and isinstance(m["materials"].get(parts[1]), dict)):
+        mat = m["materials"][parts[1]]       # a named material of a composite section
+    if isinstance(mat, dict):
+        if parts[-1] == "tau":
             for k in ("tau_S", "tau_B", "eta", "zeta"):
                 mat.pop(k, None)
-        elif parts[1] in ("tau_S", "tau_B"):
+        elif parts[-1] in ("tau_S", "tau_B"):
             if "tau" in mat:
                 t = mat.pop("tau")
                 mat.setdefault("tau_S", t)
                 mat.setdefault("tau_B", t)
             mat.pop("eta", None)
             mat.pop("zeta", None)
-        elif parts[1] in ("eta", "zeta"):   # the viscosities replace the retardation times
-            _times_to_viscosities(mat, keep=parts[1])
+        elif parts[-1] in ("eta", "zeta"):  # the viscosities replace the retardation times
+            _times_to_viscosities(mat, keep=parts[-1])
     if (parts[:2] == ["material", "branches"] and len(parts) == 4
             and isinstance(m.get("material", {}).get("branches"), list)):
         branches = m["material"]["branches"]

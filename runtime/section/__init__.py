@@ -2,11 +2,11 @@
 
 A floor below ``runtime/problem``: it imports NumPy, SciPy, shapely, cytriangle and
 ``runtime.errors`` only. ``analyse_section(regions, materials, tol=...)`` returns a
-:class:`SectionResult` with the 6x6 stiffness, the consistent and the naive 6x6 viscosity
-about the elastic centroid, the shear centre and the inertia per length; the parsers
-``materials_from_mapping`` (``[materials.NAME]``) and ``regions_from_mapping``
-(``[[section.regions]]``) turn TOML tables into its input, with errors that name the key
-path.
+:class:`~runtime.section.analysis.SectionResult` with the 6x6 stiffness, the consistent
+and the naive 6x6 viscosity about the elastic centroid, the shear centre and the inertia
+per length; the parsers ``materials_from_mapping`` (``[materials.NAME]``) and
+``regions_from_mapping`` (``[[section.regions]]``) turn TOML tables into its input, with
+errors that name the key path.
 """
 
 from runtime.section.analysis import RESULTANTS, STRAINS, SectionResult, analyse_section

@@ -55,6 +55,8 @@ class SectionResult:
     Convergence: ``mesh_size`` h [m] of the final mesh, ``n_elements``, ``n_nodes``,
     ``tolerance``, ``achieved_change`` (largest relative change of a diagonal entry from
     the previous mesh), ``converged``, ``history`` (h, change) per mesh; ``warnings``.
+    ``info``: what a caller adds (the problem layer: the damping route, the regions, the
+    closed-form rod model), merged into :meth:`to_dict`.
     """
 
     stiffness: np.ndarray
@@ -77,10 +79,31 @@ class SectionResult:
     history: tuple[tuple[float, float], ...]
     warnings: tuple[str, ...] = ()
     mesh: Mesh | None = field(default=None, repr=False, compare=False)
+    info: Mapping[str, Any] = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def reference_point(self) -> tuple[float, float]:
         return self.elastic_centroid
+
+    def _line_of_action(self, V: np.ndarray) -> tuple[float, float] | None:
+        if not V[2, 2] > 0.0:
+            return None
+        c1, c2 = self.elastic_centroid
+        return (c1 - float(V[4, 2]) / float(V[2, 2]), c2 + float(V[3, 2]) / float(V[2, 2]))
+
+    @property
+    def viscous_centroid(self) -> tuple[float, float] | None:
+        """Where the viscous axial force of a uniform extension rate acts [m] (consistent
+        viscosity): the elastic centroid + (-V[4, 2], V[3, 2]) / V[2, 2], with M1 =
+        <x2 sigma33>, M2 = <-x1 sigma33> about the centroid. Off the elastic centroid
+        when the viscosity is distributed otherwise than the stiffness (a composite of
+        polymers and metals); None for an elastic section (V[2, 2] = 0)."""
+        return self._line_of_action(self.viscosity)
+
+    @property
+    def viscous_centroid_naive(self) -> tuple[float, float] | None:
+        """As :attr:`viscous_centroid` for the naive (traction) viscosity [m]."""
+        return self._line_of_action(self.viscosity_naive)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready mapping (the keys of ``kvrod section``'s section.json)."""
@@ -96,12 +119,24 @@ class SectionResult:
             "elastic_centroid": list(self.elastic_centroid),
             "shear_centre": list(self.shear_centre),
             "reference_point": list(self.reference_point),
+            "viscous_centroid": (None if self.viscous_centroid is None
+                                 else list(self.viscous_centroid)),
+            "viscous_centroid_naive": (None if self.viscous_centroid_naive is None
+                                       else list(self.viscous_centroid_naive)),
             "area": self.area,
             "mesh": {"size": self.mesh_size, "elements": self.n_elements,
                      "nodes": self.n_nodes, "tolerance": self.tolerance,
-                     "achieved_change": self.achieved_change, "converged": self.converged},
+                     "achieved_change": _finite(self.achieved_change),
+                     "converged": self.converged,
+                     "history": [[h, _finite(c)] for h, c in self.history]},
             "warnings": list(self.warnings),
+            **{k: v for k, v in self.info.items()},
         }
+
+
+def _finite(x: float) -> float | None:
+    """JSON has no infinity: the first mesh's change (no previous mesh) is None."""
+    return x if math.isfinite(x) else None
 
 
 def shift(c: tuple[float, float]) -> np.ndarray:
@@ -210,9 +245,11 @@ def analyse_section(regions: Sequence[Region] | Any,
     Parameters
     ----------
     regions
-        :class:`Region` objects, or the ``[[section.regions]]`` array of tables.
+        :class:`~runtime.section.regions.Region` objects, or the ``[[section.regions]]``
+        array of tables.
     materials
-        {name: :class:`SectionMaterial`}, or the ``[materials]`` table.
+        {name: :class:`~runtime.section.materials.SectionMaterial`}, or the
+        ``[materials]`` table.
     tol
         Relative change of every diagonal entry of K, V and V_naive between two successive
         meshes below which the refinement stops (default 1e-4).

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -125,6 +125,30 @@ class SectionMaterial:
     bulk_excess: float = 0.0
     bulk_viscosity_excess: float = 0.0
     warnings: tuple[str, ...] = field(default=())
+    #: the ``[materials.NAME]`` table this material was read from (``to_mapping`` gives it
+    #: back as written, so a problem written out and read again is the same problem)
+    source: Mapping[str, Any] | None = field(default=None, compare=False, repr=False)
+
+    def to_mapping(self) -> dict[str, Any]:
+        """The ``[materials.NAME]`` table of this material: the table it was read from, else
+        E, nu, density and the retardation times (isotropic) or the Voigt matrices in the
+        material's own axes with the orientation (anisotropic)."""
+        if self.source is not None:
+            return _plain(self.source)
+        if self.isotropic is not None:
+            E, nu, tS, tB = self.isotropic
+            return {"youngs_modulus": E, "poisson_ratio": nu, "density": self.density,
+                    "tau_S": tS, "tau_B": tB}
+        T = stress_transform(rotation(*self.orientation))
+        Ti = np.linalg.inv(T)
+        out: dict[str, Any] = {"stiffness_matrix": (Ti @ self.stiffness @ Ti.T).tolist(),
+                               "density": self.density}
+        if np.any(self.viscosity):
+            out["viscosity_matrix"] = (Ti @ self.viscosity @ Ti.T).tolist()
+        if any(self.orientation):
+            out["orientation"] = {"rotation": self.orientation[0],
+                                  "off_axis": self.orientation[1]}
+        return out
 
     @property
     def eta_E(self) -> float:
@@ -134,6 +158,15 @@ class SectionMaterial:
         E, nu, tS, tB = self.isotropic
         eta, zeta = viscosities_from_times(E, nu, tS, tB)
         return zeta * (1 - 2 * nu) ** 2 + 4.0 / 3.0 * eta * (1 + nu) ** 2
+
+
+def _plain(m: Any) -> Any:
+    """A deep copy of a TOML-like value (tables, arrays, numbers, strings)."""
+    if isinstance(m, Mapping):
+        return {str(k): _plain(v) for k, v in m.items()}
+    if isinstance(m, (list, tuple)):
+        return [_plain(v) for v in m]
+    return m
 
 
 def _check_matrices(path: str, C: np.ndarray, V: np.ndarray, keys: tuple[str, str]) -> None:
@@ -226,8 +259,10 @@ def material_from_mapping(name: str, m: Any, path: str | None = None) -> Section
     m = ck.table(p, m)
     model = m.get("model", "kelvin_voigt")
     if model != "kelvin_voigt":
-        raise ParameterError(f"{p}.model", model, "'kelvin_voigt' (generalized Maxwell "
-                             "materials are not supported in composite sections yet)")
+        raise ParameterError(f"{p}.model", model, "'kelvin_voigt': the regions of a "
+                             "composite section are Kelvin-Voigt materials; generalized "
+                             "Maxwell regions are not supported yet (a homogeneous rod "
+                             "takes a generalized Maxwell material in [material])")
     if "stiffness_matrix" in m:
         ck.no_unknown_keys(p, m, _ANI_KEYS)
         C = ck.matrix6(f"{p}.stiffness_matrix", m["stiffness_matrix"], "Pa")
@@ -242,7 +277,7 @@ def material_from_mapping(name: str, m: Any, path: str | None = None) -> Section
                                 "an angle in degrees"),
                       ck.number(f"{p}.orientation.off_axis", o.get("off_axis", 0.0),
                                 "an angle in degrees, -90 ... 90", low=-90.0, high=90.0))
-        return anisotropic(name, C, V, rho, orient, path=p)
+        return replace(anisotropic(name, C, V, rho, orient, path=p), source=_plain(m))
     ck.no_unknown_keys(p, m, _ISO_KEYS)
     groups = (("tau",), ("tau_S", "tau_B"), ("eta", "zeta"))
     present = [g for g in groups if any(k in m for k in g)]
@@ -268,7 +303,7 @@ def material_from_mapping(name: str, m: Any, path: str | None = None) -> Section
         tS = ck.nonnegative(f"{p}.eta", m["eta"], "Pa s") / shear_modulus(E, nu)
     if "zeta" in m:
         tB = ck.nonnegative(f"{p}.zeta", m["zeta"], "Pa s") / bulk_modulus(E, nu)
-    return isotropic(name, E, nu, m["density"], tS, tB, path=p)
+    return replace(isotropic(name, E, nu, m["density"], tS, tB, path=p), source=_plain(m))
 
 
 def materials_from_mapping(m: Any, path: str = "materials") -> dict[str, SectionMaterial]:

@@ -20,6 +20,7 @@ import shapely
 from shapely.geometry import LineString, Polygon
 from shapely.ops import unary_union
 
+from runtime.section.element import shape_functions
 from runtime.section.regions import Region
 
 #: minimum angle of the triangles (degrees; Triangle guarantees termination below 20.7)
@@ -127,7 +128,6 @@ def _grading_points(vertices: np.ndarray, segments: np.ndarray, polys, h: float,
 
 def _inverted(nodes: np.ndarray, elements: np.ndarray) -> np.ndarray:
     """Elements whose isoparametric Jacobian is not positive at a corner or midside node."""
-    from runtime.section.fe import shape_functions  # fe imports this module
 
     L = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [.5, .5, 0], [0, .5, .5], [.5, 0, .5]])
     _, dN = shape_functions(L.astype(float))

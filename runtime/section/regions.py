@@ -26,11 +26,18 @@ OVERLAP_TOLERANCE = 1e-9
 @dataclass(frozen=True)
 class Region:
     """One region: ``material`` (a name in the materials map) and ``shape``; ``name`` is
-    how errors and reports call it (its key path by default)."""
+    how errors and reports call it (empty: its key path, ``section.regions[i]``)."""
 
     material: str
     shape: Shape
     name: str = ""
+
+    def to_mapping(self) -> dict[str, Any]:
+        """The ``[[section.regions]]`` table of this region."""
+        out: dict[str, Any] = {"material": self.material, "shape": self.shape.to_mapping()}
+        if self.name:
+            out["name"] = self.name
+        return out
 
 
 def region_from_mapping(m: Any, path: str) -> Region:
@@ -41,7 +48,7 @@ def region_from_mapping(m: Any, path: str) -> Region:
                                                    "the name of a [materials.NAME] table"))
     shape = shape_from_mapping(ck.required(path, m, "shape", "a shape table { kind = ... }"),
                                f"{path}.shape")
-    name = ck.string(f"{path}.name", m["name"]) if "name" in m else path
+    name = ck.string(f"{path}.name", m["name"]) if "name" in m else ""
     return Region(mat, shape, name)
 
 

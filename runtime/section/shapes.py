@@ -94,6 +94,9 @@ class Circle:
     def area(self) -> float:
         return math.pi * self.radius**2
 
+    def to_mapping(self) -> dict[str, Any]:
+        return {"kind": self.kind, "radius": self.radius, "centre": list(self.centre)}
+
 
 @dataclass(frozen=True)
 class Ellipse:
@@ -114,6 +117,10 @@ class Ellipse:
     def area(self) -> float:
         return math.pi * self.a * self.b
 
+    def to_mapping(self) -> dict[str, Any]:
+        return {"kind": self.kind, "a": self.a, "b": self.b, "centre": list(self.centre),
+                "angle": self.angle}
+
 
 @dataclass(frozen=True)
 class Tube:
@@ -133,6 +140,10 @@ class Tube:
     @property
     def area(self) -> float:
         return math.pi * (self.outer_radius**2 - self.inner_radius**2)
+
+    def to_mapping(self) -> dict[str, Any]:
+        return {"kind": self.kind, "inner_radius": self.inner_radius,
+                "outer_radius": self.outer_radius, "centre": list(self.centre)}
 
 
 @dataclass(frozen=True)
@@ -157,6 +168,10 @@ class Rectangle:
     def area(self) -> float:
         return self.width * self.height
 
+    def to_mapping(self) -> dict[str, Any]:
+        return {"kind": self.kind, "width": self.width, "height": self.height,
+                "centre": list(self.centre), "angle": self.angle}
+
 
 @dataclass(frozen=True)
 class PolygonShape:
@@ -173,6 +188,12 @@ class PolygonShape:
     @property
     def area(self) -> float:
         return float(Polygon(self.points, list(self.holes)).area)
+
+    def to_mapping(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"kind": self.kind, "points": [list(p) for p in self.points]}
+        if self.holes:
+            out["holes"] = [[list(p) for p in h] for h in self.holes]
+        return out
 
 
 Shape = Circle | Ellipse | Tube | Rectangle | PolygonShape

@@ -1,31 +1,15 @@
-"""Observers of the run loop: they watch accepted steps on the integrator's dense output.
-
-An observer implements any of
-
-* ``begin(run)``: the run starts (``run.t``, ``run.y``, ``run.yp`` hold the initial values);
-* ``step(run, dense, t0, t1)``: a step ``[t0, t1]`` was accepted; ``dense(t)`` and
-  ``dense.derivative(t)`` interpolate y and y' on it, ``dense.values(ts)`` both at once
-  (rows per time);
-* ``restart(run, restart)``: the integrator restarted at a breakpoint of the inputs
-  (``runtime.solvers.schedule.Restart``: its time, the states before and after);
-* ``end(run)``: the run stopped (finished, failed or interrupted);
-* ``state() -> dict`` / ``restore(dict)``: what a checkpoint must keep to continue.
+"""The rod run's observers (the hooks they implement: :class:`runtime.solvers.driver.Observer`):
+the energy audit's running integrals (:class:`EnergyIntegrator`), output samples of the
+ends, energies and reactions (:class:`Sampler`), maxima of one coordinate
+(:class:`Maxima`), full states for ParaView (:class:`Snapshots`), the deformed centreline
+(:class:`Centreline`), progress (:class:`Progress`).
 
 They are called in the order given, so an observer may use the results of earlier ones
-(:class:`Sampler` reads the running integrals of :class:`EnergyIntegrator`).
-
-With the compiled step loop (``runtime/solvers/bdf_core.c``) the run loop lets many steps
-pass between two calls of Python code. An observer that does not need every step says so
-with ``sparse = True`` and tells the loop when it must be called:
-
-* ``attach(solver) -> bool``: move its per-step work into the compiled loop (the energy
-  quadrature and the output samples); its ``step`` then only collects the results. If
-  it returns False, the observer is called after every step, as without the loop;
-* ``next_time() -> float``: the loop stops at the step that reaches this time;
-* ``watches() -> list[(index, direction)]``: the loop stops at a step in which
-  ``y[index]`` changes sign in ``direction`` (< 0: downwards).
-
-``step`` of a sparse observer may be called for any step, not only those it asked for.
+(:class:`Sampler` reads the running integrals of :class:`EnergyIntegrator`). All of them
+are ``sparse``: with the compiled step loop (``runtime/solvers/native/step_loop.c``) the
+energy quadrature and the output samples run inside it (``attach``) and the others say
+when the driver must stop (``next_time``, ``watches``); ``step`` of a sparse observer may
+be called for any step, not only those it asked for.
 """
 
 from __future__ import annotations
@@ -36,17 +20,12 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from runtime.solvers.driver import RunState
 from runtime.solvers.roots import bracketed_root
 
 #: Gauss-Legendre nodes/weights on [0, 1] for the per-step energy quadrature
 GL_X = (np.polynomial.legendre.leggauss(3)[0] + 1.0) / 2.0
 GL_W = np.polynomial.legendre.leggauss(3)[1] / 2.0
-
-
-class Observer(Protocol):
-    """What the run loop calls (every method optional; see the module docstring)."""
-
-    name: str
 
 
 class EnergyModel(Protocol):
@@ -137,7 +116,7 @@ class EnergyIntegrator:
         w = (c[0, 1] * x + c[1, 1] * x2 / 2.0 + c[2, 1] * x2 * x / 3.0) * h
         return (float(d), float(w)) if np.ndim(t) == 0 else (d, w)
 
-    def step(self, run: Run, dense, t0: float, t1: float) -> None:
+    def step(self, run: RunState, dense, t0: float, t1: float) -> None:
         if self._core is not None:
             self._collect()
             return
@@ -149,11 +128,11 @@ class EnergyIntegrator:
         self.dissipated += float(c[0, 0] + c[1, 0] / 2.0 + c[2, 0] / 3.0) * h
         self.external_work += float(c[0, 1] + c[1, 1] / 2.0 + c[2, 1] / 3.0) * h
 
-    def end(self, run: Run) -> None:
+    def end(self, run: RunState) -> None:
         if self._core is not None:
             self._collect()
 
-    def restart(self, run: Run, restart) -> None:
+    def restart(self, run: RunState, restart) -> None:
         """The integrator restarted at a breakpoint where prescribed velocities jump: the
         supports' impulse did the work of the held masses' kinetic energy jump (the
         positions, hence W, are continuous), booked as external work."""
@@ -242,18 +221,18 @@ class Sampler:
     def _collect(self) -> None:
         self._core.flush_samples()
 
-    def end(self, run: Run) -> None:
+    def end(self, run: RunState) -> None:
         if self._core is not None:
             self._collect()
 
-    def begin(self, run: Run) -> None:
+    def begin(self, run: RunState) -> None:
         if self.k_out == 0 and self.t_out.size and self.t_out[0] <= run.t:
             e = self.model.energies(np.array([run.t]), run.y[None, :], run.yp[None, :])
             self._record(np.array([run.t]), run.y[None, self._all_indices()], e,
                          np.zeros(1), np.zeros(1))
             self.k_out = 1
 
-    def step(self, run: Run, dense, t0: float, t1: float) -> None:
+    def step(self, run: RunState, dense, t0: float, t1: float) -> None:
         if self._core is not None:
             self._collect()
             return
@@ -339,7 +318,7 @@ class Maxima:
     def _keep(self, x: float) -> bool:
         return x > 0 or not self.positive_only
 
-    def begin(self, run: Run) -> None:
+    def begin(self, run: RunState) -> None:
         x0 = float(run.y[self.ix]) - self.offset
         if self.initial and not self.t and x0 > 0 and self._keep(x0):
             self.t.append(run.t)
@@ -348,7 +327,7 @@ class Maxima:
     def watches(self) -> list[tuple[int, float]]:
         return [(self.iv, -1.0)]
 
-    def step(self, run: Run, dense, t0: float, t1: float) -> None:
+    def step(self, run: RunState, dense, t0: float, t1: float) -> None:
         v_new = float(run.y[self.iv])
         # the velocity at the step's start, from the step's own interpolant: the previous
         # call may lie many steps back in the compiled loop
@@ -382,7 +361,7 @@ class Snapshots:
         self.every, self.sink = float(every), sink
         self.next = math.nan
 
-    def begin(self, run: Run) -> None:
+    def begin(self, run: RunState) -> None:
         if not math.isfinite(self.next):
             self.sink(run.t, run.y.copy(), run.yp.copy())
             self.next = run.t + self.every
@@ -390,7 +369,7 @@ class Snapshots:
     def next_time(self) -> float:
         return self.next if math.isfinite(self.next) else math.inf
 
-    def step(self, run: Run, dense, t0: float, t1: float) -> None:
+    def step(self, run: RunState, dense, t0: float, t1: float) -> None:
         while self.next <= t1:
             self.sink(self.next, np.array(dense(self.next)),
                       np.array(dense.derivative(self.next)))
@@ -421,7 +400,7 @@ class Centreline:
         self.k = 0
         self.rec: list[np.ndarray] = []
 
-    def begin(self, run: Run) -> None:
+    def begin(self, run: RunState) -> None:
         if self.k == 0 and self.t_frames.size and self.t_frames[0] <= run.t:
             self.rec.append(np.array(run.y[self.idx].T))
             self.k = 1
@@ -429,7 +408,7 @@ class Centreline:
     def next_time(self) -> float:
         return float(self.t_frames[self.k]) if self.k < self.t_frames.size else math.inf
 
-    def step(self, run: Run, dense, t0: float, t1: float) -> None:
+    def step(self, run: RunState, dense, t0: float, t1: float) -> None:
         k = int(np.searchsorted(self.t_frames, t1 + 1e-12 * max(1.0, abs(t1)), side="right"))
         for t in self.t_frames[self.k:k]:
             self.rec.append(np.array(np.asarray(dense(min(t, t1)))[self.idx].T))
@@ -466,13 +445,5 @@ class Progress:
     def __init__(self, callback: Callable[[float], object]) -> None:
         self.callback = callback
 
-    def step(self, run: Run, dense, t0: float, t1: float) -> None:
+    def step(self, run: RunState, dense, t0: float, t1: float) -> None:
         self.callback(t1)
-
-
-class Run(Protocol):
-    """The loop's view of a run in progress (see :class:`runtime.simulate.loop.RunState`)."""
-
-    t: float
-    y: np.ndarray
-    yp: np.ndarray

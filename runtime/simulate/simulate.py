@@ -2,7 +2,7 @@
 
 Static equilibrium under the loads at ``t = 0-`` (Newton with load stepping; or the
 stress-free reference at rest when ``simulation.initial = "reference"``), consistent
-initial values, then the run loop (``runtime.simulate.loop``) with its observers:
+initial values, then the run loop (``runtime.solvers.driver``) with its observers:
 output samples of both ends and of the energies, the running integrals of the dissipated
 power and the external power (prescribed end motion included) for the energy audit,
 maxima of one end coordinate (``analysis.maxima``), VTK snapshots, progress and
@@ -29,7 +29,6 @@ from runtime.model.statics import RodStatics, largest_displacement
 from runtime.problem.assemble import build_model
 from runtime.problem.schema import Problem
 from runtime.problem.timefunctions import TimeFunction
-from runtime.simulate.loop import run_loop
 from runtime.simulate.observers import (
     Centreline,
     EnergyIntegrator,
@@ -38,6 +37,7 @@ from runtime.simulate.observers import (
     Sampler,
     Snapshots,
 )
+from runtime.solvers.driver import run_loop
 from runtime.solvers.initial import consistent_initial
 from runtime.solvers.statics import StaticSolveError, solve_static
 

@@ -22,8 +22,21 @@ import numpy as np
 from runtime.errors import ParameterError
 from runtime.solvers.protocols import ResidualProblem, band_storage
 
-from . import _bdf_c
-from .bdf_core import CoreLink
+from .dense import BDFDenseOutput
+from .native import loader as _native
+from .native.step_loop import (
+    CALLBACK,
+    FAIL_CONV,
+    FAIL_ERR,
+    FAIL_FIXED,
+    FAIL_HMIN,
+    FAIL_STALL,
+    MAXSTEPS,
+    NONFINITE,
+    WATCH,
+    CoreLink,
+)
+from .newton import NewtonSystem, newton_system
 
 __all__ = ["BDF", "BDFDenseOutput", "IntegrationError"]
 
@@ -79,90 +92,6 @@ class IntegrationError(RuntimeError):
         self.worst_index = worst_index
 
 
-def _interp_coefficients(
-    t: np.ndarray, tn: float, psi: np.ndarray, k: int
-) -> tuple[np.ndarray, np.ndarray]:
-    """IDA's interpolation weights: ``y(t) = sum c_j phi_j``, ``y'(t) = sum d_j phi_j``.
-
-    ``t`` has shape (m,); returns ``c`` of shape (k+1, m) and ``d`` of shape (k+1, m)
-    (``d[0] = 0``).
-    """
-    if t.size == 1:  # the common case (one output time in a step): scalar arithmetic
-        delt = float(t[0]) - tn
-        cl, dl = [1.0], [0.0]
-        cs, ds = 1.0, 0.0
-        gs = delt / psi[0]
-        for j in range(1, k + 1):
-            ds = ds * gs + cs / psi[j - 1]
-            cs = cs * gs
-            if j < k:
-                gs = (delt + psi[j - 1]) / psi[j]
-            cl.append(cs)
-            dl.append(ds)
-        return np.array(cl).reshape(k + 1, 1), np.array(dl).reshape(k + 1, 1)
-    delt = t - tn
-    c = np.empty((k + 1, t.size))
-    d = np.zeros((k + 1, t.size))
-    cc = np.ones_like(delt)
-    dd = np.zeros_like(delt)
-    gam = delt / psi[0]
-    c[0] = 1.0
-    for j in range(1, k + 1):
-        dd = dd * gam + cc / psi[j - 1]
-        cc = cc * gam
-        gam = (delt + psi[j - 1]) / psi[j] if j < k else gam
-        c[j] = cc
-        d[j] = dd
-    return c, d
-
-
-class BDFDenseOutput:
-    """The BDF interpolating polynomial of one step, valid on ``[t_old, t]``.
-
-    Calling it gives ``y(t)`` with shape (n,) for scalar ``t`` or (n, m) for an array;
-    ``derivative(t)`` gives ``y'(t)`` in the same shapes.
-    """
-
-    def __init__(self, t_old: float, t: float, phi: np.ndarray, psi: np.ndarray,
-                 clib=None) -> None:
-        self.t_old = t_old
-        self.t = t
-        self.t_min, self.t_max = min(t_old, t), max(t_old, t)
-        self._phi = phi  # (k+1, n), C order
-        self._psi = psi  # (k,) at least
-        self._k = phi.shape[0] - 1
-        self._c = clib   # compiled helpers (kv_interp) or None
-
-    def _eval(self, t: float | np.ndarray, deriv: bool) -> np.ndarray:
-        ta = np.atleast_1d(np.asarray(t, dtype=float))
-        c, d = _interp_coefficients(ta, self.t, self._psi, self._k)
-        out = ((d if deriv else c).T @ self._phi).T
-        return out[:, 0] if np.ndim(t) == 0 else out
-
-    def values(self, t: np.ndarray, out_y: np.ndarray | None = None,
-               out_yp: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """``(y(t), y'(t))`` for times ``t`` of shape (m,), each of shape (m, n) (one row
-        per time; note the order), written into ``out_y``/``out_yp`` if given."""
-        ta = np.ascontiguousarray(t, dtype=float)
-        phi = self._phi  # (k+1, n), C order: c.T @ phi runs over contiguous rows
-        if self._c is not None and phi.flags.c_contiguous:
-            m, n = ta.size, phi.shape[1]
-            y = out_y if out_y is not None else np.empty((m, n))
-            yp = out_yp if out_yp is not None else np.empty((m, n))
-            psi = np.ascontiguousarray(self._psi, dtype=float)
-            self._c.kv_interp(self._k, n, m, self.t, psi.ctypes.data, phi.ctypes.data,
-                              ta.ctypes.data, y.ctypes.data, yp.ctypes.data)
-            return y, yp
-        c, d = _interp_coefficients(ta, self.t, self._psi, self._k)
-        return np.matmul(c.T, phi, out=out_y), np.matmul(d.T, phi, out=out_yp)
-
-    def __call__(self, t: float | np.ndarray) -> np.ndarray:
-        return self._eval(t, False)
-
-    def derivative(self, t: float | np.ndarray) -> np.ndarray:
-        return self._eval(t, True)
-
-
 class BDF:
     """IDA-style variable-order (1..5) variable-step BDF solver for ``F(t, y, y') = 0``.
 
@@ -201,7 +130,7 @@ class BDF:
         Solve the Newton systems condensed when the problem names kinematic blocks
         (``condensation_blocks()``) and the C helpers are available.
     compiled_loop : bool
-        Take the steps in C (``bdf_core.c``: the same algorithm, statement for
+        Take the steps in C (``native/step_loop.c``: the same algorithm, statement for
         statement) when the C helpers are available; else, or with False, in Python.
         The problem's compiled kernels (``c_kernels()``) are then called from C, other
         problems through callbacks.
@@ -287,7 +216,7 @@ class BDF:
         self._tmp = np.empty(n)
         self._ewt = np.empty(n)
         #: rows F_i = y_i - g_i(t) of prescribed unknowns (``problem.exact_rows``,
-        #: optional): their Newton corrections are taken unscaled (bdf_core.c, kv_ida)
+        #: optional): their Newton corrections are taken unscaled (native/step_loop.c, kv_ida)
         self._exact = np.ascontiguousarray(getattr(problem, "exact_rows", ()),
                                            dtype=np.int32).ravel()
         self._exact_res = np.zeros(max(self._exact.size, 1))
@@ -295,31 +224,19 @@ class BDF:
         self._errmask = diff.astype(float) if self.suppress_alg else None
         self._ewt_err = np.empty(n) if self.suppress_alg else self._ewt
         self._ab = band_storage(n, self.kl, self.ku)
-        self._ipiv = np.zeros(max(n, 1), dtype=np.int32)
         self._have_lu = False
-        # Compiled helpers (runtime/solvers/_bdf_c.py: flush-to-zero band solve, fused Newton
-        # update, LAPACK dgbtrf without f2py); None -> NumPy/f2py path. Data addresses
-        # are fetched once (ndarray.ctypes.data costs microseconds); the Newton iterate
-        # buffers swap with the accepted ones, so their addresses swap too.
-        self._c = _bdf_c.load() if n > 0 else None
+        # The compiled helpers (runtime/solvers/native: flush-to-zero band and condensed
+        # solves, fused Newton update, norms, interpolation), or None: the NumPy path.
+        self._c = _native.load() if n > 0 else None
         if self._c is not None:
-            self._p_ab = self._ab.ctypes.data
-            self._p_ipiv = self._ipiv.ctypes.data
-            self._prof = np.zeros(2 * n, dtype=np.int32)  # factor profile (kv_gbtrf)
-            self._p_prof = self._prof.ctypes.data
-            self._p_res = self._res.ctypes.data
-            self._p_ewt = self._ewt.ctypes.data
-            self._p_ee = self._ee.ctypes.data
-            self._p_yy, self._p_ypw = self._yy.ctypes.data, self._ypw.ctypes.data
-            self._p_y, self._p_yp = self._y.ctypes.data, self._yp.ctypes.data
             self._ptrs = {id(a): a.ctypes.data
                           for a in (self._ee, self._res, self._ewt, self._ewt_err)}
-        # Condensed Newton systems when the problem names its kinematic blocks (the rod:
-        # phi' = v, p' = 1/2 p*(0, Omega)): the LU and the solves work on about half the
-        # unknowns and a narrower band, 3.8x fewer bytes (see _bdf_c.CondensedNewton).
-        self._cond = (_bdf_c.CondensedNewton.build(problem, n, self.kl, self.ku,
-                                                   self._ab.shape[0])
-                      if self._c is not None and condense else None)
+        # The Newton systems (runtime/solvers/newton.py): condensed when the problem names
+        # its kinematic blocks (the rod: phi' = v, p' = 1/2 p*(0, Omega)), so the LU and
+        # the solves work on about half the unknowns and a narrower band (3.8x fewer
+        # bytes); else the band LU of the whole matrix.
+        self._newton: NewtonSystem = newton_system(problem, self._ab, self.kl, self.ku,
+                                                   self._c, condense)
 
         # IDA's scalar state; coefficient lists are Python floats (fast scalar loops).
         self._psi = [0.0] * (mo + 2)
@@ -354,7 +271,7 @@ class BDF:
             self._raise_nonfinite(self.t, self._y, self._yp, 0.0)
 
         self._start_history(first_step)
-        # The compiled step loop (runtime/solvers/bdf_core.c), from this state on.
+        # The compiled step loop (runtime/solvers/native/step_loop.c), from this state on.
         self._core = (CoreLink(self._c, self)
                       if self._c is not None and compiled_loop and n > 0 else None)
 
@@ -454,13 +371,13 @@ class BDF:
             raise RuntimeError("Attempt to step on a failed or finished solver.")
         if self._core is None or self.n == 0 or self.t == self.t_bound:
             self.step()
-            code = _bdf_c.MAXSTEPS
+            code = MAXSTEPS
         else:
             code = self._advance_core(t_stop, max(int(max_steps), 1))
         if self.direction * (self.t - self.t_bound) >= 0.0:
             self.status = "finished"
             return "finished"
-        if code == _bdf_c.WATCH:
+        if code == WATCH:
             return "watch"
         if self.direction * (self.t - t_stop) >= 0.0:
             return "tstop"
@@ -468,7 +385,7 @@ class BDF:
 
     @property
     def compiled(self) -> bool:
-        """True when the steps run in the compiled loop (``bdf_core.c``)."""
+        """True when the steps run in the compiled loop (``native/step_loop.c``)."""
         return self._core is not None
 
     @property
@@ -550,19 +467,19 @@ class BDF:
             return code
         self.status = "failed"
         s = core.s
-        if code == _bdf_c.NONFINITE:
+        if code == NONFINITE:
             self._raise_nonfinite(s.fail_t, self._yy, self._ypw, self._hh)
-        if code == _bdf_c.FAIL_STALL:
+        if code == FAIL_STALL:
             self._raise_failure(self._stall_reason(), at_accepted=True)
-        if code == _bdf_c.CALLBACK:
+        if code == CALLBACK:
             self._raise_failure("a compiled function of the problem (residual, Jacobian or "
                                 "energies) returned an error code")
         reasons = {
-            _bdf_c.FAIL_CONV: f"the Newton iteration failed to converge {s.fail_count} "
+            FAIL_CONV: f"the Newton iteration failed to converge {s.fail_count} "
                               "times in a row",
-            _bdf_c.FAIL_ERR: f"the local error test failed {s.fail_count} times in a row",
-            _bdf_c.FAIL_FIXED: "the Newton iteration failed at the fixed step size",
-            _bdf_c.FAIL_HMIN: self._hmin_reason(_CONV_FAIL if s.fail_nflag == _CONV_FAIL
+            FAIL_ERR: f"the local error test failed {s.fail_count} times in a row",
+            FAIL_FIXED: "the Newton iteration failed at the fixed step size",
+            FAIL_HMIN: self._hmin_reason(_CONV_FAIL if s.fail_nflag == _CONV_FAIL
                                                 else _ERR_FAIL),
         }
         self._raise_failure(reasons[code])
@@ -583,7 +500,7 @@ class BDF:
 
     # ------------------------------------------------------------------ internals
     def _wrms(self, v: np.ndarray, w: np.ndarray) -> float:
-        if self._c is not None:  # flush-to-zero norm (see runtime/solvers/_bdf_c.py)
+        if self._c is not None:  # flush-to-zero norm (see runtime/solvers/native)
             ptrs = self._ptrs
             pv, pw = ptrs.get(id(v)), ptrs.get(id(w))
             return self._c.kv_wrms(self.n, pv if pv is not None else v.ctypes.data, None,
@@ -650,7 +567,7 @@ class BDF:
         phi, yy, ypw, tmp = self._phi, self._yy, self._ypw, self._tmp
         # Straight into the Newton iterates (the corrector starts from the prediction).
         # Summed term by term in order (not np.dot, whose BLAS kernels sum in another
-        # order and fuse multiply-adds) so that this path rounds like bdf_core.c.
+        # order and fuse multiply-adds) so that this path rounds like native/step_loop.c.
         np.copyto(yy, phi[0])
         ypw.fill(0.0)
         gamma = self._gamma
@@ -675,17 +592,7 @@ class BDF:
         ab.fill(0.0)
         self.problem.jacobian_band(t, self._yy, self._ypw, self._cj, ab)
         self.njev += 1
-        if self._cond is not None:
-            info = self._cond.factor(ab)      # J stays in ab: the solves read it
-        elif self._c is not None:
-            info = self._c.kv_gbtrf(self.n, self.kl, self.ku, self._p_ab,
-                                    ab.shape[0], self._p_ipiv, self._p_prof)
-        else:  # the NumPy path (no C compiler): SciPy's LAPACK, imported on use
-            from scipy.linalg.lapack import dgbtrf
-
-            self._ipiv = None  # free the old pivots first (dgbtrf allocates new ones)
-            _, ipiv, info = dgbtrf(ab, self.kl, self.ku, overwrite_ab=1)
-            self._ipiv = ipiv
+        info = self._newton.factor()
         self.nlu += 1
         self._cjold = self._cj
         self._cjratio = 1.0
@@ -708,16 +615,9 @@ class BDF:
 
         problem = self.problem
         yy, ypw, ee, res = self._yy, self._ypw, self._ee, self._res
-        ab, kl, ku = self._ab, self.kl, self.ku
         ewt, tmp = self._ewt, self._tmp
-        inv_n = 1.0 / self.n
         maxcor = self.max_nonlinear_iter
-        clib, n = self._c, self.n
-        cond = self._cond
-        cond_ptr = cond.ptr if cond is not None else None
-        if clib is not None:
-            p_ab, ldab, p_ipiv, p_prof = self._p_ab, ab.shape[0], self._p_ipiv, self._p_prof
-            p_res, p_ewt, p_ee = self._p_res, self._p_ewt, self._p_ee
+        correct = self._newton.correct
 
         first = True
         while True:
@@ -735,33 +635,14 @@ class BDF:
                     return _CONV_FAIL
             cj = self._cj
             scale = 2.0 / (1.0 + self._cjratio) if self._cjratio != 1.0 else 1.0
-            ipiv = self._ipiv
             m = 0
             exact, exact_res = self._exact, self._exact_res
             while True:
                 if exact.size:
                     exact_res[:exact.size] = res[exact]
-                if cond is not None:
-                    delnrm = clib.kv_cond_newton(cond_ptr, p_ab, p_res, scale, p_ewt, p_ee,
-                                                 self._p_yy, self._p_ypw, cj)
-                elif clib is not None:
-                    delnrm = clib.kv_newton(n, kl, ku, p_ab, ldab, p_ipiv, p_prof, p_res,
-                                            scale, p_ewt, p_ee, self._p_yy, self._p_ypw, cj)
-                else:
-                    from scipy.linalg.lapack import dgbtrs
-
-                    dgbtrs(ab, kl, ku, res, ipiv, overwrite_b=1)
-                    if scale != 1.0:
-                        res *= scale
-                    np.multiply(res, ewt, out=tmp)
-                    delnrm = math.sqrt(float(np.dot(tmp, tmp)) * inv_n)
+                delnrm = correct(res, scale, ewt, ee, yy, ypw, cj)
                 if not math.isfinite(delnrm):
                     self._raise_nonfinite(tnew, yy, ypw, self._hh)
-                if clib is None:
-                    ee -= res
-                    yy -= res
-                    np.multiply(res, cj, out=tmp)
-                    ypw -= tmp
                 if exact.size:
                     self._exact_rows_finish(scale)
                 self.nni += 1
@@ -791,7 +672,7 @@ class BDF:
 
     def _exact_rows_finish(self, scale: float) -> None:
         """After a Newton update: the part (1 - scale) F_i of the exact rows' corrections
-        that the scale left out (as ``exact_rows_finish`` in bdf_core.c)."""
+        that the scale left out (as ``exact_rows_finish`` in native/step_loop.c)."""
         if scale == 1.0:
             return
         for k, i in enumerate(self._exact):
@@ -985,9 +866,6 @@ class BDF:
         # Accept the Newton iterate by swapping buffers (no copies).
         self._y, self._yy = self._yy, self._y
         self._yp, self._ypw = self._ypw, self._yp
-        if self._c is not None:
-            self._p_y, self._p_yy = self._p_yy, self._p_y
-            self._p_yp, self._p_ypw = self._p_ypw, self._p_yp
         self._update_weights()
 
     # ------------------------------------------------------------------ failures

@@ -9,8 +9,8 @@ import numpy as np
 
 from runtime.solvers.protocols import ResidualProblem, band_storage
 
-from . import _bdf_c
 from .bdf import IntegrationError
+from .native.band import band_solve
 
 
 def consistent_initial(
@@ -62,7 +62,7 @@ def consistent_initial(
         problem.jacobian_band(t0, y, yp, 1.0, ab1)  # dF/dy + dF/dy'
         ab1 -= ab  # dF/dy'
         ab[:, diff] = ab1[:, diff]
-        du, info = _bdf_c.band_solve(ab, kl, ku, f)
+        du, info = band_solve(ab, kl, ku, f)
         if info != 0:
             break
         lam = 1.0

@@ -17,7 +17,6 @@ Example (``rod`` implements ``runtime.solvers.protocols.ResidualProblem``)::
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -25,11 +24,12 @@ from typing import Any
 import numpy as np
 
 from runtime.solvers.protocols import ResidualProblem
-from runtime.solvers.roots import bracketed_root
 
-from .bdf import BDF, BDFDenseOutput, IntegrationError
+from .bdf import BDF, IntegrationError
+from .dense import BDFDenseOutput
+from .driver import run_loop
 from .initial import consistent_initial
-from .schedule import Pieces
+from .observers import DenseSolution, Events, OutputGrid, ProgressCallback, StepOutputs
 
 __all__ = [
     "BDF",
@@ -121,24 +121,6 @@ class SolveResult:
         return self.status >= 0
 
 
-def _event_attrs(events: Sequence[Callable[..., float]]) -> tuple[np.ndarray, np.ndarray]:
-    terminal = np.array([int(getattr(e, "terminal", False)) for e in events], dtype=int)
-    direction = np.array([float(getattr(e, "direction", 0.0)) for e in events])
-    return terminal, direction
-
-
-def _eval_events(events: Sequence[Callable[..., float]], t: float, y, yp) -> np.ndarray:
-    return np.array([float(e(t, y, yp)) for e in events])
-
-
-def _find_active(g_old: np.ndarray, g_new: np.ndarray, direction: np.ndarray) -> np.ndarray:
-    up = (g_old <= 0) & (g_new >= 0)
-    down = (g_old >= 0) & (g_new <= 0)
-    either = up | down
-    mask = up & (direction > 0) | down & (direction < 0) | either & (direction == 0)
-    return np.nonzero(mask)[0]
-
-
 def solve(
     problem: ResidualProblem,
     t_span: tuple[float, float],
@@ -199,18 +181,12 @@ def solve(
     """
     t0, tf = float(t_span[0]), float(t_span[1])
     y0 = np.asarray(y0, dtype=float)
-    pieces = Pieces(problem, t0, tf) if tf >= t0 else None
-    if pieces is not None:
-        h_piece = pieces.enter()
-        if math.isfinite(h_piece):
-            options = {**options, "max_step": min(h_piece, options.get("max_step", math.inf))}
     if yp0 is None:
         y0, yp0 = consistent_initial(problem, t0, y0, np.zeros_like(y0))
-    solver = BDF(problem, t0, y0, yp0, pieces.end if pieces is not None else tf, rtol=rtol,
-                 atol=atol, **options)
-    direction = solver.direction
-    user_max_step = float(options.get("max_step", math.inf))
-
+    yp0 = np.asarray(yp0, dtype=float)
+    direction = 1.0 if tf >= t0 else -1.0
+    n = y0.size
+    observers: list = []
     if t_eval is not None:
         t_eval = np.asarray(t_eval, dtype=float)
         if t_eval.ndim != 1:
@@ -221,179 +197,40 @@ def solve(
         d = np.diff(t_eval)
         if (direction > 0 and np.any(d <= 0)) or (direction < 0 and np.any(d >= 0)):
             raise ValueError("t_eval must be strictly monotonic in the direction of t_span")
-        t_eval_i = 0
-        # Outputs go straight into preallocated (m, n) arrays (returned transposed):
-        # no per-output arrays, no final stacking copy.
-        y_rows = np.empty((t_eval.size, y0.size))
-        yp_rows = np.empty((t_eval.size, y0.size))
-        # An output at t0 itself comes from the initial values.
-        while t_eval_i < t_eval.size and t_eval[t_eval_i] == t0:
-            y_rows[t_eval_i] = y0
-            yp_rows[t_eval_i] = yp0
-            t_eval_i += 1
+        outputs: OutputGrid | StepOutputs = OutputGrid(t_eval, n, direction)
     else:
-        ts_out = [t0]
-        ys_out = [y0.copy()]
-        yps_out = [np.asarray(yp0, dtype=float).copy()]
-
+        outputs = StepOutputs()
+    ev = None
     if events is not None:
-        if callable(events):
-            events = [events]
-        events = list(events)
-        terminal, ev_dir = _event_attrs(events)
-        max_count = np.where(terminal > 0, terminal, np.inf)
-        ev_count = np.zeros(len(events))
-        g = _eval_events(events, t0, solver.y, solver.yp)
-        t_events: list[list[float]] | None = [[] for _ in events]
-        y_events: list[list[np.ndarray]] | None = [[] for _ in events]
-        yp_events: list[list[np.ndarray]] | None = [[] for _ in events]
+        ev = Events([events] if callable(events) else list(events), direction)
+        observers.append(ev)               # first: a terminal event cuts the outputs
+    observers.append(outputs)
+    dense = DenseSolution() if dense_output else None
+    if dense is not None:
+        observers.append(dense)
+    if progress is not None:
+        observers.append(ProgressCallback(progress))
+    options = dict(options)
+    out = run_loop(problem, t0, y0, yp0, tf, rtol=rtol, atol=atol, observers=observers,
+                   max_steps=max_steps, min_step=options.pop("min_step", 0.0),
+                   max_order=options.pop("max_order", 5), solver_options=options)
+    if out.status == "finished":
+        status, message = 0, "The solver successfully reached the end of the integration " \
+                             "interval."
+    elif out.status == "stopped":
+        status, message = 1, out.message
+    elif out.error is not None:
+        status, message = -1, str(out.error)
     else:
-        t_events = y_events = yp_events = None
-
-    interpolants: list[BDFDenseOutput] = []
-    ts_steps = [t0]
-    status: int | None = None
-    message = ""
-    error: IntegrationError | None = None
-
-    # With the compiled loop and nothing to do at every step (outputs on a grid, no
-    # events, no dense solution), C integrates from one output time to the next.
-    skip = solver.compiled and t_eval is not None and events is None and not dense_output
-    while status is None:
-        if solver.nstep >= max_steps:
-            status, message = -1, f"Reached max_steps = {max_steps} at t = {solver.t:.9g}."
-            break
-        try:
-            if skip:
-                t_next = t_eval[t_eval_i] if t_eval_i < t_eval.size else tf
-                solver.advance(t_next, max_steps - solver.nstep)
-            else:
-                solver.step()
-        except IntegrationError as exc:
-            status, message, error = -1, str(exc), exc
-            break
-        t_old, t = solver.t_old, solver.t
-        interp: BDFDenseOutput | None = None
-        if dense_output:
-            interp = solver.dense_output()
-            interpolants.append(interp)
-            ts_steps.append(t)
-
-        t_stop = t
-        if events is not None:
-            g_new = _eval_events(events, t, solver.y, solver.yp)
-            active = _find_active(g, g_new, ev_dir)
-            if t_old == t0:
-                # As in IDA, an exact zero of g at t0 (e.g. a velocity event on a release
-                # from rest) is not an event.
-                active = active[g[active] != 0.0]
-            if active.size:
-                if interp is None:
-                    interp = solver.dense_output()
-                roots = []
-                for i in active:
-                    ev = events[i]
-
-                    def gi(
-                        s: float, ev: Callable[..., float] = ev, f: BDFDenseOutput = interp
-                    ) -> float:
-                        return float(ev(s, f(s), f.derivative(s)))
-
-                    roots.append(_locate(gi, t_old, t, g[i], g_new[i]))
-                roots = np.asarray(roots)
-                order = np.argsort(direction * roots)
-                active, roots = active[order], roots[order]
-                stop_here = False
-                for i, r in zip(active, roots, strict=True):
-                    ev_count[i] += 1
-                    t_events[i].append(r)
-                    y_events[i].append(interp(r))
-                    yp_events[i].append(interp.derivative(r))
-                    if ev_count[i] >= max_count[i]:
-                        stop_here = True
-                        t_stop = r
-                        break
-                if stop_here:
-                    status, message = 1, "A termination event occurred."
-            g = g_new
-
-        if t_eval is None:
-            if status == 1:
-                ts_out.append(t_stop)
-                ys_out.append(interp(t_stop))
-                yps_out.append(interp.derivative(t_stop))
-            else:
-                ts_out.append(t)
-                ys_out.append(solver.y.copy())
-                yps_out.append(solver.yp.copy())
-        else:
-            j0 = t_eval_i
-            while t_eval_i < t_eval.size and direction * (t_eval[t_eval_i] - t_stop) <= 0:
-                t_eval_i += 1
-            if t_eval_i > j0:
-                if interp is None:
-                    interp = solver.dense_output()
-                interp.values(t_eval[j0:t_eval_i], y_rows[j0:t_eval_i],
-                              yp_rows[j0:t_eval_i])
-
-        if progress is not None:
-            progress(t_stop)
-        if status is None and solver.status == "finished":
-            if pieces is not None and not pieces.last:
-                try:              # the next piece: after a breakpoint of the inputs
-                    pieces.next(solver)
-                except IntegrationError as exc:
-                    status, message, error = -1, str(exc), exc
-                    break
-                solver.set_max_step(min(solver.max_step, user_max_step))
-                continue
-            status = 0
-            message = "The solver successfully reached the end of the integration interval."
-
-    n = y0.size
-    if t_eval is not None:
-        ts_out = t_eval[:t_eval_i].copy()
-        y_arr, yp_arr = y_rows[:t_eval_i].T, yp_rows[:t_eval_i].T
-    else:
-        y_arr = np.array(ys_out).T if ys_out else np.empty((n, 0))
-        yp_arr = np.array(yps_out).T if yps_out else np.empty((n, 0))
-    sol = BDFSolution(ts_steps, interpolants) if dense_output and interpolants else None
-    if t_events is not None:
-        t_ev = [np.asarray(te) for te in t_events]
-        y_ev = [np.asarray(ye).reshape(-1, n) for ye in y_events]
-        yp_ev = [np.asarray(ye).reshape(-1, n) for ye in yp_events]
-    else:
-        t_ev = y_ev = yp_ev = None
-    return SolveResult(
-        t=np.asarray(ts_out),
-        y=y_arr,
-        yp=yp_arr,
-        sol=sol,
-        t_events=t_ev,
-        y_events=y_ev,
-        yp_events=yp_ev,
-        status=status,
-        message=message,
-        counters=solver.counters,
-        error=error,
-    )
-
-
-def _locate(gi: Callable[[float], float], a: float, b: float, ga: float, gb: float) -> float:
-    """Root of ``gi`` in [a, b] given the sign change ga -> gb (to round-off)."""
-    if ga == 0.0:
-        return a
-    if gb == 0.0:
-        return b
-    lo, hi = (a, b) if a < b else (b, a)
-    xtol = 4.0 * np.finfo(float).eps * max(abs(lo), abs(hi), 1e-300)
-    # Re-evaluate at the ends on the interpolant so the root finder sees a consistent bracket.
-    glo, ghi = gi(lo), gi(hi)
-    if glo == 0.0:
-        return lo
-    if ghi == 0.0:
-        return hi
-    if math.copysign(1.0, glo) == math.copysign(1.0, ghi):
-        # The interpolant misses the sign change at round-off level: take the end with |g| min.
-        return lo if abs(glo) < abs(ghi) else hi
-    return bracketed_root(gi, lo, hi, glo, ghi, xtol=xtol)
+        status, message = -1, (f"Reached max_steps = {max_steps} at t = {out.t_last:.9g}."
+                               if out.interrupt is None else out.message)
+        if out.interrupt is not None:
+            raise out.interrupt
+    ts, y_arr, yp_arr = (outputs.arrays() if isinstance(outputs, OutputGrid)
+                         else outputs.arrays(n))
+    sol = (BDFSolution(dense.ts, dense.interpolants) if dense is not None
+           and dense.interpolants else None)
+    t_ev, y_ev, yp_ev = ev.arrays(n) if ev is not None else (None, None, None)
+    return SolveResult(t=np.asarray(ts), y=y_arr, yp=yp_arr, sol=sol, t_events=t_ev,
+                       y_events=y_ev, yp_events=yp_ev, status=status, message=message,
+                       counters=out.counters, error=out.error)

@@ -156,7 +156,7 @@ class CKernels:
     """Compiled functions of a problem for the C step loop: addresses of the residual, the
     banded Jacobian and (optional, 0 if none) the energies (signatures of
     ``kvrod_residual``, ``kvrod_jacobian_band``, ``kvrod_energies`` in
-    ``generated/rod_assembly.h``) and of their first argument ``ctx``; ``drive(t)``
+    ``runtime/model/native/rod_assembly.h``) and of their first argument ``ctx``; ``drive(t)``
     (optional) makes the functions valid at time t and returns the interval ``[lo, hi)``
     on which they then stay valid; ``keep`` holds whatever must outlive the solver.
 

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from runtime.errors import ParameterError
-from runtime.solvers._bdf_c import BandLU
+from runtime.solvers.native.band import BandLU
 from runtime.solvers.protocols import StaticProblem, band_storage
 
 __all__ = ["StaticResult", "StaticSolveError", "solve_static"]

@@ -167,7 +167,7 @@ def check_point(problem: Any, params: Mapping[str, Any], where: str) -> None:
     from runtime.problem.registry import load_problem
 
     try:
-        load_problem(problem, params)
+        load_problem(problem, params).check_simulable()
     except ParameterError as exc:
         raise StudyError(f"{where}: {exc}") from None
 
@@ -330,7 +330,7 @@ class PointOutcome:
 def _library_loads() -> int:
     from runtime.model import build
 
-    return build._load_cached.cache_info().misses
+    return build.library_loads()
 
 
 def _point_meta(problem: str, point_id: str, params: Mapping[str, Any],
@@ -572,9 +572,9 @@ def write_plots(out: Path, study: Study, rows: Mapping[str, Mapping[str, Any]]) 
         groups.setdefault(key, []).append((float(p.params[x]), row))
     if not groups:
         return None
-    from runtime.io.plots import _plt, _save
+    from runtime.io.figures import pyplot, save
 
-    plt = _plt()
+    plt = pyplot()
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.5))
     for key, pts in groups.items():
         pts.sort(key=lambda t: t[0])
@@ -597,7 +597,7 @@ def write_plots(out: Path, study: Study, rows: Mapping[str, Mapping[str, Any]]) 
     if others:
         ax2.legend(fontsize=7)
     fig.suptitle(f"study {study.name}: {sum(len(v) for v in groups.values())} finished points")
-    return _save(fig, Path(out) / "summary.png")
+    return save(fig, Path(out) / "summary.png", dpi=120, bbox_inches="tight")
 
 
 # --------------------------------------------------------------------------------------

@@ -56,9 +56,9 @@ def warm_up() -> dict:
 
     lib = build.load_library()
     try:  # compiled BDF helpers, when this checkout has them
-        from runtime.solvers import _bdf_c
+        from runtime.solvers.native import loader
 
-        _bdf_c.load()
+        loader.load()
     except (ImportError, AttributeError):
         pass
     return {"pid": os.getpid(), "library": None if lib is None else str(lib._name)}

@@ -425,6 +425,12 @@ class Templates:
         self._cli(["calibrate", "--mode", "decrements", "--data", str(d), "--n-elements", "4",
                    "--out", str(path)])
 
+    def _make_section(self, path: Path) -> None:
+        f = self.root / "section_ok.toml"
+        f.write_text(SECTION_OK)
+        self._cli(["section", str(f), "--out", str(path)])
+        assert (path / "section.json").exists() and (path / "section.png").exists()
+
     def _make_sweep(self, path: Path) -> None:
         st = self.root / "study_ok.toml"
         st.write_text(STUDY_OK)
@@ -1031,6 +1037,41 @@ CAL_D = ("calibrate", "--mode", "decrements", "--data", "{tmp}/delta.csv", "--n-
 CAL_S = ("calibrate", "--data", "{data}", "--n-elements", "4")
 SWEEP = ("sweep", "{tmp}/study.toml", "--serial")
 DELTA = write("delta.csv", DELTAS)
+#: a small composite section file (two regions) and variants of it
+SECTION_OK = """name = "two_layers"
+[section]
+kind = "composite"
+[[section.regions]]
+material = "core"
+shape = { kind = "circle", radius = 0.001 }
+[[section.regions]]
+material = "sheath"
+shape = { kind = "tube", inner_radius = 0.001, outer_radius = 0.002 }
+[materials.core]
+youngs_modulus = 1e11
+poisson_ratio = 0.3
+density = 8000.0
+[materials.sheath]
+youngs_modulus = 1e7
+poisson_ratio = 0.45
+density = 1200.0
+tau_S = 0.01
+"""
+SEC = ("section", "{tmp}/sec.toml")
+
+
+def section_file(old: str = "", new: str = "") -> Callable:
+    """SECTION_OK with ``old`` replaced by ``new`` (all must change), as {tmp}/sec.toml."""
+    text = SECTION_OK.replace(old, new) if old else SECTION_OK
+    assert text != SECTION_OK or not old, old
+    return write("sec.toml", text)
+
+
+SPD_BAD = ('[materials.sheath]\nyoungs_modulus = 1e7\npoisson_ratio = 0.45\n'
+           'density = 1200.0\ntau_S = 0.01\n',
+           '[materials.sheath]\ndensity = 1200.0\nstiffness_matrix = ['
+           + ", ".join("[" + ", ".join(("-1e9" if i == j == 2 else "1e9" if i == j else "0.0")
+                                       for j in range(6)) + "]" for i in range(6)) + "]\n")
 FOLDER = ("{out_name}",)
 GUARDED = {"guard": True}
 
@@ -1771,4 +1812,58 @@ CASES: list[Case] = [
          ("calibrate", "--data", "{tmp}/gap.csv", "--n-elements", "4", *OUT), 2,
          ("gap.csv", "line 3", "empty"),
          (write("gap.csv", "t,x\n0,0.2\n0.01,\n0.02,0.19\n"),), (ABSENT,), **GUARDED),
+    # ==================================================================================
+    # kvrod section: composite sections of named materials (issue 25)
+    # ==================================================================================
+    Case("section-writes-json-and-png", "data_loss", (*SEC, *OUT), 0, (), (section_file(),),
+         (has("section.json", "section.png"),
+          json_is("section.json", lambda d: len(d["stiffness"]) == 6
+                  and d["reference_point"] == d["elastic_centroid"]
+                  and d["mesh"]["converged"], "a converged 6x6 result")),
+         ),
+    Case("section-bad-poisson-ratio-named", "message", (*SEC, *OUT), 2,
+         ("materials.sheath.poisson_ratio", RANGE),
+         (section_file("poisson_ratio = 0.45", "poisson_ratio = 0.7"),), (ABSENT,),
+         **GUARDED),
+    Case("section-overlapping-regions-named", "message", (*SEC, *OUT), 2,
+         ("section.regions[1]", "overlap", "section.regions[0]"),
+         (section_file("inner_radius = 0.001", "inner_radius = 0.0005"),), (ABSENT,),
+         **GUARDED),
+    Case("section-unknown-material-name-named", "message", (*SEC, *OUT), 2,
+         ("section.regions[1].material", "sheeth"),
+         (section_file('material = "sheath"', 'material = "sheeth"'),), (ABSENT,),
+         **GUARDED),
+    Case("section-non-spd-stiffness-named", "message", (*SEC, *OUT), 2,
+         ("materials.sheath.stiffness_matrix", "positive definite", "Pa"),
+         (section_file(*SPD_BAD),), (ABSENT,), **GUARDED),
+    Case("section-maxwell-region-refused", "message", (*SEC, *OUT), 2,
+         ("materials.sheath.model", "maxwell"),
+         (section_file("tau_S = 0.01", 'tau_S = 0.01\nmodel = "generalized_maxwell"'),),
+         (ABSENT,), **GUARDED),
+    Case("section-material-beside-composite-named", "message", (*SEC, *OUT), 2,
+         ("material", "composite"),
+         (section_file('name = "two_layers"', 'name = "two_layers"\n[material]\ntau = 0.1'),),
+         (ABSENT,), **GUARDED),
+    Case("section-into-finished-section-refused", "data_loss", (*SEC, *OUT), 2,
+         (*FOLDER, OVERWRITE_FLAG), (section_file(), template("section")), (UNCHANGED,),
+         **GUARDED),
+    Case("section-bad-file-keeps-finished-section", "data_loss", (*SEC, *OVR, *OUT), 2,
+         ("materials.sheath.density",),
+         (section_file("density = 1200.0", "density = -1.0"), template("section")),
+         (UNCHANGED,), **GUARDED),
+    Case("section-overwrite-replaces-section", "data_loss", (*SEC, "--set",
+                                                             "materials.sheath.tau_S=0.02",
+                                                             *OVR, *OUT), 0, (),
+         (section_file(), template("section")),
+         (json_is("section.json", lambda d: d["materials"]["sheath"]["tau_S"] == 0.02,
+                  "the new analysis (tau_S = 0.02)"),)),
+    Case("simulate-composite-section-refused", "message",
+         ("simulate", "{tmp}/rod.toml", *OUT), 2, ("section.kind", "composite",
+                                                   "kvrod section"),
+         (write("rod.toml", '[rod]\nlength = 0.3\nelements = 4\n'
+                + SECTION_OK.replace('name = "two_layers"', "")),), (ABSENT,), **GUARDED),
+    Case("static-composite-section-refused", "message",
+         ("static", "{tmp}/rod.toml", *OUT), 2, ("section.kind", "composite"),
+         (write("rod.toml", '[rod]\nlength = 0.3\nelements = 4\n'
+                + SECTION_OK.replace('name = "two_layers"', "")),), (ABSENT,), **GUARDED),
 ]

@@ -122,13 +122,15 @@ class ComputationStarted(BaseException):  # noqa: N818 - not an error of the pro
 _GUARDED = (("runtime.simulate.simulate", "simulate"),
             ("runtime.analysis.modal", "modal_analysis"),
             ("runtime.solvers.statics", "solve_static"), ("runtime.study.sweep", "run_point"),
-            ("runtime.analysis.compare_damping", "compare_damping"),
-            ("runtime.analysis.calibration", "calibrate_signal"),
-            ("runtime.analysis.calibration", "calibrate_decrements"))
+            ("runtime.study.compare_damping", "compare_damping"),
+            ("runtime.study.calibration", "calibrate_signal"),
+            ("runtime.study.calibration", "calibrate_decrements"),
+            ("runtime.section.analysis", "analyse_section"))
 _PREIMPORT = ("runtime.simulate.simulate", "runtime.analysis.modal", "runtime.solvers.statics",
-              "runtime.study.sweep", "runtime.analysis.calibration",
-              "runtime.analysis.compare_damping", "kvrod.reproduce", "kvrod.beyond",
-              "kvrod.cli_beyond", "kvrod.cli_runtime", "kvrod.cli_sweep")
+              "runtime.study.sweep", "runtime.study.calibration",
+              "runtime.study.compare_damping", "reports.reproduction", "reports.damping_studies",
+              "kvrod.cli_analysis", "kvrod.cli_notes", "kvrod.cli_runtime", "kvrod.cli_sweep",
+              "runtime.section", "runtime.problem.section_analysis", "kvrod.cli_section")
 
 
 def _install_guard(monkeypatch) -> None:

@@ -88,7 +88,7 @@ CONFIG_BAD = [
     ('scenario = "cantilever"\n[parameters\n', "malformed TOML"),
     ('scenario = "cantilever"\nparameters = 3\n', "must be a table"),
     ('scenario = "cantilever"\n[other]\nx = 1\n', "unknown table"),
-    ('scenario = "cantilever"\n[parameters]\ndamping = 1\n', "material.damping)' = 1"),
+    ('scenario = "cantilever"\n[parameters]\ndamping = 1\n', "section.damping)' = 1"),
     ('scenario = ["cantilever"]\n', "must be a string"),
     ('scenario = "cantilever"\n[parameters]\ntau = 0.1\ntau_S = 0.2\n', "both given"),
 ]

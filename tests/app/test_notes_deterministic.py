@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from kvrod import beyond
+from reports import damping_studies as beyond
 
 
 @pytest.fixture()
@@ -63,7 +63,7 @@ def test_notes_beyond_twice_gives_the_same_bytes(tmp_path, monkeypatch, small):
 
 
 def _paths(argv: list[str]) -> tuple[Path, Path]:
-    from kvrod.cli_beyond import _notes_paths
+    from kvrod.cli_notes import _notes_paths
 
     ns = argparse.Namespace(out=None, out_notes=None)
     for flag, value in zip(argv[::2], argv[1::2], strict=True):
@@ -80,8 +80,33 @@ def test_out_alone_keeps_the_notes_out_of_the_checkout(tmp_path, monkeypatch):
 
 
 def test_decade_bounds():
-    from kvrod.run_info import bound, decade
+    from reports.run_info import bound, decade
 
     assert decade(7.6e-6) == "1e-5" and bound(7.6e-6) == "< 1e-5"
     assert decade(2.4e-6) == "1e-5" and decade(1.2e-5) == "1e-4"
     assert bound(0.0) == "0" and bound(float("nan")) == "-"
+
+
+def test_notes_sections_twice_gives_the_same_bytes(tmp_path, monkeypatch):
+    """notes-sections (three section analyses, no simulation): the same notes, figures and
+    section.json files from two runs; its wall times only in the results folder."""
+    from reports.sections import RESULTS, write_sections_notes
+
+    for name in ("a", "b"):
+        (tmp_path / name).mkdir()
+        monkeypatch.chdir(tmp_path / name)
+        write_sections_notes(Path("notes/sections.md"), Path("results/sections"))
+    a, b = tmp_path / "a", tmp_path / "b"
+    files = [Path("notes/sections.md"), *sorted(p.relative_to(a) for p in
+                                                (a / "notes" / "figures").glob("*.png")),
+             *(Path("results/sections") / r / f for r in RESULTS
+               for f in ("section.json", "section.png"))]
+    assert len(files) == 1 + 4 + 6
+    for f in files:
+        assert (a / f).read_bytes() == (b / f).read_bytes(), f
+    text = (a / "notes/sections.md").read_text()
+    assert str(tmp_path) not in text and not re.search(r"(?i)\bissue \d", text)
+    assert "run-info.md" in text and "wall" not in json.loads(
+        (a / "results/sections/cable/section.json").read_text())
+    info = json.loads((a / "results/sections/timings.json").read_text())
+    assert {f"section analysis: {r}" for r in RESULTS} <= set(info["wall_s"])

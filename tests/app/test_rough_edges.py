@@ -34,13 +34,13 @@ def test_version(capsys):
 
 def test_version_says_when_the_tree_differs_from_its_manifest(tmp_path, monkeypatch):
     import generated
-    from kvrod.cli import version_text
+    from runtime.version import version_text
 
     copy = tmp_path / "generated"
     shutil.copytree(ROOT / "generated", copy, ignore=shutil.ignore_patterns("__pycache__"))
     monkeypatch.setattr(generated, "__file__", str(copy / "__init__.py"))
     assert "differ" not in version_text()
-    (copy / "rod_assembly.c").write_text((copy / "rod_assembly.c").read_text() + "\n")
+    (copy / "rod_kernels.c").write_text((copy / "rod_kernels.c").read_text() + "\n")
     assert "1 file(s) differ from it" in version_text()
 
 
@@ -77,6 +77,7 @@ def test_compile_is_announced(tmp_path, monkeypatch, capsys):
     """A compilation of the rod kernels tells the observers when it starts and how long it
     took; the command line prints both on stderr (library code prints nothing)."""
     from kvrod.notices import install_compile_notices, remove_compile_notices
+    from runtime import native
     from runtime.model import build
 
     def fake_compiler(tail, compiler):     # writes a "library" where -o points
@@ -86,7 +87,7 @@ def test_compile_is_announced(tmp_path, monkeypatch, capsys):
 
     monkeypatch.setattr(build, "run_compiler", fake_compiler)
     events = []
-    build.add_compile_observer(lambda what, s: events.append((what, s)))
+    native.add_compile_observer(lambda what, s: events.append((what, s)))
     try:
         build.compile_library("cc", outdir=tmp_path)
         assert capsys.readouterr().err == ""            # no observer that prints
@@ -96,18 +97,19 @@ def test_compile_is_announced(tmp_path, monkeypatch, capsys):
         err = capsys.readouterr().err.splitlines()
     finally:
         remove_compile_notices()
-        build._observers.clear()
-    assert events[0] == (build.ROD_KERNELS, None) and events[1][1] >= 0
+        native._observers.clear()
+    assert events[0] == (native.ROD_KERNELS, None) and events[1][1] >= 0
     assert err[0] == "kvrod: compiling the rod kernels (first use, ~10 s; cached afterwards)..."
     assert re.fullmatch(r"kvrod: compiled the rod kernels in \d+\.\d s", err[1])
 
 
 def test_compile_native_reports_zero_when_cached():
+    from runtime import native
     from runtime.model import build
 
     build.compile_native()                              # whatever it takes the first time
     spent = build.compile_native()
-    assert spent == {build.ROD_KERNELS: 0.0, build.STEP_LOOP: 0.0}
+    assert spent == {native.ROD_KERNELS: 0.0, native.STEP_LOOP: 0.0}
 
 
 def test_a_missing_package_is_named_with_its_install_command(monkeypatch, capsys, tmp_path):
@@ -172,7 +174,7 @@ def test_a_rod_along_x_needs_no_normal():
 
 
 def test_compare_damping_table_has_a_label_per_column():
-    from kvrod.analyses import compare_table
+    from reports.analyses import compare_table
 
     r = {"tau_E": 0.04, "measured_zeta": 0.07, "predicted_zeta": 0.071,
          "predicted_zeta_continuum": 0.0713, "modal_zeta": 0.0712}

@@ -128,12 +128,12 @@ def test_key_inputs():
 
 
 def test_cache_root_is_the_compiled_kernels_root(monkeypatch, tmp_path):
-    from runtime.model import build
+    from runtime import native
 
     monkeypatch.setenv("KVROD_CACHE_DIR", str(tmp_path))
-    assert cache.cache_root() == build.cache_dir() == tmp_path
+    assert cache.cache_root() == native.cache_dir() == tmp_path
     monkeypatch.delenv("KVROD_CACHE_DIR")
-    assert cache.cache_root() == build.cache_dir()
+    assert cache.cache_root() == native.cache_dir()
     assert ROOT not in cache.cache_root().parents        # never in the checkout
 
 

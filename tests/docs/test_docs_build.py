@@ -151,7 +151,7 @@ def test_getting_started_shows_what_each_command_prints(built, kvrod_docs):
 def test_the_validation_page_shows_the_notes_figures_and_tables(built):
     _, out = built
     html = (out / "validation.html").read_text()
-    for name in ("reproduction", "examples", "beyond", "maxwell"):
+    for name in ("reproduction", "examples", "beyond", "maxwell", "sections"):
         note = (ROOT / "notes" / f"{name}.md").read_text()
         for fig in re.findall(r"!\[[^\]]*\]\(figures/([^)]+)\)", note):
             assert f'src="_images/{fig}"' in html, (name, fig)

@@ -8,10 +8,11 @@ import numpy as np
 import pytest
 from scipy.linalg.lapack import dgbtrf
 
-from runtime.solvers import _bdf_c
+from runtime.solvers.native.band import band_solve
+from runtime.solvers.native.loader import load
 from runtime.solvers.protocols import band_storage
 
-pytestmark = pytest.mark.skipif(_bdf_c.load() is None, reason="no C compiler")
+pytestmark = pytest.mark.skipif(load() is None, reason="no C compiler")
 
 
 def _band(n: int, kl: int, ku: int, rng, diag: float = 0.01) -> tuple[np.ndarray, np.ndarray]:
@@ -37,11 +38,11 @@ def test_band_lu_matches_lapack_and_solves(n, kl, ku):
     b = rng.standard_normal(n)
     lapack, piv_l, info_l = dgbtrf(ab.copy(order="F"), kl, ku)
     ours = ab.copy(order="F")
-    x, info = _bdf_c.band_solve(ours, kl, ku, b)
+    x, info = band_solve(ours, kl, ku, b)
     assert info == info_l == 0
     np.testing.assert_allclose(ours, lapack, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(A @ x, b, rtol=1e-9, atol=1e-9)
-    lib = _bdf_c.load()
+    lib = load()
     ipiv = np.zeros(n, dtype=np.int32)
     prof = np.zeros(2 * n, dtype=np.int32)
     lib.kv_gbtrf(n, kl, ku, ab.ctypes.data, ab.shape[0], ipiv.ctypes.data, prof.ctypes.data)
@@ -52,7 +53,7 @@ def test_singular_band_matrix_reports_the_zero_pivot():
     rng = np.random.default_rng(3)
     A, ab = _band(12, 2, 2, rng)
     ab[:, 5] = 0.0                   # column 6 (1-based) vanishes
-    _, info = _bdf_c.band_solve(ab, 2, 2, np.ones(12))
+    _, info = band_solve(ab, 2, 2, np.ones(12))
     _, _, info_l = dgbtrf(_band(12, 2, 2, np.random.default_rng(3))[1] * (
         np.arange(12) != 5), 2, 2)
     assert info == 6 == info_l

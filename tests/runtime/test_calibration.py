@@ -7,18 +7,19 @@ import json
 import numpy as np
 import pytest
 
-from kvrod import cli_beyond
+from kvrod import cli_analysis
 from kvrod.cli import CliError, _Parser
-from runtime.analysis import calibration as cal
 from runtime.analysis.decay import damping_ratios
+from runtime.analysis.records import load_csv
 from runtime.problem.registry import load_problem
 from runtime.simulate.simulate import simulate
+from runtime.study import calibration as cal
 
 
 def parse(argv):
     p = _Parser(prog="kvrod")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    cli_beyond.add_commands(sub, _Parser)
+    cli_analysis.add_commands(sub, _Parser)
     return p.parse_args(argv)
 
 
@@ -101,25 +102,25 @@ def test_bad_decrements(d, match):
 def test_load_csv(tmp_path):
     f = tmp_path / "d.csv"
     f.write_text("# measured\nT,X\n0,0.2\n0.1,0.19\n0.2,0.18\n")
-    t, x = cal.load_csv(f, ("t", "x"))
+    t, x = load_csv(f, ("t", "x"))
     assert t.tolist() == [0, 0.1, 0.2] and x.tolist() == [0.2, 0.19, 0.18]
     # a gap or a typo is refused naming the file's line and column (issue 22)
     f.write_text("# measured\nT,X\n0,0.2\n0.1,0.19\n0.2,\n")
     with pytest.raises(ValueError, match="line 5, column 'x': the cell is empty"):
-        cal.load_csv(f, ("t", "x"))
+        load_csv(f, ("t", "x"))
     f.write_text("T,X\n0,0.2\n0.1,O.19\n")
     with pytest.raises(ValueError, match="line 3, column 'x': 'O.19' is not a finite"):
-        cal.load_csv(f, ("t", "x"))
+        load_csv(f, ("t", "x"))
     g = tmp_path / "delta.csv"
     g.write_text("0.4\n0.42\n")
-    (d,) = cal.load_csv(g, ("delta",))
+    (d,) = load_csv(g, ("delta",))
     assert d.tolist() == [0.4, 0.42]
     with pytest.raises(ValueError, match="no column 'x'"):
-        cal.load_csv(_write(tmp_path, "t,y\n0,1\n"), ("t", "x"))
+        load_csv(_write(tmp_path, "t,y\n0,1\n"), ("t", "x"))
     with pytest.raises(ValueError, match="does not exist"):
-        cal.load_csv(tmp_path / "missing.csv", ("t", "x"))
+        load_csv(tmp_path / "missing.csv", ("t", "x"))
     with pytest.raises(ValueError, match="empty"):
-        cal.load_csv(_write(tmp_path, "# nothing\n"), ("t", "x"))
+        load_csv(_write(tmp_path, "# nothing\n"), ("t", "x"))
 
 
 def _write(tmp_path, text: str):

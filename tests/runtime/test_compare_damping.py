@@ -1,4 +1,4 @@
-"""eta_E against eta~_E in simulation (issue 7 item 1): runtime/analysis/compare_damping.py.
+"""eta_E against eta~_E in simulation (issue 7 item 1): runtime/study/compare_damping.py.
 
 No bulk viscosity (tau_B = 0, tau_S = 0.04 s, nu = 0.3): tau_E / tau~_E = 1 + nu = 1.3
 (eq. (6) over Sect. 4.2). Measured at N = 12: ratio consistent/naive 1.2995 (bending) and
@@ -14,14 +14,14 @@ import re
 import numpy as np
 import pytest
 
-from runtime.analysis.compare_damping import (
+from runtime.io.results import write_json
+from runtime.study.compare_damping import (
     compare_damping,
     measured_zeta,
     plot_compare,
     predicted_ratio,
     summary,
 )
-from runtime.io.results import write_json
 
 
 @pytest.fixture(scope="module")
@@ -108,7 +108,7 @@ def test_outputs(no_bulk, tmp_path):
 
 def test_cli_compare_damping(no_bulk, tmp_path, monkeypatch, capsys):
     """`kvrod compare-damping` formats and writes the library's result (JSON, MD, PNG)."""
-    from kvrod import cli_beyond
+    from kvrod import cli_analysis
     from kvrod.cli import _Parser
 
     seen = {}
@@ -117,10 +117,10 @@ def test_cli_compare_damping(no_bulk, tmp_path, monkeypatch, capsys):
         seen.update(kw)
         return no_bulk
 
-    monkeypatch.setattr("runtime.analysis.compare_damping.compare_damping", fake)
+    monkeypatch.setattr("runtime.study.compare_damping.compare_damping", fake)
     p = _Parser(prog="kvrod")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    cli_beyond.add_commands(sub, _Parser)
+    cli_analysis.add_commands(sub, _Parser)
     args = p.parse_args(["compare-damping", "--n-elements", "12", "--out", str(tmp_path)])
     assert args.func(args) == 0
     assert seen["n_elements"] == 12 and seen["tau_B"] == 0.0 and seen["poisson_ratio"] == 0.3
@@ -135,9 +135,9 @@ def test_cli_compare_damping(no_bulk, tmp_path, monkeypatch, capsys):
 
 def test_notes_beyond_small(no_bulk, tmp_path, monkeypatch):
     """`kvrod notes-beyond` end to end with small settings (the template renders strictly)."""
-    from kvrod import beyond
+    from reports import damping_studies as beyond
 
-    monkeypatch.setattr("runtime.analysis.compare_damping.compare_damping", lambda **kw: no_bulk)
+    monkeypatch.setattr("runtime.study.compare_damping.compare_damping", lambda **kw: no_bulk)
     for name, value in (("MODES_N", 8), ("CAL_DATA_N", 8), ("CAL_MODEL_N", 8),
                         ("CAL_T_END", 2.0)):
         monkeypatch.setattr(beyond, name, value)

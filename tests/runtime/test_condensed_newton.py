@@ -12,10 +12,12 @@ import ctypes
 import numpy as np
 import pytest
 
-from runtime.solvers import _bdf_c
+from runtime.solvers.native.band import band_solve
+from runtime.solvers.native.condensed import CondensedNewton
+from runtime.solvers.native.loader import load
 from tests.rods import MAXWELL, random_state, rod_model, with_internal_strains
 
-pytestmark = pytest.mark.skipif(_bdf_c.load() is None, reason="no C compiler")
+pytestmark = pytest.mark.skipif(load() is None, reason="no C compiler")
 
 ENDS = [dict(), dict(end="clamped"), dict(start="pinned", end="pinned"),
         dict(start="free", end="clamped"), dict(start="free", end="free")]
@@ -36,7 +38,7 @@ def _rod_system(kw, cj, seed=2, N=9):
 def test_condensed_solve_equals_the_full_solve(kw):
     rng = np.random.default_rng(2)
     m = rod_model(9, **kw)
-    cond = _bdf_c.CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
+    cond = CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
     assert cond is not None and cond.nc == m.n - 3 * (m.N + 1) - 4 * m.N
     assert 2 * cond.klc + cond.kuc + 1 < m.ldab
     for cj in (1e1, 3e3, 1e6):
@@ -47,7 +49,7 @@ def test_condensed_solve_equals_the_full_solve(kw):
         ab = np.zeros((m.ldab, m.n), order="F")
         m.jacobian_band(0.0, y, yp, cj, ab)
         b = rng.standard_normal(m.n)
-        full, info = _bdf_c.band_solve(ab.copy(order="F"), m.kl, m.ku, b)
+        full, info = band_solve(ab.copy(order="F"), m.kl, m.ku, b)
         ab[:m.kl] = np.nan          # the LU's fill-in room: not part of J, never read
         assert cond.factor(ab) == 0
         x = cond.solve(ab, b)
@@ -60,7 +62,7 @@ def test_condensed_solve_equals_the_full_solve(kw):
 @pytest.mark.parametrize("N", [1, 2, 9])
 def test_rods_take_the_block_path(kw, N):
     m = rod_model(N, **kw)
-    cond = _bdf_c.CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
+    cond = CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
     assert cond.block_tridiagonal, cond.band_reason
     assert cond.band_reason is None
     kv6 = cond._keep["kv6"]
@@ -70,7 +72,7 @@ def test_rods_take_the_block_path(kw, N):
     assert kv6[2:-1].sum() == (0 if m.branches else N - 2 if N > 2 else 0)
     assert not kv6[[0, 1, -1]].any()
     # the kinematic blocks phi' = v are recognised as diagonal
-    assert _bdf_c.CondensedNewton(cond._lib, m.n, m.kl, m.ku, m.ldab,
+    assert CondensedNewton(cond._lib, m.n, m.kl, m.ku, m.ldab,
                                   m.condensation_blocks()).block_tridiagonal is False
     diag = cond._keep["diag"]
     assert diag.sum() == N + 1 and diag[::2].all()    # v blocks (sorted: v0, p1, v1, ...)
@@ -80,11 +82,11 @@ def test_rods_take_the_block_path(kw, N):
 def test_block_and_band_paths_agree_at_length(kw):
     """N = 40: many interior (fixed-size) cells; both paths against the full band LU."""
     m, ab, rng = _rod_system(kw, 1e2, seed=5, N=40)
-    block = _bdf_c.CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
-    band = _bdf_c.CondensedNewton(block._lib, m.n, m.kl, m.ku, m.ldab, m.condensation_blocks())
+    block = CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
+    band = CondensedNewton(block._lib, m.n, m.kl, m.ku, m.ldab, m.condensation_blocks())
     assert block.block_tridiagonal and not band.block_tridiagonal
     b = rng.standard_normal(m.n)
-    full, info = _bdf_c.band_solve(ab.copy(order="F"), m.kl, m.ku, b)
+    full, info = band_solve(ab.copy(order="F"), m.kl, m.ku, b)
     assert info == 0
     for cond in (block, band):
         assert cond.factor(ab) == 0
@@ -96,7 +98,7 @@ def test_fused_newton_update_matches_solve_then_update():
     """kv_cond_newton (solve, scaling, weighted norm and updates fused per cell) equals
     the solve followed by the update in NumPy."""
     m, ab, rng = _rod_system({}, 3e2, seed=7, N=12)
-    cond = _bdf_c.CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
+    cond = CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
     assert cond.factor(ab) == 0
     res = rng.standard_normal(m.n)
     ewt = rng.uniform(0.5, 2.0, m.n)
@@ -117,7 +119,7 @@ def test_raw_entry_points_for_an_including_step_loop():
     """cond_factor_raw / cond_solve_raw (no floating-point mode change) are exported and
     give what kv_cond_factor / kv_cond_solve give."""
     m, ab, rng = _rod_system({}, 1e3)
-    cond = _bdf_c.CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
+    cond = CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
     lib = cond._lib
     raw_f, raw_s = lib.cond_factor_raw, lib.cond_solve_raw
     raw_f.argtypes, raw_f.restype = [ctypes.c_void_p, ctypes.c_void_p], ctypes.c_int
@@ -177,8 +179,8 @@ def test_hand_made_block_tridiagonal_system_takes_the_block_path(sizes):
     cells of 6 kept unknowns each that are not the rod's (other blocks)."""
     rng = np.random.default_rng(11)
     A, ab, kl, ku, blocks, cells, pattern = _cell_system(sizes, rng)
-    lib = _bdf_c.load()
-    cond = _bdf_c.CondensedNewton(lib, A.shape[0], kl, ku, ab.shape[0], blocks, cells=cells,
+    lib = load()
+    cond = CondensedNewton(lib, A.shape[0], kl, ku, ab.shape[0], blocks, cells=cells,
                                   pattern=pattern)
     assert cond.block_tridiagonal, cond.band_reason
     assert not cond._keep["kv6"].any()
@@ -199,7 +201,7 @@ def test_systems_that_are_not_block_tridiagonal_take_the_band_path(case):
         kw = dict(cells=cells)
     elif case == "cell splits a block":
         kw = dict(cells=[0] + [c + 1 for c in cells[1:]], pattern=pattern)
-    cond = _bdf_c.CondensedNewton(_bdf_c.load(), A.shape[0], kl, ku, ab.shape[0], blocks, **kw)
+    cond = CondensedNewton(load(), A.shape[0], kl, ku, ab.shape[0], blocks, **kw)
     assert not cond.block_tridiagonal
     assert cond.band_reason
     b = rng.standard_normal(A.shape[0])
@@ -213,7 +215,7 @@ def test_a_pattern_contradicting_the_blocks_is_refused():
     A, ab, kl, ku, blocks, cells, pattern = _cell_system(SIZES, rng)
     pattern[kl + ku + 0 - 6, 6] = True           # row 0 (a kinematic row) and column 6
     with pytest.raises(ValueError, match="outside the block"):
-        _bdf_c.CondensedNewton(_bdf_c.load(), A.shape[0], kl, ku, ab.shape[0], blocks,
+        CondensedNewton(load(), A.shape[0], kl, ku, ab.shape[0], blocks,
                                cells=cells, pattern=pattern)
 
 
@@ -222,7 +224,7 @@ def test_a_pattern_contradicting_the_blocks_is_refused():
 @pytest.mark.parametrize("kw", [dict(), dict(tau=None, **MAXWELL)])
 def test_singular_matrices_are_reported(kw):
     m, ab, _ = _rod_system(kw, 1e3)
-    cond = _bdf_c.CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
+    cond = CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
     assert cond.block_tridiagonal
     cs = cond._keep["cs"]
     kv = m.kl + m.ku
@@ -251,7 +253,7 @@ def test_singular_matrices_are_reported(kw):
 def test_singular_hand_made_system_is_reported_on_the_block_path():
     rng = np.random.default_rng(14)
     A, ab, kl, ku, blocks, cells, pattern = _cell_system(SIZES, rng)
-    cond = _bdf_c.CondensedNewton(_bdf_c.load(), A.shape[0], kl, ku, ab.shape[0], blocks,
+    cond = CondensedNewton(load(), A.shape[0], kl, ku, ab.shape[0], blocks,
                                   cells=cells, pattern=pattern)
     assert cond.block_tridiagonal
     # a kept row of cell 3 vanishes (and so does its row of the condensed matrix): D_3
@@ -263,5 +265,5 @@ def test_singular_hand_made_system_is_reported_on_the_block_path():
     cs = cond._keep["cs"]
     info = cond.factor(bad)
     assert cs[3] < info <= cs[4]
-    _, band_info = _bdf_c.band_solve(bad.copy(order="F"), kl, ku, np.ones(A.shape[0]))
+    _, band_info = band_solve(bad.copy(order="F"), kl, ku, np.ones(A.shape[0]))
     assert band_info > 0

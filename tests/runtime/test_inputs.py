@@ -16,8 +16,8 @@ from references.beams import euler_bernoulli_frequencies
 from references.transient import cantilever_tip_response
 from runtime.problem.registry import load_problem
 from runtime.problem.timefunctions import TimeFunction
-from runtime.simulate import loop
 from runtime.simulate.simulate import simulate
+from runtime.solvers import driver
 from runtime.solvers.bdf import BDF
 
 PULSE = [[0.0, 0.0], [0.05, 0.0], [0.0525, 1.0], [0.055, 0.0]]
@@ -109,7 +109,7 @@ def test_both_drivers_and_both_loops_stop_at_the_breakpoints(monkeypatch):
     for python in (False, True):
         with monkeypatch.context() as mp:
             if python:
-                mp.setattr(loop, "BDF", partial(BDF, compiled_loop=False))
+                mp.setattr(driver, "BDF", partial(BDF, compiled_loop=False))
             runs.append(simulate(p))
     a, b = runs
     assert a.counters == b.counters

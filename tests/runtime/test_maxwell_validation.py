@@ -205,8 +205,8 @@ def test_analytic_column_of_a_maxwell_rod_gives_each_mode_its_own_value():
     on: the reference's root tracking jumped branches). Checked against the
     Euler-Bernoulli complex-modulus roots computed separately (a scalar equation per
     mode; Timoshenko lies below it, by 4 % at the 4th mode of this strongly damped rod)."""
-    from kvrod import continuum
     from references import viscoelastic_beam as vb
+    from reports import continuum
     from runtime.analysis.modal import modal_analysis
 
     problem = _maxwell_example(12, 0.002)

@@ -227,7 +227,7 @@ def test_bad_input():
 def test_continuum_column_comes_from_the_independent_references():
     """`kvrod modes` labels modes with continuum frequencies from the references package
     (its own section formulas), not with a copy inside the runtime."""
-    from kvrod import continuum
+    from reports import continuum
 
     problem = rod(4, height=0.012)
     sec = rectangle_section(0.01, 0.012, 0.3)

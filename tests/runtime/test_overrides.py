@@ -75,7 +75,8 @@ def test_python_overrides_take_whole_tables_and_arrays():
     assert q == p
     # the same as a file with those tables
     assert p.to_mapping()["material"] == Problem.from_mapping(
-        {**load_problem("cantilever").to_mapping(), "material": material}).material.to_mapping()
+        {**load_problem("cantilever").to_mapping(), "material": material}
+    ).to_mapping()["material"]
 
 
 @pytest.mark.parametrize("ov, needle", [

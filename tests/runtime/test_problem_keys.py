@@ -5,6 +5,10 @@
    function), they must be exactly the catalogue's keys, per table and kind.
 2. Each key's ``invalid`` value is refused by ``Problem.from_mapping`` with a message that
    names the key: the documented range is the enforced one.
+
+The section layer (``runtime/section``: ``[[section.regions]]``, their shapes,
+``[materials.NAME]``) has its own ``no_unknown_keys`` (it sits below the problem layer);
+both are recorded.
 """
 
 from __future__ import annotations
@@ -18,6 +22,7 @@ import pytest
 from runtime.errors import ParameterError
 from runtime.problem import coerce, keys
 from runtime.problem.schema import TOP_KEYS, Problem
+from runtime.section import _checks as section_checks
 
 TABLES_AT_TOP = set(TOP_KEYS) - {"name", "description"}
 
@@ -29,7 +34,17 @@ SECTION = {"rectangle": {"width": 0.01, "height": 0.01}, "ellipse": {"a": 0.01, 
            "circle": {"radius": 0.005},
            "tube": {"outer_radius": 0.01, "inner_radius": 0.005},
            "stiffness": {k: 1.0 for k in ("EA", "GA1", "GA2", "EI1", "EI2", "GJ", "rhoA",
-                                          "rhoI1", "rhoI2", "rhoI3")}}
+                                          "rhoI1", "rhoI2", "rhoI3")},
+           "composite": {"regions": [{"material": "a", "shape": {"kind": "circle",
+                                                                 "radius": 0.004}}]}}
+SHAPE = {"circle": {"kind": "circle", "radius": 0.005},
+         "rectangle": {"kind": "rectangle", "width": 0.01, "height": 0.01},
+         "ellipse": {"kind": "ellipse", "a": 0.01, "b": 0.005},
+         "tube": {"kind": "tube", "inner_radius": 0.003, "outer_radius": 0.005},
+         "polygon": {"kind": "polygon", "points": [[0, 0], [0.01, 0], [0.01, 0.01]]}}
+NAMED = {"isotropic": {"youngs_modulus": 1e6, "poisson_ratio": 0.3, "density": 1000.0},
+         "anisotropic": {"density": 1000.0, "stiffness_matrix":
+                         [[1e9 if i == j else 0.0 for j in range(6)] for i in range(6)]}}
 MATERIAL = {"kelvin_voigt": {"model": "kelvin_voigt", "density": 1000.0,
                              "youngs_modulus": 1e6, "poisson_ratio": 0.3},
             "generalized_maxwell": {"model": "generalized_maxwell", "youngs_modulus": 1e6,
@@ -71,8 +86,30 @@ def _variant(table: str, kind: str | None) -> tuple[dict, dict]:
             del m["rod"]["length"]
         return m, g
     if table == "section":
-        m["section"] = {"kind": kind or "rectangle", **SECTION[kind or "rectangle"]}
+        m["section"] = {"kind": kind or "rectangle", **copy.deepcopy(SECTION[kind or
+                                                                           "rectangle"])}
+        if kind == "composite":
+            del m["material"]
+            m["materials"] = {"a": copy.deepcopy(NAMED["isotropic"])}
         return m, m["section"]
+    if table.startswith("section.regions") or table.startswith("materials"):
+        del m["material"]
+        named = copy.deepcopy(NAMED["anisotropic" if table.endswith("orientation") else
+                                    kind if table == "materials.NAME" and kind else
+                                    "isotropic"])
+        m["materials"] = {"a": named}
+        shape = copy.deepcopy(SHAPE[kind if table == "section.regions.shape" and kind
+                                    else "circle"])
+        region = {"material": "a", "shape": shape}
+        m["section"] = {"kind": "composite", "regions": [region]}
+        if table == "section.regions":
+            return m, region
+        if table == "section.regions.shape":
+            return m, shape
+        if table == "materials.NAME.orientation":
+            named["orientation"] = {"rotation": 10.0, "off_axis": 20.0}
+            return m, named["orientation"]
+        return m, named
     if table == "material":
         m["material"] = copy.deepcopy(MATERIAL[kind or "kelvin_voigt"])
         return m, m["material"]
@@ -99,16 +136,19 @@ def _variant(table: str, kind: str | None) -> tuple[dict, dict]:
 
 def _variants():
     for table, kinds in (("rod.geometry", GEOMETRY), ("section", SECTION),
-                         ("material", MATERIAL), ("loads", LOAD), ("<time>", TIME)):
+                         ("material", MATERIAL), ("loads", LOAD), ("<time>", TIME),
+                         ("section.regions.shape", SHAPE), ("materials.NAME", NAMED)):
         for kind in kinds:
             yield table, kind
     for table in ("", "rod", "material.branches", "start", "end", "start.motion",
-                  "end.motion", "simulation", "statics", "analysis"):
+                  "end.motion", "simulation", "statics", "analysis", "section.regions",
+                  "materials.NAME.orientation"):
         yield table, None
 
 
 def _table_of(path: str) -> str:
     path = re.sub(r"\[\d+\]", "", path)
+    path = re.sub(r"^materials\.[^.]+", "materials.NAME", path)
     if path.endswith(("time", "translation_time", "rotation_time")):
         return "<time>"
     return path
@@ -129,6 +169,7 @@ def test_the_catalogue_lists_exactly_the_keys_the_parser_accepts(monkeypatch, ta
         return original(path, mapping, allowed)
 
     monkeypatch.setattr(coerce, "no_unknown_keys", record)
+    monkeypatch.setattr(section_checks, "no_unknown_keys", record)
     m, _ = _variant(table, kind)
     Problem.from_mapping(m)
     accepted = set(seen[table])

@@ -59,7 +59,7 @@ def test_maxwell_run_interrupted_after_a_checkpoint_resumes(tmp_path, monkeypatc
 def test_dominant_period_of_a_noisy_damped_oscillation(noise):
     """Closed form: x = exp(-zeta w t) cos(w_d t), period 2 pi / w_d, with white noise of
     up to the initial amplitude (where the spacing of maxima is the noise's)."""
-    from runtime.analysis.calibration import dominant_period
+    from runtime.study.calibration import dominant_period
 
     w, zeta = 2 * math.pi / 1.7, 0.05
     wd = w * math.sqrt(1 - zeta**2)
@@ -73,8 +73,8 @@ def test_heavy_noise_calibration_recovers_a_known_tau():
     """A record simulated at tau = 0.06 s (release from 0.05 N, N = 4) with white noise of
     15 % of its amplitude: the fit recovers tau and its interval holds it (before: refused
     as 'check the units of t', the period taken from noise maxima)."""
-    from runtime.analysis.calibration import calibrate_signal, check_record
     from runtime.simulate.simulate import simulate
+    from runtime.study.calibration import calibrate_signal, check_record
 
     truth = load_problem("cantilever", {"n_elements": 4, "tau": 0.06, "t_end": 4.0,
                                         "output_step": 0.01})

@@ -13,12 +13,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from runtime import native
 from runtime.errors import GeneratedCodeError
 from runtime.model import build
 from tests.rods import rod_model
 
 ROOT = Path(__file__).resolve().parents[2]
-needs_cc = pytest.mark.skipif(build.find_compiler() is None, reason="no C compiler")
+needs_cc = pytest.mark.skipif(native.find_compiler() is None, reason="no C compiler")
 
 
 @pytest.fixture
@@ -36,7 +37,7 @@ def test_compiles_into_content_keyed_cache(fresh_build):
     assert m.backend == "c"
     libs = list(fresh_build.glob("kvrod_rod_*.so"))
     assert len(libs) == 1
-    assert build.library_key(build.find_compiler())[:32] in libs[0].name
+    assert build.library_key(native.find_compiler())[:32] in libs[0].name
     assert not list(fresh_build.glob("*.tmp"))
 
 
@@ -45,8 +46,10 @@ def test_concurrent_first_use_does_not_corrupt_the_cache(tmp_path):
     code = "\n".join([
         f"import sys; sys.path.insert(0, {str(ROOT)!r})",
         "import ctypes, pathlib",
+        "from runtime import native",
         "from runtime.model import build",
-        f"p = build.compile_library(build.find_compiler(), outdir=pathlib.Path({str(tmp_path)!r}))",
+        f"p = build.compile_library(native.find_compiler(), "
+        f"outdir=pathlib.Path({str(tmp_path)!r}))",
         "ctypes.CDLL(str(p)).kvrod_n_state",
     ])
     procs = [subprocess.Popen([sys.executable, "-c", code]) for _ in range(3)]
@@ -67,7 +70,7 @@ def test_manifest_mismatch_tells_the_user_to_regenerate(tmp_path):
     (tmp_path / "MANIFEST.json").write_text(json.dumps(man))
     names = build.SOURCES + build.HEADERS
     build.verify_manifest(tmp_path, names)  # consistent: no error
-    with open(tmp_path / "rod_assembly.c", "a") as fh:
+    with open(tmp_path / "rod_kernels.c", "a") as fh:
         fh.write("/* hand edit */\n")
     with pytest.raises(GeneratedCodeError, match="kvrod generate"):
         build.verify_manifest(tmp_path, names)
@@ -103,7 +106,7 @@ def test_manifest_problems_are_errors_naming_the_file(tmp_path, damage):
 
 def test_fallback_without_compiler_warns_once_and_gives_same_numbers(fresh_build, monkeypatch):
     ref = None
-    if build.find_compiler() is not None:
+    if native.find_compiler() is not None:
         ref = rod_model(3)
     monkeypatch.setenv("KVROD_NO_COMPILER", "1")
     build.clear_cache()
@@ -127,9 +130,10 @@ def test_fallback_without_compiler_warns_once_and_gives_same_numbers(fresh_build
 def test_tampered_library_is_rebuilt_not_loaded(tmp_path):
     """A cached library whose bytes no longer match the hash recorded at build time is
     compiled again (issue 6, item 4)."""
+    from runtime import native
     from runtime.model import build
 
-    compiler = build.find_compiler()
+    compiler = native.find_compiler()
     if compiler is None:
         import pytest
 

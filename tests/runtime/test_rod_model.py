@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from runtime.errors import ParameterError
-from runtime.model.casadi_rod import CasadiRod
+from runtime.model.casadi_oracle import CasadiOracle
 from runtime.model.quaternion import quat_exp, quat_mul, quat_rotation
 from runtime.model.rod import RodModel
 from runtime.model.statics import RodStatics
@@ -74,10 +74,10 @@ def test_energy_identity_along_the_flow(start, end):
     """d/dt (T + W) = -2D + P_ext at random states, y' solved from F(y, y') = 0."""
     rng = np.random.default_rng(2)
     m = model(7, start, end)
-    cr = CasadiRod(m.arrays)
+    cr = CasadiOracle(m.arrays)
     ysym = ca.MX.sym("y", m.n)
     dsym = ca.MX.sym("d", m.n)
-    out = cr.energies(0.0, ysym, dsym, *CasadiRod.args(m.arrays))
+    out = cr.energies(0.0, ysym, dsym, *CasadiOracle.args(m.arrays))
     dE = ca.Function("dE", [ysym, dsym], [ca.jtimes(out[0] + out[1], ysym, dsym)])
     for _ in range(3):
         y = random_state(m, rng)

@@ -175,7 +175,7 @@ def test_workers_load_the_kernels_once(dask_run, client):
     def loads() -> int:
         from runtime.model import build
 
-        return build._load_cached.cache_info().misses
+        return build.library_loads()
 
     # the worker plugin loaded the library once per worker process, before any point
     assert set(client.run(loads).values()) == {1}

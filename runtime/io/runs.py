@@ -1,0 +1,217 @@
+"""Run a problem into a results folder (the results-folder protocol of a run): the work
+behind `kvrod simulate` and `kvrod static`, shared by those commands and the notes."""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Callable
+from pathlib import Path
+
+
+def already_finished(problem, out: Path) -> bool:
+    """True when DIR holds a finished run of exactly this problem (and no checkpoint)."""
+    import json
+
+    from runtime.io.results import CHECKPOINT, jsonable
+
+    path = out / "summary.json"
+    if (out / CHECKPOINT).exists() or not path.exists():
+        return False
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return False
+    return (isinstance(data, dict) and data.get("status") == "finished"
+            and data.get("parameters") == jsonable(problem.to_mapping()))
+
+
+#: a progress display of a run: ``progress(t_end, label) -> (callback(t), close())``
+ProgressDisplay = Callable[[float, str], tuple[Callable[[float], object], Callable[[], object]]]
+
+
+def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: bool = False,
+                  vtk_every: float | None = None, checkpoint_every: float = 1.0,
+                  overwrite: bool = False, progress: ProgressDisplay | None = None) -> tuple:
+    """Run one problem into results folder ``out`` and write its results.
+
+    Everything that can be checked is checked before anything is written (parameters, the
+    folder, an existing result, the checkpoint to resume, the generated code). Then the
+    folder is locked (``.kvrod.lock``), ``summary.json`` says "running" (with t_reached)
+    while the run goes and a checkpoint is written every ``checkpoint_every`` simulated
+    seconds; when the run stops, ``summary.json`` says "finished", "failed" or
+    "interrupted" (never "running", except after SIGKILL). ``resume`` continues from
+    DIR/checkpoint.npz (VTK frames before the checkpoint are kept); ``overwrite`` replaces
+    a finished result. Returns (result, summary).
+    """
+    from runtime.io import folder as F
+    from runtime.io.results import (
+        CHECKPOINT,
+        jsonable,
+        load_checkpoint,
+        write_checkpoint,
+        write_run,
+        write_status,
+    )
+    from runtime.model import build
+    from runtime.simulate.simulate import simulate
+
+    out = Path(out)
+    params = jsonable(problem.to_mapping())
+    F.check_output_path(out)
+    if not resume:
+        F.refuse_existing(out, "simulate", overwrite=overwrite, resumable=True)
+    state = load_checkpoint(out, params) if resume else None
+    if state is not None:
+        import numpy as np
+
+        from generated import rod_layout
+        from runtime.io.results import CheckpointError
+
+        # the state holds the internal strains of a generalized Maxwell rod's relaxation
+        # terms too (as many as runtime.problem.assemble gives the rod's arrays)
+        terms = len(problem.material.rod_matrices(problem.section, np.array([0.5]))
+                    .get("theta", ()))
+        n = rod_layout.n_state(problem.rod.elements, terms)
+        for key in ("y", "yp"):
+            if np.shape(state[key]) != (n,) or not np.all(np.isfinite(state[key])):
+                raise CheckpointError(f"--resume: checkpoint {str(out / CHECKPOINT)!r} holds a "
+                                      f"state {key} of shape {np.shape(state[key])}, this "
+                                      f"problem needs ({n},) finite values; start again with "
+                                      "--overwrite")
+    build.require_generated()
+    if (state is None and problem.simulation.initial == "static"
+            and not (problem.start.clamped or problem.end.clamped)):
+        # rigid motions may be free: a static start under loads along them is refused
+        # before the folder is touched (the model is built twice only for such rods)
+        from runtime.problem.assemble import build_model
+
+        check_statics(build_model(problem))
+    with F.claim(out, "simulate", overwrite=overwrite and not resume) as claimed:
+        t_start = float(state["t"]) if state else 0.0
+        write_status(out, params, "running", t_start)
+        claimed.keep()
+
+        def on_checkpoint(st):
+            if series is not None:       # the frames so far survive a kill after this
+                series.write_collection()
+            write_checkpoint(out, params, st)
+            write_status(out, params, "running", st["t"])
+
+        series = None
+        model = None
+        if vtk_every is not None:
+            from runtime.io.vtk import VtkSeries
+            from runtime.problem.assemble import build_model
+
+            model = build_model(problem)          # one model: the run's and the frames'
+            series = VtkSeries(out / "vtk", model, resume_from=t_start if state else None)
+        cb, close = (progress(problem.simulation.t_end, label) if progress is not None
+                     else (None, lambda: None))
+        try:
+            run = simulate(problem, progress=cb, checkpoint=on_checkpoint,
+                           checkpoint_every=checkpoint_every, resume=state,
+                           snapshot_every=vtk_every,
+                           snapshot_sink=series.add if series else None, model=model)
+        except BaseException as exc:   # a bug or resource error: say so, keep the checkpoint
+            write_status(out, params, "failed", t_start, f"{type(exc).__name__}: {exc}")
+            raise
+        finally:
+            close()
+            if series is not None:
+                series.close()
+        extra = {"resumed_from_t": t_start} if state else None
+        try:
+            summary = write_run(out, run, extra=extra)
+        except BaseException as exc:   # e.g. disk full: do not leave "running" behind
+            with contextlib.suppress(Exception):
+                write_status(out, params, "failed", run.t_last,
+                             f"the results could not be written: {exc}")
+            raise
+        if run.status == "finished":
+            (out / CHECKPOINT).unlink(missing_ok=True)
+        if run.interrupt is not None:
+            raise run.interrupt
+        if plots and run.t.size > 1:
+            from runtime.io.plots import plot_run
+
+            plot_run(run, out)
+    return run, summary
+
+
+def check_statics(model) -> None:
+    """Refuse (:class:`runtime.errors.IllPosedError`) a static problem that has no
+    equilibrium to compute as posed: loads along a rigid motion its supports leave free, a
+    rod too soft for its loads (``RodStatics.hold_rigid_motions``, in statics at load
+    factor 1; nothing is written)."""
+    from runtime.model.statics import RodStatics
+
+    with model.statics():
+        RodStatics(model).hold_rigid_motions(model.initial_state())
+
+
+def static_and_write(problem, out: Path, overwrite: bool = False) -> tuple[dict, object, object]:
+    """Static equilibrium of ``problem`` under its loads at t = 0- into results folder
+    ``out`` (checked and locked like :func:`run_and_write`; a problem statics cannot solve
+    as posed is refused before, see :func:`check_statics`): summary.json with the end
+    positions (for a rod held at both ends also the largest displacement and where), the
+    gauge holding free rigid motions, the load path and Newton iterations; static.npz with
+    the state ``y``, node
+    ``positions`` (3, N+1) and segment ``frames`` (N, 3, 3; columns d1, d2, d3) of the
+    equilibrium and of the ``reference``, the segment ``quaternions`` (4, N), the end
+    frames ``start_frame``, ``end_frame`` (3, 3) and, per held end, the support's
+    ``start_reaction_force`` / ``_moment`` (N, N m about the node; also in summary.json);
+    problem.toml. Returns (summary, model, y); a failed solve keeps its last converged
+    state (status "failed")."""
+    import time
+
+    from runtime.io.folder import results_folder
+    from runtime.io.results import jsonable, write_json, write_npz, write_problem
+    from runtime.model import build
+    from runtime.model.statics import largest_displacement
+    from runtime.problem.assemble import build_model
+    from runtime.simulate.simulate import load_path_table, static_equilibrium
+    from runtime.solvers.statics import StaticSolveError
+
+    build.require_generated()
+    wall0 = time.perf_counter()
+    model = build_model(problem)
+    check_statics(model)            # an ill-posed problem is refused before the folder
+    with results_folder(out, "static", markers=("summary.json",), overwrite=overwrite,
+                        names=("summary.json", "static.npz", "problem.toml")):
+        params = jsonable(problem.to_mapping())
+        gauge = None
+        try:
+            st = static_equilibrium(problem, model)
+            status, message, y, its, per = "finished", "ok", st.y, st.iterations, st.per_step
+            path, gauge = st.path_table(), st.gauge
+        except StaticSolveError as exc:
+            status, message, y, its, per = ("failed", f"static solve failed: {exc}", exc.y,
+                                            sum(exc.iterations), list(exc.iterations))
+            path = load_path_table(getattr(exc, "path", []))
+        pos = model.positions(y)
+        with model.statics():
+            reactions = model.reactions(0.0, y)
+            ends = model.end_frames(0.0, y)
+        both_held = problem.start.held and problem.end.held
+        summary = {"status": status, "message": message, "problem": problem.name,
+                   "parameters": params,
+                   "static": {"tip": pos[:, -1].tolist(), "start": pos[:, 0].tolist(),
+                              "largest_displacement": (largest_displacement(model, y)
+                                                       if both_held else None),
+                              "gauge": gauge,
+                              "reactions": {end: {w: v.tolist() for w, v in r.items()}
+                                            for end, r in reactions.items()},
+                              "newton_iterations": int(its),
+                              "newton_iterations_per_load_step": per,
+                              "path": path,
+                              "wall_time_s": time.perf_counter() - wall0},
+                   "backend": model.backend}
+        extra = {f"{end}_frame": f for end, f in ends.items()}
+        for end, r in reactions.items():
+            extra.update({f"{end}_reaction_{w}": v for w, v in r.items()})
+        write_npz(out / "static.npz", y=y, positions=pos, quaternions=model.quaternions(y),
+                  frames=model.frames(y), reference=model.positions(model.reference),
+                  reference_frames=model.frames(model.reference), **extra)
+        write_problem(out / "problem.toml", params)
+        write_json(out / "summary.json", summary)
+    return summary, model, y

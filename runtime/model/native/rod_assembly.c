@@ -1,0 +1,728 @@
+/*
+ * Assembly of the discrete rod from the per-element CasADi kernels (generated/rod_kernels.c,
+ * rod_kernels_x4.c): residual, banded Jacobian, energies and diagnostics of the whole rod.
+ * Written by hand (the loops are the project's own), compiled with the generated kernels
+ * and the generated layout header (generated/rod_layout.h: cell sizes, offsets, band
+ * widths, parameter offsets), so the loops are the only place that knows the cell-by-cell
+ * layout; their size does not depend on the number of elements N. The CasADi MX assembly
+ * (runtime/model/casadi_oracle.py) is the same rod for machines without a compiler and the
+ * oracle this one is tested against.
+ *
+ * All functions return 0 on success and a negative code on bad arguments
+ * (-1: N < 1, -2: ldab too small, -3: kernel failure, -4: cells outside the rod or
+ * the band storage).
+ */
+#include <string.h>
+#include "rod_kernels.h"
+#include "rod_kernels_x4.h"
+#include "rod_layout.h"
+#include "rod_assembly.h"
+
+/* indices of the fields of node i / segment i (i >= 1) / joint j in y */
+static inline int c0size(const kvrod_rod* r) { return CELL0_BASE + CELL0_PER * r->nb; }
+static inline int csize(const kvrod_rod* r) { return CELL_BASE + CELL_PER * r->nb; }
+static inline int cs(const kvrod_rod* r, int i) {
+  return i == 0 ? 0 : c0size(r) + csize(r) * (i - 1);
+}
+static inline int i_phi(const kvrod_rod* r, int i) {
+  return i == 0 ? CELL0_PHI_BASE + CELL0_PHI_PER * r->nb
+                : cs(r, i) + CELL_PHI_BASE + CELL_PHI_PER * r->nb;
+}
+static inline int i_v(const kvrod_rod* r, int i) {
+  return i == 0 ? CELL0_V_BASE + CELL0_V_PER * r->nb
+                : cs(r, i) + CELL_V_BASE + CELL_V_PER * r->nb;
+}
+static inline int i_p(const kvrod_rod* r, int i) {
+  return cs(r, i) + CELL_P_BASE + CELL_P_PER * r->nb;
+}
+static inline int i_om(const kvrod_rod* r, int i) {
+  return cs(r, i) + CELL_OMEGA_BASE + CELL_OMEGA_PER * r->nb;
+}
+/* internal strains: segment i's 3 nb values and joint j's 3 nb values (term b at 3b) */
+static inline int i_qs(const kvrod_rod* r, int i) {
+  return cs(r, i) + CELL_Q_SEGMENT_BASE + CELL_Q_SEGMENT_PER * r->nb;
+}
+static inline int i_qj(const kvrod_rod* r, int j) {
+  return j == 0 ? CELL0_Q_JOINT_BASE + CELL0_Q_JOINT_PER * r->nb
+                : cs(r, j) + CELL_Q_JOINT_BASE + CELL_Q_JOINT_PER * r->nb;
+}
+
+/* per-element data: segment i = 1..N, joint j = 0..N, node i = 0..N */
+static inline const double* segp(const kvrod_rod* r, int i) {
+  return r->seg + (size_t)(i - 1) * NSEG;
+}
+static inline const double* jntp(const kvrod_rod* r, int j) {
+  return r->jnt + (size_t)j * NJNT;
+}
+static inline const double* nlp(const kvrod_rod* r, int i) {
+  return r->nload + (size_t)i * NNL;
+}
+static inline const double* slp(const kvrod_rod* r, int i) {
+  return r->sload + (size_t)(i - 1) * NSL;
+}
+/* moduli C_b (3) of relaxation term b on segment i / joint j */
+static inline const double* segb(const kvrod_rod* r, int i, int b) {
+  return r->segb + ((size_t)(i - 1) * (size_t)r->nb + (size_t)b) * 3;
+}
+static inline const double* jntb(const kvrod_rod* r, int j, int b) {
+  return r->jntb + ((size_t)j * (size_t)r->nb + (size_t)b) * 3;
+}
+
+/* the resultant of the relaxation terms of segment i (joint: jq): -sum_b C_b q_b */
+static void seg_nq(const kvrod_rod* r, int i, const double* y, double* nq) {
+  int b, k;
+  nq[0] = nq[1] = nq[2] = 0.0;
+  for (b = 0; b < r->nb; ++b) {
+    const double* C = segb(r, i, b);
+    const double* q = y + i_qs(r, i) + 3 * b;
+    for (k = 0; k < 3; ++k) nq[k] -= C[k] * q[k];
+  }
+}
+static void jnt_mq(const kvrod_rod* r, int j, const double* y, double* mq) {
+  int b, k;
+  mq[0] = mq[1] = mq[2] = 0.0;
+  for (b = 0; b < r->nb; ++b) {
+    const double* C = jntb(r, j, b);
+    const double* q = y + i_qj(r, j) + 3 * b;
+    for (k = 0; k < 3; ++k) mq[k] -= C[k] * q[k];
+  }
+}
+
+static const double kZero3[3] = {0.0, 0.0, 0.0};
+
+/* The inputs of segment s's kernels (forces, their Jacobian, diagnostics):
+ * a[stride * k] for input k (stride 1: a call's argument list; 4: lane l of a four-lane
+ * call, a = a4 + l), with its relaxation resultant n_q written into nq. */
+static void seg_args(const kvrod_rod* r, int s, const double* y, const double** a,
+                     int stride, double* nq) {
+  seg_nq(r, s, y, nq);
+  a[0] = y + i_phi(r, s - 1); a[stride] = y + i_phi(r, s); a[2 * stride] = y + i_p(r, s);
+  a[3 * stride] = y + i_v(r, s - 1); a[4 * stride] = y + i_v(r, s);
+  a[5 * stride] = y + i_om(r, s); a[6 * stride] = segp(r, s); a[7 * stride] = nq;
+}
+
+/* lane l of a four-lane call of the kernels of joint j between segments j and j+1 (an
+ * interior joint; joint_args covers the clamp joints), with its resultant m_q into mq */
+static void jnt_lane(const kvrod_rod* r, int j, const double* y, const double** a4, int l,
+                     double* mq) {
+  jnt_mq(r, j, y, mq);
+  a4[l] = y + i_p(r, j); a4[4 + l] = y + i_p(r, j + 1);
+  a4[8 + l] = y + i_om(r, j); a4[12 + l] = y + i_om(r, j + 1);
+  a4[16 + l] = jntp(r, j); a4[20 + l] = mq;
+}
+
+/* work memory large enough for every kernel (sizes: rod_layout.h) */
+typedef struct {
+  const double* arg[MAXARG];
+  double* res[MAXRES];
+  long long int iw[MAXIW];
+  double w[MAXW];
+} work_t;
+
+/* lumped node mass (kg) and length (m): half of each adjacent segment */
+static double node_mass(const kvrod_rod* r, int i) {
+  double m = 0.0;
+  if (i >= 1) m += 0.5 * segp(r, i)[SEG_RHOA] * segp(r, i)[SEG_H];
+  if (i < r->N) m += 0.5 * segp(r, i + 1)[SEG_RHOA] * segp(r, i + 1)[SEG_H];
+  return m;
+}
+
+static double node_length(const kvrod_rod* r, int i) {
+  double l = 0.0;
+  if (i >= 1) l += 0.5 * segp(r, i)[SEG_H];
+  if (i < r->N) l += 0.5 * segp(r, i + 1)[SEG_H];
+  return l;
+}
+
+static double node_held(const kvrod_rod* r, int i) {
+  if (i == 0) return r->par[PAR_FIX_START];
+  if (i == r->N) return r->par[PAR_FIX_END];
+  return 0.0;
+}
+
+/* the segment whose frame carries node i's follower force */
+static inline int host(int i) { return i >= 1 ? i : 1; }
+
+static const double* held_r(const kvrod_rod* r, int i) {
+  return r->par + (i == 0 ? PAR_R_START : PAR_R_END);
+}
+
+static const double* held_v(const kvrod_rod* r, int i) {
+  return r->par + (i == 0 ? PAR_V_START : PAR_V_END);
+}
+
+static const double* held_a(const kvrod_rod* r, int i) {
+  return r->par + (i == 0 ? PAR_A_START : PAR_A_END);
+}
+
+static int has_follower(const double* f) { return f[0] != 0.0 || f[1] != 0.0 || f[2] != 0.0; }
+
+/* total external force on node i (spatial), scaled by load_scale */
+static int node_force(const kvrod_rod* r, int i, const double* y, work_t* W, double* f) {
+  const double* par = r->par;
+  const double ls = par[PAR_LOAD_SCALE], m = node_mass(r, i), l = node_length(r, i);
+  const double* nl = nlp(r, i);
+  int k;
+  for (k = 0; k < 3; ++k)
+    f[k] = ls * (m * par[PAR_GRAVITY + k] + l * par[PAR_F_DIST + k] + nl[NL_F_DEAD + k]);
+  if (has_follower(nl + NL_F_FOLLOWER)) {
+    double Rf[3];
+    W->arg[0] = y + i_p(r, host(i)); W->arg[1] = nl + NL_F_FOLLOWER;
+    W->res[0] = Rf;
+    if (rod_rotate(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    for (k = 0; k < 3; ++k) f[k] += ls * Rf[k];
+  }
+  return 0;
+}
+
+/* external torque on segment i (material), scaled by load_scale */
+static int segment_torque(const kvrod_rod* r, int i, const double* y, work_t* W, double* T) {
+  const double ls = r->par[PAR_LOAD_SCALE];
+  const double* sl = slp(r, i);
+  int k;
+  for (k = 0; k < 3; ++k) T[k] = ls * sl[SL_M_FOLLOWER + k];
+  if (has_follower(sl + SL_M_DEAD)) {
+    double RtM[3];
+    W->arg[0] = y + i_p(r, i); W->arg[1] = sl + SL_M_DEAD;
+    W->res[0] = RtM;
+    if (rod_rotate_transposed(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    for (k = 0; k < 3; ++k) T[k] += ls * RtM[k];
+  }
+  return 0;
+}
+
+/* the joint at node j: (p_a, p_b, Omega_a, Omega_b) from the state or the clamp frames */
+static int joint_args(const kvrod_rod* r, int j, const double* y, work_t* W) {
+  const int N = r->N, has_a = j >= 1, has_b = j + 1 <= N;
+  if (j == 0 && !(r->par[PAR_CLAMP_START] > 0.5)) return 0;
+  if (j == N && !(r->par[PAR_CLAMP_END] > 0.5)) return 0;
+  W->arg[0] = has_a ? y + i_p(r, j) : r->par + PAR_P_START;
+  W->arg[1] = has_b ? y + i_p(r, j + 1) : r->par + PAR_P_END;
+  W->arg[2] = has_a ? y + i_om(r, j) : r->par + PAR_OMEGA_START;
+  W->arg[3] = has_b ? y + i_om(r, j + 1) : r->par + PAR_OMEGA_END;
+  W->arg[4] = jntp(r, j);
+  return 1;
+}
+
+int kvrod_n_state(int N, int nb) { return CELL0_BASE + CELL0_PER * nb + (CELL_BASE + CELL_PER * nb) * N; }
+int kvrod_kl(int N, int nb) { return KL0 + KL1 * nb - (N == 1 ? KL_N1 : 0); }
+int kvrod_ku(int N, int nb) { return KU0 + KU1 * nb - (N == 1 ? KU_N1 : 0); }
+int kvrod_n_params(void) { return NPAR; }
+
+/* a rod the assembly can work on: N >= 1, 0 <= nb <= MAX_NB, its band at least the
+ * layout's (a wider band is fine) */
+static int check_rod(const kvrod_rod* rod) {
+  if (rod->N < 1 || rod->nb < 0 || rod->nb > MAX_NB) return -1;
+  if (rod->kl < kvrod_kl(rod->N, rod->nb) || rod->ku < kvrod_ku(rod->N, rod->nb)) return -2;
+  return 0;
+}
+
+/* the relaxation rows of one element: res = q' - (strain - q)/theta for each term
+ * (strain = 0 for an absent clamp joint, whose terms then just decay) */
+static void relax_rows(const kvrod_rod* rod, int q0, const double* strain, const double* y,
+                       const double* yp, double* res) {
+  int b, k;
+  for (b = 0; b < rod->nb; ++b) {
+    const double rate = 1.0 / rod->theta[b];
+    for (k = 0; k < 3; ++k) {
+      const int o = q0 + 3 * b + k;
+      res[o] = yp[o] - rate * ((strain ? strain[k] : 0.0) - y[o]);
+    }
+  }
+}
+
+int kvrod_residual(const kvrod_rod* rod, double t, const double* y, const double* yp,
+                   double* res) {
+  (void) t;
+  const int N = rod->N;
+  if (check_rod(rod)) return check_rod(rod);
+  work_t W;
+  double T[6], f[3], m, held, dV[3], dVx[24], G[18];
+  int i, j, k, l, nl;
+  /* nodes: kinematics and momentum, or the prescribed position and velocity */
+  for (i = 0; i <= N; ++i) {
+    m = node_mass(rod, i); held = node_held(rod, i);
+    if (node_force(rod, i, y, &W, f)) return -3;
+    W.arg[0] = y + i_phi(rod, i); W.arg[1] = y + i_v(rod, i);
+    W.arg[2] = yp + i_phi(rod, i); W.arg[3] = yp + i_v(rod, i);
+    W.arg[4] = &m; W.arg[5] = f; W.arg[6] = &held;
+    W.arg[7] = i == 0 || i == N ? held_r(rod, i) : kZero3;
+    W.arg[8] = i == 0 || i == N ? held_v(rod, i) : kZero3;
+    W.res[0] = res + i_phi(rod, i);
+    if (rod_node_inertia(W.arg, W.res, W.iw, W.w, 0)) return -3;
+  }
+  /* segments: kinematics, angular momentum, external torques */
+  for (i = 1; i <= N; ++i) {
+    W.arg[0] = y + i_p(rod, i); W.arg[1] = y + i_om(rod, i);
+    W.arg[2] = yp + i_p(rod, i); W.arg[3] = yp + i_om(rod, i);
+    W.arg[4] = segp(rod, i);
+    W.res[0] = res + i_p(rod, i);
+    if (rod_segment_inertia(W.arg, W.res, W.iw, W.w, 0)) return -3;
+    if (segment_torque(rod, i, y, &W, T)) return -3;
+    for (k = 0; k < 3; ++k) res[i_om(rod, i) + k] -= T[k];
+  }
+  /* internal forces of the segments: elastic + viscous (none on a held node's rows);
+   * four segments per kernel call (rod_segment_forces_x4: bit for bit the scalar
+   * kernel), then added segment by segment in order */
+  const int free0 = !(node_held(rod, 0) > 0.5), freeN = !(node_held(rod, N) > 0.5);
+  double Q4[4][9], nq4[4][3];
+  const double* a4[4 * 8];
+  double* r4[4];
+  for (i = 1; i <= N; i += nl) {
+    nl = N - i + 1 >= 4 ? 4 : 1;
+    if (nl == 4) {
+      for (l = 0; l < 4; ++l) {
+        seg_args(rod, i + l, y, a4 + l, 4, nq4[l]);
+        r4[l] = Q4[l];
+      }
+      if (rod_segment_forces_x4(a4, r4)) return -3;
+    } else {
+      seg_args(rod, i, y, W.arg, 1, nq4[0]);
+      W.res[0] = Q4[0];
+      if (rod_segment_forces(W.arg, W.res, W.iw, W.w, 0)) return -3;
+    }
+    for (l = 0; l < nl; ++l) {
+      const int s = i + l;
+      const double* Q = Q4[l];
+      if (rod->nb) {
+        W.arg[0] = y + i_phi(rod, s - 1); W.arg[1] = y + i_phi(rod, s);
+        W.arg[2] = y + i_p(rod, s); W.arg[3] = segp(rod, s);
+        W.res[0] = dV; W.res[1] = dVx; W.res[2] = G;
+        if (rod_segment_branch(W.arg, W.res, W.iw, W.w, 0)) return -3;
+        relax_rows(rod, i_qs(rod, s), dV, y, yp, res);
+      }
+      double* ra = res + i_v(rod, s - 1);
+      double* rb = res + i_v(rod, s);
+      double* ro = res + i_om(rod, s);
+      if (s - 1 > 0 || free0) for (k = 0; k < 3; ++k) ra[k] -= Q[k];
+      if (s < N || freeN) for (k = 0; k < 3; ++k) rb[k] -= Q[3 + k];
+      for (k = 0; k < 3; ++k) ro[k] -= Q[6 + k];
+    }
+  }
+  /* internal torques of the joints (and the clamp joints against the end frames); four
+   * interior joints per kernel call where they come in fours (rod_joint_torques_x4),
+   * then added joint by joint in order */
+  double T4[4][6], mq4[4][3];
+  for (j = 0; j <= N; j += nl) {
+    nl = j >= 1 && j + 3 <= N - 1 ? 4 : 1;
+    if (nl == 4) {
+      for (l = 0; l < 4; ++l) {
+        jnt_lane(rod, j + l, y, a4, l, mq4[l]);
+        r4[l] = T4[l];
+      }
+      if (rod_joint_torques_x4(a4, r4)) return -3;
+    } else {
+      if (!joint_args(rod, j, y, &W)) {
+        relax_rows(rod, i_qj(rod, j), 0, y, yp, res);
+        continue;
+      }
+      jnt_mq(rod, j, y, mq4[0]);
+      W.arg[5] = mq4[0];
+      W.res[0] = T4[0];
+      if (rod_joint_torques(W.arg, W.res, W.iw, W.w, 0)) return -3;
+    }
+    for (l = 0; l < nl; ++l) {
+      const int jj = j + l;
+      const double* T = T4[l];
+      if (jj >= 1) for (k = 0; k < 3; ++k) res[i_om(rod, jj) + k] -= T[k];
+      if (jj + 1 <= N) for (k = 0; k < 3; ++k) res[i_om(rod, jj + 1) + k] -= T[3 + k];
+      if (rod->nb) {
+        if (nl == 4) {
+          W.arg[0] = y + i_p(rod, jj); W.arg[1] = y + i_p(rod, jj + 1);
+        }                              /* else (p_a, p_b) are still in arg[0], arg[1] */
+        W.arg[2] = jntp(rod, jj);
+        W.res[0] = dV; W.res[1] = dVx; W.res[2] = G;
+        if (rod_joint_branch(W.arg, W.res, W.iw, W.w, 0)) return -3;
+        relax_rows(rod, i_qj(rod, jj), dV, y, yp, res);
+      }
+    }
+  }
+  return 0;
+}
+
+/* the caller's band storage: columns col0 .. of J from ab (J(i, j) in column j - col0,
+ * row kl + ku + i - j) */
+typedef struct {
+  double* ab;
+  int ldab, col0;
+} band_t;
+
+#define AB(r, c) \
+  B->ab[(size_t)(rod->kl + rod->ku + (r) - (c)) + (size_t)((c) - B->col0) * (size_t)B->ldab]
+
+/* the contributions of one element to cy dF/dy + cj dF/dy' (band storage) */
+static int jac_node(const kvrod_rod* rod, int i, const double* y, const double* yp,
+                    double cy, double cj, const band_t* B, work_t* W, double* J) {
+  const int N = rod->N;
+  double m = node_mass(rod, i), held = node_held(rod, i), f[3];
+  int r, c;
+  if (node_force(rod, i, y, W, f)) return -3;
+  W->arg[0] = y + i_phi(rod, i); W->arg[1] = y + i_v(rod, i);
+  W->arg[2] = yp + i_phi(rod, i); W->arg[3] = yp + i_v(rod, i);
+  W->arg[4] = &m; W->arg[5] = f; W->arg[6] = &held;
+  W->arg[7] = i == 0 || i == N ? held_r(rod, i) : kZero3;
+  W->arg[8] = i == 0 || i == N ? held_v(rod, i) : kZero3;
+  W->arg[9] = &cy; W->arg[10] = &cj;
+  W->res[0] = J;
+  if (rod_node_inertia_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
+  const int o = i_phi(rod, i);
+  for (c = 0; c < 6; ++c) for (r = 0; r < 6; ++r) AB(o + r, o + c) += J[r + 6 * c];
+  /* follower force: R(p_host) f depends on the host segment's quaternion */
+  const double* nl = nlp(rod, i);
+  if (cy != 0.0 && !(held > 0.5) && has_follower(nl + NL_F_FOLLOWER)) {
+    const double s = cy * rod->par[PAR_LOAD_SCALE];
+    const int op = i_p(rod, host(i));
+    W->arg[0] = y + op; W->arg[1] = nl + NL_F_FOLLOWER;
+    W->res[0] = J;
+    if (rod_rotate_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    for (c = 0; c < 4; ++c)
+      for (r = 0; r < 3; ++r) AB(i_v(rod, i) + r, op + c) -= s * J[r + 3 * c];
+  }
+  return 0;
+}
+
+static int jac_segment_inertia(const kvrod_rod* rod, int i, const double* y,
+                               const double* yp, double cy, double cj, const band_t* B,
+                               work_t* W, double* J) {
+  int r, c;
+  W->arg[0] = y + i_p(rod, i); W->arg[1] = y + i_om(rod, i);
+  W->arg[2] = yp + i_p(rod, i); W->arg[3] = yp + i_om(rod, i);
+  W->arg[4] = segp(rod, i); W->arg[5] = &cy; W->arg[6] = &cj;
+  W->res[0] = J;
+  if (rod_segment_inertia_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
+  const int o = i_p(rod, i);
+  for (c = 0; c < 7; ++c) for (r = 0; r < 7; ++r) AB(o + r, o + c) += J[r + 7 * c];
+  const double* sl = slp(rod, i);
+  if (cy != 0.0 && has_follower(sl + SL_M_DEAD)) {
+    /* dead moment: the material torque R(p)^T M depends on p */
+    const double s = cy * rod->par[PAR_LOAD_SCALE];
+    W->arg[0] = y + i_p(rod, i); W->arg[1] = sl + SL_M_DEAD;
+    W->res[0] = J;
+    if (rod_rotate_transposed_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    for (c = 0; c < 4; ++c)
+      for (r = 0; r < 3; ++r) AB(i_om(rod, i) + r, o + c) -= s * J[r + 3 * c];
+  }
+  return 0;
+}
+
+/* reduced segment Jacobian (6 x 13): rows (force on node b, torque), columns
+ * (phi_b, p, v_b, Omega); force on node a = -force on node b and the phi_a, v_a columns
+ * are the negated phi_b, v_b columns. With relaxation terms also the coupling of the
+ * forces to the segment's internal strains q_b (through n_q = -sum C_b q_b) and the
+ * relaxation rows q_b' - (dV - q_b)/theta_b. */
+static int jac_segment(const kvrod_rod* rod, int i, const double* y, double cy, double cj,
+                       const band_t* B, work_t* W, double* J, const double* Jx) {
+  const int N = rod->N;
+  int rb[6], ra[3], cb[13], cpart[13], r, c, b, k;
+  double nq[3];
+  const double* Jk = Jx;         /* the kernel's result, if evaluated already (x4) */
+  if (!Jk) {
+    seg_args(rod, i, y, W->arg, 1, nq);
+    W->res[0] = J;
+    if (rod_segment_forces_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    Jk = J;
+  }
+  const int use_a = (i - 1 > 0 || !(node_held(rod, 0) > 0.5));
+  const int use_b = (i < N || !(node_held(rod, N) > 0.5));
+  for (r = 0; r < 3; ++r) {
+    rb[r] = use_b ? i_v(rod, i) + r : -1;
+    rb[3 + r] = i_om(rod, i) + r;
+    ra[r] = use_a ? i_v(rod, i - 1) + r : -1;
+    cb[r] = i_phi(rod, i) + r; cpart[r] = i_phi(rod, i - 1) + r;
+    cb[7 + r] = i_v(rod, i) + r; cpart[7 + r] = i_v(rod, i - 1) + r;
+    cb[10 + r] = i_om(rod, i) + r; cpart[10 + r] = -1;
+  }
+  for (r = 0; r < 4; ++r) { cb[3 + r] = i_p(rod, i) + r; cpart[3 + r] = -1; }
+  for (c = 0; c < 13; ++c) {
+    const int c2 = cpart[c];
+    for (r = 0; r < 6; ++r) {
+      const double val = cy * Jk[r + 6 * c];
+      if (rb[r] >= 0) {
+        AB(rb[r], cb[c]) -= val;
+        if (c2 >= 0) AB(rb[r], c2) += val;
+      }
+      if (r < 3 && ra[r] >= 0) {
+        AB(ra[r], cb[c]) += val;
+        if (c2 >= 0) AB(ra[r], c2) -= val;
+      }
+    }
+  }
+  if (!rod->nb) return 0;
+  double dV[3], dVx[21], G[18];
+  W->arg[0] = y + i_phi(rod, i - 1); W->arg[1] = y + i_phi(rod, i);
+  W->arg[2] = y + i_p(rod, i); W->arg[3] = segp(rod, i);
+  W->res[0] = dV; W->res[1] = dVx; W->res[2] = G;
+  if (rod_segment_branch(W->arg, W->res, W->iw, W->w, 0)) return -3;
+  for (b = 0; b < rod->nb; ++b) {
+    const double* C = segb(rod, i, b);
+    const double rate = 1.0 / rod->theta[b];
+    const int q0 = i_qs(rod, i) + 3 * b;
+    for (k = 0; k < 3; ++k) {
+      /* forces on the q columns: res -= Q, dQ/dq_bk = -C_bk G[:, k] */
+      for (r = 0; r < 6; ++r) {
+        const double val = cy * C[k] * G[r + 6 * k];
+        if (rb[r] >= 0) AB(rb[r], q0 + k) += val;
+        if (r < 3 && ra[r] >= 0) AB(ra[r], q0 + k) -= val;
+      }
+      /* relaxation row: d/dq = rate, d/dq' = 1, d/d(phi_b, p) = -rate d dV/d(phi_b, p) */
+      AB(q0 + k, q0 + k) += cy * rate + cj;
+      for (c = 0; c < 7; ++c) {
+        const double val = -cy * rate * dVx[k + 3 * c];
+        AB(q0 + k, c < 3 ? i_phi(rod, i) + c : i_p(rod, i) + c - 3) += val;
+        if (c < 3) AB(q0 + k, i_phi(rod, i - 1) + c) -= val;
+      }
+    }
+  }
+  return 0;
+}
+
+/* joint j sits at node j: between segments j and j+1, or a clamp frame and a segment */
+static int jac_joint(const kvrod_rod* rod, int j, const double* y, double cy, double cj,
+                     const band_t* B, work_t* W, double* J, const double* Jx) {
+  const int N = rod->N, has_a = j >= 1, has_b = j + 1 <= N;
+  int jrows[6], jcols[14], r, c, b, k;
+  double mq[3];
+  if (!joint_args(rod, j, y, W)) {          /* absent clamp joint: its terms only decay */
+    for (b = 0; b < rod->nb; ++b)
+      for (k = 0; k < 3; ++k) {
+        const int o = i_qj(rod, j) + 3 * b + k;
+        AB(o, o) += cy / rod->theta[b] + cj;
+      }
+    return 0;
+  }
+  const double* Jk = Jx;         /* the kernel's result, if evaluated already (x4) */
+  if (!Jk) {
+    jnt_mq(rod, j, y, mq);
+    W->arg[5] = mq;
+    W->res[0] = J;
+    if (rod_joint_torques_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    Jk = J;
+  }
+  for (r = 0; r < 3; ++r) {
+    jrows[r] = has_a ? i_om(rod, j) + r : -1;
+    jrows[3 + r] = has_b ? i_om(rod, j + 1) + r : -1;
+    jcols[8 + r] = has_a ? i_om(rod, j) + r : -1;
+    jcols[11 + r] = has_b ? i_om(rod, j + 1) + r : -1;
+  }
+  for (r = 0; r < 4; ++r) {
+    jcols[r] = has_a ? i_p(rod, j) + r : -1;
+    jcols[4 + r] = has_b ? i_p(rod, j + 1) + r : -1;
+  }
+  for (c = 0; c < 14; ++c) {
+    if (jcols[c] < 0) continue;
+    for (r = 0; r < 6; ++r)
+      if (jrows[r] >= 0) AB(jrows[r], jcols[c]) -= cy * Jk[r + 6 * c];
+  }
+  if (!rod->nb) return 0;
+  double dU[3], dUx[24], G[18];
+  W->arg[2] = jntp(rod, j);                 /* (p_a, p_b) are still in arg[0], arg[1] */
+  W->res[0] = dU; W->res[1] = dUx; W->res[2] = G;
+  if (rod_joint_branch(W->arg, W->res, W->iw, W->w, 0)) return -3;
+  for (b = 0; b < rod->nb; ++b) {
+    const double* C = jntb(rod, j, b);
+    const double rate = 1.0 / rod->theta[b];
+    const int q0 = i_qj(rod, j) + 3 * b;
+    for (k = 0; k < 3; ++k) {
+      for (r = 0; r < 6; ++r)
+        if (jrows[r] >= 0) AB(jrows[r], q0 + k) += cy * C[k] * G[r + 6 * k];
+      AB(q0 + k, q0 + k) += cy * rate + cj;
+      for (c = 0; c < 8; ++c)
+        if (jcols[c] >= 0) AB(q0 + k, jcols[c]) -= cy * rate * dUx[k + 3 * c];
+    }
+  }
+  return 0;
+}
+
+static void zero_cell(const kvrod_rod* rod, int i, const band_t* B) {
+  const int c0 = cs(rod, i), c1 = i == 0 ? c0size(rod) : c0 + csize(rod);
+  int c;
+  /* band rows kl .. 2kl+ku only; rows 0 .. kl-1 are dgbtrf workspace */
+  for (c = c0; c < c1; ++c)
+    memset(B->ab + (size_t)(c - B->col0) * (size_t)B->ldab + rod->kl, 0,
+           sizeof(double) * (rod->kl + rod->ku + 1));
+}
+
+int kvrod_jacobian_band_cells(const kvrod_rod* rod, double t, const double* y,
+                              const double* yp, double cy, double cj, int ldab, double* ab,
+                              int col0, int i0, int i1) {
+  (void) t;
+  const int N = rod->N;
+  if (check_rod(rod)) return check_rod(rod);
+  if (ldab < 2 * rod->kl + rod->ku + 1) return -2;
+  if (i0 < 0 || i1 > N || col0 < 0 || col0 > cs(rod, i0 > 0 ? i0 - 1 : 0)) return -4;
+  work_t W;
+  double J[MAXJAC];
+  const band_t band = {ab, ldab, col0}, *B = &band;
+  int i, b, k, l, g0 = -1, gj = 0;
+  /* the segment and joint kernels of elements g0..g0+3, four per call (x4, bit for bit
+   * the scalar kernels); their terms are then added element by element as without */
+  double JS[4][6 * 13], JJ[4][6 * 14], q4[4][3];
+  const double* a4[4 * 8];
+  double* r4[4];
+  /* one sweep over the cells; the columns of cell i+1 are zeroed just before the
+   * elements of cell i (which reach one cell ahead) are added: cache friendly */
+  if (i0 == 0) zero_cell(rod, 0, B);
+  for (i = i0; i <= i1; ++i) {
+    if (cy != 0.0 && i >= 1 && i + 3 <= i1 && (g0 < 0 || i >= g0 + 4)) {
+      g0 = i;
+      for (l = 0; l < 4; ++l) {
+        seg_args(rod, i + l, y, a4 + l, 4, q4[l]);
+        r4[l] = JS[l];
+      }
+      if (rod_segment_forces_jac_x4(a4, r4)) return -3;
+      gj = i + 3 <= N - 1;               /* joints i..i+3 all between two segments */
+      if (gj) {
+        for (l = 0; l < 4; ++l) {
+          jnt_lane(rod, i + l, y, a4, l, q4[l]);
+          r4[l] = JJ[l];
+        }
+        if (rod_joint_torques_jac_x4(a4, r4)) return -3;
+      }
+    }
+    const int in_g = g0 >= 0 && i >= g0 && i < g0 + 4;
+    if (i + 1 <= N) zero_cell(rod, i + 1, B);
+    if (jac_node(rod, i, y, yp, cy, cj, B, &W, J)) return -3;
+    if (i >= 1 && jac_segment_inertia(rod, i, y, yp, cy, cj, B, &W, J)) return -3;
+    if (cy == 0.0) {            /* dF/dy' only: the relaxation rows' identity */
+      for (b = 0; b < 3 * rod->nb; ++b) {
+        if (i >= 1) { k = i_qs(rod, i) + b; AB(k, k) += cj; }
+        k = i_qj(rod, i) + b; AB(k, k) += cj;
+      }
+      continue;
+    }
+    if (i >= 1 && jac_segment(rod, i, y, cy, cj, B, &W, J, in_g ? JS[i - g0] : 0)) return -3;
+    if (jac_joint(rod, i, y, cy, cj, B, &W, J, in_g && gj ? JJ[i - g0] : 0)) return -3;
+  }
+  return 0;
+}
+
+int kvrod_jacobian_band(const kvrod_rod* rod, double t, const double* y, const double* yp,
+                        double cy, double cj, int ldab, double* ab) {
+  return kvrod_jacobian_band_cells(rod, t, y, yp, cy, cj, ldab, ab, 0, 0, rod->N);
+}
+
+/* the stored energy and twice the dissipation rate of the relaxation terms of one
+ * element beyond what its kernel reports (the kernel has W = l/2 dV^T C_F dV with the
+ * instantaneous C_F = C_inf + sum C_b): l/2 C_b ((dV - q)^2 - dV^2) and l C_b/theta (dV - q)^2 */
+static void relax_energy(const kvrod_rod* rod, const double* C0, size_t stride, double l,
+                         const double* dV, const double* q, double* e) {
+  int b, k;
+  for (b = 0; b < rod->nb; ++b) {
+    const double* C = C0 + stride * (size_t)b;
+    for (k = 0; k < 3; ++k) {
+      const double x = dV[k] - q[3 * b + k];
+      e[1] += 0.5 * l * C[k] * (x * x - dV[k] * dV[k]);
+      e[2] += l * C[k] / rod->theta[b] * x * x;
+    }
+  }
+}
+
+/* energies and powers of one state; per-element strains and resultants if out_el != 0
+ * (V (3N), F (3N), U (3(N+1)), M (3(N+1))) */
+static int energies_one(const kvrod_rod* rod, const double* y, const double* yp,
+                        double* e, double* out_el, work_t* W) {
+  const int N = rod->N;
+  double Tk, Wel, Dd, S3[3], R3[3], Q[9], T6[6], f[3], m, nq[3], dX[3];
+  double Fint[2][3] = {{0, 0, 0}, {0, 0, 0}};
+  double* oV = out_el;
+  double* oF = out_el ? oV + 3 * N : 0;
+  double* oU = out_el ? oF + 3 * N : 0;
+  double* oM = out_el ? oU + 3 * (N + 1) : 0;
+  int i, j, k;
+  for (k = 0; k < NDIAG; ++k) e[k] = 0.0;
+  for (i = 0; i <= N; ++i) {            /* kinetic energy and power of the nodes' loads */
+    m = node_mass(rod, i);
+    W->arg[0] = y + i_v(rod, i); W->arg[1] = &m;
+    W->res[0] = &Tk;
+    if (rod_node_kinetic(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    e[0] += Tk;
+    if (node_force(rod, i, y, W, f)) return -3;
+    for (k = 0; k < 3; ++k) e[3] += f[k] * y[i_v(rod, i) + k];
+  }
+  for (i = 1; i <= N; ++i) {
+    W->arg[0] = y + i_om(rod, i); W->arg[1] = segp(rod, i);
+    W->res[0] = &Tk;
+    if (rod_segment_kinetic(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    e[0] += Tk;
+    if (segment_torque(rod, i, y, W, S3)) return -3;
+    for (k = 0; k < 3; ++k) e[3] += S3[k] * y[i_om(rod, i) + k];
+    seg_args(rod, i, y, W->arg, 1, nq);
+    W->res[0] = &Wel; W->res[1] = &Dd; W->res[2] = S3; W->res[3] = R3;
+    if (rod_segment_diagnostics(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    e[1] += Wel; e[2] += 2.0 * Dd;
+    if (rod->nb) {
+      for (k = 0; k < 3; ++k) dX[k] = S3[k] - segp(rod, i)[SEG_V0 + k];
+      relax_energy(rod, segb(rod, i, 0), 3, segp(rod, i)[SEG_H], dX, y + i_qs(rod, i), e);
+    }
+    if (out_el)
+      for (k = 0; k < 3; ++k) { oV[3 * (i - 1) + k] = S3[k]; oF[3 * (i - 1) + k] = R3[k]; }
+    if (i == 1 || i == N) {             /* internal forces on the end nodes (reactions) */
+      W->res[0] = Q;
+      if (rod_segment_forces(W->arg, W->res, W->iw, W->w, 0)) return -3;
+      for (k = 0; k < 3; ++k) {
+        if (i == 1) Fint[0][k] += Q[k];
+        if (i == N) Fint[1][k] += Q[3 + k];
+      }
+    }
+  }
+  for (j = 0; j <= N; ++j) {
+    if (!joint_args(rod, j, y, W)) continue;
+    jnt_mq(rod, j, y, nq);
+    W->arg[5] = nq;
+    W->res[0] = &Wel; W->res[1] = &Dd; W->res[2] = S3; W->res[3] = R3;
+    if (rod_joint_diagnostics(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    e[1] += Wel; e[2] += 2.0 * Dd;
+    if (rod->nb) {
+      for (k = 0; k < 3; ++k) dX[k] = S3[k] - jntp(rod, j)[JNT_U0 + k];
+      relax_energy(rod, jntb(rod, j, 0), 3, jntp(rod, j)[JNT_H], dX, y + i_qj(rod, j), e);
+    }
+    if (out_el) for (k = 0; k < 3; ++k) { oU[3 * j + k] = S3[k]; oM[3 * j + k] = R3[k]; }
+    if (j == 0 || j == N) {             /* the clamp's moment and its power */
+      W->res[0] = T6;
+      if (rod_joint_torques(W->arg, W->res, W->iw, W->w, 0)) return -3;
+      const double* om = rod->par + (j == 0 ? PAR_OMEGA_START : PAR_OMEGA_END);
+      const double* pc = rod->par + (j == 0 ? PAR_P_START : PAR_P_END);
+      double mTc[3];
+      const double* Tc = j == 0 ? T6 : T6 + 3;  /* the joint's torque on the clamp frame */
+      for (k = 0; k < 3; ++k) { e[4] -= Tc[k] * om[k]; mTc[k] = -Tc[k]; }
+      W->arg[0] = pc; W->arg[1] = mTc;    /* the support's moment, spatial */
+      W->res[0] = e + NDIAG_E + (j == 0 ? 3 : 9);
+      if (rod_rotate(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    }
+  }
+  for (j = 0; j < 2; ++j) {             /* the supports' forces and their power */
+    i = j == 0 ? 0 : N;
+    if (!(node_held(rod, i) > 0.5)) continue;
+    m = node_mass(rod, i);
+    if (node_force(rod, i, y, W, f)) return -3;
+    double* R = e + NDIAG_E + 6 * j;
+    const double* a = held_a(rod, i);
+    for (k = 0; k < 3; ++k) {
+      R[k] = m * a[k] - f[k] - Fint[j][k];
+      e[4] += R[k] * y[i_v(rod, i) + k];
+    }
+  }
+  return 0;
+}
+
+int kvrod_diagnostics(const kvrod_rod* rod, double t, const double* y, const double* yp,
+                      double* out) {
+  (void) t;
+  const int N = rod->N;
+  if (check_rod(rod)) return check_rod(rod);
+  work_t W;
+  memset(out, 0, sizeof(double) * (size_t)(NDIAG + 6 * N + 6 * (N + 1)));
+  return energies_one(rod, y, yp, out, out + NDIAG, &W);
+}
+
+int kvrod_energies(const kvrod_rod* rod, int m, const double* ts, const double* ys,
+                   const double* yps, double* out) {
+  (void) ts;
+  if (check_rod(rod)) return check_rod(rod);
+  const size_t n = (size_t) kvrod_n_state(rod->N, rod->nb);
+  work_t W;
+  int k;
+  for (k = 0; k < m; ++k)
+    if (energies_one(rod, ys + k * n, yps + k * n, out + (size_t)k * NDIAG, 0, &W)) return -3;
+  return 0;
+}

@@ -1,0 +1,831 @@
+/* The IDA-style BDF step loop of runtime/solvers/bdf.py in C (step_loop.py links it): one call integrates up to
+   a stop time (an output, a checkpoint, a snapshot), a watched sign change, or a failure,
+   with the energy audit and the output samples of every step on the way.
+
+   Why C: at N = 50 a step costs ~20 us of arithmetic (residual, Newton solves, norms);
+   the same step driven from Python cost ~75 us, most of it interpreter overhead of the
+   ~40 NumPy and ctypes calls a step makes, plus ~70 us per step for the energy audit's
+   interpolation and quadrature. The algorithm is the one of bdf.py (the pure-Python path
+   kept for machines without a C compiler), statement for statement, so that both take
+   the same steps up to rounding (tests/runtime/test_step_loop.py checks that). Function
+   names follow IDA's (IDASetCoeffs, IDANls, IDATestError, IDACompleteStep, ...).
+
+   The problem comes as function pointers: the rod's compiled kernels (kvrod_residual,
+   kvrod_jacobian_band or, on the condensed block path, kvrod_jacobian_band_cells,
+   kvrod_energies on a kvrod_rod struct), or ctypes callbacks into Python for any other
+   problem. Loads that change with time are re-applied by a
+   callback ("drive") only when t leaves the interval on which they are constant. */
+#define _POSIX_C_SOURCE 199309L     /* clock_gettime under -std=c99 */
+#include <time.h>
+#include "band.c"
+#include "condensed.c"
+
+typedef int (*kv_res_fn)(const void *ctx, double t, const double *y, const double *yp,
+                         double *res);
+typedef int (*kv_jac_fn)(const void *ctx, double t, const double *y, const double *yp,
+                         double cy, double cj, int ldab, double *ab);
+/* kvrod_jacobian_band_cells: the contributions of elements i0..i1 into band storage
+   holding columns col0.. of J; element i adds to the columns of cells i-1..i+1 (the
+   cells of the condensation) and zeroes those of cell i+1 first */
+typedef int (*kv_jac_cells_fn)(const void *ctx, double t, const double *y, const double *yp,
+                               double cy, double cj, int ldab, double *ab, int col0, int i0,
+                               int i1);
+typedef int (*kv_en_fn)(const void *ctx, int m, const double *ts, const double *ys,
+                        const double *yps, double *out);
+typedef int (*kv_drive_fn)(double t);
+
+#define KV_MAXORD 5
+#define KV_NH (KV_MAXORD + 2)
+#define KV_NEN 5            /* energies of a state: T, W, 2D, P_ext, P_bc (then extras) */
+#define KV_MAXEN 32         /* most values per state the energies may return (nen) */
+#define KV_MAXWATCH 8
+
+/* IDA's constants (bdf.py) */
+#define EPS_NEWT 0.33
+#define TOL_DEL (1e-4 * EPS_NEWT)
+#define RATE_MAX 0.9
+#define XRATE 0.25
+
+/* return codes of kv_ida_advance (>= 0: stopped normally) */
+enum { KV_TSTOP = 0, KV_WATCH = 1, KV_FINISHED = 2, KV_MAXSTEPS = 3,
+       KV_FAIL_CONV = -1, KV_FAIL_ERR = -2, KV_FAIL_STALL = -3, KV_FAIL_HMIN = -4,
+       KV_FAIL_FIXED = -5, KV_CALLBACK = -6, KV_NONFINITE = -7 };
+enum { NLS_OK = 0, NLS_CONV_FAIL = 1, NLS_ERR_FAIL = 2, NLS_CALLBACK = 3, NLS_NONFINITE = 4 };
+
+/* The solver: problem, arrays (owned by Python), settings, IDA's scalar state, counters,
+   audit and sampling. Mirrored field for field by CoreStruct in step_loop.py (checked by
+   kv_ida_sizeof at load). */
+typedef struct {
+    /* problem */
+    int n, kl, ku, ldab;
+    kv_res_fn res;
+    kv_jac_fn jac;
+    kv_en_fn en;                /* NULL: no audit in C */
+    int nen;                    /* values per state of en: KV_NEN, then extras sampled
+                                   with the outputs (e.g. the supports' reactions) */
+    const void *ctx;
+    kv_drive_fn drive;          /* NULL: loads never change */
+    double drive_lo, drive_hi;  /* the loads are constant for t in [lo, hi) (drive writes) */
+    double drive_t;             /* time the loads were last driven to */
+    kv_cond *cond;              /* NULL: full band LU */
+    /* arrays: phi (KV_NH x n, row-major), vectors of n */
+    double *phi, *y, *yp, *yy, *ypw, *ee, *res_v, *tmp, *ewt, *ewt_err, *errmask, *atol;
+    double *ab;
+    int *ipiv, *prof;
+    /* settings */
+    double rtol, t_bound, direction, hmax_inv, min_step, fixed_step;   /* fixed_step 0: none */
+    int max_order, maxcor, max_conv_fails, max_error_fails;
+    /* IDA's state */
+    double psi[KV_NH], alpha[KV_NH], beta[KV_NH], sigma[KV_NH], gamma[KV_NH];
+    int kk, kused, knew, ns, phase, have_lu;
+    double hh, hused, cj, cjold, cjlast, cjratio, ss, oldnrm, rr;
+    double t, t_old;
+    int started;                /* an accepted step exists (t_old valid) */
+    /* counters */
+    long long nstep, nfev, njev, nlu, nni, netf, ncfn;
+    long long nst0;             /* nstep at the last (re)start: the first step after a
+                                   restart is IDA's first step (nstep - nst0 == 0) */
+    /* failure report: the component blamed, the counts, the kind of the last failure */
+    int fail_index, fail_count, fail_nflag;
+    double fail_t;              /* time of the attempted point (non-finite values) */
+    /* sign changes that stop the loop: y[idx] crossing 0 in direction dir (<0: from > 0
+       to <= 0; > 0: from < 0 to >= 0) */
+    int nwatch;
+    int watch_idx[KV_MAXWATCH];
+    double watch_dir[KV_MAXWATCH], watch_old[KV_MAXWATCH];
+    int watch_hit;              /* bit mask of the watches that fired in the last step */
+    /* energy audit: 3-point Gauss-Legendre on each step's interpolant */
+    int audit;
+    double gl_x[3], fit[9];     /* nodes on [0, 1]; values -> quadratic coefficients */
+    double dissipated, external_work;   /* J, up to t */
+    double coef[6];             /* the last step's quadratics of 2D and P: c0, c1, c2 each */
+    double *wy, *wyp;           /* work: 3 x n each */
+    /* samples on an output grid t_out[0..m_out): rows [t, y[samp_idx]..., T, W, int 2D,
+       int P] for t_out[k_out], ... into a buffer of rec_cap rows, rec_n of them filled;
+       when it is full, flush() hands them to Python (which empties it: rec_n = 0) */
+    int nsamp, m_out, k_out, rec_w, rec_cap, rec_n;
+    const int *samp_idx;
+    const double *t_out;
+    double *rec;                /* rec_cap x rec_w */
+    kv_drive_fn flush;          /* called with t (unused) */
+    double *sy, *syp;           /* work: n each */
+    /* seconds spent in: residual, Jacobian, LU, Newton solves, energies, drive (when
+       timing is set; for benchmarks: two clock reads per call) */
+    int timing;
+    double sec[6];
+    int stop;                   /* set by Python (a signal held in a callback): return */
+    /* the Jacobian by cells (NULL: none; used with the condensed block path): J is then
+       evaluated chunk cells at a time into a window of jwin_cols columns (ldab rows) and
+       the cells are factored right behind, while their columns are in cache, instead of
+       writing all of J (21 MB at N = 4000) and reading it back */
+    kv_jac_cells_fn jac_cells;
+    double *jwin;
+    int jwin_cols, jchunk;
+    /* rows F_i = y_i - g_i(t) of prescribed unknowns (a held end's position and velocity):
+       their Newton corrections are taken unscaled, so that they hold to round-off at
+       every step (IDA scales the simplified Newton's corrections by 2/(1 + cj/cj_old)
+       when cj changed, which would leave them at the Newton tolerance); exact_res holds
+       their residuals across the solve */
+    int nexact;
+    const int *exact;
+    double *exact_res;
+} kv_ida;
+
+enum { SEC_RES, SEC_JAC, SEC_LU, SEC_NEWTON, SEC_EN, SEC_DRIVE };
+
+static double now(const kv_ida *S)
+{
+    if (!S->timing) return 0.0;
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+#define TIC(S) double tic_ = now(S)
+#define TOC(S, k) do { if ((S)->timing) (S)->sec[k] += now(S) - tic_; } while (0)
+
+size_t kv_ida_sizeof(void) { return sizeof(kv_ida); }
+
+/* ---- calls into the problem (outside the flush-to-zero mode of the integrator's own
+   arithmetic: the kernels see the caller's floating-point environment) -------------- */
+#if defined(__x86_64__) || defined(__SSE2__)
+#define USER_MODE(S) _mm_setcsr((S)->user_csr_)
+#define CORE_MODE(S) _mm_setcsr((S)->user_csr_ | 0x8040u)
+#else
+#define USER_MODE(S)
+#define CORE_MODE(S)
+#endif
+
+typedef struct { kv_ida *S; unsigned int user_csr_; } kv_run;   /* one advance call */
+
+static int drive_to(kv_run *R, double t)
+{
+    kv_ida *S = R->S;
+    if (!S->drive || (t >= S->drive_lo && t < S->drive_hi) || t == S->drive_t) return 0;
+    TIC(S);
+    USER_MODE(R);
+    int rc = S->drive(t);
+    CORE_MODE(R);
+    TOC(S, SEC_DRIVE);
+    if (rc == 0) S->drive_t = t;
+    return rc;
+}
+
+static int call_res(kv_run *R, double t, const double *y, const double *yp, double *out)
+{
+    kv_ida *S = R->S;
+    if (drive_to(R, t)) return 1;
+    TIC(S);
+    USER_MODE(R);
+    int rc = S->res(S->ctx, t, y, yp, out);
+    CORE_MODE(R);
+    TOC(S, SEC_RES);
+    S->nfev++;
+    return rc;
+}
+
+static int call_jac(kv_run *R, double t, double cj)
+{
+    kv_ida *S = R->S;
+    if (drive_to(R, t)) return 1;
+    TIC(S);
+    USER_MODE(R);
+    int rc = S->jac(S->ctx, t, S->yy, S->ypw, 1.0, cj, S->ldab, S->ab);
+    CORE_MODE(R);
+    TOC(S, SEC_JAC);
+    S->njev++;
+    return rc;
+}
+
+/* energies of m states (rows of ys, yps) at times ts: one kernel call when the loads are
+   constant over all of them, else one per state (as RodModel.energies) */
+static int call_en(kv_run *R, int m, const double *ts, const double *ys, const double *yps,
+                   double *out)
+{
+    kv_ida *S = R->S;
+    if (drive_to(R, ts[0])) return 1;
+    int steady = 1;
+    if (S->drive)
+        for (int i = 1; i < m; ++i)
+            if (!((ts[i] >= S->drive_lo && ts[i] < S->drive_hi) || ts[i] == S->drive_t))
+                steady = 0;
+    int rc = 0;
+    if (steady) {
+        TIC(S);
+        USER_MODE(R);
+        rc = S->en(S->ctx, m, ts, ys, yps, out);
+        CORE_MODE(R);
+        TOC(S, SEC_EN);
+        return rc;
+    }
+    for (int i = 0; i < m && rc == 0; ++i) {
+        if (drive_to(R, ts[i])) return 1;
+        TIC(S);
+        USER_MODE(R);
+        rc = S->en(S->ctx, 1, ts + i, ys + (size_t)i * S->n, yps + (size_t)i * S->n,
+                   out + (size_t)i * S->nen);
+        CORE_MODE(R);
+        TOC(S, SEC_EN);
+    }
+    return rc;
+}
+
+/* ---- vector helpers ---------------------------------------------------------------- */
+static int argmax_abs(int n, const double *v, const double *w)
+{
+    int k = 0;
+    double big = -1.0;
+    for (int i = 0; i < n; ++i) {
+        double a = fabs(w ? v[i] * w[i] : v[i]);
+        if (a > big || (a != a && big == big)) { big = a; k = i; }
+    }
+    return k;
+}
+
+static double hmin(const kv_ida *S)
+{
+    double a = 16.0 * 2.220446049250313e-16 * fabs(S->t);
+    double m = S->min_step > a ? S->min_step : a;
+    return m > 1e-300 ? m : 1e-300;
+}
+
+#define PHI(j) (S->phi + (size_t)(j) * (size_t)S->n)
+
+/* ---- IDA ------------------------------------------------------------------------- */
+static double set_coeffs(kv_ida *S)     /* IDASetCoeffs; returns ck */
+{
+    const int kk = S->kk;
+    const double hh = S->hh;
+    double *psi = S->psi, *alpha = S->alpha, *beta = S->beta, *sigma = S->sigma,
+           *gamma = S->gamma;
+    if (hh != S->hused || kk != S->kused) S->ns = 0;
+    S->ns = S->ns + 1 < S->kused + 2 ? S->ns + 1 : S->kused + 2;
+    const int ns = S->ns;
+    if (kk + 1 >= ns) {
+        beta[0] = alpha[0] = sigma[0] = 1.0;
+        gamma[0] = 0.0;
+        double temp1 = hh;
+        for (int i = 1; i <= kk; ++i) {
+            double temp2 = psi[i - 1];
+            psi[i - 1] = temp1;
+            beta[i] = beta[i - 1] * psi[i - 1] / temp2;
+            temp1 = temp2 + hh;
+            alpha[i] = hh / temp1;
+            sigma[i] = i * sigma[i - 1] * alpha[i];
+            gamma[i] = gamma[i - 1] + alpha[i - 1] / hh;
+        }
+        psi[kk] = temp1;
+    }
+    double alphas = 0.0, alpha0 = 0.0;
+    for (int i = 0; i < kk; ++i) {
+        alphas -= 1.0 / (i + 1);
+        alpha0 -= alpha[i];
+    }
+    S->cjlast = S->cj;
+    S->cj = -alphas / hh;
+    double ck = fabs(alpha[kk] + alphas - alpha0);
+    if (alpha[kk] > ck) ck = alpha[kk];
+    /* IDASetCoeffs' rescaling phi_j *= beta_j (j = ns .. kk) is done by predict, in its
+       pass over phi */
+    return ck;
+}
+
+/* IDAPredict, into the Newton iterates: yy = sum_j phi_j, ypw = sum_j gamma_j phi_j,
+   summed in j order per component (as bdf.py's _predict) in one pass over memory; with
+   ns <= kk first set_coeffs' rescaling phi_j *= beta_j for j = ns .. kk (the same
+   products as bdf.py's, in the same pass: at N = 1000 the pass over phi, not the
+   arithmetic, is the cost) */
+static void predict_scaled(kv_ida *S, int ns)
+{
+    const int n = S->n, kk = S->kk;
+    double *restrict yy = S->yy, *restrict ypw = S->ypw;
+    double g[KV_NH], beta[KV_NH];          /* local: the stores to phi cannot alias them */
+    double *ph[KV_NH];
+    for (int j = 0; j <= kk; ++j) { g[j] = S->gamma[j]; beta[j] = S->beta[j]; ph[j] = PHI(j); }
+    if (ns < 1) ns = 1;
+    if (ns > kk) {
+        for (int q = 0; q < n; ++q) {
+            double a = ph[0][q], b = 0.0;
+            for (int j = 1; j <= kk; ++j) {
+                const double v = ph[j][q];
+                a += v;
+                b += g[j] * v;
+            }
+            yy[q] = a;
+            ypw[q] = b;
+        }
+        return;
+    }
+    for (int q = 0; q < n; ++q) {
+        double a = ph[0][q], b = 0.0;
+        for (int j = 1; j <= kk; ++j) {
+            double v = ph[j][q];
+            if (j >= ns) { v *= beta[j]; ph[j][q] = v; }
+            a += v;
+            b += g[j] * v;
+        }
+        yy[q] = a;
+        ypw[q] = b;
+    }
+}
+
+static void predict(kv_ida *S) { predict_scaled(S, S->kk + 1); }
+
+static void restore(kv_ida *S)           /* IDARestore */
+{
+    const int kk = S->kk, n = S->n;
+    for (int j = 1; j <= kk; ++j) S->psi[j - 1] = S->psi[j] - S->hh;
+    for (int j = S->ns; j <= kk; ++j) {
+        double *p = PHI(j), r = 1.0 / S->beta[j];
+        for (int q = 0; q < n; ++q) p[q] *= r;
+    }
+}
+
+/* J by cells, condensed and factored behind the sweep (kv_ida.jac_cells): the same
+   entries, summed in the same order, and the same factorisation as call_jac then
+   cond_factor_bt (cell k needs the columns of cells k-1..k+1, final once element k+2 is
+   in, and is done then; the window keeps the columns from cell k-1 on, slid to its
+   start by a copy). Returns as cond_factor_raw; -2 after a failed Jacobian call. */
+static int jac_factor_cells(kv_run *R, double t, double cj)
+{
+    kv_ida *S = R->S;
+    kv_cond *c = S->cond;
+    const int ncell = c->ncell, ldab = S->ldab, chunk = S->jchunk;
+    const int *cf = c->cf;
+    int el = 0, fac = 0, lo = 0, info = 0;
+    if (drive_to(R, t)) return -2;
+    while (fac < ncell) {
+        const int i1 = el + chunk - 1 < ncell - 1 ? el + chunk - 1 : ncell - 1;
+        const int hi = i1 + 2 < ncell ? i1 + 2 : ncell;   /* the columns written reach cell i1+1 */
+        if (cf[hi] - cf[lo] > S->jwin_cols) { info = -2; break; }
+        TIC(S);
+        USER_MODE(R);
+        const int rc = S->jac_cells(S->ctx, t, S->yy, S->ypw, 1.0, cj, ldab, S->jwin, cf[lo],
+                                    el, i1);
+        CORE_MODE(R);
+        TOC(S, SEC_JAC);
+        if (rc) { info = -2; break; }
+        el = i1 + 1;
+        const int last = el == ncell ? ncell - 1 : el - 3;
+        if (last >= fac) {
+            TIC(S);
+            c->col0 = cf[lo];
+            info = cond_factor_bt_cells(c, S->jwin, fac, last);
+            c->col0 = 0;
+            TOC(S, SEC_LU);
+            if (info) break;
+            fac = last + 1;
+        }
+        if (el == ncell) break;
+        const int nlo = fac > 0 ? fac - 1 : 0;
+        if (nlo > lo) {
+            memmove(S->jwin, S->jwin + (size_t)(cf[nlo] - cf[lo]) * (size_t)ldab,
+                    sizeof(double) * (size_t)(cf[hi] - cf[nlo]) * (size_t)ldab);
+            lo = nlo;
+        }
+    }
+    S->njev++;
+    return info;
+}
+
+/* evaluate and factorise J at the iterate; 1 ok, 0 singular, -1 callback failure */
+static int setup(kv_run *R, double t)
+{
+    kv_ida *S = R->S;
+    int info;
+    if (S->jac_cells && S->cond && S->cond->bt) {
+        info = jac_factor_cells(R, t, S->cj);
+        if (info == -2) return -1;
+    } else {
+        if (call_jac(R, t, S->cj)) return -1;
+        TIC(S);
+        if (S->cond) info = kv_cond_factor(S->cond, S->ab);   /* J stays in ab */
+        else info = kv_gbtrf(S->n, S->kl, S->ku, S->ab, S->ldab, S->ipiv, S->prof);
+        TOC(S, SEC_LU);
+    }
+    S->nlu++;
+    S->cjold = S->cj;
+    S->cjratio = 1.0;
+    S->ss = 20.0;
+    S->have_lu = info == 0;
+    return info == 0;
+}
+
+/* the exact rows (see kv_ida.exact): their residuals before the solve, and after it the
+   part of their correction that the scale left out, (1 - scale) F_i, so that the
+   correction is F_i itself (the rows are identities: the solve gives scale F_i) */
+static void exact_rows_keep(kv_ida *S)
+{
+    for (int k = 0; k < S->nexact; ++k) S->exact_res[k] = S->res_v[S->exact[k]];
+}
+
+static void exact_rows_finish(kv_ida *S, double scale)
+{
+    if (scale == 1.0) return;
+    for (int k = 0; k < S->nexact; ++k) {
+        const int i = S->exact[k];
+        const double d = (1.0 - scale) * S->exact_res[k];
+        S->ee[i] -= d;
+        S->yy[i] -= d;
+        S->ypw[i] -= S->cj * d;
+    }
+}
+
+static int nls(kv_run *R, double tnew)   /* IDANls: simplified Newton for ee */
+{
+    kv_ida *S = R->S;
+    const int n = S->n;
+    int call_setup = 0;
+    if (S->nstep == S->nst0 && !S->have_lu) {
+        S->cjold = S->cj;
+        S->ss = 20.0;
+        call_setup = 1;
+    }
+    S->cjratio = S->cj / S->cjold;
+    const double cj_lo = (1.0 - XRATE) / (1.0 + XRATE), cj_hi = 1.0 / cj_lo;
+    if (S->cjratio < cj_lo || S->cjratio > cj_hi || !S->have_lu) call_setup = 1;
+    if (S->cj != S->cjlast) S->ss = 100.0;
+
+    int first = 1;
+    for (;;) {
+        if (!first) predict(S);
+        first = 0;
+        memset(S->ee, 0, sizeof(double) * (size_t)n);
+        if (call_res(R, tnew, S->yy, S->ypw, S->res_v)) return NLS_CALLBACK;
+        int jcur = 0;
+        if (call_setup) {
+            jcur = 1;
+            int ok = setup(R, tnew);
+            if (ok < 0) return NLS_CALLBACK;
+            if (!ok) {
+                S->fail_index = argmax_abs(n, S->res_v, 0);
+                return NLS_CONV_FAIL;
+            }
+        }
+        const double cj = S->cj;
+        const double scale = S->cjratio != 1.0 ? 2.0 / (1.0 + S->cjratio) : 1.0;
+        int m = 0;
+        for (;;) {
+            double delnrm;
+            exact_rows_keep(S);
+            TIC(S);
+            if (S->cond)
+                delnrm = kv_cond_newton(S->cond, S->ab, S->res_v, scale, S->ewt, S->ee,
+                                        S->yy, S->ypw, cj);
+            else
+                delnrm = kv_newton(n, S->kl, S->ku, S->ab, S->ldab, S->ipiv, S->prof,
+                                   S->res_v, scale, S->ewt, S->ee, S->yy, S->ypw, cj);
+            TOC(S, SEC_NEWTON);
+            exact_rows_finish(S, scale);
+            if (!isfinite(delnrm)) { S->fail_t = tnew; return NLS_NONFINITE; }
+            S->nni++;
+            if (m == 0) {
+                S->oldnrm = delnrm;
+                if (delnrm <= TOL_DEL) return NLS_OK;
+            } else {
+                double rate = pow(delnrm / S->oldnrm, 1.0 / m);
+                if (rate > RATE_MAX) break;
+                S->ss = rate / (1.0 - rate);
+            }
+            if (S->ss * delnrm <= EPS_NEWT) return NLS_OK;
+            m += 1;
+            if (m >= S->maxcor) break;
+            if (call_res(R, tnew, S->yy, S->ypw, S->res_v)) return NLS_CALLBACK;
+        }
+        S->fail_index = argmax_abs(n, S->res_v, S->ewt);
+        if (jcur) return NLS_CONV_FAIL;
+        call_setup = 1;
+    }
+}
+
+/* IDATestError: estimates at orders k, k-1, k-2 (out: err[3]) and the test */
+static int test_error(kv_ida *S, double ck, double *err)
+{
+    const int kk = S->kk, n = S->n;
+    const double *sigma = S->sigma, *w = S->ewt_err, *ee = S->ee;
+    /* the three weighted norms of ee, phi_k + ee and phi_k-1 + phi_k + ee in one pass
+       (each sum in component order, as kv_wrms) */
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+    {
+        const double *pk = PHI(kk), *pk1 = PHI(kk > 1 ? kk - 1 : kk);
+        for (int q = 0; q < n; ++q) {
+            const double e = ee[q], wq = w[q];
+            double t = e * wq;
+            s0 += t * t;
+            const double d1 = pk[q] + e;
+            t = d1 * wq;
+            s1 += t * t;
+            t = (d1 + pk1[q]) * wq;
+            s2 += t * t;
+        }
+    }
+    double enorm_k = n > 0 ? sqrt(s0 / n) : 0.0;
+    err[0] = sigma[kk] * enorm_k;
+    double terr_k = (kk + 1) * err[0];
+    err[1] = err[2] = 0.0;
+    S->knew = kk;
+    if (kk > 1) {
+        err[1] = sigma[kk - 1] * (n > 0 ? sqrt(s1 / n) : 0.0);
+        double terr_km1 = kk * err[1];
+        if (kk > 2) {
+            err[2] = sigma[kk - 2] * (n > 0 ? sqrt(s2 / n) : 0.0);
+            double terr_km2 = (kk - 1) * err[2];
+            if ((terr_km1 > terr_km2 ? terr_km1 : terr_km2) <= terr_k) S->knew = kk - 1;
+        } else if (terr_km1 <= 0.5 * terr_k) {
+            S->knew = kk - 1;
+        }
+    }
+    if (ck * enorm_k > 1.0) {
+        S->fail_index = argmax_abs(n, ee, w);
+        return NLS_ERR_FAIL;
+    }
+    return NLS_OK;
+}
+
+/* IDAHandleNFlag: shrink h (and maybe the order); 0 to retry, or a KV_FAIL_ code */
+static int handle_failure(kv_ida *S, int nflag, int ncf, int nef, double err_k,
+                          double err_km1)
+{
+    S->phase = 1;
+    S->fail_nflag = nflag;
+    if (nflag == NLS_CONV_FAIL) {
+        S->ncfn++;
+        if (S->fixed_step > 0.0) return KV_FAIL_FIXED;
+        if (ncf >= S->max_conv_fails) { S->fail_count = ncf; return KV_FAIL_CONV; }
+        S->rr = 0.25;
+    } else {
+        S->netf++;
+        if (nef == 1) {
+            double err_knew = S->kk == S->knew ? err_k : err_km1;
+            S->kk = S->knew;
+            double rr = 0.9 * pow(2.0 * err_knew + 1e-4, -1.0 / (S->kk + 1));
+            S->rr = rr < 0.25 ? 0.25 : (rr > 0.9 ? 0.9 : rr);
+        } else if (nef == 2) {
+            S->kk = S->knew;
+            S->rr = 0.25;
+        } else {
+            S->kk = 1;
+            S->rr = 0.25;
+        }
+        if (nef >= S->max_error_fails) { S->fail_count = nef; return KV_FAIL_ERR; }
+    }
+    S->hh *= S->rr;
+    if (fabs(S->hh) < hmin(S)) return KV_FAIL_HMIN;
+    return 0;
+}
+
+static void complete_step(kv_ida *S, double tnew, double err_k, double err_km1)
+{
+    const int n = S->n, mo = S->max_order;
+    S->nstep++;
+    const int kk = S->kk;
+    const int kdiff = kk - S->kused;
+    S->kused = kk;
+    S->hused = S->hh;
+    double *ee = S->ee;
+    if (S->fixed_step > 0.0) {
+        if (S->nstep - S->nst0 > 1 && kk < mo) S->kk = kk + 1;
+        S->hh = S->direction * S->fixed_step;
+    } else {
+        if (S->knew == kk - 1 || kk == mo) S->phase = 1;
+        if (S->phase == 0) {
+            if (S->nstep - S->nst0 > 1) {
+                S->kk = kk + 1;
+                double hnew = 2.0 * S->hh;
+                double tmp = fabs(hnew) * S->hmax_inv;
+                if (tmp > 1.0) hnew /= tmp;
+                S->hh = hnew;
+            }
+        } else {
+            int action = 0;
+            double err_kp1 = 0.0;
+            if (S->knew == kk - 1) {
+                action = -1;
+            } else if (kk == mo || kk + 1 >= S->ns || kdiff == 1) {
+                action = 0;
+            } else {
+                const double *pk1 = PHI(kk + 1), *w = S->ewt_err;
+                double sq = 0.0;        /* wrms(ee - phi_k+1), without storing it */
+                for (int q = 0; q < n; ++q) {
+                    const double t = (ee[q] - pk1[q]) * w[q];
+                    sq += t * t;
+                }
+                err_kp1 = (n > 0 ? sqrt(sq / n) : 0.0) / (kk + 2);
+                double terr_k = (kk + 1) * err_k, terr_kp1 = (kk + 2) * err_kp1;
+                if (kk == 1) {
+                    action = terr_kp1 >= 0.5 * terr_k ? 0 : 1;
+                } else {
+                    double terr_km1 = kk * err_km1;
+                    double mn = terr_k < terr_kp1 ? terr_k : terr_kp1;
+                    if (terr_km1 <= mn) action = -1;
+                    else if (terr_kp1 >= terr_k) action = 0;
+                    else action = 1;
+                }
+            }
+            double err_knew;
+            if (action == 1) { S->kk = kk + 1; err_knew = err_kp1; }
+            else if (action == -1) { S->kk = kk - 1; err_knew = err_km1; }
+            else err_knew = err_k;
+            double hnew = S->hh;
+            double rr = pow(2.0 * err_knew + 1e-4, -1.0 / (S->kk + 1));
+            if (rr >= 2.0) {
+                hnew = 2.0 * S->hh;
+                double tmp = fabs(hnew) * S->hmax_inv;
+                if (tmp > 1.0) hnew /= tmp;
+            } else if (rr <= 1.0) {
+                rr = rr < 0.5 ? 0.5 : (rr > 0.9 ? 0.9 : rr);
+                hnew = S->hh * rr;
+            }
+            S->hh = hnew;
+        }
+    }
+    /* the history update (phi_ku+1 = ee, phi_ku += ee, phi_j += phi_j+1 downwards) and
+       the new weights, in one pass */
+    const int ku = S->kused;
+    double *sw = S->y; S->y = S->yy; S->yy = sw;       /* accept the iterate: swap */
+    sw = S->yp; S->yp = S->ypw; S->ypw = sw;
+    const double *restrict y = S->y, *restrict atol = S->atol, rtol = S->rtol;
+    double *restrict ewt = S->ewt;
+    for (int q = 0; q < n; ++q) {
+        const double e = ee[q];
+        if (ku < mo) PHI(ku + 1)[q] = e;
+        double v = PHI(ku)[q] + e;
+        PHI(ku)[q] = v;
+        for (int j = ku - 1; j >= 0; --j) {
+            v = PHI(j)[q] + v;
+            PHI(j)[q] = v;
+        }
+        ewt[q] = 1.0 / (fabs(y[q]) * rtol + atol[q]);
+    }
+    if (S->errmask)
+        for (int q = 0; q < n; ++q) S->ewt_err[q] = ewt[q] * S->errmask[q];
+    S->t_old = S->t;
+    S->t = tnew;
+    S->started = 1;
+}
+
+/* one accepted step (bdf.py's _step_impl); 0 or a KV_FAIL_ / KV_CALLBACK / KV_NONFINITE */
+static int step(kv_run *R)
+{
+    kv_ida *S = R->S;
+    int ncf = 0, nef = 0;
+    const double tn = S->t;
+    double tnew, err[3];
+    for (;;) {
+        const double remaining = S->t_bound - tn;
+        if (S->direction * (S->hh - remaining) > -1e-8 * fabs(S->hh)) {
+            if (S->nstep == S->nst0) {
+                double f = remaining / S->hh, *p = PHI(1);
+                for (int q = 0; q < S->n; ++q) p[q] *= f;
+                S->psi[0] = remaining;
+            }
+            S->hh = remaining;
+        }
+        const double hh = S->hh;
+        if (fabs(hh) < hmin(S)) {
+            S->fail_index = argmax_abs(S->n, S->ee, S->ewt);
+            return KV_FAIL_STALL;
+        }
+        double ck = set_coeffs(S);
+        tnew = tn + hh;
+        if (hh == remaining) tnew = S->t_bound;
+        predict_scaled(S, S->ns);
+        int nflag = nls(R, tnew);
+        if (nflag == NLS_CALLBACK) return KV_CALLBACK;
+        if (nflag == NLS_NONFINITE) return KV_NONFINITE;
+        err[0] = err[1] = err[2] = 0.0;
+        if (nflag == NLS_OK && S->fixed_step <= 0.0) nflag = test_error(S, ck, err);
+        if (nflag == NLS_OK) break;
+        restore(S);
+        if (nflag == NLS_CONV_FAIL) ncf++;
+        else nef++;
+        int rc = handle_failure(S, nflag, ncf, nef, err[0], err[1]);
+        if (rc) return rc;
+        if (S->nstep == S->nst0) {    /* IDAReset: rescale h y'0 to the new step */
+            S->psi[0] = S->hh;
+            double *p = PHI(1);
+            for (int q = 0; q < S->n; ++q) p[q] *= S->rr;
+        }
+    }
+    complete_step(S, tnew, err[0], err[1]);
+    return 0;
+}
+
+/* ---- after a step: energy audit, output samples, watches --------------------------- */
+static void interp(const kv_ida *S, int m, const double *ts, double *oy, double *oyp)
+{
+    const int k = S->kused > 1 ? S->kused : 1;
+    kv_interp(k, S->n, m, S->t, S->psi, S->phi, ts, oy, oyp);
+}
+
+static int audit_step(kv_run *R)
+{
+    kv_ida *S = R->S;
+    const double t0 = S->t_old, t1 = S->t, h = t1 - t0;
+    if (h == 0.0) return 0;
+    double tq[3], e[3 * KV_MAXEN];
+    for (int j = 0; j < 3; ++j) tq[j] = t0 + h * S->gl_x[j];
+    interp(S, 3, tq, S->wy, S->wyp);
+    if (call_en(R, 3, tq, S->wy, S->wyp, e)) return 1;
+    double g[3][2];
+    for (int j = 0; j < 3; ++j) {
+        g[j][0] = e[j * S->nen + 2];
+        g[j][1] = e[j * S->nen + 3] + e[j * S->nen + 4];
+    }
+    for (int r = 0; r < 3; ++r)          /* coef = FIT @ g, row r of FIT */
+        for (int c = 0; c < 2; ++c)
+            S->coef[3 * c + r] = S->fit[3 * r] * g[0][c] + S->fit[3 * r + 1] * g[1][c]
+                                 + S->fit[3 * r + 2] * g[2][c];
+    return 0;
+}
+
+static void partial(const kv_ida *S, double t, double *d, double *w)
+{
+    const double t0 = S->t_old, h = S->t - t0;
+    if (h == 0.0) { *d = *w = 0.0; return; }
+    const double x = (t - t0) / h, x2 = x * x;
+    const double *c = S->coef;
+    *d = (c[0] * x + c[1] * x2 / 2.0 + c[2] * x2 * x / 3.0) * h;
+    *w = (c[3] * x + c[4] * x2 / 2.0 + c[5] * x2 * x / 3.0) * h;
+}
+
+static int sample_step(kv_run *R)
+{
+    kv_ida *S = R->S;
+    const double t1 = S->t, slack = 1e-12 * (fabs(t1) > 1.0 ? fabs(t1) : 1.0);
+    while (S->k_out < S->m_out && S->t_out[S->k_out] <= t1 + slack) {
+        double ts = S->t_out[S->k_out] < t1 ? S->t_out[S->k_out] : t1, e[KV_MAXEN], d, w;
+        interp(S, 1, &ts, S->sy, S->syp);
+        if (call_en(R, 1, &ts, S->sy, S->syp, e)) return 1;
+        partial(S, ts, &d, &w);
+        if (S->rec_n == S->rec_cap) {
+            USER_MODE(R);
+            int rc = S->flush(ts);
+            CORE_MODE(R);
+            if (rc || S->rec_n == S->rec_cap) return 1;
+        }
+        double *row = S->rec + (size_t)S->rec_n++ * (size_t)S->rec_w;
+        row[0] = ts;
+        for (int i = 0; i < S->nsamp; ++i) row[1 + i] = S->sy[S->samp_idx[i]];
+        row[1 + S->nsamp] = e[0];
+        row[2 + S->nsamp] = e[1];
+        row[3 + S->nsamp] = S->dissipated + d;
+        row[4 + S->nsamp] = S->external_work + w;
+        for (int k = KV_NEN; k < S->nen; ++k) row[k + S->nsamp] = e[k];
+        S->k_out++;
+    }
+    return 0;
+}
+
+static int after_step(kv_run *R)
+{
+    kv_ida *S = R->S;
+    if (S->audit) {
+        if (audit_step(R)) return 1;
+        if (S->m_out > S->k_out && sample_step(R)) return 1;
+        if (S->t != S->t_old) {            /* the Gauss-Legendre sum: x = 1 */
+            const double h = S->t - S->t_old, *c = S->coef;
+            S->dissipated += (c[0] + c[1] / 2.0 + c[2] / 3.0) * h;
+            S->external_work += (c[3] + c[4] / 2.0 + c[5] / 3.0) * h;
+        }
+    }
+    S->watch_hit = 0;
+    for (int k = 0; k < S->nwatch; ++k) {
+        const double v_new = S->y[S->watch_idx[k]], v_old = S->watch_old[k];
+        if ((S->watch_dir[k] < 0 && v_old > 0.0 && v_new <= 0.0) ||
+            (S->watch_dir[k] > 0 && v_old < 0.0 && v_new >= 0.0))
+            S->watch_hit |= 1 << k;
+        S->watch_old[k] = v_new;
+    }
+    return 0;
+}
+
+/* Integrate until t reaches t_stop (in the direction of integration) or t_bound, a
+   watched sign change, max_steps steps, or a failure; the step that reaches t_stop is
+   completed (t may pass t_stop: interpolate back). Returns a KV_ code. */
+int kv_ida_advance(kv_ida *S, double t_stop, long long max_steps)
+{
+    kv_run R = {S, 0};
+#if defined(__x86_64__) || defined(__SSE2__)
+    R.user_csr_ = _mm_getcsr();
+    CORE_MODE(&R);
+#endif
+    int rc = KV_MAXSTEPS;
+    for (long long k = 0; k < max_steps; ++k) {
+        if (S->t == S->t_bound) { rc = KV_FINISHED; break; }
+        int r = step(&R);
+        if (r) { rc = r; break; }
+        if (after_step(&R)) { rc = KV_CALLBACK; break; }
+        if (S->direction * (S->t - S->t_bound) >= 0.0) { rc = KV_FINISHED; break; }
+        if (S->watch_hit) { rc = KV_WATCH; break; }
+        if (S->direction * (S->t - t_stop) >= 0.0) { rc = KV_TSTOP; break; }
+        if (S->stop) break;
+    }
+    USER_MODE(&R);
+    return rc;
+}
+
+/* the watched components' current values (call after setting the watches) */
+void kv_ida_watch_reset(kv_ida *S)
+{
+    for (int k = 0; k < S->nwatch; ++k) S->watch_old[k] = S->y[S->watch_idx[k]];
+}

@@ -1,0 +1,390 @@
+"""The compiled step loop (``step_loop.c``) and its link to :class:`runtime.solvers.bdf.BDF`.
+
+``step_loop.c`` runs IDA's step (the algorithm of ``bdf.py``, statement for statement) on a
+struct that holds the solver's scalar state and the addresses of its NumPy arrays
+(:class:`CoreStruct` below). :class:`CoreLink` builds that struct from a
+solver, gives the C code the problem's functions and runs ``kv_ida_advance``:
+
+* a problem with compiled kernels (``problem.c_kernels()``, a
+  :class:`~runtime.solvers.protocols.CKernels`: the rod's C assembly) is called
+  directly from C, its time-dependent loads through one Python callback that runs only when
+  t leaves the interval on which they are constant;
+* any other problem (``residual``/``jacobian_band`` in Python) through ctypes callbacks.
+
+An exception raised inside a callback is kept and raised again once the C call returns:
+C code cannot unwind Python frames. Signals (Ctrl-C, SIGTERM) are held while C runs
+with callbacks and delivered once it has returned: Python raises a signal's exception at
+whatever bytecode runs next, which may be the first line of a callback, before any
+``try`` can catch it; ctypes would print it and drop it.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import math
+import signal
+import threading
+from typing import Any
+
+import numpy as np
+
+from ..protocols import CKernels
+
+#: a runtime.solvers.bdf.BDF (not imported here: bdf.py imports this module)
+BDF = Any
+
+#: the signals held while the compiled loop may call back into Python
+_HELD = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM") if hasattr(signal, name))
+
+
+def _call_holding_signals(s, fn, *args):
+    """``(fn(*args), signals received meanwhile)``, the signals' handlers not run yet; a
+    signal sets ``s.stop`` so that the compiled loop returns after its current step (only
+    the main thread can set handlers; elsewhere signals are not delivered to Python
+    code anyway)."""
+    if threading.current_thread() is not threading.main_thread():
+        return fn(*args), []
+    pending: list[int] = []
+
+    def hold(signum, frame):
+        pending.append(signum)
+        s.stop = 1
+
+    saved = []
+    try:
+        for sig in _HELD:
+            old = signal.getsignal(sig)
+            if old is not None:                  # None: a handler not set from Python
+                signal.signal(sig, hold)
+                saved.append((sig, old))
+        return fn(*args), pending
+    finally:
+        for sig, old in saved:
+            signal.signal(sig, old)
+
+
+#: return codes of kv_ida_advance
+TSTOP, WATCH, FINISHED, MAXSTEPS = 0, 1, 2, 3
+FAIL_CONV, FAIL_ERR, FAIL_STALL, FAIL_HMIN, FAIL_FIXED, CALLBACK, NONFINITE = range(-1, -8, -1)
+MAXWATCH = 8
+NH = 7          # history rows: max order 5 + 2
+
+RES_FN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_double, ctypes.c_void_p,
+                          ctypes.c_void_p, ctypes.c_void_p)
+JAC_FN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_double, ctypes.c_void_p,
+                          ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_int,
+                          ctypes.c_void_p)
+DRIVE_FN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_double)
+
+
+def _fields(kind, *names):
+    return [(name, kind) for name in names]
+
+
+class CoreStruct(ctypes.Structure):
+    """Mirror of ``kv_ida`` in step_loop.c (field for field; the size is checked at load)."""
+
+    _I, _P, _D, _L = ctypes.c_int, ctypes.c_void_p, ctypes.c_double, ctypes.c_longlong
+    _fields_ = (
+        _fields(_I, "n", "kl", "ku", "ldab")
+        + _fields(_P, "res", "jac", "en")
+        + _fields(_I, "nen")
+        + _fields(_P, "ctx", "drive")
+        + _fields(_D, "drive_lo", "drive_hi", "drive_t")
+        + _fields(_P, "cond", "phi", "y", "yp", "yy", "ypw", "ee", "res_v", "tmp", "ewt",
+                  "ewt_err", "errmask", "atol", "ab", "ipiv", "prof")
+        + _fields(_D, "rtol", "t_bound", "direction", "hmax_inv", "min_step", "fixed_step")
+        + _fields(_I, "max_order", "maxcor", "max_conv_fails", "max_error_fails")
+        + _fields(_D * NH, "psi", "alpha", "beta", "sigma", "gamma")
+        + _fields(_I, "kk", "kused", "knew", "ns", "phase", "have_lu")
+        + _fields(_D, "hh", "hused", "cj", "cjold", "cjlast", "cjratio", "ss", "oldnrm",
+                  "rr", "t", "t_old")
+        + _fields(_I, "started")
+        + _fields(_L, "nstep", "nfev", "njev", "nlu", "nni", "netf", "ncfn", "nst0")
+        + _fields(_I, "fail_index", "fail_count", "fail_nflag")
+        + _fields(_D, "fail_t")
+        + _fields(_I, "nwatch")
+        + _fields(_I * MAXWATCH, "watch_idx")
+        + _fields(_D * MAXWATCH, "watch_dir", "watch_old")
+        + _fields(_I, "watch_hit", "audit")
+        + _fields(_D * 3, "gl_x")
+        + _fields(_D * 9, "fit")
+        + _fields(_D, "dissipated", "external_work")
+        + _fields(_D * 6, "coef")
+        + _fields(_P, "wy", "wyp")
+        + _fields(_I, "nsamp", "m_out", "k_out", "rec_w", "rec_cap", "rec_n")
+        + _fields(_P, "samp_idx", "t_out", "rec", "flush", "sy", "syp")
+        + _fields(_I, "timing")
+        + _fields(_D * 6, "sec")
+        + _fields(_I, "stop")
+        + _fields(_P, "jac_cells", "jwin")
+        + _fields(_I, "jwin_cols", "jchunk")
+        + _fields(_I, "nexact")
+        + _fields(_P, "exact", "exact_res")
+    )
+    #: names of the entries of ``sec`` (seconds per part when ``timing`` is set)
+    SECTIONS = ("residual", "jacobian", "lu", "newton_solve_update", "energies", "drive")
+
+
+class CoreLink:
+    """The compiled step loop of one :class:`~runtime.solvers.bdf.BDF` (see the module
+    docstring). Built by the solver when the C helpers are available."""
+
+    def __init__(self, lib: ctypes.CDLL, solver: BDF) -> None:
+        self._lib = lib
+        self._solver = solver
+        s = CoreStruct()
+        self.s = s
+        self.ptr = ctypes.addressof(s)
+        self._error: BaseException | None = None
+        self._keep: list[Any] = []
+        self._callbacks = False      # a function other than the drive is a Python callback
+        self._drive_now = None       # constant loads: drive(t) before each run
+        self._go = None              # loads moved with t: the drive callback's body
+        n = solver.n
+        # every buffer the C code may hand to a callback, by address
+        self._arrays: dict[int, np.ndarray] = {}
+        for a in (solver._y, solver._yp, solver._yy, solver._ypw, solver._res, solver._tmp,
+                  solver._ee):
+            self._arrays[a.ctypes.data] = a
+        s.n, s.kl, s.ku, s.ldab = n, solver.kl, solver.ku, solver._ab.shape[0]
+        problem = solver.problem
+        get = getattr(problem, "c_kernels", None)
+        kern: CKernels | None = get() if get is not None else None
+        if kern is not None:
+            s.res, s.jac, s.en, s.ctx = kern.residual, kern.jacobian, kern.energies, kern.ctx
+            s.nen = kern.n_energies
+            self._keep.append(kern.keep)
+            self.has_energies = bool(kern.energies)
+            if kern.drive is not None and not kern.drive_constant:
+                self._set_drive(kern.drive)
+            else:
+                # constant loads: driven from Python before each run (advance), so that
+                # C never calls back for them (no callback: no signals to hold either)
+                self._drive_now = kern.drive
+                s.drive_lo, s.drive_hi = -math.inf, math.inf
+        else:
+            self._python_functions(problem)
+            self.has_energies = False
+            s.nen = 5
+        s.drive_t = math.nan
+        newton = solver._newton
+        cond = getattr(newton, "cond", None)           # the condensed systems, if any
+        s.cond = newton.cond_ptr
+        if kern is not None and kern.jacobian_cells and cond is not None \
+                and cond.block_tridiagonal:
+            self._jacobian_by_cells(kern.jacobian_cells, cond.cell_starts)
+        p = lambda a: a.ctypes.data if a is not None else None  # noqa: E731
+        s.phi = p(solver._phi)
+        s.y, s.yp, s.yy, s.ypw = p(solver._y), p(solver._yp), p(solver._yy), p(solver._ypw)
+        s.ee, s.res_v, s.tmp, s.ewt = p(solver._ee), p(solver._res), p(solver._tmp), p(solver._ewt)
+        s.ewt_err = p(solver._ewt_err)
+        s.nexact, s.exact = solver._exact.size, p(solver._exact)
+        s.exact_res = p(solver._exact_res)
+        s.errmask = p(solver._errmask)
+        s.atol = p(solver.atol)
+        s.ab, s.ipiv, s.prof = p(solver._ab), p(newton.ipiv), p(newton.prof)
+        s.rtol, s.t_bound, s.direction = solver.rtol, solver.t_bound, solver.direction
+        s.hmax_inv, s.min_step = solver._hmax_inv, solver.min_step
+        s.fixed_step = solver.fixed_step or 0.0
+        s.max_order, s.maxcor = solver.max_order, solver.max_nonlinear_iter
+        s.max_conv_fails, s.max_error_fails = solver.max_conv_fails, solver.max_error_fails
+        self.push(solver)
+
+    #: cells of the Jacobian evaluated per call when it is factored behind its sweep:
+    #: the window (JAC_CHUNK + 4 cells of band columns, ~120 kB for the rod) stays in L2
+    JAC_CHUNK = 32
+
+    def _jacobian_by_cells(self, jacobian_cells: int, cf: np.ndarray) -> None:
+        """Let C evaluate J by cells and factor each cell behind the sweep (``kv_ida``'s
+        jac_cells: the full band J is never stored)."""
+        s = self.s
+        ncell = len(cf) - 1
+        k = np.arange(ncell)
+        cols = int((cf[np.minimum(k + self.JAC_CHUNK + 4, ncell)] - cf[k]).max())
+        win = np.zeros((s.ldab, cols), order="F")
+        self._keep.append(win)
+        s.jac_cells, s.jwin = jacobian_cells, win.ctypes.data
+        s.jwin_cols, s.jchunk = cols, self.JAC_CHUNK
+
+    # -- problem functions -------------------------------------------------------------
+    def _guard(self, fn):
+        """Run a Python callback for C: 0 on success, 1 after keeping its exception."""
+        def call(*args):
+            try:
+                fn(*args)
+                return 0
+            except BaseException as exc:  # noqa: BLE001 - re-raised after the C call
+                if self._error is None:
+                    self._error = exc
+                return 1
+        return call
+
+    def _set_drive(self, drive) -> None:
+        s = self.s
+
+        def go(t: float) -> None:
+            s.drive_lo, s.drive_hi = drive(t)
+
+        self._go = go
+        cb = DRIVE_FN(self._guard(go))
+        self._keep.append(cb)
+        s.drive = ctypes.cast(cb, ctypes.c_void_p).value
+        s.drive_lo = s.drive_hi = math.nan          # nothing is known to hold yet
+
+    def _python_functions(self, problem) -> None:
+        arrays, s = self._arrays, self.s
+        ab = self._solver._ab
+
+        def residual(ctx, t, py, pyp, pout):
+            problem.residual(t, arrays[py], arrays[pyp], arrays[pout])
+
+        def jacobian(ctx, t, py, pyp, cy, cj, ldab, pab):
+            ab.fill(0.0)
+            problem.jacobian_band(t, arrays[py], arrays[pyp], cj, ab)
+
+        r = RES_FN(self._guard(residual))
+        j = JAC_FN(self._guard(jacobian))
+        self._keep += [r, j]
+        self._callbacks = True
+        s.res = ctypes.cast(r, ctypes.c_void_p).value
+        s.jac = ctypes.cast(j, ctypes.c_void_p).value
+        s.en = None
+        s.drive = None
+        s.drive_lo, s.drive_hi = -math.inf, math.inf
+
+    # -- state between Python and C ----------------------------------------------------
+    _SCALARS = ("kk", "kused", "knew", "ns", "phase", "hh", "hused", "cj", "cjold",
+                "cjlast", "cjratio", "ss", "oldnrm", "rr")
+    _COUNTERS = ("nstep", "nfev", "njev", "nlu", "nni", "netf", "ncfn")
+
+    def push(self, solver: BDF) -> None:
+        """Copy the solver's Python-side state into the struct (at construction)."""
+        s = self.s
+        for name in self._SCALARS:
+            setattr(s, name, getattr(solver, "_" + name))
+        s.have_lu = int(solver._have_lu)
+        s.t = solver.t
+        s.started = solver.t_old is not None
+        s.t_old = solver.t_old if solver.t_old is not None else solver.t
+        for name in self._COUNTERS:
+            setattr(s, name, getattr(solver, name))
+        s.nst0 = solver._nst0
+        s.t_bound, s.hmax_inv = solver.t_bound, solver._hmax_inv
+        for name in ("psi", "alpha", "beta", "sigma", "gamma"):
+            vals = getattr(solver, "_" + name)
+            arr = getattr(s, name)
+            for k, v in enumerate(vals):
+                arr[k] = v
+
+    def pull(self, solver: BDF) -> None:
+        """Copy the struct's state back into the solver's attributes (after a C call)."""
+        s = self.s
+        solver.t = s.t
+        solver.t_old = s.t_old if s.started else None
+        for name in self._COUNTERS:
+            setattr(solver, name, getattr(s, name))
+        solver._kused, solver._kk, solver._hh = s.kused, s.kk, s.hh
+        solver._psi = list(s.psi)
+        a = self._arrays
+        solver._y, solver._yp, solver._yy, solver._ypw = a[s.y], a[s.yp], a[s.yy], a[s.ypw]
+        solver._fail_index = s.fail_index
+
+    def advance(self, t_stop: float, max_steps: int) -> int:
+        """Run kv_ida_advance and copy the state back into the solver; returns the code
+        (``TSTOP`` ...). Re-raises the exception of a callback, then delivers the
+        signals held meanwhile (their handlers raise KeyboardInterrupt, Terminated)."""
+        self._error = None
+        s = self.s
+        if s.drive:
+            # Python code may have driven the loads to another time since the last call
+            # (an observer evaluating the model at an output time): drive them to the
+            # current time here, which also tells whether C can need the callback at all
+            s.drive_lo = s.drive_hi = s.drive_t = math.nan
+            self._go(s.t)
+            s.drive_t = s.t
+        elif self._drive_now is not None:
+            self._drive_now(s.t)             # a no-op unless the model was moved meanwhile
+        s.stop = 0
+        # the drive is called back only when t leaves [lo, hi) (a release: never again)
+        drive_calls = bool(s.drive) and not (math.isinf(s.drive_hi) if s.direction > 0
+                                              else math.isinf(s.drive_lo))
+        if self._callbacks or drive_calls:
+            code, held = _call_holding_signals(s, self._lib.kv_ida_advance, self.ptr, t_stop,
+                                               max_steps)
+        else:
+            code, held = self._lib.kv_ida_advance(self.ptr, t_stop, max_steps), ()
+        self.pull(self._solver)
+        try:
+            if self._error is not None:
+                exc, self._error = self._error, None
+                raise exc
+        finally:
+            for sig in held:
+                signal.raise_signal(sig)
+        return code
+
+    # -- audit, samples, watches --------------------------------------------------------
+    def enable_audit(self, gl_x: np.ndarray, fit: np.ndarray, dissipated: float,
+                     external_work: float) -> bool:
+        """Integrate 2D and P over every step in C (3-point Gauss-Legendre on the step's
+        interpolant, ``runtime.simulate.observers.EnergyIntegrator``); False when the
+        problem has no compiled energies."""
+        if not self.has_energies:
+            return False
+        s, n = self.s, self._solver.n
+        self._wy, self._wyp = np.zeros((3, n)), np.zeros((3, n))
+        s.wy, s.wyp = self._wy.ctypes.data, self._wyp.ctypes.data
+        for k in range(3):
+            s.gl_x[k] = float(gl_x[k])
+        for k, v in enumerate(np.asarray(fit, dtype=float).ravel()):
+            s.fit[k] = v
+        s.dissipated, s.external_work = dissipated, external_work
+        s.audit = 1
+        return True
+
+    #: rows of the sample buffer (handed to ``sink`` whenever full, and at every stop)
+    SAMPLE_ROWS = 1024
+
+    def enable_sampling(self, t_out: np.ndarray, k_out: int, indices: np.ndarray,
+                        sink) -> bool:
+        """Record rows ``[t, y[indices]..., T, W, int 2D, int P, extras...]`` at the output
+        times ``t_out[k_out:]`` (needs the audit; extras: the energies' values beyond the
+        first five, ``CKernels.n_energies``); ``sink(rows)`` receives them (a view: copy
+        what you keep) when the buffer is full and at :meth:`flush_samples`."""
+        s = self.s
+        if not s.audit:
+            return False
+        self._t_out = np.ascontiguousarray(t_out, dtype=float)
+        self._idx = np.ascontiguousarray(indices, dtype=np.int32)
+        self._rec = np.full((self.SAMPLE_ROWS, s.nen + self._idx.size), math.nan)
+        self._sink = sink
+        self._sy, self._syp = np.zeros(self._solver.n), np.zeros(self._solver.n)
+        s.t_out, s.samp_idx, s.rec = (self._t_out.ctypes.data, self._idx.ctypes.data,
+                                      self._rec.ctypes.data)
+        s.sy, s.syp = self._sy.ctypes.data, self._syp.ctypes.data
+        s.nsamp, s.m_out, s.k_out = self._idx.size, self._t_out.size, k_out
+        s.rec_w, s.rec_cap, s.rec_n = self._rec.shape[1], self.SAMPLE_ROWS, 0
+        cb = DRIVE_FN(self._guard(lambda t: self.flush_samples()))
+        self._keep.append(cb)
+        self._callbacks = True
+        s.flush = ctypes.cast(cb, ctypes.c_void_p).value
+        return True
+
+    def flush_samples(self) -> None:
+        """Hand the buffered sample rows to the sink and empty the buffer."""
+        s = self.s
+        if s.rec_n:
+            self._sink(self._rec[:s.rec_n])
+            s.rec_n = 0
+
+    def set_watches(self, watches: list[tuple[int, float]]) -> None:
+        """Stop after any step in which ``y[index]`` changes sign in ``direction`` (< 0:
+        from > 0 to <= 0; > 0: from < 0 to >= 0)."""
+        if len(watches) > MAXWATCH:
+            raise ValueError(f"at most {MAXWATCH} watched components")
+        s = self.s
+        s.nwatch = len(watches)
+        for k, (i, d) in enumerate(watches):
+            s.watch_idx[k], s.watch_dir[k] = int(i), float(d)
+        self._lib.kv_ida_watch_reset(self.ptr)

@@ -1,0 +1,157 @@
+"""The Newton systems of a BDF step: factor the iteration matrix ``J = dF/dy + cj dF/dy'``
+(LAPACK band storage, filled by the problem) and correct the iterate with its solution.
+
+One interface, three implementations by what is available:
+
+* :class:`CondensedSystem`: the kinematic rows eliminated (``native/condensed.py``), the
+  condensed matrix block tridiagonal in the rod's cells or banded;
+* :class:`BandSystem`: the compiled band LU of the full matrix (``native/band.c``);
+* :class:`LapackSystem`: SciPy's LAPACK and NumPy (no C compiler).
+
+``correct(res, scale, ewt, ee, yy, ypw, cj)`` solves ``J d = res``, scales ``d`` by
+``scale`` (IDA's 2/(1 + cj/cj_old) after a change of cj), subtracts it from the
+correction ``ee`` and the iterate ``yy``, ``cj d`` from ``ypw``, and returns the weighted
+RMS norm of ``d``; ``res`` is overwritten. The compiled two fuse all of that in one call
+(with flush-to-zero, see ``native/__init__.py``); every implementation rounds alike, so
+the compiled step loop and the NumPy path take the same steps.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+class NewtonSystem:
+    """Base: the band storage ``ab`` (shape (2 kl + ku + 1, n), Fortran order) that the
+    problem fills before :meth:`factor`, and what the compiled step loop needs of it."""
+
+    #: pivots and factor profile (int32), or None (the compiled step loop reads them)
+    ipiv: np.ndarray | None = None
+    prof: np.ndarray | None = None
+    #: address of the condensed system's C struct, or None
+    cond_ptr: int | None = None
+
+    def __init__(self, ab: np.ndarray, kl: int, ku: int) -> None:
+        self.ab, self.kl, self.ku, self.n = ab, kl, ku, ab.shape[1]
+
+    def factor(self) -> int:
+        """Factorise ``ab`` in place; LAPACK's info (0: regular)."""
+        raise NotImplementedError
+
+    def correct(self, res: np.ndarray, scale: float, ewt: np.ndarray, ee: np.ndarray,
+                yy: np.ndarray, ypw: np.ndarray, cj: float) -> float:
+        """See the module docstring."""
+        raise NotImplementedError
+
+
+class _Addresses:
+    """Data addresses of the last arrays seen (``ndarray.ctypes.data`` costs ~3 us; the
+    iterate buffers swap with the accepted ones at every step)."""
+
+    def __init__(self) -> None:
+        self._cache: dict[int, tuple[np.ndarray, int]] = {}
+
+    def __call__(self, a: np.ndarray) -> int:
+        hit = self._cache.get(id(a))
+        if hit is not None and hit[0] is a:
+            return hit[1]
+        if len(self._cache) > 16:
+            self._cache.clear()
+        ptr = a.ctypes.data
+        self._cache[id(a)] = (a, ptr)
+        return ptr
+
+
+class LapackSystem(NewtonSystem):
+    """SciPy's ``dgbtrf``/``dgbtrs`` (imported on use: scipy.linalg costs ~0.2 s of
+    import) and the update in NumPy."""
+
+    def __init__(self, ab: np.ndarray, kl: int, ku: int) -> None:
+        super().__init__(ab, kl, ku)
+        self._tmp = np.empty(self.n)
+        self._piv: np.ndarray | None = None
+
+    def factor(self) -> int:
+        from scipy.linalg.lapack import dgbtrf
+
+        self._piv = None  # free the old pivots first (dgbtrf allocates new ones)
+        _, self._piv, info = dgbtrf(self.ab, self.kl, self.ku, overwrite_ab=1)
+        return int(info)
+
+    def correct(self, res, scale, ewt, ee, yy, ypw, cj) -> float:
+        from scipy.linalg.lapack import dgbtrs
+
+        dgbtrs(self.ab, self.kl, self.ku, res, self._piv, overwrite_b=1)
+        if scale != 1.0:
+            res *= scale
+        tmp = self._tmp
+        np.multiply(res, ewt, out=tmp)
+        delnrm = math.sqrt(float(np.dot(tmp, tmp)) * (1.0 / self.n))
+        ee -= res
+        yy -= res
+        np.multiply(res, cj, out=tmp)
+        ypw -= tmp
+        return delnrm
+
+
+class BandSystem(NewtonSystem):
+    """The compiled band LU (``kv_gbtrf``: LAPACK's dgbtf2 with a factor profile) and the
+    fused solve and update (``kv_newton``)."""
+
+    def __init__(self, ab: np.ndarray, kl: int, ku: int, lib) -> None:
+        super().__init__(ab, kl, ku)
+        self._lib = lib
+        self.ipiv = np.zeros(max(self.n, 1), dtype=np.int32)
+        self.prof = np.zeros(2 * max(self.n, 1), dtype=np.int32)
+        self._p = _Addresses()
+
+    def factor(self) -> int:
+        p = self._p
+        return int(self._lib.kv_gbtrf(self.n, self.kl, self.ku, p(self.ab), self.ab.shape[0],
+                                      p(self.ipiv), p(self.prof)))
+
+    def correct(self, res, scale, ewt, ee, yy, ypw, cj) -> float:
+        p = self._p
+        return self._lib.kv_newton(self.n, self.kl, self.ku, p(self.ab), self.ab.shape[0],
+                                   p(self.ipiv), p(self.prof), p(res), scale, p(ewt), p(ee),
+                                   p(yy), p(ypw), cj)
+
+
+class CondensedSystem(NewtonSystem):
+    """The condensed systems (``native/condensed.py``): ``factor`` condenses and
+    factorises (J stays in ``ab``: the solves read it), ``kv_cond_newton`` solves and
+    updates."""
+
+    def __init__(self, ab: np.ndarray, kl: int, ku: int, lib, cond) -> None:
+        super().__init__(ab, kl, ku)
+        self._lib, self.cond = lib, cond
+        self.cond_ptr = cond.ptr
+        self.ipiv = np.zeros(max(self.n, 1), dtype=np.int32)     # unused, kept for C
+        self.prof = np.zeros(2 * max(self.n, 1), dtype=np.int32)
+        self._p = _Addresses()
+
+    def factor(self) -> int:
+        return int(self.cond.factor(self.ab))
+
+    def correct(self, res, scale, ewt, ee, yy, ypw, cj) -> float:
+        p = self._p
+        return self._lib.kv_cond_newton(self.cond_ptr, p(self.ab), p(res), scale, p(ewt),
+                                        p(ee), p(yy), p(ypw), cj)
+
+
+def newton_system(problem, ab: np.ndarray, kl: int, ku: int, lib,
+                  condense: bool = True) -> NewtonSystem:
+    """The best Newton system available for ``problem``: condensed when the problem names
+    its kinematic blocks (``condensation_blocks()``) and the compiled library ``lib`` is
+    there, else the compiled band LU, else LAPACK."""
+    if lib is None:
+        return LapackSystem(ab, kl, ku)
+    if condense:
+        from .native.condensed import CondensedNewton
+
+        cond = CondensedNewton.build(problem, ab.shape[1], kl, ku, ab.shape[0])
+        if cond is not None:
+            return CondensedSystem(ab, kl, ku, lib, cond)
+    return BandSystem(ab, kl, ku, lib)

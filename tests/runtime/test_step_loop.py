@@ -1,0 +1,290 @@
+"""The compiled step loop (runtime/solvers/native/step_loop.c) against the Python path of bdf.py.
+
+The two implement the same algorithm statement for statement and round alike, so they
+must take *identical* steps: same times, states, orders and counters after every step,
+on problems called through Python callbacks (chains, DAEs, fixed steps) and on the rod's
+compiled kernels (loads constant, loads moved with time through the drive callback, a
+generalized Maxwell rod). The run loop's observers, moved into the compiled loop (energy
+audit, samples) or called only at its stops (maxima, snapshots, progress), must give the
+series of the every-step Python run.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import partial
+
+import numpy as np
+import pytest
+
+from runtime.problem.registry import load_problem
+from runtime.simulate.simulate import simulate
+from runtime.solvers import driver
+from runtime.solvers.bdf import BDF, IntegrationError
+from runtime.solvers.integrator import consistent_initial
+from runtime.solvers.native.loader import load
+from tests.rods import MAXWELL, rod_model
+from tests.runtime.problems import KVChain, Oscillator, Robertson, Scalar
+
+pytestmark = pytest.mark.skipif(load() is None, reason="no C compiler")
+
+
+def _pair(problem, y0, yp0, t_end, **kw) -> tuple[BDF, BDF]:
+    py = BDF(problem, 0.0, y0, yp0, t_end, compiled_loop=False, **kw)
+    c = BDF(problem, 0.0, y0, yp0, t_end, **kw)
+    assert not py.compiled and c.compiled
+    return py, c
+
+
+def _assert_same_steps(py: BDF, c: BDF, max_steps: int = 100_000) -> None:
+    while py.status == "running" and py.nstep < max_steps:
+        py.step()
+        c.step()
+        assert c.t == py.t and c.t_old == py.t_old and c.order == py.order
+        assert np.array_equal(c.y, py.y) and np.array_equal(c.yp, py.yp)
+        assert c.counters == py.counters
+    assert c.status == py.status
+    a, b = py.dense_output(), c.dense_output()
+    tm = 0.5 * (py.t_old + py.t)
+    assert np.array_equal(a(tm), b(tm)) and np.array_equal(a.derivative(tm), b.derivative(tm))
+
+
+def test_same_steps_on_a_stiff_chain_through_callbacks():
+    chain = KVChain(M=15)
+    y0 = chain.initial()
+    py, c = _pair(chain, y0, chain.rhs(y0), 2.0, rtol=1e-6, atol=1e-8)
+    _assert_same_steps(py, c)
+    assert py.nstep > 100 and py.netf > 0      # error-test failures happened on the way
+
+
+def test_same_steps_on_a_dae_with_suppressed_algebraic_error():
+    prob = Robertson()
+    py, c = _pair(prob, np.array([1.0, 0.0, 0.0]), np.array([-0.04, 0.04, 0.0]), 4e5,
+                  rtol=1e-6, atol=np.array([1e-8, 1e-12, 1e-8]), suppress_alg=True)
+    _assert_same_steps(py, c)
+    assert py.status == "finished"
+
+
+@pytest.mark.parametrize("max_order", [1, 5])
+def test_same_steps_at_a_fixed_step_and_limited_order(max_order):
+    prob = Oscillator(1.0)
+    y0 = np.array([1.0, 0.0])
+    py, c = _pair(prob, y0, np.array([0.0, -1.0]), 1.0, fixed_step=0.01,
+                  max_order=max_order)
+    _assert_same_steps(py, c)
+    assert py.nstep == 100
+
+
+def _released(model):
+    """The reference at rest under the rod's dead loads: consistent (y0, y0')."""
+    model.at(0.0)
+    return consistent_initial(model, 0.0, model.initial_state(0.0), np.zeros(model.n))
+
+
+_KV, _MAXWELL, _PINNED = dict(), dict(tau=None, **MAXWELL), dict(start="pinned", end="clamped")
+
+
+@pytest.mark.parametrize("kw,chunk", [(_KV, 1), (_KV, 2), (_KV, None), (_MAXWELL, 2),
+                                      (_MAXWELL, None), (_PINNED, 1), (_PINNED, None)])
+def test_same_steps_on_the_rod_kernels(kw, chunk, monkeypatch):
+    """Also: the compiled loop evaluates J element by element and factors each cell
+    behind the sweep (step_loop.c's jac_factor_cells), with windows slid after every
+    1 or 2 elements or by the default chunk; the Python path stores the whole J first."""
+    from runtime.solvers.native.step_loop import CoreLink
+
+    if chunk is not None:
+        monkeypatch.setattr(CoreLink, "JAC_CHUNK", chunk)
+    m = rod_model(8, **kw)          # dead loads at the end and gravity: the rod moves
+    y0, yp0 = _released(m)
+    py, c = _pair(m, y0, yp0, 0.3, rtol=1e-6, atol=1e-8)
+    assert c.core.s.jac_cells and c.core.s.jchunk == CoreLink.JAC_CHUNK
+    _assert_same_steps(py, c)
+    assert py.nstep > 50
+
+
+def test_same_steps_with_time_dependent_loads_through_the_drive_callback():
+    p = load_problem("examples/base_excitation.toml",
+                     {"rod.elements": 6, "simulation.t_end": 0.6})
+    from runtime.problem.assemble import build_model
+
+    m = build_model(p)
+    assert m.drive is not None and m.drive.time_dependent
+    y0 = m.constrain(m.initial_state(0.0))
+    y0, yp0 = consistent_initial(m, 0.0, y0, np.zeros(m.n))
+    calls = {"n": 0}
+    kern = m.c_kernels()
+    inner = kern.drive
+
+    def counting(t):
+        calls["n"] += 1
+        return inner(t)
+
+    py, c = _pair(m, y0, yp0, 0.6, rtol=1e-6, atol=1e-9)
+    c._core._set_drive(counting)
+    _assert_same_steps(py, c)
+    # the clamp moves at every t: the loads are re-driven for every new time
+    assert calls["n"] >= c.nstep
+
+
+def test_advance_stops_at_t_stop_at_a_watched_sign_change_and_after_max_steps():
+    prob = Oscillator(2.0)      # x = cos(2 t): the velocity turns negative at once
+    s = BDF(prob, 0.0, np.array([1.0, 0.0]), np.array([0.0, -4.0]), 10.0, rtol=1e-8,
+            atol=1e-10)
+    assert s.advance(0.1) == "tstop" and s.t_old < 0.1 <= s.t
+    n = s.nstep
+    assert s.advance(5.0, max_steps=3) == "max_steps" and s.nstep == n + 3
+    s.watch([(1, +1.0)])        # v = -2 sin(2 t) crosses zero upwards at t = pi/2
+    assert s.advance(10.0) == "watch"
+    assert s.t_old < math.pi / 2 <= s.t
+    assert s.advance(10.0) == "watch" and s.t_old < 3 * math.pi / 2 <= s.t
+    s.watch([])
+    assert s.advance(20.0) == "finished" and s.t == 10.0 and s.status == "finished"
+
+
+def test_an_exception_in_a_python_callback_comes_through():
+    def f(t, y):
+        if t > 0.3:
+            raise ValueError("model broke at t > 0.3")
+        return -y
+
+    s = BDF(Scalar(f, lambda t, y: -1.0), 0.0, np.array([1.0]), np.array([-1.0]), 1.0)
+    with pytest.raises(ValueError, match="model broke"):
+        while s.status == "running":
+            s.advance(1.0)
+    assert s.status == "failed" and 0.0 < s.t <= 0.3
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_failures_are_reported_alike(compiled):
+    # y' = y^2 from 1 blows up at t = 1: both paths stop there with the same report
+    prob = Scalar(lambda t, y: y * y, lambda t, y: 2.0 * y)
+    s = BDF(prob, 0.0, np.array([1.0]), np.array([1.0]), 2.0, compiled_loop=compiled)
+    with pytest.raises(IntegrationError) as info:
+        while s.status == "running":
+            s.advance(2.0)
+    err = info.value
+    assert 0.99 < err.t < 1.0 and err.t == s.t and err.worst_index == 0
+    assert "Integration failed after the accepted point" in str(err)
+
+
+# ---- the run loop --------------------------------------------------------------------
+def _simulate(problem, python: bool, monkeypatch, **kw):
+    with monkeypatch.context() as mp:
+        if python:
+            mp.setattr(driver, "BDF", partial(BDF, compiled_loop=False))
+        return simulate(problem, **kw)
+
+
+@pytest.mark.parametrize("name, overrides", [
+    ("cantilever", {"rod.elements": 8, "simulation.t_end": 3.6}),
+    ("examples/base_excitation.toml", {"rod.elements": 6, "simulation.t_end": 2.0}),
+    ("examples/maxwell_cantilever.toml", {"rod.elements": 6, "simulation.t_end": 1.0}),
+])
+def test_observers_in_the_compiled_loop_give_the_python_series(name, overrides, monkeypatch):
+    p = load_problem(name, overrides)
+    snaps = {False: [], True: []}
+    runs = {py: _simulate(p, py, monkeypatch, snapshot_every=0.25,
+                          snapshot_sink=lambda t, y, yp, py=py: snaps[py].append((t, y)))
+            for py in (True, False)}
+    a, b = runs[True], runs[False]
+    assert a.status == b.status == "finished" and a.counters == b.counters
+    for key in ("t", "tip", "start", "peaks_t", "peaks_x"):
+        assert np.array_equal(getattr(a, key), getattr(b, key)), key
+    for key in ("kinetic", "elastic", "dissipated", "external_work"):
+        x, y = getattr(a, key), getattr(b, key)
+        np.testing.assert_allclose(y, x, rtol=1e-12, atol=1e-15 * np.abs(x).max()), key
+    assert a.reactions.keys() == b.reactions.keys() == {"start"}
+    for what in ("force", "moment"):
+        x, y = a.reactions["start"][what], b.reactions["start"][what]
+        np.testing.assert_allclose(y, x, rtol=1e-12, atol=1e-14 * np.abs(x).max())
+    for end in ("start", "end"):
+        assert np.array_equal(a.end_quaternions[end], b.end_quaternions[end])
+    assert a.t.size == round(p.simulation.t_end / p.simulation.output_step) + 1
+    assert [t for t, _ in snaps[True]] == [t for t, _ in snaps[False]]
+    assert len(snaps[True]) == int(p.simulation.t_end / 0.25) + 1
+    for (_, y1), (_, y2) in zip(snaps[True], snaps[False], strict=True):
+        assert np.array_equal(y1, y2)
+    if name == "cantilever":
+        assert a.peaks_x.size >= 3
+
+
+def test_the_compiled_loop_calls_python_rarely_unless_an_observer_needs_every_step():
+    p = load_problem("cantilever", {"rod.elements": 6, "simulation.t_end": 2.0})
+    ticks: list[float] = []
+    run = simulate(p, progress=ticks.append)
+    assert run.counters["nstep"] > 400
+    assert len(ticks) <= 110 and ticks[-1] == 2.0      # about Progress.ticks stops
+
+    seen: list[float] = []
+
+    class EveryStep:                                    # not sparse: sees every step
+        def step(self, run, dense, t0, t1):
+            seen.append(t1)
+
+    m = run.model
+    y0, yp0 = _released(m)
+    res = driver.run_loop(m, 0.0, y0, yp0, 0.5, rtol=1e-6, atol=1e-8, observers=[EveryStep()])
+    assert res.status == "finished" and len(seen) == res.counters["nstep"] > 10
+
+
+def test_samples_pass_through_a_small_buffer_unchanged(monkeypatch):
+    """The compiled loop hands its output rows to Python whenever its buffer is full (the
+    memory of a long run stays bounded): a 5-row buffer gives the same series."""
+    from runtime.solvers.native.step_loop import CoreLink
+
+    p = load_problem("cantilever", {"rod.elements": 6, "simulation.t_end": 1.0})
+    ref = simulate(p)
+    monkeypatch.setattr(CoreLink, "SAMPLE_ROWS", 5)
+    small = simulate(p)
+    assert ref.t.size == 201 and np.array_equal(small.t, ref.t)
+    for key in ("tip", "start", "kinetic", "elastic", "dissipated", "external_work"):
+        assert np.array_equal(getattr(small, key), getattr(ref, key)), key
+
+
+def test_a_signal_during_callbacks_is_delivered_after_the_compiled_loop_returns():
+    """Ctrl-C while C runs with Python callbacks: the handler's KeyboardInterrupt comes out
+    of advance() with the solver's state pulled back, not printed and lost by ctypes (a
+    signal's exception can fire on a callback's first line, before any try)."""
+    import os
+    import signal
+
+    calls = {"n": 0}
+
+    def f(t, y):
+        calls["n"] += 1
+        if calls["n"] == 50:
+            os.kill(os.getpid(), signal.SIGINT)
+        return -y
+
+    s = BDF(Scalar(f, lambda t, y: -1.0), 0.0, np.array([1.0]), np.array([-1.0]), 100.0)
+    with pytest.raises(KeyboardInterrupt):
+        s.advance(100.0)
+    assert 0.0 < s.t < 100.0 and s.nfev >= 50 and abs(s.y[0] - math.exp(-s.t)) < 1e-4
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+@pytest.mark.parametrize("n", [7, 13006, 40001])
+@pytest.mark.parametrize("k", [1, 3, 5])
+def test_interpolation_in_c_sums_like_numpy_at_every_size_and_alignment(n, k):
+    """kv_interp (one pass over phi, vectorised per order, non-temporal stores from 256 kB
+    per output row, rows of odd n alternating in alignment) gives y = phi_0 + c_1 phi_1
+    + ... and y' = 0 + d_1 phi_1 + ... summed in j order: NumPy's sums term by term."""
+    import ctypes
+
+    from runtime.solvers.dense import _interp_coefficients
+
+    lib = load()
+    rng = np.random.default_rng(n + k)
+    phi = rng.standard_normal((k + 1, n))
+    psi = np.cumsum(rng.uniform(0.01, 0.02, 6))
+    ts = np.array([-0.003, -0.0071, 0.0])
+    y, yp = np.full((3, n), np.nan), np.full((3, n), np.nan)
+    P = lambda a: a.ctypes.data  # noqa: E731
+    lib.kv_interp(k, n, 3, ctypes.c_double(0.0), P(psi), P(phi), P(ts), P(y), P(yp))
+    c, d = _interp_coefficients(ts, 0.0, psi, k)
+    for i in range(3):
+        wy, wyp = phi[0].copy(), np.zeros(n)
+        for j in range(1, k + 1):
+            wy += c[j, i] * phi[j]
+            wyp += d[j, i] * phi[j]
+        assert np.array_equal(y[i], wy) and np.array_equal(yp[i], wyp), i
