@@ -7,6 +7,7 @@ from typing import Any
 
 from bench.energy_audit import markdown as energy_audit_md
 from bench.meta import targets_md
+from bench.modes import markdown as modes_md
 
 
 def _f(v: Any, fmt: str = ".3f") -> str:
@@ -243,7 +244,8 @@ def kernels_md(doc: dict) -> list[str]:
 
 #: the README's sections, in order: document name -> Markdown lines
 SECTION_MD = {"integrators": integrators_md, "scaling": scaling_md, "codegen": codegen_md,
-              "peers": peers_md, "kernels": kernels_md, "energy_audit": energy_audit_md}
+              "peers": peers_md, "kernels": kernels_md, "energy_audit": energy_audit_md,
+              "modes": modes_md}
 
 
 def markdown(docs: dict) -> str:
@@ -260,8 +262,8 @@ def markdown(docs: dict) -> str:
     if meta["quick"]:
         lines += ["Quick mode: N = 25 (scaling: 25, 50) only, 2 s simulated, IDAS and CVODES "
                   "on kvrod's compiled kernels (no flat SX compile), SciPy BDF only, no "
-                  "codegen timing, PyElastica, kernel table or energy audit. Use the full run "
-                  "for the quoted figures.", ""]
+                  "codegen timing, PyElastica, kernel table or energy audit; modes at N = 50 "
+                  "only. Use the full run for the quoted figures.", ""]
     for name, section_md in SECTION_MD.items():
         if name in docs:
             lines += section_md(docs[name])

@@ -33,6 +33,8 @@ def _cmd_modes(args) -> int:
 
     if args.count < 1:
         raise _cli_error(f"kvrod modes: --count must be >= 1, got {args.count}")
+    if args.near is not None and not (math.isfinite(args.near) and args.near >= 0):
+        raise _cli_error(f"kvrod modes: --near must be a frequency >= 0 Hz, got {args.near}")
     problem = problem_from_args(args, "modes")
     nq = 6 * problem.rod.elements
     if args.count > nq:
@@ -48,11 +50,13 @@ def _cmd_modes(args) -> int:
 
 
 def _modes_into(args, problem, out: Path) -> int:
-    res = run_modes(problem, args.count, args.deformed)
+    target = None if args.near is None else 2 * math.pi * args.near
+    res = run_modes(problem, args.count, args.deformed, target=target)
     modes = res["modes"]
     m = problem.material
     state = "pre-deformed by its static loads" if args.deformed else "straight, unloaded"
-    print(f"{problem.name}: N = {problem.rod.elements}, {m.describe()}, {state}")
+    near = "" if args.near is None else f"; the {args.count} modes nearest {args.near:g} Hz"
+    print(f"{problem.name}: N = {problem.rod.elements}, {m.describe()}, {state}{near}")
     if res["static_tip"] is not None:
         print(f"static tip [m]: {[round(float(v), 6) for v in res['static_tip']]}")
     print(modes_table(modes))
@@ -224,6 +228,10 @@ def add_commands(sub, parser_class) -> None:
 
     add_problem_arguments(m)
     m.add_argument("--count", type=int, default=10, help="number of modes (default 10)")
+    m.add_argument("--near", type=float, metavar="HZ",
+                   help="the --count modes whose natural frequency is nearest HZ (Hz) "
+                        "instead of the lowest (numbered within those shown; no continuum "
+                        "column)")
     m.add_argument("--deformed", action="store_true",
                    help="linearise about the static state under the problem's loads")
     m.add_argument("--out", help="results folder (default results/modes-SCENARIO[-deformed])")

@@ -38,7 +38,7 @@ def write_modes(res: dict, out: Path, figures: bool = True) -> list[Path]:
     out = Path(out)
     paths = write_files(out, res["problem"], res["modes"], model=res["model"],
                         y_eq=res.get("y_eq"), deformed=res["deformed"],
-                        static_tip=res["static_tip"])
+                        static_tip=res["static_tip"], target=res.get("target"))
     if figures:
         from runtime.io.shapes import plot_mode_components, plot_mode_shapes_3d
 
@@ -48,12 +48,16 @@ def write_modes(res: dict, out: Path, figures: bool = True) -> list[Path]:
     return paths
 
 
-def run_modes(problem, count: int = 10, deformed: bool = False) -> dict:
+def run_modes(problem, count: int = 10, deformed: bool = False,
+              target: float | None = None) -> dict:
     """Modal analysis of a problem; returns {"modes", "model", "y_eq", "static_tip", ...}.
 
     Straight (default): about the stress-free reference without loads; deformed: about
-    the static equilibrium under the problem's loads at t = 0-. Continuum reference
-    frequencies (the independent ``references`` package) are attached where they apply.
+    the static equilibrium under the problem's loads at t = 0-. ``target`` (rad/s): the
+    ``count`` modes nearest that natural frequency instead of the lowest. Continuum
+    reference frequencies (the independent ``references`` package) are attached where
+    they apply (not with a target: the modes' family_index then counts within the modes
+    returned, not from the family's first).
     """
     from dataclasses import replace
 
@@ -68,11 +72,11 @@ def run_modes(problem, count: int = 10, deformed: bool = False) -> dict:
     if deformed:
         st = static_equilibrium(p, model)
         y_eq, tip = st.y, st.tip
-    modes = modal_analysis(model, y_eq, count=count)
-    if not deformed:
+    modes = modal_analysis(model, y_eq, count=count, target=target)
+    if not deformed and target is None:
         continuum.attach(problem, modes)
     return {"problem": problem, "model": model, "modes": modes, "deformed": deformed,
-            "y_eq": y_eq, "static_tip": tip}
+            "y_eq": y_eq, "static_tip": tip, "target": target}
 
 
 def compare_table(result) -> str:

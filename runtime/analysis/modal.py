@@ -56,10 +56,24 @@ gravity field) are ordinary modes of the linearisation; a mode whose M-norm lies
 with omega = 0 and no damping ratio where omega^2 is below the eigensolvers' round-off
 (1e-12 of the largest stiffness-to-mass ratio).
 
-Dense ``scipy.linalg.eig`` is used up to ``dense_max`` reduced unknowns (default 300, i.e.
-N <= 50 clamped-free); above, sparse shift-invert ``scipy.sparse.linalg.eigs`` (undamped
-modes at ``sigma = 0``; each damped eigenvalue refined by shift-invert at the prediction of
-the modal projection): N = 200 takes 0.2 s sparse against 7 s dense.
+Solvers
+-------
+By default the sparse method of :mod:`runtime.analysis.modal_sparse` at every size
+(shift-invert Lanczos for the undamped modes, the modal projection's prediction of the
+damped eigenvalues, refined by block shift-invert iteration on the sparse pencil and a
+Rayleigh functional step on the second-order problem with the internal strains eliminated
+per frequency): N = 4000 Kelvin-Voigt (eight modes) or the Maxwell cantilever at N = 1000
+in about 2 s. The ``count`` lowest modes, or with ``target`` the ``count`` nearest a
+natural frequency (the rule of ``_select``). Dense LAPACK (``scipy.linalg.eig`` of the whole
+pencil, QZ for a Maxwell rod) is the test oracle, used up to ``dense_max`` reduced unknowns
+(default 0) and for problems too small for ARPACK.
+
+Degenerate pairs (the two bending families of a circular or square section) are solved
+together: one M-orthonormal pair of undamped shapes from Lanczos, rotated to the two
+bending families (``_separate_degenerate``), and their damped eigenvalues as Ritz
+values of one small projected problem, so the twins' zeta agree to round-off (1e-9 at
+N = 4000). They are listed in the order that rotation gives (ascending bending-1 energy:
+bending-2 first).
 
 Sign of a mode shape
 --------------------
@@ -80,6 +94,7 @@ torsion mode of a loaded, bent rod, which mixes with bending) this pairing is no
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -87,6 +102,7 @@ import scipy.linalg as la
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from runtime.errors import ParameterError
 from runtime.model.rod import RodModel
 from runtime.model.statics import RodStatics
 
@@ -590,26 +606,6 @@ def _pencil_eigen(lin: Linearization) -> tuple[np.ndarray, np.ndarray]:
     return lam, X
 
 
-def _deflated_inverse(lin: Linearization, Zn: np.ndarray) -> spla.LinearOperator:
-    """x = K^+ b on the M-orthogonal complement of span(Zn) (K Zn = 0 = Zn^T K): the
-    solution of the bordered system [[K, M Zn], [Zn^T M, 0]] [x; mu] = [b; 0], regular
-    though K is singular. As ARPACK's shift-invert operator at sigma = 0 it maps the
-    rigid motions to 0, so they are never returned, and it is M-symmetric."""
-    nq, k = lin.nq, Zn.shape[1]
-    MZ = sp.csc_matrix(np.asarray(lin.M @ Zn))
-    Kb = sp.bmat([[lin.K, MZ], [MZ.T, None]]).tocsc()
-    try:
-        lu = spla.splu(Kb)
-    except RuntimeError as exc:
-        raise _singular(exc) from None
-    pad = np.zeros(k)
-
-    def solve(b: np.ndarray) -> np.ndarray:
-        return lu.solve(np.r_[np.ravel(b), pad])[:nq]
-
-    return spla.LinearOperator((nq, nq), matvec=solve, dtype=float)
-
-
 def _upper_half(lam: np.ndarray, X: np.ndarray, rtol: float = 1e-7):
     """One eigenvalue of each conjugate pair (Im > 0) and all real ones (Im := 0).
 
@@ -694,61 +690,44 @@ def _span_clusters(lin: Linearization, omega: np.ndarray, Phi: np.ndarray,
     return Phi
 
 
-def _sparse_modes(lin: Linearization, count: int, Zn: np.ndarray):
-    m = min(count + 6, lin.nq - Zn.shape[1] - 2)
-    v0 = _start_vector(lin.nq)
-    opinv = None
-    if Zn.shape[1]:
-        opinv = _deflated_inverse(lin, Zn)
-        v0 = v0 - Zn @ (Zn.T @ (lin.M @ v0))     # start in the elastic complement
-    try:
-        if _is_symmetric(lin.K):  # Lanczos: M-orthogonal eigenvectors, repeated ones too
-            w2, Phi = spla.eigsh(lin.K, k=m, M=lin.M, sigma=0.0, which="LM", v0=v0,
-                                 OPinv=opinv)
-        else:
-            w2, Phi = spla.eigs(lin.K, k=m, M=lin.M, sigma=0.0, which="LM", v0=v0,
-                                OPinv=opinv)
-    except RuntimeError as exc:   # SuperLU: "Factor is exactly singular"
-        raise _singular(exc) from None
-    order = np.argsort(w2.real)
-    w2, Phi = w2.real[order], Phi[:, order].real
-    Phi = _span_clusters(lin, np.sqrt(np.maximum(w2, 0.0)), Phi)
-    Phi /= np.sqrt(np.einsum("ik,ik->k", Phi, lin.M @ Phi))[None, :]
-    # prediction of the damped eigenvalues from the modal projection, then refinement
-    Mr, Cr, Kr = (Phi.T @ (X @ Phi) for X in (lin.M, lin.C, lin.K))
-    Ar = np.block([[np.zeros((m, m)), -np.eye(m)], [Kr, Cr]])
-    Er = np.block([[np.eye(m), np.zeros((m, m))], [np.zeros((m, m)), Mr]])
-    seeds = la.eigvals(-Ar, Er)
-    seeds = seeds[seeds.imag >= -1e-9 * np.abs(seeds)]
-    seeds = seeds[np.argsort(np.abs(seeds))]
-    lams: list[complex] = []
-    vecs: list[np.ndarray] = []
-    A, E = lin.A.astype(complex), lin.E.astype(complex)
-    done = np.zeros(seeds.size, dtype=bool)
-    for i, s in enumerate(seeds):
-        if done[i]:
-            continue
-        grp = np.flatnonzero(~done & (np.abs(seeds - s) <= 1e-6 * abs(s)))
-        done[grp] = True
-        sigma = complex(s) * (1 + 1e-7) + 1e-9j * abs(s)
-        lu = spla.splu((-A - sigma * E).tocsc())
-        op = spla.LinearOperator(A.shape, matvec=lambda x, lu=lu: lu.solve(E @ x),
-                                 dtype=complex)
-        mu, V = spla.eigs(op, k=grp.size, which="LM", tol=1e-12,
-                          v0=_start_vector(A.shape[0], complex))
-        for lam, v in zip(sigma + 1.0 / mu, V.T, strict=True):
-            if abs(lam.imag) <= 1e-7 * abs(lam):
-                lam = complex(lam.real, 0.0)
-            if lam.imag < 0:
-                lam, v = lam.conjugate(), v.conj()
-            lams.append(complex(lam))
-            vecs.append(v[: lin.nq])
-    return w2, Phi, np.array(lams), np.array(vecs).T
+def _select(omega: np.ndarray, k0: int, count: int, target: float) -> tuple[int, np.ndarray]:
+    """The modes shown: (how many of the k0 unresisted rigid modes, indices into ``omega``
+    (ascending) of the others).
+
+    Rule: the ``count`` modes whose natural frequency is nearest ``target`` (rad/s; 0: the
+    lowest), the rigid modes (omega 0) competing like any other. A cluster of repeated
+    frequencies (relative 1e-6, e.g. a twin bending pair) ranks by the frequency of its
+    first member, so it is taken whole unless the count ends inside it; ties keep the
+    order rigid modes first, then ascending omega (within a cluster: the order of
+    :func:`_separate_degenerate`)."""
+    cand = np.r_[np.zeros(k0), omega]
+    head = np.empty(cand.size)
+    for g in _clusters(cand):
+        head[g] = cand[g[0]]
+    chosen = np.sort(np.argsort(np.abs(head - target), kind="stable")[:count])
+    return int(np.sum(chosen < k0)), chosen[chosen >= k0] - k0
+
+
+def _covered(w2: np.ndarray, k0: int, count: int, target: float) -> bool:
+    """Whether the m eigenvalues w2 nearest target^2 (as shift-invert returns them) hold
+    every mode :func:`_select` would pick from all of them: a mode not among them lies
+    farther from target^2 than all of them in omega^2, so it is farther in omega than the
+    farthest one picked when that one's distance d satisfies d (2 target + d) < the
+    largest omega^2 distance found."""
+    if target == 0.0:
+        return True
+    omega = np.sqrt(np.maximum(w2, 0.0))
+    _, sel = _select(omega, k0, count, target)
+    if sel.size == 0:
+        return True
+    d = float(np.max(np.abs(omega[sel] - target)))
+    return d * (2 * target + d) < float(np.max(np.abs(w2 - target**2)))
 
 
 def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int = 10,
-                   dense_max: int = 300) -> list[Mode]:
-    """The ``count`` lowest modes of the rod linearised at ``y_eq`` (see module docstring).
+                   dense_max: int = 0, target: float | None = None) -> list[Mode]:
+    """The ``count`` lowest modes (or those nearest ``target``) of the rod linearised at
+    ``y_eq`` (see module docstring).
 
     Parameters
     ----------
@@ -759,8 +738,15 @@ def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int =
     count : int
         Number of modes (>= 1).
     dense_max : int
-        Largest reduced size ``nq`` solved with dense LAPACK (above: sparse shift-invert
-        ARPACK). A generalized Maxwell rod (internal strains in the state) is solved dense.
+        Largest reduced size ``nq`` solved with dense LAPACK, every eigenvalue of the
+        pencil (the test oracle; a generalized Maxwell rod up to
+        ``MAXWELL_DENSE_MAX`` unknowns). Default 0: the sparse method
+        (:mod:`runtime.analysis.modal_sparse`) at every size where it applies (``count``
+        + 6 modes fewer than the unknowns), dense below.
+    target : float, optional
+        Natural angular frequency (rad/s, >= 0): the ``count`` modes whose natural
+        frequency is nearest to it instead of the lowest (module docstring). Their
+        ``index`` and ``family_index`` then count within the modes returned.
 
     Returns
     -------
@@ -773,41 +759,68 @@ def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int =
     """
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
         raise ValueError(f"count = {count!r} must be an integer >= 1")
+    if target is not None and (isinstance(target, bool) or not isinstance(
+            target, (int, float, np.integer, np.floating)) or not math.isfinite(target)
+            or target < 0):
+        raise ParameterError("target", target, "a finite natural angular frequency >= 0 "
+                             "rad/s (None: the lowest modes)", where="modal_analysis")
+    w_t = 0.0 if target is None else float(target)
     lin = linearize(model, y_eq)
     if count > lin.nq:
         raise ValueError(f"count = {count} exceeds the {lin.nq} degrees of freedom")
     maxwell = model.branches > 0
-    if maxwell and lin.E.shape[0] > MAXWELL_DENSE_MAX:
-        raise ValueError(f"the linearised generalized Maxwell rod has {lin.E.shape[0]} "
-                         f"unknowns (internal strains included); at most {MAXWELL_DENSE_MAX} "
-                         "are solved (dense): use fewer elements")
     Z_all, Zn = _rigid_subspaces(lin)
     k0 = Zn.shape[1]
-    n_el = count - min(k0, count)          # elastic (and resisted rigid) modes to show
-    if lin.nq <= dense_max or maxwell:
+    from runtime.analysis import modal_sparse as ms
+
+    m = count + ms.EXTRA_MODES if target is not None else max(count - k0, 1) + \
+        ms.EXTRA_MODES
+    dense = lin.nq <= dense_max or m > lin.nq - k0 - 2
+    if dense:
+        if maxwell and lin.E.shape[0] > MAXWELL_DENSE_MAX:
+            raise ValueError(f"the linearised generalized Maxwell rod has {lin.E.shape[0]} "
+                             f"unknowns (internal strains included); the dense solver "
+                             f"takes at most {MAXWELL_DENSE_MAX} (use the sparse one: "
+                             f"dense_max below {lin.nq})")
         w2, Phi, lam, Xq = _dense_modes(lin, Zn)
+        errs = np.zeros(lam.size)
+        omega = np.sqrt(np.maximum(w2, 0.0))
+        n_rigid, sel = _select(omega, k0, count, w_t)
+        lo = max(int(sel.min()) - ms.EXTRA_MODES, 0) if sel.size else 0
+        hi = min(int(sel.max()) + 1 + ms.EXTRA_MODES, omega.size) if sel.size else 0
     else:
-        w2, Phi, lam, Xq = _sparse_modes(lin, max(n_el, 1), Zn)
+        while True:
+            w2, Phi = ms.undamped_modes(lin, m, Zn, w_t**2)
+            if _covered(w2, k0, count, w_t) or m >= lin.nq - k0 - 2:
+                break
+            m = min(2 * m, lin.nq - k0 - 2)
+        omega = np.sqrt(np.maximum(w2, 0.0))
+        n_rigid, sel = _select(omega, k0, count, w_t)
+        lam, Xq, errs = ms.sparse_modes(lin, sel, w2, Phi, maxwell, Zn, w_t**2)
+        lo, hi = 0, omega.size
     if maxwell:
         # the real eigenvalues are the relaxation of the internal strains (and overdamped
         # motion, not identified here): the modes are the oscillatory pairs
         osc = np.abs(lam.imag) > 0
-        lam, Xq = lam[osc], Xq[:, osc]
-    omega = np.sqrt(np.maximum(w2, 0.0))
+        lam, Xq, errs = lam[osc], Xq[:, osc], errs[osc]
     Phi = _fix_signs(_separate_degenerate(lin, omega, Phi, lin.M))
     Zn = _fix_signs(Zn)
     # participation of the undamped modes in every damped eigenvector (M-weighted)
-    c = Phi.T @ (lin.M @ Xq)  # (modes, eigvecs)
+    c = Phi[:, lo:hi].T @ (lin.M @ Xq)  # (modes, eigvecs)
     Pmat = np.abs(c.T) ** 2
     Pmat /= np.maximum(np.real(np.einsum("ij,ij->i", Xq.T.conj(), (lin.M @ Xq).T)), 1e-300
                        )[:, None]
-    pairs = _assign(lam, Pmat, omega, min(Phi.shape[1], n_el + 6))
-    k_show = min(n_el, Phi.shape[1])
-    energies = _strain_energy_fractions(lin, Phi[:, :k_show]) if k_show else np.zeros((0, 6))
-    rigid_share = _rigid_participation(Z_all, lin.M, Phi[:, :k_show])
+    pairs = _assign(lam, Pmat, omega[lo:hi], hi - lo) if hi > lo else []
+    used = [v for k in sel for v in pairs[k - lo]]
+    worst = max((float(errs[int(np.argmin(np.abs(lam - v)))]) for v in used), default=0.0)
+    if worst > ms.BACKWARD_ERROR_WARN:
+        warnings.warn(f"kvrod: a damped eigenvalue was refined only to a backward error of "
+                      f"{worst:.1e} in the pencil (doubtful)", RuntimeWarning, stacklevel=2)
+    energies = _strain_energy_fractions(lin, Phi[:, sel]) if sel.size else np.zeros((0, 6))
+    rigid_share = _rigid_participation(Z_all, lin.M, Phi[:, sel])
     modes: list[Mode] = []
     family_count: dict[str, int] = {}
-    for j in range(min(k0, count)):      # the unresisted rigid motions: omega = 0
+    for j in range(n_rigid):      # the unresisted rigid motions: omega = 0
         dx = lin.expand(Zn[:, j])
         family_count["rigid"] = j + 1
         modes.append(Mode(index=j + 1, family="rigid", family_index=j + 1, omega=0.0,
@@ -820,24 +833,25 @@ def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int =
     # omega^2 below this is round-off of the eigensolvers (eps ~ 1e-16 times the largest
     # stiffness-to-mass ratio, with room for n and the conditioning)
     w2_floor = 1e-12 * float(np.max(np.abs(lin.K.diagonal()) / lin.M.diagonal()))
-    for k in range(k_show):
-        e = energies[k]
+    for i, k in enumerate(sel):
+        e = energies[i]
         fr = e / e.sum() if e.sum() > 0 else e
-        fam = "rigid" if rigid_share[k] > 0.5 else _classify(fr)
+        fam = "rigid" if rigid_share[i] > 0.5 else _classify(fr)
         family_count[fam] = family_count.get(fam, 0) + 1
-        l1, l2 = _finish_pair(pairs[k])
+        l1, l2 = _finish_pair(pairs[k - lo])
         wn, zeta = _pair_zeta(l1, l2)
         phi = Phi[:, k]
-        zm = float(phi @ (Cd @ phi)) / (2 * omega[k]) if omega[k] > 0 else math.inf
+        w = float(omega[k])
+        zm = float(phi @ (Cd @ phi)) / (2 * w) if w > 0 else math.inf
         if fam == "rigid" and abs(w2[k]) <= w2_floor:   # unresisted to round-off
-            omega[k], l1, l2, zeta, zm = 0.0, 0j, 0j, math.nan, math.nan
+            w, l1, l2, zeta, zm = 0.0, 0j, 0j, math.nan, math.nan
         if maxwell:   # frequency-dependent moduli: the natural frequency is |lambda|, and
-            omega[k], zm = wn, math.nan        # there is no constant damping matrix
+            w, zm = wn, math.nan               # there is no constant damping matrix
         dx = lin.expand(phi)
         disp = dx[lin.statics.phi_cols].T
         rot = dx[lin.statics.theta_cols].T
         modes.append(Mode(index=len(modes) + 1, family=fam, family_index=family_count[fam],
-                          omega=float(omega[k]), eigenvalues=(l1, l2), zeta=float(zeta),
+                          omega=w, eigenvalues=(l1, l2), zeta=float(zeta),
                           omega_damped=float(abs(l1.imag)), zeta_modal=zm,
                           energy_fractions=dict(zip(STRAIN_COMPONENTS, map(float, fr),
                                                     strict=True)),

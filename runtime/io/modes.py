@@ -7,7 +7,9 @@ modes.json (format 2)
     ``format`` (2), ``problem`` (name), ``parameters`` (the resolved problem),
     ``tau_E`` (s; the low-frequency equivalent for a generalized Maxwell material),
     ``deformed`` (linearised about the static equilibrium under the loads, else about the
-    unloaded reference), ``static_tip`` (m, or null), ``shapes`` ("modes.npz") and
+    unloaded reference), ``static_tip`` (m, or null), ``target_omega`` (rad/s: the modes
+    are those nearest this natural frequency, numbered within themselves; null or absent:
+    the lowest), ``shapes`` ("modes.npz") and
     ``modes``: one object per mode, lowest first, with ``index``, ``family``
     (bending-1, bending-2, torsion, axial, shear, rigid), ``family_index``, ``omega``
     (undamped, rad/s), ``frequency_hz``, ``eigenvalues`` (the damped pair as [re, im],
@@ -47,12 +49,15 @@ NPZ_NAME = "modes.npz"
 
 
 def write_modes(out: Path, problem, modes: Sequence, *, model, y_eq: np.ndarray | None,
-                deformed: bool, static_tip: np.ndarray | None = None) -> list[Path]:
+                deformed: bool, static_tip: np.ndarray | None = None,
+                target: float | None = None) -> list[Path]:
     """Write ``out/modes.npz`` then ``out/modes.json`` (the folder's marker, last).
 
     ``modes``: :class:`runtime.analysis.modal.Mode` list of ``model`` (the problem's
     rod) linearised about ``y_eq`` (None: the reference); ``static_tip``: the static
-    s = L position (m) of a deformed analysis. Returns both paths.
+    s = L position (m) of a deformed analysis; ``target``: the natural angular frequency
+    (rad/s) the modes are nearest to (``target_omega`` in the JSON; null: the lowest
+    modes). Returns both paths.
     """
     out = Path(out)
     y = model.reference if y_eq is None else np.asarray(y_eq, dtype=float)
@@ -68,6 +73,7 @@ def write_modes(out: Path, problem, modes: Sequence, *, model, y_eq: np.ndarray 
         "format": FORMAT, "problem": problem.name, "parameters": problem.to_mapping(),
         "tau_E": float(problem.material.tau_E), "deformed": bool(deformed),
         "static_tip": None if static_tip is None else [float(v) for v in static_tip],
+        "target_omega": None if target is None else float(target),
         "shapes": NPZ_NAME,
         "modes": [m.to_dict(shapes=False) for m in modes]})
     return [js, npz]

@@ -34,7 +34,7 @@ def test_quick_writes_the_documents(quick_run):
     assert "us/step" in readme
 
 
-@pytest.mark.parametrize("name", ["integrators", "scaling"])
+@pytest.mark.parametrize("name", ["integrators", "scaling", "modes"])
 def test_json_has_metadata_and_verdicts(quick_run, name):
     out, _ = quick_run
     doc = json.loads((out / f"{name}.json").read_text())
@@ -64,3 +64,21 @@ def test_integrators_compares_at_matched_accuracy(quick_run):
             assert run["duel"][name]["us_per_step"] > 0
     assert run["strongest"] in run["duel"]
     assert doc["targets"][0]["verdict"] in ("met", "missed")
+
+
+def test_modes_rows_ran_and_twins_agree(quick_run):
+    """The modes section: every whole-process row ran (kvrod modes of the Kelvin-Voigt and
+    the Maxwell cantilever, the simulation beside them), the first damping ratios are
+    those of the cantilever (zeta = omega tau / 2 for Kelvin-Voigt, tau = 0.04 s), and the
+    twin bending modes of its square section agree."""
+    out, _ = quick_run
+    doc = json.loads((out / "modes.json").read_text())
+    assert [r["kind"] for r in doc["rows"]] == ["modes", "modes", "simulate"]
+    for r in doc["rows"]:
+        assert r["ok"] and r["walls"] and r["median"] > 0, r
+    kv = doc["rows"][0]
+    assert kv["first_zeta"] == pytest.approx(kv["first_omega"] * 0.04 / 2, rel=1e-6)
+    assert 0 < doc["rows"][1]["first_zeta"] < 1
+    twin = doc["targets"][2]
+    assert twin["verdict"] == "met", twin
+    assert "Damped modes at any size" in (out / "README.md").read_text()

@@ -144,14 +144,14 @@ def test_kelvin_voigt_ratio_per_family():
 
 def test_sparse_path_agrees_with_dense():
     model = RodModel(rod(16, tau_S=0.04, tau_B=0.04, height=0.012))
-    dense = modal_analysis(model, count=6)
+    dense = modal_analysis(model, count=6, dense_max=10**6)
     sparse = modal_analysis(model, count=6, dense_max=0)
     for a, b in zip(dense, sparse, strict=True):
         assert a.family == b.family
         assert a.omega == pytest.approx(b.omega, rel=1e-8)
-        assert a.zeta == pytest.approx(b.zeta, rel=1e-6)
+        assert a.zeta == pytest.approx(b.zeta, rel=1e-7)
         assert sorted(a.eigenvalues, key=abs) == pytest.approx(
-            sorted(b.eigenvalues, key=abs), rel=1e-6)
+            sorted(b.eigenvalues, key=abs), rel=1e-7)
 
 
 def test_linearization_structure():
@@ -314,7 +314,7 @@ def _ss_reference():
     return RX.simply_supported_reference(doc)["frequencies"]
 
 
-@pytest.mark.parametrize("N,dense_max", [(64, 10_000), (64, 300), (256, 300)])
+@pytest.mark.parametrize("N,dense_max", [(64, 10_000), (64, 0), (1024, 0)])
 def test_simply_supported_modes_rigid_spin_then_timoshenko_bending(N, dense_max):
     """Pinned-pinned steel bar: the spin about its axis is mode 1, `rigid`, omega 0 and no
     damping ratio; the first bending pair within 0.5 % of the simply supported Timoshenko
@@ -335,7 +335,7 @@ def test_simply_supported_modes_rigid_spin_then_timoshenko_bending(N, dense_max)
         m = next(m for m in modes if m.family == fam)
         assert m.family_index == 1
         assert abs(m.omega / ref[fam][0] - 1) < 5e-3
-        assert abs(m.omega / ref[fam][0] - 1) < (3e-4 if N == 64 else 3e-5)
+        assert abs(m.omega / ref[fam][0] - 1) < (3e-4 if N == 64 else 1e-5)
         assert m.zeta == pytest.approx(m.omega * tau / 2, rel=1e-6)
     assert all(m.family != "rigid" for m in modes[1:])
 
@@ -419,14 +419,14 @@ def test_mode_shapes_do_not_flip_with_the_eigensolver(monkeypatch, loaded):
     problem = rod(10, tau_S=0.04, tau_B=0.04, height=0.012, loads=loaded)
     model = RodModel(problem)
     y_eq = static_equilibrium(problem, model).y if loaded else None
-    ref = modal_analysis(model, y_eq, count=6)
+    ref = modal_analysis(model, y_eq, count=6, dense_max=10**6)
     sparse = modal_analysis(model, y_eq, count=6, dense_max=0)
     real_eigh, real_eig = la.eigh, la.eig
     monkeypatch.setattr(modal.la, "eigh", lambda *a, **k: (lambda w, v: (w, -v))(
         *real_eigh(*a, **k)))
     monkeypatch.setattr(modal.la, "eig", lambda *a, **k: (lambda w, v: (w, -v))(
         *real_eig(*a, **k)))
-    flipped = modal_analysis(model, y_eq, count=6)
+    flipped = modal_analysis(model, y_eq, count=6, dense_max=10**6)
     for a, b, c in zip(ref, flipped, sparse, strict=True):
         scale = np.abs(a.displacement).max() + np.abs(a.rotation).max()
         for other in (b, c):
@@ -434,3 +434,186 @@ def test_mode_shapes_do_not_flip_with_the_eigensolver(monkeypatch, loaded):
             np.testing.assert_allclose(other.displacement, a.displacement, rtol=0,
                                        atol=1e-6 * scale)
             np.testing.assert_allclose(other.rotation, a.rotation, rtol=0, atol=1e-6 * scale)
+
+
+# -- damped modes at any size (issue 27): the sparse method against the dense oracle ----
+def _bending_twins(modes):
+    """Consecutive (bending-1, bending-2) pairs of one natural frequency (to 1e-4)."""
+    return [(a, b) for a, b in zip(modes, modes[1:], strict=False)
+            if {a.family, b.family} == {"bending-1", "bending-2"}
+            and abs(a.omega / b.omega - 1) < 1e-4]
+
+
+@pytest.mark.parametrize("section", [{"kind": "circle", "radius": 0.005},
+                                     {"kind": "rectangle", "width": 0.01, "height": 0.01}])
+@pytest.mark.parametrize("material", ["kelvin_voigt", "maxwell", "steel"])
+def test_twin_bending_modes_agree(section, material):
+    """The two bending modes of a circular or square section have one damping ratio and one
+    frequency (the section's symmetry): to 1e-6 (measured 1e-11 to 1e-9). 'steel': the
+    simply supported steel bar with light damping (tau = 1e-7 s, zeta ~ 3e-5), where a
+    dense eigensolver of the whole pencil loses relative accuracy in Re(lambda); its
+    damping is stiffness-proportional (C = tau K), so zeta = omega tau / 2 exactly."""
+    from dataclasses import replace
+
+    from runtime.problem.registry import load_problem
+
+    if material == "kelvin_voigt":
+        problem = rod_problem(48, loads=False, tau=0.04, section=section)
+    elif material == "maxwell":
+        problem = replace(load_problem("maxwell_cantilever", {"rod.elements": 48,
+                                                              "section": section}), loads=())
+    else:
+        problem = _example("simply_supported", **{"rod.elements": 48, "material.tau": 1e-7,
+                                                  "section": section})
+    modes = modal_analysis(RodModel(problem), count=8)
+    twins = _bending_twins(modes)
+    assert len(twins) >= 3
+    for a, b in twins:
+        assert abs(a.omega / b.omega - 1) < 1e-6, (a, b)
+        assert abs(a.zeta / b.zeta - 1) < 1e-6, (a, b)
+        if material == "steel":
+            for m in (a, b):
+                assert m.zeta == pytest.approx(m.omega * 1e-7 / 2, rel=1e-7)
+
+
+def test_proportional_damping_is_exact_on_a_long_rod():
+    """N = 2000, C = tau K (straight, tau_S = tau_B): every damped pair is exactly
+    lambda^2 + tau omega^2 lambda + omega^2 = 0, so zeta = omega tau / 2 (closed form),
+    also for the overdamped modes. The first-order pencil alone resolved the slow
+    eigenvalues of a long rod only to its conditioning (5e-7 in zeta at N = 4000); the
+    Rayleigh functional step on the second-order problem keeps 1e-8."""
+    modes = modal_analysis(RodModel(rod(2000, tau_S=0.04, tau_B=0.04)), count=8)
+    assert [m.family for m in modes].count("torsion") == 1
+    for m in modes:
+        assert m.zeta == pytest.approx(m.omega * 0.04 / 2, rel=1e-8), m
+        l1, l2 = m.eigenvalues
+        assert (l1 * l2).real == pytest.approx(m.omega**2, rel=1e-8)
+
+
+def _loaded_rod(N: int, loads):
+    problem = rod_problem(N, tau=0.04, loads=loads)
+    model = RodModel(problem)
+    return model, static_equilibrium(problem, model).y
+
+
+@pytest.mark.parametrize("case", ["non-proportional", "tip-force", "dead-loads", "maxwell",
+                                  "maxwell-fast", "maxwell-loaded"])
+def test_sparse_agrees_with_the_dense_oracle(case):
+    """The sparse method against dense LAPACK of the whole pencil (QZ for Maxwell) on
+    small rods: tau_B = 0 (damping not proportional to the stiffness), a rod bent by a
+    tip force (symmetric stiffness), one under the tests' dead force, moment and gravity
+    (non-symmetric: the two-sided Rayleigh functional), the Maxwell cantilever (also with
+    a 1e-12 s branch, and bent by its load). Measured agreement 1e-11 to 9e-9."""
+    from dataclasses import replace
+
+    from runtime.problem.registry import load_problem
+
+    y = None
+    count = 8
+    if case == "non-proportional":
+        model = RodModel(rod(16, tau_S=0.04, tau_B=0.0))
+    elif case == "tip-force":
+        model, y = _loaded_rod(10, [{"kind": "force", "vector": [0.05, 0.0, 0.0]}])
+        count = 4
+    elif case == "dead-loads":
+        model, y = _loaded_rod(10, True)
+    elif case == "maxwell-loaded":
+        problem = load_problem("maxwell_cantilever", {"rod.elements": 10})
+        model = RodModel(problem)
+        y = static_equilibrium(problem, model).y
+    else:
+        tau0 = 1e-12 if case == "maxwell-fast" else 0.002
+        model = RodModel(replace(load_problem(
+            "maxwell_cantilever", {"rod.elements": 12, "material.branches.0.tau": tau0}),
+            loads=()))
+    dense = modal_analysis(model, y, count=count, dense_max=10**6)
+    sparse = modal_analysis(model, y, count=count)
+    for a, b in zip(dense, sparse, strict=True):
+        assert (a.family, a.family_index) == (b.family, b.family_index)
+        assert b.omega == pytest.approx(a.omega, rel=1e-8)
+        assert b.zeta == pytest.approx(a.zeta, rel=1e-7)
+        assert sorted(b.eigenvalues, key=abs) == pytest.approx(
+            sorted(a.eigenvalues, key=abs), rel=1e-7)
+        scale = np.abs(a.displacement).max() + np.abs(a.rotation).max()
+        if not any(c is not a and abs(c.omega / a.omega - 1) < 1e-6 for c in dense):
+            np.testing.assert_allclose(b.displacement, a.displacement, atol=1e-6 * scale)
+
+
+def test_modes_nearest_a_target_frequency():
+    """``target``: the count modes nearest a natural frequency, the same modes (values,
+    shapes) as in the list of the lowest; a twin pair is taken whole; rigid modes compete
+    at omega 0; a bad target is named."""
+    from runtime.errors import ParameterError
+
+    model = RodModel(rod(40, tau_S=0.04, tau_B=0.04))
+    low = modal_analysis(model, count=12)
+    # the first: torsion (94 rad/s), then the pair at 118 (23 rad/s away) before the pair
+    # at 61 (34 away); the second: the pair at 61 whole, then torsion (33 away) before the
+    # pair at 22 (39 away)
+    assert [low[k].family[:7] for k in (4, 5, 6, 7, 8)] == ["bending"] * 2 + ["torsion"] + [
+        "bending"] * 2
+    for target, want in ((low[6].omega * 1.01, [6, 7, 8]), (low[4].omega, [4, 5, 6])):
+        near = modal_analysis(model, count=3, target=target)
+        assert [m.omega for m in near] == pytest.approx([low[k].omega for k in want],
+                                                        rel=1e-9)
+        assert [m.zeta for m in near] == pytest.approx([low[k].zeta for k in want],
+                                                       rel=1e-8)
+        assert [m.family for m in near] == [low[k].family for k in want]
+        assert [m.index for m in near] == [1, 2, 3]
+        for m, k in zip(near, want, strict=True):
+            scale = np.abs(m.displacement).max() + np.abs(m.rotation).max()
+            np.testing.assert_allclose(m.displacement, low[k].displacement, atol=1e-8 * scale)
+            np.testing.assert_allclose(m.rotation, low[k].rotation, atol=1e-8 * scale)
+    dense = modal_analysis(model, count=3, target=low[6].omega * 1.01, dense_max=10**6)
+    assert [m.omega for m in dense] == pytest.approx([low[k].omega for k in (6, 7, 8)],
+                                                     rel=1e-9)
+    ss = RodModel(_example("simply_supported", **{"rod.elements": 64, "material.tau": 1e-4}))
+    first = modal_analysis(ss, count=3, target=0.0)
+    assert [m.family for m in first] == ["rigid", "bending-2", "bending-1"] or \
+        [m.family for m in first] == ["rigid", "bending-1", "bending-2"]
+    w1 = first[1].omega
+    assert [m.family for m in modal_analysis(ss, count=2, target=w1)] != ["rigid"] * 2
+    for bad in (-1.0, math.nan, math.inf, True, "3"):
+        with pytest.raises(ParameterError, match="target"):
+            modal_analysis(model, count=2, target=bad)
+
+
+def test_sparse_runs_are_identical():
+    """The same modes, eigenvalues and signs on every run (fixed start vectors, no
+    randomness left to ARPACK)."""
+    model = RodModel(rod(300, tau_S=0.04, tau_B=0.0))
+    a, b = (modal_analysis(model, count=6) for _ in range(2))
+    for x, y in zip(a, b, strict=True):
+        assert (x.family, x.family_index) == (y.family, y.family_index)
+        assert x.eigenvalues == pytest.approx(y.eigenvalues, rel=1e-12)
+        np.testing.assert_allclose(x.displacement, y.displacement,
+                                   atol=1e-10 * np.abs(x.displacement).max())
+
+
+def test_cli_modes_near_a_frequency(tmp_path, capsys):
+    """`kvrod modes --near HZ`: the modes nearest that frequency, recorded in modes.json
+    (target_omega), without the continuum column (family_index counts within them); a
+    negative or non-finite frequency is one line naming --near, exit 2, nothing written."""
+    import json
+
+    from kvrod.cli import main
+
+    out = tmp_path / "near"
+    assert main(["modes", "cantilever", "--n-elements", "40", "--count", "3", "--near", "15",
+                 "--out", str(out)]) == 0
+    js = json.loads((out / "modes.json").read_text())
+    assert js["target_omega"] == pytest.approx(2 * math.pi * 15)
+    assert [m["family"] for m in js["modes"]] == ["torsion", "bending-2", "bending-1"]
+    assert [m["index"] for m in js["modes"]] == [1, 2, 3]
+    assert all(m["analytic_omega"] is None for m in js["modes"])
+    low = modal_analysis(RodModel(rod_problem(40, loads=False, tau=0.04, section={
+        "kind": "rectangle", "width": 0.01, "height": 0.01})), count=9)
+    assert [m["omega"] for m in js["modes"]] == pytest.approx([m.omega for m in low[6:9]],
+                                                              rel=1e-9)
+    capsys.readouterr()
+    for bad in ("-1", "nan"):
+        assert main(["modes", "cantilever", "--near", bad, "--out",
+                     str(tmp_path / "bad")]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("kvrod") and "--near" in err[0]
+        assert not (tmp_path / "bad").exists()
