@@ -104,7 +104,9 @@ class RodModel:
         if self.reference.shape != (self.n,):
             raise ValueError(f"reference state has shape {self.reference.shape}, "
                              f"expected ({self.n},)")
-        self.kl, self.ku = L.bandwidths(N, B)
+        #: a rod with coupled sections (docs/design.md, section 10)
+        self.coupled = arrays.coupled
+        self.kl, self.ku = L.bandwidths(N, B, self.coupled)
         self.ldab = 2 * self.kl + self.ku + 1
         self.drive = drive
         self._key: tuple = ()       # (time, left?, load factor) the arrays were driven to
@@ -402,7 +404,12 @@ class RodModel:
         i: segment i, node i, joint i). Couplings are nearest-neighbour, so the Newton
         systems condensed by :meth:`condensation_blocks` are block tridiagonal in these
         cells (``CondensedNewton`` checks it on :meth:`band_pattern`)."""
-        return [0] + [int(self.p_index[i][0]) for i in range(self.N)]
+        starts = [0] + [int(self.p_index[i][0]) for i in range(self.N)]
+        if self.coupled:
+            # a coupled segment reaches cells i-1..i+1 (its nodes and its neighbours'
+            # frames): nearest-neighbour in pairs of cells
+            return starts[::2]
+        return starts
 
     def describe_dof(self, index: int) -> str:
         """Human-readable name of state/residual component ``index``."""
@@ -455,7 +462,8 @@ class RodModel:
         return CKernels(address(lib.kvrod_residual), address(lib.kvrod_jacobian_band),
                         address(lib.kvrod_energies), ctypes.addressof(self._struct),
                         drive=drive, keep=self,
-                        jacobian_cells=address(lib.kvrod_jacobian_band_cells),
+                        jacobian_cells=(0 if self.coupled else
+                                        address(lib.kvrod_jacobian_band_cells)),
                         drive_constant=drive is not None and not self.drive.time_dependent,
                         n_energies=len(L.DIAG_SCALARS))
 
