@@ -965,9 +965,14 @@ def element_stencils(n_elements: int, branches: int = 0,
             raise ValueError("coupled sections with relaxation terms are not supported")
         for i in range(1, N + 1):
             nb = [k for k in (i - 1, i + 1) if 1 <= k <= N]
+            # the segment's resultant sees its strain and both joints' curvatures and rates
             rows = [*_node(i - 1, "v"), *_node(i, "v"), *_segment(i, "Omega")]
-            rows += [r for k in nb for r in _segment(k, "Omega")]
             out.append((rows, [*nd(i - 1), *nd(i), *sg(i)] + [c for k in nb for c in sg(k)]))
+            # a neighbour's torque: its joint's kinematics for the coupling's moment, which
+            # depends on the segment's strain and strain rate only
+            for k in nb:
+                out.append((list(_segment(k, "Omega")),
+                            [*nd(i - 1), *nd(i), *sg(i), *_segment(k, "p")]))
             vv = [*_node(i - 1, "v"), *_node(i, "v")]
             out.append(([*sg(i), *vv], [*sg(i), *vv]))              # coupled inertia
     for i in range(N + 1):

@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_layout.h.jinja
 // derivation step: discrete_rod
-// inputs sha256: fc897410c4a14f27d6b682c2c3f3c57f34ba1c9e48a30aeabc2679d524fecb04
+// inputs sha256: 5d13964be16d090f1a3cd0dd044387313e3e10ad2942da907299d1682e813e1e
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*
@@ -50,8 +50,8 @@
 #define KUC_1 15
 #define KLC_2 25
 #define KUC_2 22
-#define KLC 32
-#define KUC 28
+#define KLC 25
+#define KUC 22
 /* coupled sections: parameters per segment and per joint beside NSEG, NJNT */
 #define NSEGC 50
 #define NJNTC 18

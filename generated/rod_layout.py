@@ -1,7 +1,7 @@
 # GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 # source: derive/templates/rod_layout.py.jinja
 # derivation step: discrete_rod
-# inputs sha256: d07db5fec27569488bb6fccfda593c2beea752110557df171aa2fc907d690622
+# inputs sha256: 51271f5b130dbd8aa1e469eb04417eac2c457cd4aaa8f16b08ef29ac72e62dc7
 # tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 """State, parameter and diagnostics layout of the discrete rod (the one place that owns it).
@@ -138,8 +138,8 @@ COUPLED_JOINT_PARAMS = (
 N_COUPLED_JOINT = 18
 COUPLED_JOINT_OFFSETS = {'C_MM': 0, 'V_MM': 9}
 #: band widths of a coupled rod for N = 1, 2 and N >= 3; its static band
-COUPLED_BANDS = ((18, 15), (25, 22), (32, 28))
-COUPLED_STATIC_KL, COUPLED_STATIC_KU = (14, 14)
+COUPLED_BANDS = ((18, 15), (25, 22), (25, 22))
+COUPLED_STATIC_KL, COUPLED_STATIC_KU = (11, 11)
 
 #: loads per node (0..N) and per segment (1..N), current values
 NODE_LOADS = (
