@@ -50,9 +50,9 @@ def _cmd_modes(args) -> int:
 def _modes_into(args, problem, out: Path) -> int:
     res = run_modes(problem, args.count, args.deformed)
     modes = res["modes"]
-    m = problem.material
     state = "pre-deformed by its static loads" if args.deformed else "straight, unloaded"
-    print(f"{problem.name}: N = {problem.rod.elements}, {m.describe()}, {state}")
+    print(f"{problem.name}: N = {problem.rod.elements}, {problem.describe_material()}, "
+          f"{state}")
     if res["static_tip"] is not None:
         print(f"static tip [m]: {[round(float(v), 6) for v in res['static_tip']]}")
     print(modes_table(modes))

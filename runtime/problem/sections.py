@@ -21,15 +21,17 @@ Their transverse shear factors (eq. (7)), ``shear_correction``:
 The torsion factor kappa_3 = J_T / I3 is exact either way.
 
 ``stiffness``: the rod's stiffnesses given directly (``EA``, ``GA1``, ``GA2`` in N;
-``EI1``, ``EI2``, ``GJ`` in N m^2) with the inertia per length (``rhoA`` in kg/m and
-``rhoI1``, ``rhoI2``, ``rhoI3`` in kg m), for benchmarks that prescribe them.
+``EI1``, ``EI2``, ``GJ`` in N m^2), or its 6x6 ``stiffness_matrix`` (and optionally
+``viscosity_matrix``) about the centreline, with the inertia per length (``rhoA`` in kg/m
+and ``rhoI1``, ``rhoI2``, ``rhoI3`` in kg m; optionally ``rhoI12`` and ``mass_centre``),
+for benchmarks that prescribe them and sections known from elsewhere (BECAS, VABS, a
+test rig).
 
 ``composite``: ``[[section.regions]]`` (each a ``material`` named in ``[materials.NAME]``
 and a ``shape``: circle, rectangle, ellipse, tube, polygon with holes; see
 :mod:`runtime.section`). Its 6x6 stiffness and viscosity come from the finite-element
-section analysis (``kvrod section``); the rod kernels take diagonal matrices today, so a
-composite problem is analysed but not simulated
-(:meth:`runtime.problem.schema.Problem.check_simulable`).
+section analysis (``kvrod section``) and the rod simulates them with its coupled kernels
+(:mod:`runtime.problem.coupled`; docs/design.md, section 10).
 
 ``damping`` (every kind): which rod viscosity the section gives, ``"consistent"`` (the
 dissipation on the section's elastic deformation, eta_E of eq. (5)) or ``"naive"`` (the
@@ -42,12 +44,11 @@ it then varies linearly along the rod, evaluated at each segment's midpoint.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from functools import lru_cache
 from typing import Any
-
-import math
 
 import numpy as np
 
@@ -396,13 +397,10 @@ def _tuple6(M: np.ndarray) -> tuple[tuple[float, ...], ...]:
 
 #: the rod viscosity a section gives: the dissipation route (eta_E) or the traction route
 DAMPING_ROUTES = ("consistent", "naive")
-#: what a composite problem cannot do yet, and what it can
+#: a composite section's rod matrices come from its section analysis, not a material
 COMPOSITE_REFUSAL = (
-    "a section the rod kernels take (rectangle, ellipse, circle, tube, stiffness) for "
-    "simulate, static, modes and sweep: a composite section's 6x6 stiffness and viscosity "
-    "are coupled (its mass centre may lie off the elastic centroid) and the rod kernels take "
-    "diagonal matrices; simulating coupled sections comes with the 6x6 kernels. `kvrod "
-    "section FILE.toml` computes this section's properties")
+    "a shape or stiffness section for a material's rod matrices: a composite section's "
+    "come from its finite-element analysis (runtime.problem.coupled.composite_matrices)")
 
 
 @dataclass(frozen=True, eq=False)
@@ -414,7 +412,7 @@ class Composite:
 
     Its properties come from the finite-element section analysis
     (:func:`runtime.problem.section_analysis.analyse_problem_section`, ``kvrod section``),
-    about the elastic centroid. Not simulated yet (``COMPOSITE_REFUSAL``).
+    about the elastic centroid, the rod's centreline (:mod:`runtime.problem.coupled`).
     """
 
     regions: tuple[Any, ...]
