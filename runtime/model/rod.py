@@ -27,7 +27,7 @@ from generated import rod_layout as L
 from runtime.errors import GeneratedCodeError, ParameterError
 from runtime.model import build
 from runtime.model.arrays import RodArrays
-from runtime.model.quaternion import end_quaternion, quat_rotation
+from runtime.model.quaternion import end_quaternion, quat_mul, quat_rotation
 
 
 class Drive(Protocol):
@@ -668,6 +668,43 @@ class RodModel:
         res["strains"] = {"V": V, "U": U}
         res["resultants"] = {"F": F, "M": M}
         return res
+
+    def strain_rates(self, t: float, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The exact rates of the discrete strains along the flow of state ``y``:
+        ``Vdot`` (3, N) = R^T (v_b - v_a)/h + V x Omega on segments and ``Udot`` (3, N+1) =
+        A w / h_j at joints (``w = Omega_b - R(r)^T Omega_a``, ``A = I + [u]x + u u^T``,
+        u = Im(r)/Re(r), r = conj(p_a) p_b; zero where a clamp joint is absent), the
+        rates whose viscous resultants the kernels form (``derive/discrete_rod.py``)."""
+        self._time(t)
+        a = self.arrays
+        N = self.N
+        h = a.seg_field("h")[:, 0]
+        p = y[self.p_index]
+        om = y[self.omega_index]
+        R = quat_rotation(p)                                            # (N, 3, 3)
+        phi, v = y[self.phi_index], y[self.v_index]
+        V = np.einsum("nji,nj->ni", R, np.diff(phi, axis=0)) / h[:, None]
+        Vd = np.einsum("nji,nj->ni", R, np.diff(v, axis=0)) / h[:, None] + np.cross(V, om)
+        pa, pb, oa, ob, on = [], [], [], [], []
+        for j in range(N + 1):
+            has_a, has_b = j >= 1, j + 1 <= N
+            if not ((has_a and has_b) or (j == 0 and a.clamped("start"))
+                    or (j == N and a.clamped("end"))):
+                on.append(False)
+                pa.append(p[0]), pb.append(p[0]), oa.append(om[0]), ob.append(om[0])
+                continue
+            on.append(True)
+            pa.append(p[j - 1] if has_a else a.param("p_start"))
+            pb.append(p[j] if has_b else a.param("p_end"))
+            oa.append(om[j - 1] if has_a else a.param("Omega_start"))
+            ob.append(om[j] if has_b else a.param("Omega_end"))
+        pa, pb, oa, ob = (np.array(x, dtype=float) for x in (pa, pb, oa, ob))
+        r = quat_mul(pa * np.array([1.0, -1.0, -1.0, -1.0]), pb)
+        u = r[:, 1:] / r[:, :1]
+        w = ob - np.einsum("nji,nj->ni", quat_rotation(r), oa)
+        Aw = w + np.cross(u, w) + u * np.sum(u * w, axis=1, keepdims=True)
+        Ud = np.where(np.array(on)[:, None], Aw / a.jnt_field("h"), 0.0)
+        return Vd.T, Ud.T
 
     def energy_floor(self) -> float:
         """Energy (J) of round-off-sized strains of this rod: below it there is nothing to
