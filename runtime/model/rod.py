@@ -122,6 +122,12 @@ class RodModel:
         self._struct = arrays.struct(self.kl, self.ku)
         self._sp = None
         self._casadi = None
+        if lib is None and arrays.coupled:
+            raise GeneratedCodeError(
+                "a rod with coupled sections (full 6x6 matrices, a mass centre off the "
+                "centreline, a product of inertia) runs on the compiled backend only; the "
+                "CasADi fallback takes diagonal sections (a C compiler is needed: see the "
+                "warning above, or backend='c')")
         if lib is None:
             from runtime.model.casadi_oracle import CasadiOracle
 

@@ -493,6 +493,10 @@ def section_from_mapping(m: Mapping[str, Any] | None,
         C.no_unknown_keys("section", {**m, **damping}, STIFFNESSES + INERTIAS + MATRIX_KEYS
                           + ("damping",))
         matrix = "stiffness_matrix" in m
+        kw: dict[str, Any] = {}
+        for k in ("stiffness_matrix", "viscosity_matrix"):
+            if k in m:
+                kw[k] = _tuple6(_matrix6(f"section.{k}", m[k]))
         if matrix and any(k in m for k in STIFFNESSES):
             k = next(k for k in STIFFNESSES if k in m)
             raise ParameterError(f"section.{k}", m[k], "absent beside section."
@@ -503,11 +507,8 @@ def section_from_mapping(m: Mapping[str, Any] | None,
             raise ParameterError(f"section.{missing[0]}", None, "a positive value (stiffness "
                                  "sections give EA, GA1, GA2, EI1, EI2, GJ or "
                                  "stiffness_matrix, and rhoA, rhoI1..3)")
-        kw: dict[str, Any] = {k: C.positive(f"section.{k}", m[k])
-                              for k in STIFFNESSES + INERTIAS if k in m}
-        for k in ("stiffness_matrix", "viscosity_matrix"):
-            if k in m:
-                kw[k] = _tuple6(_matrix6(f"section.{k}", m[k]))
+        kw.update({k: C.positive(f"section.{k}", m[k]) for k in STIFFNESSES + INERTIAS
+                   if k in m})
         if "rhoI12" in m:
             kw["rhoI12"] = C.number("section.rhoI12", m["rhoI12"])
         if "mass_centre" in m:

@@ -221,3 +221,11 @@ def test_strain_rates_and_vtk_dissipation_of_a_coupled_rod():
         cell, point = element_fields(m, 0.0, y)
         total = cell["dissipation_rate_2D"].sum() + point["dissipation_rate_2D"].sum()
         assert total == pytest.approx(m.diagnostics(0.0, y)["dissipation_rate"], rel=1e-10)
+
+
+def test_the_casadi_backend_refuses_a_coupled_rod_with_a_clear_message():
+    from runtime.errors import GeneratedCodeError
+
+    m = coupled_model(np.random.default_rng(18), 3)
+    with pytest.raises(GeneratedCodeError, match="coupled sections.*compiled backend"):
+        RodModel(m.arrays, m.reference, backend="casadi")
