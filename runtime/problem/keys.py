@@ -271,6 +271,20 @@ KEYS: tuple[Key, ...] = (
        "the branch's spring as G", invalid=-1.0),
     _k("material.branches", "bulk_modulus", "Pa", "-", ">= 0; with shear_modulus",
        "the branch's spring as K", invalid=-1.0),
+    # -- [[zones]] ----------------------------------------------------------------------
+    _k("zones", "from", "m", "required", "0 ... L", "where the zone starts (arc length): a "
+       "stretch of the rod with its own section and/or material; zones may not overlap, "
+       "the problem's [section] and [material] hold elsewhere; place the ends on nodes "
+       "(multiples of L/N): a segment belongs to the zone of its midpoint", invalid=-1.0),
+    _k("zones", "to", "m", "required", "from < to <= L", "where the zone ends",
+       invalid=-1.0),
+    _k("zones", "section", "-", "the problem's [section]", "a [section] table (every "
+       "kind; a composite names [materials.NAME]; tapers run over the zone)", "the zone's "
+       "section; joints across a sharp change take the mean of their two segments (first "
+       "order in h there)", invalid={"kind": "hexagon"}),
+    _k("zones", "material", "-", "the problem's [material]", "a Kelvin-Voigt [material] "
+       "table", "the zone's material (generalized Maxwell materials are the same along "
+       "the rod)", invalid={"density": -1.0}),
     # -- [start], [end] -----------------------------------------------------------------
     *(_k(end, "kind", "-", '"clamped"' if end == "start" else '"free"', "free, clamped, "
          "pinned", "what holds the end: nothing, position and frame, position",

@@ -84,7 +84,7 @@ GLASSY_RATIO_MAX = 1e10
 BETA1_L = 1.8751040687119611
 
 TOP_KEYS = ("name", "description", "rod", "section", "material", "materials", "start", "end",
-            "loads", "simulation", "statics", "analysis")
+            "loads", "simulation", "statics", "analysis", "zones")
 
 
 @dataclass(frozen=True)
@@ -194,6 +194,8 @@ class Problem:
     statics: Statics = field(default_factory=Statics)
     analysis: Analysis = field(default_factory=Analysis)
     base: Path | None = field(default=None, compare=False, repr=False)
+    #: stretches of the rod with their own section or material (runtime.problem.zones)
+    zones: tuple[Any, ...] = ()
 
     def __post_init__(self) -> None:
         from runtime.problem.sections import LENGTH_MAX, LENGTH_MIN, LENGTH_RANGE
@@ -505,7 +507,20 @@ class Problem:
         self.check_simulable()
         N = self.rod.elements
         x = (np.arange(N) + 0.5) / N
-        return self._matrices_at(x)
+        m = self._matrices_at(x)
+        if self.zones:
+            from runtime.problem.zones import apply_zones
+
+            m = apply_zones(m, x * self.rod.length, self.zones, self._zone_matrices)
+        return m
+
+    @staticmethod
+    def _zone_matrices(zone: Any, x: np.ndarray) -> dict[str, np.ndarray]:
+        if isinstance(zone.section, Composite):
+            from runtime.problem.coupled import composite_matrices
+
+            return composite_matrices(zone.section, np.size(x))
+        return zone.material.rod_matrices(zone.section, x)
 
     def _matrices_at(self, x: np.ndarray) -> dict[str, np.ndarray]:
         if isinstance(self.section, Composite):
@@ -519,7 +534,13 @@ class Problem:
         (the checks of every new problem use them)."""
         m = self.__dict__.get("_m3")
         if m is None:
-            m = self._matrices_at(np.array([0.0, 0.5, 1.0]))
+            x3 = np.array([0.0, 0.5, 1.0])
+            m = self._matrices_at(x3)
+            if self.zones:         # the checks see every zone's ends and middle too
+                parts = [m] + [self._zone_matrices(z, x3) for z in self.zones]
+                keys = set.intersection(*(set(p) for p in parts)) - {"theta", "segb", "jntb"}
+                m = {k: np.concatenate([p[k] for p in parts]) for k in keys
+                     } | {k: v for k, v in m.items() if k in ("theta", "segb", "jntb")}
             object.__setattr__(self, "_m3", m)
         return m
 
@@ -594,6 +615,11 @@ class Problem:
             material = self.material.to_mapping()
             material.pop("damping", None)               # the key is section.damping
             stuff = {"material": material}
+        if self.zones:
+            stuff["zones"] = [z.to_mapping() for z in self.zones]
+            for z in self.zones:
+                if isinstance(z.section, Composite):
+                    stuff.setdefault("materials", {}).update(z.section.materials_mapping())
         return {"name": self.name, "description": self.description, "rod": rod,
                 "section": section, **stuff,
                 "start": self.start.to_mapping(), "end": self.end.to_mapping(),
@@ -622,7 +648,18 @@ class Problem:
             raise ParameterError("loads", loads_m, "an array of tables [[loads]]")
         loads = tuple(load_from_mapping(f"loads[{i}]", ld, base)
                       for i, ld in enumerate(loads_m))
-        section, material = section_and_material(m)
+        zones_m = m.get("zones")
+        zone_composite = isinstance(zones_m, list) and any(
+            isinstance(z, Mapping) and isinstance(z.get("section"), Mapping)
+            and z["section"].get("kind") == "composite" for z in zones_m)
+        top = dict(m)
+        if zone_composite and "materials" in m and C.table(
+                "section", m.get("section") or {}).get("kind") != "composite":
+            top.pop("materials")         # the zones' composite sections name them
+        section, material = section_and_material(top)
+        from runtime.problem.zones import zones_from_mapping
+
+        zones = zones_from_mapping(zones_m, m, rod.length)
         return cls(
             name=C.string("name", m.get("name", name)),
             description=str(m.get("description", "")),
@@ -636,6 +673,7 @@ class Problem:
             statics=_settings(Statics, "statics", m.get("statics")),
             analysis=_settings(Analysis, "analysis", m.get("analysis")),
             base=base,
+            zones=zones,
         )
 
     def with_overrides(self, overrides: Mapping[str, Any]) -> Problem:
