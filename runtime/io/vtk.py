@@ -76,7 +76,6 @@ def _coupled_dissipation(model: RodModel, t: float, y: np.ndarray, w: np.ndarray
     ``h Vdot^T V_FF Vdot + 2 Vdot^T V_FM (w_a Udot_a + w_b Udot_b)`` (its couplings'
     share), a joint ``h_j Udot^T V_MM Udot``; they add up to the rod's 2D."""
     a = model.arrays
-    N = model.N
     Vd, Ud = (x.T for x in model.strain_rates(t, y))                     # (N, 3), (N+1, 3)
     m = a.section_matrices()
     wc = a.segc_field("w")

@@ -207,7 +207,7 @@ def test_strain_rates_and_vtk_dissipation_of_a_coupled_rod():
         Vd, Ud = m.strain_rates(0.0, y)
         eps = 1e-7
 
-        def moved(s):
+        def moved(s, m=m, y=y):
             z = y.copy()
             z[m.phi_index] += s * y[m.v_index]
             om = y[m.omega_index]
