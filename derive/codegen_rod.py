@@ -175,8 +175,8 @@ def artifacts() -> list[Artifact]:
     sigs = {f.name(): _signature(f) for f in fns}
     ctx_json = json.dumps(ctx, sort_keys=True, default=str)
     out = [
-        Artifact("rod_kernels.c", c_text, "casadi.CodeGenerator(" + ", ".join(sorted(serial))
-                 + ")", STEP, kernels_hash, {"functions": sigs}),
+        Artifact("rod_kernels.c", c_text, "casadi.CodeGenerator(derive.discrete_rod.kernels()"
+                 " + coupled_kernels())", STEP, kernels_hash, {"functions": sigs}),
         Artifact("rod_kernels.h", h_text, "casadi.CodeGenerator (header)", STEP, kernels_hash),
     ]
     x4 = [f for f in fns if f.name() in X4_KERNELS]

@@ -1,5 +1,5 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
-// source: casadi.CodeGenerator(rod_coupled_inertia, rod_coupled_inertia_jac, rod_coupled_joint_diagnostics, rod_coupled_joint_torques, rod_coupled_joint_torques_jac, rod_coupled_kinetic, rod_coupled_segment_diagnostics, rod_coupled_segment_forces, rod_coupled_segment_forces_jac, rod_joint_branch, rod_joint_diagnostics, rod_joint_torques, rod_joint_torques_jac, rod_node_inertia, rod_node_inertia_jac, rod_node_kinetic, rod_rotate, rod_rotate_jac, rod_rotate_transposed, rod_rotate_transposed_jac, rod_segment_branch, rod_segment_diagnostics, rod_segment_forces, rod_segment_forces_jac, rod_segment_inertia, rod_segment_inertia_jac, rod_segment_kinetic)
+// source: casadi.CodeGenerator(derive.discrete_rod.kernels() + coupled_kernels())
 // derivation step: discrete_rod
 // inputs sha256: 48abcc7973c3c5892df4daa6ca28c5d446dd893df405c8b3f94e18c82d002698
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6

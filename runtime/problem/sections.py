@@ -302,8 +302,7 @@ class GivenStiffness:
     symmetric positive definite 6x6 stiffness about the centreline (strain order Gamma1,
     Gamma2, Gamma3, K1, K2, K3, as ``kvrod section`` reports), with optionally
     ``viscosity_matrix`` (symmetric positive semi-definite, N s ...; else the material's
-    retardation times make it, see :meth:`runtime.problem.materials.KelvinVoigt.
-    rod_matrices`); ``rhoA``, ``rhoI1..3`` as before (the rotary inertia about the mass
+    retardation times make it: :func:`runtime.problem.coupled.given_matrices`); ``rhoA``, ``rhoI1..3`` as before (the rotary inertia about the mass
     centre), ``rhoI12`` (kg m, the product <rho x1 x2>) and ``mass_centre`` (m, in the
     section's (x1, x2) along (d1, d2)) optional. With a matrix the diagonal fields hold its
     diagonal.
