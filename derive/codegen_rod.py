@@ -47,7 +47,7 @@ def _signature(f: ca.Function) -> dict:
 
 @lru_cache(maxsize=1)
 def _build() -> tuple[list[ca.Function], str, str, tuple, tuple]:
-    fns = dr.kernels()
+    fns = dr.kernels() + dr.coupled_kernels()
     cg = ca.CodeGenerator("rod_kernels.c", CODEGEN_OPTIONS)
     for f in fns:
         cg.add(f)
@@ -69,11 +69,14 @@ def _band_data() -> dict:
         formula = dr.bandwidth_formula()
         return {"bands": [dr.bandwidths(n) for n in (1, 2, 3, 4)],
                 "static": [dr.static_bandwidths(n) for n in (1, 2, 3)],
-                "formula": formula, "n1_delta": _n1_delta(formula)}
+                "formula": formula, "n1_delta": _n1_delta(formula),
+                "coupled": [dr.bandwidths(n, 0, True) for n in (1, 2, 3, 4, 5)],
+                "coupled_static": [dr.static_bandwidths(n, True) for n in (1, 2, 3, 4)]}
 
-    d = cache.memo("rod-bands", compute)
+    d = cache.memo("rod-bands-coupled", compute)
     pairs = lambda rows: tuple(tuple(int(v) for v in r) for r in rows)  # noqa: E731
     return {"bands": pairs(d["bands"]), "static": pairs(d["static"]),
+            "coupled": pairs(d["coupled"]), "coupled_static": pairs(d["coupled_static"]),
             "formula": pairs(d["formula"]), "n1_delta": tuple(int(v) for v in d["n1_delta"])}
 
 
@@ -108,7 +111,19 @@ def _context() -> dict:
     if formula != ((kl, formula[0][1]), (ku, formula[1][1])):
         raise RuntimeError(f"band formula {formula} disagrees with the B = 0 band {kl, ku}")
     dkl, dku = _band_data()["n1_delta"]
+    cb = _band_data()["coupled"]
+    if len(set(cb[2:])) != 1:
+        raise RuntimeError(f"coupled band widths not constant for N >= 3: {cb}")
+    cs = _band_data()["coupled_static"]
     return {
+        "coupled_bands": cb[:3], "coupled_static": (max(b[0] for b in cs),
+                                                    max(b[1] for b in cs)),
+        "coupled_segment_params": dr.COUPLED_SEGMENT_PARAMS,
+        "n_coupled_segment": dr.N_COUPLED_SEGMENT,
+        "coupled_segment_offsets": dr.COUPLED_SEGMENT_OFFSETS,
+        "coupled_joint_params": dr.COUPLED_JOINT_PARAMS,
+        "n_coupled_joint": dr.N_COUPLED_JOINT,
+        "coupled_joint_offsets": dr.COUPLED_JOINT_OFFSETS,
         "cell0_fields_b": dr.CELL0_FIELDS_B, "cell_fields_b": dr.CELL_FIELDS_B,
         "cell0_offsets_b": _offsets_b(dr.CELL0_FIELDS_B),
         "cell_offsets_b": _offsets_b(dr.CELL_FIELDS_B),
@@ -160,8 +175,8 @@ def artifacts() -> list[Artifact]:
     sigs = {f.name(): _signature(f) for f in fns}
     ctx_json = json.dumps(ctx, sort_keys=True, default=str)
     out = [
-        Artifact("rod_kernels.c", c_text, "casadi.CodeGenerator(" + ", ".join(sorted(serial))
-                 + ")", STEP, kernels_hash, {"functions": sigs}),
+        Artifact("rod_kernels.c", c_text, "casadi.CodeGenerator(derive.discrete_rod.kernels()"
+                 " + coupled_kernels())", STEP, kernels_hash, {"functions": sigs}),
         Artifact("rod_kernels.h", h_text, "casadi.CodeGenerator (header)", STEP, kernels_hash),
     ]
     x4 = [f for f in fns if f.name() in X4_KERNELS]

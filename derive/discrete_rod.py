@@ -617,6 +617,307 @@ def kernels() -> list[ca.Function]:
 
 
 # --------------------------------------------------------------------------------------
+# Coupled sections (issue 26): full 6x6 stiffness and viscosity, mass centre off the
+# centreline, product of inertia (docs/design.md, section 10)
+# --------------------------------------------------------------------------------------
+
+#: per-segment parameters of a rod with coupled sections, beside :data:`SEGMENT_PARAMS`
+#: (whose h, V0 and rhoA they use); matrices row-major 3x3 blocks of the section's 6x6
+#: matrices in the order (Gamma1, Gamma2, Gamma3, K1, K2, K3) about the centreline
+COUPLED_SEGMENT_PARAMS: tuple[tuple[str, int, str, str], ...] = (
+    ("C_FF", 9, "N", "stiffness block (Gamma, Gamma), symmetric"),
+    ("V_FF", 9, "N s", "viscosity block (Gamma, Gamma), symmetric"),
+    ("C_FM", 9, "N m", "stiffness block (Gamma, K): n += C_FM K, m += C_FM^T Gamma"),
+    ("V_FM", 9, "N m s", "viscosity block (Gamma, K)"),
+    ("w", 2, "m", "weights of the couplings with the joints at nodes i-1 and i "
+                  "(h/2 each; 0 where the joint is absent: a free end)"),
+    ("rhoJ", 9, "kg m", "rotary inertia per length about the mass centre, 3x3 "
+                        "((I11, -I12, 0), (-I12, I22, 0), (0, 0, I33)) rho"),
+    ("e", 3, "m", "mass centre in the material frame (e1, e2, 0)"),
+)
+#: per-joint parameters of a rod with coupled sections, beside :data:`JOINT_PARAMS`
+COUPLED_JOINT_PARAMS: tuple[tuple[str, int, str, str], ...] = (
+    ("C_MM", 9, "N m^2", "stiffness block (K, K), symmetric"),
+    ("V_MM", 9, "N m^2 s", "viscosity block (K, K), symmetric"),
+)
+COUPLED_SEGMENT_OFFSETS, N_COUPLED_SEGMENT = (_offsets(COUPLED_SEGMENT_PARAMS),
+                                              _size(COUPLED_SEGMENT_PARAMS))
+COUPLED_JOINT_OFFSETS, N_COUPLED_JOINT = (_offsets(COUPLED_JOINT_PARAMS),
+                                          _size(COUPLED_JOINT_PARAMS))
+
+
+def _cseg(sc, name):
+    return _field(sc, COUPLED_SEGMENT_OFFSETS, COUPLED_SEGMENT_PARAMS, name)
+
+
+def _cjnt(jc, name):
+    return _field(jc, COUPLED_JOINT_OFFSETS, COUPLED_JOINT_PARAMS, name)
+
+
+def _mat3(v):
+    """3x3 matrix from 9 row-major entries."""
+    return ca.reshape(v, 3, 3).T
+
+
+def _sym3(v):
+    """Symmetric part of the 3x3 matrix of 9 row-major entries (the quadratic forms'
+    matrix; the tables hold symmetric blocks, checked where they are built)."""
+    M = _mat3(v)
+    return 0.5 * (M + M.T)
+
+
+@dataclass(frozen=True)
+class _CSym:
+    """Inputs of the coupled segment kernels: segment i, its nodes a = i-1, b = i, its
+    neighbours' quaternions and angular velocities (p_a: segment i-1 or the clamp frame
+    at s = 0; p_b: segment i+1 or the clamp frame at s = L) and the two joints' rows."""
+
+    phi_a: ca.SX
+    phi_b: ca.SX
+    p_a: ca.SX
+    p: ca.SX
+    p_b: ca.SX
+    v_a: ca.SX
+    v_b: ca.SX
+    omega_a: ca.SX
+    omega: ca.SX
+    omega_b: ca.SX
+    sp: ca.SX       # SEGMENT_PARAMS
+    sc: ca.SX       # COUPLED_SEGMENT_PARAMS
+    ja: ca.SX       # JOINT_PARAMS of joint i-1
+    jb: ca.SX       # JOINT_PARAMS of joint i
+
+
+def _csymbols() -> _CSym:
+    S = ca.SX.sym
+    return _CSym(S("phi_a", 3), S("phi_b", 3), S("p_a", 4), S("p", 4), S("p_b", 4),
+                 S("v_a", 3), S("v_b", 3), S("Omega_a", 3), S("Omega", 3), S("Omega_b", 3),
+                 S("seg", N_SEGMENT), S("segc", N_COUPLED_SEGMENT), S("jnt_a", N_JOINT),
+                 S("jnt_b", N_JOINT))
+
+
+def coupled_segment_functionals(c: _CSym) -> dict[str, ca.SX]:
+    """Strains, rates, W and D of segment i of a rod with coupled sections (the
+    definitions; docs/design.md, section 10).
+
+    ``W_i = h/2 dG^T C_FF dG + w_a dG^T C_FM dU_a + w_b dG^T C_FM dU_b`` with
+    ``dG = Gamma_i - V0_i``, ``dU_a = U_{i-1} - U0_{i-1}`` (joint at node i-1, between
+    p_a and p), ``dU_b = U_i - U0_i`` (joint at node i, between p and p_b) and
+    ``w_a = w_b = h/2``: the coupling with the mean curvature (U_{i-1} + U_i)/2 of the
+    segment's two joints; D likewise with V and the exact rates. The joints' own
+    ``h_j/2 dU^T C_MM dU`` is in :func:`coupled_joint_quantities`.
+    """
+    h = _seg(c.sp, "h")
+    G = shear_strain(c.phi_a, c.phi_b, c.p, h)
+    Ua = curvature(c.p_a, c.p, _jnt(c.ja, "h"))
+    Ub = curvature(c.p, c.p_b, _jnt(c.jb, "h"))
+    x = ca.vertcat(c.phi_a, c.phi_b, c.p_a, c.p, c.p_b)
+    xd = ca.vertcat(c.v_a, c.v_b, qdot(c.p_a, c.omega_a), qdot(c.p, c.omega),
+                    qdot(c.p_b, c.omega_b))
+    Gd, Uad, Ubd = (ca.jtimes(e, x, xd) for e in (G, Ua, Ub))
+    dG = G - _seg(c.sp, "V0")
+    dUa, dUb = Ua - _jnt(c.ja, "U0"), Ub - _jnt(c.jb, "U0")
+    wa, wb = _cseg(c.sc, "w")[0], _cseg(c.sc, "w")[1]
+    CFF, VFF = _sym3(_cseg(c.sc, "C_FF")), _sym3(_cseg(c.sc, "V_FF"))
+    CFM, VFM = _mat3(_cseg(c.sc, "C_FM")), _mat3(_cseg(c.sc, "V_FM"))
+    W = h / 2 * ca.dot(dG, CFF @ dG) + ca.dot(dG, CFM @ (wa * dUa + wb * dUb))
+    D = h / 2 * ca.dot(Gd, VFF @ Gd) + ca.dot(Gd, VFM @ (wa * Uad + wb * Ubd))
+    return {"V": G, "Vdot": Gd, "dV": dG, "dUa": dUa, "dUb": dUb, "Uad": Uad, "Ubd": Ubd,
+            "W": W, "D": D}
+
+
+def coupled_segment_forces_ad(c: _CSym) -> ca.SX:
+    """Forces of a coupled segment on its nodes and torques on its own and neighbouring
+    segments, ``Q = (f_a, f_b, T_a, T, T_b)`` (15), by CasADi AD of W and D (the
+    definition, as :func:`segment_forces_ad`: the torque conjugate to each Omega is
+    ``-1/2 vec(L(p)^T dW/dp) - dD/dOmega``)."""
+    f = coupled_segment_functionals(c)
+    gW = ca.gradient(f["W"], ca.vertcat(c.phi_a, c.phi_b, c.p_a, c.p, c.p_b))
+    gD = ca.gradient(f["D"], ca.vertcat(c.v_a, c.v_b, c.omega_a, c.omega, c.omega_b))
+    return ca.vertcat(-gW[0:3] - gD[0:3], -gW[3:6] - gD[3:6],
+                      torque_from_gradient(c.p_a, gW[6:10]) - gD[6:9],
+                      torque_from_gradient(c.p, gW[10:14]) - gD[9:12],
+                      torque_from_gradient(c.p_b, gW[14:18]) - gD[12:15])
+
+
+def _joint_kinematics(p_l, p_r, o_l, o_r, hj):
+    """u = Im(r)/Re(r), U = 2u/h_j, Udot = A w/h_j (w = Omega_r - R(r)^T Omega_l) of a
+    joint between frames p_l, p_r (r = conj(p_l) p_r), and the torques it exerts for a
+    moment m: ``(R(r) A^T m, -A^T m)`` (:func:`joint_quantities`)."""
+    r = qmul(qconj(p_l), p_r)
+    u = r[1:4] / r[0]
+    w = o_r - rotate_transposed(r, o_l)
+    Udot = (w + ca.cross(u, w) + u * ca.dot(u, w)) / hj
+
+    def torques(m):
+        Atm = m - ca.cross(u, m) + u * ca.dot(u, m)
+        return rotate(r, Atm), -Atm
+
+    return 2.0 / hj * u, Udot, torques
+
+
+def coupled_segment_quantities(c: _CSym) -> dict[str, ca.SX]:
+    """Closed forms of :func:`coupled_segment_forces_ad` (what the kernels evaluate).
+
+    The virtual work of W and D is ``h n . dGamma + h_a m_a . dU_a + h_b m_b . dU_b`` with
+    the segment's resultant ``n = C_FF dG + V_FF Gdot + (C_FM (w_a dU_a + w_b dU_b) +
+    V_FM (w_a Udot_a + w_b Udot_b))/h`` and the couplings' moments on the joints
+    ``m_a = w_a/h_a (C_FM^T dG + V_FM^T Gdot)`` (m_b likewise), so Q is the segment's
+    ``(R n, -R n, h Gamma x n)`` (:func:`segment_quantities`) plus each joint's torques for
+    its m (:func:`joint_quantities`). Identically the AD of the definitions (tested).
+    """
+    h = _seg(c.sp, "h")
+    G = rotate_transposed(c.p, c.phi_b - c.phi_a) / h
+    Gd = rotate_transposed(c.p, c.v_b - c.v_a) / h + ca.cross(G, c.omega)
+    ha, hb = _jnt(c.ja, "h"), _jnt(c.jb, "h")
+    Ua, Uad, torques_a = _joint_kinematics(c.p_a, c.p, c.omega_a, c.omega, ha)
+    Ub, Ubd, torques_b = _joint_kinematics(c.p, c.p_b, c.omega, c.omega_b, hb)
+    dG = G - _seg(c.sp, "V0")
+    dUa, dUb = Ua - _jnt(c.ja, "U0"), Ub - _jnt(c.jb, "U0")
+    wa, wb = _cseg(c.sc, "w")[0], _cseg(c.sc, "w")[1]
+    CFF, VFF = _sym3(_cseg(c.sc, "C_FF")), _sym3(_cseg(c.sc, "V_FF"))
+    CFM, VFM = _mat3(_cseg(c.sc, "C_FM")), _mat3(_cseg(c.sc, "V_FM"))
+    kw, kd = wa * dUa + wb * dUb, wa * Uad + wb * Ubd
+    n = CFF @ dG + VFF @ Gd + (CFM @ kw + VFM @ kd) / h
+    mt = CFM.T @ dG + VFM.T @ Gd
+    ma, mb = wa / ha * mt, wb / hb * mt
+    Rn = rotate(c.p, n)
+    Ta_l, Ta_r = torques_a(ma)
+    Tb_l, Tb_r = torques_b(mb)
+    Q = ca.vertcat(Rn, -Rn, Ta_l, h * ca.cross(G, n) + Ta_r + Tb_l, Tb_r)
+    W = h / 2 * ca.dot(dG, CFF @ dG) + ca.dot(dG, CFM @ kw)
+    D = h / 2 * ca.dot(Gd, VFF @ Gd) + ca.dot(Gd, VFM @ kd)
+    return {"V": G, "W": W, "D": D, "Q": Q, "F": n, "Ma": ma, "Mb": mb}
+
+
+def coupled_joint_quantities(s: _Sym, jc) -> dict[str, ca.SX]:
+    """A joint of a coupled rod: as :func:`joint_quantities` with full matrices,
+    ``m = C_MM dU + V_MM Udot``, ``W = h_j/2 dU^T C_MM dU``, ``D = h_j/2 Udot^T V_MM Udot``
+    (the closed forms; torques ``T_b = -A^T m``, ``T_a = R(r) A^T m``)."""
+    r = qmul(qconj(s.p), s.p_b)
+    hj = _jnt(s.jp, "h")
+    u = r[1:4] / r[0]
+    U = 2.0 / hj * u
+    w = s.omega_b - rotate_transposed(r, s.omega)
+    Aw = w + ca.cross(u, w) + u * ca.dot(u, w)
+    Udot = Aw / hj
+    dU = U - _jnt(s.jp, "U0")
+    C, V = _sym3(_cjnt(jc, "C_MM")), _sym3(_cjnt(jc, "V_MM"))
+    m = C @ dU + V @ Udot
+    Atm = m - ca.cross(u, m) + u * ca.dot(u, m)
+    T = ca.vertcat(rotate(r, Atm), -Atm)
+    return {"U": U, "Udot": Udot, "W": hj / 2 * ca.dot(dU, C @ dU),
+            "D": hj / 2 * ca.dot(Udot, V @ Udot), "T": T, "M": m}
+
+
+def coupled_joint_torques_ad(s: _Sym, jc) -> ca.SX:
+    """The coupled joint's torques by AD of its W and D (the definition)."""
+    hj = _jnt(s.jp, "h")
+    U = curvature(s.p, s.p_b, hj)
+    Udot = ca.jtimes(U, ca.vertcat(s.p, s.p_b),
+                     ca.vertcat(qdot(s.p, s.omega), qdot(s.p_b, s.omega_b)))
+    dU = U - _jnt(s.jp, "U0")
+    C, V = _sym3(_cjnt(jc, "C_MM")), _sym3(_cjnt(jc, "V_MM"))
+    W = hj / 2 * ca.dot(dU, C @ dU)
+    D = hj / 2 * ca.dot(Udot, V @ Udot)
+    gW = ca.gradient(W, ca.vertcat(s.p, s.p_b))
+    gD = ca.gradient(D, ca.vertcat(s.omega, s.omega_b))
+    return ca.vertcat(torque_from_gradient(s.p, gW[0:4]),
+                      torque_from_gradient(s.p_b, gW[4:8])) - gD
+
+
+def coupled_inertia(c: _CSym, p_dot, omega_dot, v_dot_a, v_dot_b, g) -> dict[str, ca.SX]:
+    """Inertia of a segment whose mass centre is off the centreline (offset e, material)
+    with the full rotary inertia (product I12), by Euler-Lagrange / Euler-Poincare.
+
+    Kinetic energy of segment i besides the lumped node masses (``a = rho A h``,
+    ``vbar = (v_a + v_b)/2``, ``J_o = h rhoJ + a (|e|^2 I - e e^T)``, the parallel-axis
+    theorem): ``T_i = 1/2 Omega^T J_o Omega + a vbar . R (Omega x e)``; with the nodes'
+    ``a/4 (|v_a|^2 + |v_b|^2)`` that is ``a/4 (|v_a + w|^2 + |v_b + w|^2) +
+    1/2 Omega^T h rhoJ Omega``, ``w = R (Omega x e)``: positive definite. Its equations:
+    the nodes' momentum rows gain ``a/2 R (Omega' x e + Omega x (Omega x e))`` (the time
+    derivative of ``dT/dv``), the segment's angular momentum row is
+    ``J_o Omega' + Omega x J_o Omega + a e x R^T (vbar' - g)`` (the configuration term of
+    Euler-Poincare cancels against the rate of ``a e x R^T vbar``; gravity ``g`` (scaled)
+    acting at the mass centre adds the torque ``a e x R^T g``). Returns the rows, the
+    kinetic energy T_i and the power of that gravity torque.
+    """
+    h, rhoA = _seg(c.sp, "h"), _seg(c.sp, "rhoA")
+    a = rhoA * h
+    e = _cseg(c.sc, "e")
+    Jo = h * _sym3(_cseg(c.sc, "rhoJ")) + a * (ca.dot(e, e) * ca.SX.eye(3) - e @ e.T)
+    om = c.omega
+    vbd = 0.5 * (v_dot_a + v_dot_b)
+    r_om = Jo @ omega_dot + ca.cross(om, Jo @ om) + a * ca.cross(e, rotate_transposed(
+        c.p, vbd - g))
+    r_node = 0.5 * a * rotate(c.p, ca.cross(omega_dot, e) + ca.cross(om, ca.cross(om, e)))
+    vb = 0.5 * (c.v_a + c.v_b)
+    T = 0.5 * ca.dot(om, Jo @ om) + a * ca.dot(vb, rotate(c.p, ca.cross(om, e)))
+    Pg = ca.dot(om, a * ca.cross(e, rotate_transposed(c.p, g)))
+    return {"r": ca.vertcat(p_dot - qdot(c.p, om), r_om, r_node, r_node), "T": T,
+            "P_g": Pg}
+
+
+def coupled_kernels() -> list[ca.Function]:
+    """The kernels of a rod with coupled sections (:data:`COUPLED_SEGMENT_PARAMS`), used
+    by the assembly instead of the diagonal ones for such a rod.
+
+    ``rod_coupled_segment_forces``: Q = (f_a, f_b, T_a, T, T_b) (15) of
+    :func:`coupled_segment_quantities`; ``_jac``: dQ/d(phi_a, phi_b, p_a, p, p_b, v_a,
+    v_b, Omega_a, Omega, Omega_b) (15 x 33); ``_diagnostics``: W, D, strain, resultant
+    and the joint-moment shares. ``rod_coupled_joint_torques`` (and ``_jac``:
+    d/d(p_a, p_b, Omega_a, Omega_b), 6 x 14; ``_diagnostics``): the joint with full
+    C_MM, V_MM. ``rod_coupled_inertia``: rows (p kinematics 4, angular momentum 3, node
+    a 3, node b 3) of :func:`coupled_inertia`; ``_jac``: cy d/dy + cj d/dy' in the columns
+    (p, Omega, v_a, v_b) (13 x 13); ``rod_coupled_kinetic``: T_i and the gravity torque's
+    power.
+    """
+    c = _csymbols()
+    S = ca.SX.sym
+    seg_in = {"phi_a": c.phi_a, "phi_b": c.phi_b, "p_a": c.p_a, "p": c.p, "p_b": c.p_b,
+              "v_a": c.v_a, "v_b": c.v_b, "Omega_a": c.omega_a, "Omega": c.omega,
+              "Omega_b": c.omega_b, "seg": c.sp, "segc": c.sc, "jnt_a": c.ja,
+              "jnt_b": c.jb}
+    q = coupled_segment_quantities(c)
+    xs = ca.vertcat(c.phi_a, c.phi_b, c.p_a, c.p, c.p_b, c.v_a, c.v_b, c.omega_a, c.omega,
+                    c.omega_b)
+    s = _symbols()
+    jc = S("jntc", N_COUPLED_JOINT)
+    jnt_in = {"p_a": s.p, "p_b": s.p_b, "Omega_a": s.omega, "Omega_b": s.omega_b,
+              "jnt": s.jp, "jntc": jc}
+    jq = coupled_joint_quantities(s, jc)
+    xj = ca.vertcat(s.p, s.p_b, s.omega, s.omega_b)
+    pd, omd, vda, vdb, g = S("p_dot", 4), S("Omega_dot", 3), S("v_dot_a", 3), S("v_dot_b", 3), \
+        S("g", 3)
+    cy, cj = S("c_y"), S("c_j")
+    iq = coupled_inertia(c, pd, omd, vda, vdb, g)
+    Jy = ca.jacobian(iq["r"], ca.vertcat(c.p, c.omega))
+    Jyp = ca.jacobian(iq["r"], ca.vertcat(pd, omd, vda, vdb))
+    J_inertia = ca.horzcat(cy * Jy, ca.SX.zeros(13, 6)) + cj * Jyp
+    in_in = {"p": c.p, "Omega": c.omega, "p_dot": pd, "Omega_dot": omd, "v_dot_a": vda,
+             "v_dot_b": vdb, "seg": c.sp, "segc": c.sc, "g": g}
+    return [
+        _fn("rod_coupled_segment_forces", seg_in, {"Q": q["Q"]}),
+        _fn("rod_coupled_segment_forces_jac", seg_in,
+            {"dQ_dx": ca.densify(ca.jacobian(q["Q"], xs))}),
+        _fn("rod_coupled_segment_diagnostics", seg_in,
+            {"W": q["W"], "D": q["D"], "V": q["V"], "F": q["F"], "M_a": q["Ma"],
+             "M_b": q["Mb"]}),
+        _fn("rod_coupled_joint_torques", jnt_in, {"T": jq["T"]}),
+        _fn("rod_coupled_joint_torques_jac", jnt_in,
+            {"dT_dx": ca.densify(ca.jacobian(jq["T"], xj))}),
+        _fn("rod_coupled_joint_diagnostics", jnt_in,
+            {"W": jq["W"], "D": jq["D"], "U": jq["U"], "M": jq["M"]}),
+        _fn("rod_coupled_inertia", in_in, {"r": iq["r"]}),
+        _fn("rod_coupled_inertia_jac", {**in_in, "c_y": cy, "c_j": cj},
+            {"J": ca.densify(J_inertia)}),
+        _fn("rod_coupled_kinetic", {"v_a": c.v_a, "v_b": c.v_b, "p": c.p, "Omega": c.omega,
+                                    "seg": c.sp, "segc": c.sc, "g": g},
+            {"T": iq["T"], "P_g": iq["P_g"]}),
+    ]
+
+
+# --------------------------------------------------------------------------------------
 # Structure of the assembled Jacobian (band widths) from the element stencils
 # --------------------------------------------------------------------------------------
 
@@ -645,16 +946,35 @@ def _q_joint(j: int, branches: int) -> list[int]:
     return list(_field_range(j, "q_joint", branches)) if branches else []
 
 
-def element_stencils(n_elements: int, branches: int = 0) -> list[tuple[list[int], list[int]]]:
+def element_stencils(n_elements: int, branches: int = 0,
+                     coupled: bool = False) -> list[tuple[list[int], list[int]]]:
     """(rows, columns) of every element's block in dF/dy + c dF/dy' (all ends clamped,
     every load present: the widest pattern) for B = ``branches`` relaxation terms. A
     declarative table of which unknowns each element couples, from which the band widths
-    follow; the assembled C Jacobian is tested to have exactly this pattern."""
+    follow; the assembled C Jacobian is tested to have exactly this pattern. ``coupled``:
+    a rod with coupled sections (:func:`coupled_kernels`, B = 0): segment i's forces
+    also reach the neighbouring segments i-1, i+1 (the couplings with the curvatures of
+    its two joints) and its inertia couples its Omega with the velocities of its nodes."""
     N, B = n_elements, branches
     nd = lambda i: [*_node(i, "phi", B), *_node(i, "v", B)]  # noqa: E731
     sg = lambda i: [*_segment(i, "p", B), *_segment(i, "Omega", B)]  # noqa: E731
     qs = lambda i: list(_segment(i, "q_segment", B)) if B else []  # noqa: E731
     out = []
+    if coupled:
+        if B:
+            raise ValueError("coupled sections with relaxation terms are not supported")
+        for i in range(1, N + 1):
+            nb = [k for k in (i - 1, i + 1) if 1 <= k <= N]
+            # the segment's resultant sees its strain and both joints' curvatures and rates
+            rows = [*_node(i - 1, "v"), *_node(i, "v"), *_segment(i, "Omega")]
+            out.append((rows, [*nd(i - 1), *nd(i), *sg(i)] + [c for k in nb for c in sg(k)]))
+            # a neighbour's torque: its joint's kinematics for the coupling's moment, which
+            # depends on the segment's strain and strain rate only
+            for k in nb:
+                out.append((list(_segment(k, "Omega")),
+                            [*nd(i - 1), *nd(i), *sg(i), *_segment(k, "p")]))
+            vv = [*_node(i - 1, "v"), *_node(i, "v")]
+            out.append(([*sg(i), *vv], [*sg(i), *vv]))              # coupled inertia
     for i in range(N + 1):
         out.append((nd(i), nd(i)))                                   # node inertia
         out.append((list(_node(i, "v", B)), list(_segment(max(i, 1), "p", B))))  # follower
@@ -676,10 +996,10 @@ def element_stencils(n_elements: int, branches: int = 0) -> list[tuple[list[int]
     return out
 
 
-def bandwidths(n_elements: int, branches: int = 0) -> tuple[int, int]:
+def bandwidths(n_elements: int, branches: int = 0, coupled: bool = False) -> tuple[int, int]:
     """Exact (kl, ku) of dF/dy + c dF/dy' from :func:`element_stencils`."""
     kl = ku = 0
-    for rows, cols in element_stencils(n_elements, branches):
+    for rows, cols in element_stencils(n_elements, branches, coupled):
         for r in rows:
             for c in cols:
                 kl, ku = max(kl, r - c), max(ku, c - r)
@@ -701,7 +1021,7 @@ def bandwidth_formula(max_branches: int = MAX_BRANCHES) -> tuple[tuple[int, int]
     return kl, ku
 
 
-def static_bandwidths(n_elements: int) -> tuple[int, int]:
+def static_bandwidths(n_elements: int, coupled: bool = False) -> tuple[int, int]:
     """Exact (kl, ku) of the static Jacobian in reduced coordinates (dphi, dtheta).
 
     Static rows are the momentum rows (node forces, segment torques) of each cell; columns
@@ -723,7 +1043,7 @@ def static_bandwidths(n_elements: int) -> tuple[int, int]:
         return []
 
     kl = ku = 0
-    for rows, cols in element_stencils(N):
+    for rows, cols in element_stencils(N, 0, coupled):
         for r in rows:
             for rs in static_index(r, True):
                 for c in cols:

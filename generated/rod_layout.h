@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_layout.h.jinja
 // derivation step: discrete_rod
-// inputs sha256: 0e7954abfd35759e251e95080672252b706c29566d550d227947baedea588b0b
+// inputs sha256: 5d13964be16d090f1a3cd0dd044387313e3e10ad2942da907299d1682e813e1e
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*
@@ -44,6 +44,26 @@
 #define KU1 6
 #define KL_N1 1
 #define KU_N1 0
+
+/* band widths of a rod with coupled sections (nb = 0) for N = 1, 2 and N >= 3 */
+#define KLC_1 18
+#define KUC_1 15
+#define KLC_2 25
+#define KUC_2 22
+#define KLC 25
+#define KUC 22
+/* coupled sections: parameters per segment and per joint beside NSEG, NJNT */
+#define NSEGC 50
+#define NJNTC 18
+#define SEGC_C_FF 0
+#define SEGC_V_FF 9
+#define SEGC_C_FM 18
+#define SEGC_V_FM 27
+#define SEGC_W 36
+#define SEGC_RHOJ 38
+#define SEGC_E 47
+#define JNTC_C_MM 0
+#define JNTC_V_MM 9
 
 /* most relaxation terms; parameters per rod, segment, joint, node load, segment load */
 #define MAX_NB 24
@@ -93,10 +113,10 @@
 #define SL_M_FOLLOWER 3
 
 /* work memory large enough for every kernel; the largest kernel Jacobian */
-#define MAXW 78
+#define MAXW 620
 #define MAXIW 1
-#define MAXARG 11
-#define MAXRES 4
-#define MAXJAC 84
+#define MAXARG 14
+#define MAXRES 6
+#define MAXJAC 495
 
 #endif

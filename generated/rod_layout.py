@@ -1,7 +1,7 @@
 # GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 # source: derive/templates/rod_layout.py.jinja
 # derivation step: discrete_rod
-# inputs sha256: 75b5b259b39cc4d36ae9e84e1a588787e2c0ddde70cbd69ea10a1d5398e6cd17
+# inputs sha256: 51271f5b130dbd8aa1e469eb04417eac2c457cd4aaa8f16b08ef29ac72e62dc7
 # tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 """State, parameter and diagnostics layout of the discrete rod (the one place that owns it).
@@ -118,6 +118,29 @@ JOINT_PARAMS = (
 N_JOINT = 10
 JOINT_OFFSETS = {'h': 0, 'C_M': 1, 'V_M': 4, 'U0': 7}
 
+#: a rod with coupled sections (full 6x6 stiffness and viscosity, mass centre off the
+#: centreline): per-segment and per-joint parameters beside SEGMENT_PARAMS, JOINT_PARAMS
+COUPLED_SEGMENT_PARAMS = (
+    ("C_FF", 9, "N", "stiffness block (Gamma, Gamma), symmetric"),
+    ("V_FF", 9, "N s", "viscosity block (Gamma, Gamma), symmetric"),
+    ("C_FM", 9, "N m", "stiffness block (Gamma, K): n += C_FM K, m += C_FM^T Gamma"),
+    ("V_FM", 9, "N m s", "viscosity block (Gamma, K)"),
+    ("w", 2, "m", "weights of the couplings with the joints at nodes i-1 and i (h/2 each; 0 where the joint is absent: a free end)"),
+    ("rhoJ", 9, "kg m", "rotary inertia per length about the mass centre, 3x3 ((I11, -I12, 0), (-I12, I22, 0), (0, 0, I33)) rho"),
+    ("e", 3, "m", "mass centre in the material frame (e1, e2, 0)"),
+)
+N_COUPLED_SEGMENT = 50
+COUPLED_SEGMENT_OFFSETS = {'C_FF': 0, 'V_FF': 9, 'C_FM': 18, 'V_FM': 27, 'w': 36, 'rhoJ': 38, 'e': 47}
+COUPLED_JOINT_PARAMS = (
+    ("C_MM", 9, "N m^2", "stiffness block (K, K), symmetric"),
+    ("V_MM", 9, "N m^2 s", "viscosity block (K, K), symmetric"),
+)
+N_COUPLED_JOINT = 18
+COUPLED_JOINT_OFFSETS = {'C_MM': 0, 'V_MM': 9}
+#: band widths of a coupled rod for N = 1, 2 and N >= 3; its static band
+COUPLED_BANDS = ((18, 15), (25, 22), (25, 22))
+COUPLED_STATIC_KL, COUPLED_STATIC_KU = (11, 11)
+
 #: loads per node (0..N) and per segment (1..N), current values
 NODE_LOADS = (
     ("f_dead", 3, "N", "dead point force (spatial)"),
@@ -140,7 +163,7 @@ DIAG_ENERGIES = DIAG_SCALARS[:5]
 DIAG_REACTIONS = DIAG_SCALARS[5:]
 
 #: per-element CasADi kernels (names, inputs, outputs)
-KERNELS = {'rod_segment_forces': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'seg': [14, 1], 'n_q': [3, 1]}, 'outputs': {'Q': [9, 1]}}, 'rod_segment_forces_jac': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'seg': [14, 1], 'n_q': [3, 1]}, 'outputs': {'dQb_dxb': [6, 13]}}, 'rod_joint_torques': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1], 'm_q': [3, 1]}, 'outputs': {'T': [6, 1]}}, 'rod_joint_torques_jac': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1], 'm_q': [3, 1]}, 'outputs': {'dT_dx': [6, 14]}}, 'rod_segment_inertia': {'inputs': {'p': [4, 1], 'Omega': [3, 1], 'p_dot': [4, 1], 'Omega_dot': [3, 1], 'seg': [14, 1]}, 'outputs': {'r': [7, 1]}}, 'rod_segment_inertia_jac': {'inputs': {'p': [4, 1], 'Omega': [3, 1], 'p_dot': [4, 1], 'Omega_dot': [3, 1], 'seg': [14, 1], 'c_y': [1, 1], 'c_j': [1, 1]}, 'outputs': {'J': [7, 7]}}, 'rod_node_inertia': {'inputs': {'phi': [3, 1], 'v': [3, 1], 'phi_dot': [3, 1], 'v_dot': [3, 1], 'm': [1, 1], 'f': [3, 1], 'held': [1, 1], 'r_held': [3, 1], 'v_held': [3, 1]}, 'outputs': {'r': [6, 1]}}, 'rod_node_inertia_jac': {'inputs': {'phi': [3, 1], 'v': [3, 1], 'phi_dot': [3, 1], 'v_dot': [3, 1], 'm': [1, 1], 'f': [3, 1], 'held': [1, 1], 'r_held': [3, 1], 'v_held': [3, 1], 'c_y': [1, 1], 'c_j': [1, 1]}, 'outputs': {'J': [6, 6]}}, 'rod_rotate': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'Rx': [3, 1]}}, 'rod_rotate_jac': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'dRx_dp': [3, 4]}}, 'rod_rotate_transposed': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'RTx': [3, 1]}}, 'rod_rotate_transposed_jac': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'dRTx_dp': [3, 4]}}, 'rod_segment_diagnostics': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'seg': [14, 1], 'n_q': [3, 1]}, 'outputs': {'W': [1, 1], 'D': [1, 1], 'V': [3, 1], 'F': [3, 1]}}, 'rod_joint_diagnostics': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1], 'm_q': [3, 1]}, 'outputs': {'W': [1, 1], 'D': [1, 1], 'U': [3, 1], 'M': [3, 1]}}, 'rod_segment_kinetic': {'inputs': {'Omega': [3, 1], 'seg': [14, 1]}, 'outputs': {'T': [1, 1]}}, 'rod_node_kinetic': {'inputs': {'v': [3, 1], 'm': [1, 1]}, 'outputs': {'T': [1, 1]}}, 'rod_segment_branch': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'seg': [14, 1]}, 'outputs': {'dV': [3, 1], 'dV_dx': [3, 7], 'G': [6, 3]}}, 'rod_joint_branch': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'jnt': [10, 1]}, 'outputs': {'dU': [3, 1], 'dU_dx': [3, 8], 'G': [6, 3]}}}
+KERNELS = {'rod_segment_forces': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'seg': [14, 1], 'n_q': [3, 1]}, 'outputs': {'Q': [9, 1]}}, 'rod_segment_forces_jac': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'seg': [14, 1], 'n_q': [3, 1]}, 'outputs': {'dQb_dxb': [6, 13]}}, 'rod_joint_torques': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1], 'm_q': [3, 1]}, 'outputs': {'T': [6, 1]}}, 'rod_joint_torques_jac': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1], 'm_q': [3, 1]}, 'outputs': {'dT_dx': [6, 14]}}, 'rod_segment_inertia': {'inputs': {'p': [4, 1], 'Omega': [3, 1], 'p_dot': [4, 1], 'Omega_dot': [3, 1], 'seg': [14, 1]}, 'outputs': {'r': [7, 1]}}, 'rod_segment_inertia_jac': {'inputs': {'p': [4, 1], 'Omega': [3, 1], 'p_dot': [4, 1], 'Omega_dot': [3, 1], 'seg': [14, 1], 'c_y': [1, 1], 'c_j': [1, 1]}, 'outputs': {'J': [7, 7]}}, 'rod_node_inertia': {'inputs': {'phi': [3, 1], 'v': [3, 1], 'phi_dot': [3, 1], 'v_dot': [3, 1], 'm': [1, 1], 'f': [3, 1], 'held': [1, 1], 'r_held': [3, 1], 'v_held': [3, 1]}, 'outputs': {'r': [6, 1]}}, 'rod_node_inertia_jac': {'inputs': {'phi': [3, 1], 'v': [3, 1], 'phi_dot': [3, 1], 'v_dot': [3, 1], 'm': [1, 1], 'f': [3, 1], 'held': [1, 1], 'r_held': [3, 1], 'v_held': [3, 1], 'c_y': [1, 1], 'c_j': [1, 1]}, 'outputs': {'J': [6, 6]}}, 'rod_rotate': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'Rx': [3, 1]}}, 'rod_rotate_jac': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'dRx_dp': [3, 4]}}, 'rod_rotate_transposed': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'RTx': [3, 1]}}, 'rod_rotate_transposed_jac': {'inputs': {'p': [4, 1], 'x': [3, 1]}, 'outputs': {'dRTx_dp': [3, 4]}}, 'rod_segment_diagnostics': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega': [3, 1], 'seg': [14, 1], 'n_q': [3, 1]}, 'outputs': {'W': [1, 1], 'D': [1, 1], 'V': [3, 1], 'F': [3, 1]}}, 'rod_joint_diagnostics': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1], 'm_q': [3, 1]}, 'outputs': {'W': [1, 1], 'D': [1, 1], 'U': [3, 1], 'M': [3, 1]}}, 'rod_segment_kinetic': {'inputs': {'Omega': [3, 1], 'seg': [14, 1]}, 'outputs': {'T': [1, 1]}}, 'rod_node_kinetic': {'inputs': {'v': [3, 1], 'm': [1, 1]}, 'outputs': {'T': [1, 1]}}, 'rod_segment_branch': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p': [4, 1], 'seg': [14, 1]}, 'outputs': {'dV': [3, 1], 'dV_dx': [3, 7], 'G': [6, 3]}}, 'rod_joint_branch': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'jnt': [10, 1]}, 'outputs': {'dU': [3, 1], 'dU_dx': [3, 8], 'G': [6, 3]}}, 'rod_coupled_segment_forces': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p_a': [4, 1], 'p': [4, 1], 'p_b': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega_a': [3, 1], 'Omega': [3, 1], 'Omega_b': [3, 1], 'seg': [14, 1], 'segc': [50, 1], 'jnt_a': [10, 1], 'jnt_b': [10, 1]}, 'outputs': {'Q': [15, 1]}}, 'rod_coupled_segment_forces_jac': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p_a': [4, 1], 'p': [4, 1], 'p_b': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega_a': [3, 1], 'Omega': [3, 1], 'Omega_b': [3, 1], 'seg': [14, 1], 'segc': [50, 1], 'jnt_a': [10, 1], 'jnt_b': [10, 1]}, 'outputs': {'dQ_dx': [15, 33]}}, 'rod_coupled_segment_diagnostics': {'inputs': {'phi_a': [3, 1], 'phi_b': [3, 1], 'p_a': [4, 1], 'p': [4, 1], 'p_b': [4, 1], 'v_a': [3, 1], 'v_b': [3, 1], 'Omega_a': [3, 1], 'Omega': [3, 1], 'Omega_b': [3, 1], 'seg': [14, 1], 'segc': [50, 1], 'jnt_a': [10, 1], 'jnt_b': [10, 1]}, 'outputs': {'W': [1, 1], 'D': [1, 1], 'V': [3, 1], 'F': [3, 1], 'M_a': [3, 1], 'M_b': [3, 1]}}, 'rod_coupled_joint_torques': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1], 'jntc': [18, 1]}, 'outputs': {'T': [6, 1]}}, 'rod_coupled_joint_torques_jac': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1], 'jntc': [18, 1]}, 'outputs': {'dT_dx': [6, 14]}}, 'rod_coupled_joint_diagnostics': {'inputs': {'p_a': [4, 1], 'p_b': [4, 1], 'Omega_a': [3, 1], 'Omega_b': [3, 1], 'jnt': [10, 1], 'jntc': [18, 1]}, 'outputs': {'W': [1, 1], 'D': [1, 1], 'U': [3, 1], 'M': [3, 1]}}, 'rod_coupled_inertia': {'inputs': {'p': [4, 1], 'Omega': [3, 1], 'p_dot': [4, 1], 'Omega_dot': [3, 1], 'v_dot_a': [3, 1], 'v_dot_b': [3, 1], 'seg': [14, 1], 'segc': [50, 1], 'g': [3, 1]}, 'outputs': {'r': [13, 1]}}, 'rod_coupled_inertia_jac': {'inputs': {'p': [4, 1], 'Omega': [3, 1], 'p_dot': [4, 1], 'Omega_dot': [3, 1], 'v_dot_a': [3, 1], 'v_dot_b': [3, 1], 'seg': [14, 1], 'segc': [50, 1], 'g': [3, 1], 'c_y': [1, 1], 'c_j': [1, 1]}, 'outputs': {'J': [13, 13]}}, 'rod_coupled_kinetic': {'inputs': {'v_a': [3, 1], 'v_b': [3, 1], 'p': [4, 1], 'Omega': [3, 1], 'seg': [14, 1], 'segc': [50, 1], 'g': [3, 1]}, 'outputs': {'T': [1, 1], 'P_g': [1, 1]}}}
 
 
 def _check_branches(branches: int) -> int:
@@ -251,9 +274,15 @@ def static_phi(i: int) -> int:
     return 0 if i == 0 else static_cell_start(i) + STATIC_CELL_OFFSETS["phi"]
 
 
-def bandwidths(n_elements: int, branches: int = 0) -> tuple[int, int]:
-    """Exact (kl, ku) of the dynamic Jacobian for N elements and B relaxation terms."""
+def bandwidths(n_elements: int, branches: int = 0, coupled: bool = False
+               ) -> tuple[int, int]:
+    """Exact (kl, ku) of the dynamic Jacobian for N elements and B relaxation terms
+    (``coupled``: a rod with coupled sections, B = 0)."""
     B = _check_branches(branches)
+    if coupled:
+        if B:
+            raise ValueError("coupled sections with relaxation terms are not supported")
+        return COUPLED_BANDS[min(n_elements, 3) - 1]
     (kl0, kl1), (ku0, ku1) = KL_FORMULA
     kl, ku = kl0 + kl1 * B, ku0 + ku1 * B
     if n_elements == 1:

@@ -53,10 +53,10 @@ def _modes_into(args, problem, out: Path) -> int:
     target = None if args.near is None else 2 * math.pi * args.near
     res = run_modes(problem, args.count, args.deformed, target=target)
     modes = res["modes"]
-    m = problem.material
     state = "pre-deformed by its static loads" if args.deformed else "straight, unloaded"
     near = "" if args.near is None else f"; the {args.count} modes nearest {args.near:g} Hz"
-    print(f"{problem.name}: N = {problem.rod.elements}, {m.describe()}, {state}{near}")
+    print(f"{problem.name}: N = {problem.rod.elements}, {problem.describe_material()}, "
+          f"{state}{near}")
     if res["static_tip"] is not None:
         print(f"static tip [m]: {[round(float(v), 6) for v in res['static_tip']]}")
     print(modes_table(modes))

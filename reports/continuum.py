@@ -39,6 +39,8 @@ def support(problem) -> str | None:
     rod without end motion whose ends are those; else None (no continuum reference)."""
     from runtime.problem.geometry import Straight
 
+    if problem.material is None or getattr(problem.section, "coupled", False):
+        return None                     # a composite or coupled section: no closed form here
     if not (isinstance(problem.rod.geometry, Straight) and problem.rod.geometry.twist == 0
             and problem.start.motion is None and problem.end.motion is None
             and not getattr(problem.section, "tapered", False)

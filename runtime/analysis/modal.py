@@ -328,8 +328,54 @@ class Mode:
 
 
 def _strain_energy_fractions(lin: Linearization, Q: np.ndarray) -> np.ndarray:
-    """Strain energy per component (k, 6) of real reduced mode vectors Q (nq, k), J."""
+    """Strain energy per component (k, 6) of real reduced mode vectors Q (nq, k), J.
+
+    A rod with coupled sections (full 6x6 matrices) has no energy per component; each
+    component c gets its share ``1/2 e_c (C e)_c`` of the quadratic form (the couplings'
+    energy split half to the strain, half to the curvature), which sums to the strain
+    energy (docs/design.md, section 10)."""
+    if getattr(lin.model, "coupled", False):
+        return _coupled_strain_energies(lin, Q)
     return np.stack([np.sum(c**2, axis=1) for c in _strain_vectors(lin, Q)], axis=1)
+
+
+def _mode_strains(lin: Linearization, dx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Linearised strains (dV (3, N), dU (3, N+1)) of a reduced mode vector expanded to
+    ``dx``, by central differences of ``RodModel.diagnostics`` along the retraction."""
+    model, st = lin.model, lin.statics
+    L = float(np.sum(model.arrays.seg_field("h")))
+    th = dx[st.theta_cols]
+    scale = max(float(np.max(np.abs(dx[st.phi_cols.ravel()]))) / L,
+                float(np.max(np.abs(th))), 1e-300)
+    eps = 1e-6 / scale
+    with model.statics():
+        sp_ = model.diagnostics(0.0, st.static_retract(lin.y_eq, eps * dx))["strains"]
+        sm_ = model.diagnostics(0.0, st.static_retract(lin.y_eq, -eps * dx))["strains"]
+    return (sp_["V"] - sm_["V"]) / (2 * eps), (sp_["U"] - sm_["U"]) / (2 * eps)
+
+
+def _coupled_strain_energies(lin: Linearization, Q: np.ndarray) -> np.ndarray:
+    """The shares of :func:`_strain_energy_fractions` for a coupled rod (k, 6), J."""
+    a = lin.model.arrays
+    N = a.N
+    h = a.seg_field("h")[:, 0]
+    CFF = a.segc_field("C_FF").reshape(N, 3, 3)
+    CFM = a.segc_field("C_FM").reshape(N, 3, 3)
+    w = a.segc_field("w")
+    CMM = a.jntc_field("C_MM").reshape(N + 1, 3, 3)
+    wU = a.jnt_field("h")[:, 0].copy()
+    wU[0] = wU[0] if a.clamped("start") else 0.0
+    wU[-1] = wU[-1] if a.clamped("end") else 0.0
+    out = np.zeros((Q.shape[1], 6))
+    for k in range(Q.shape[1]):
+        dV, dU = (x.T for x in _mode_strains(lin, lin.expand(Q[:, k])))   # (N, 3), (N+1, 3)
+        kbar = w[:, :1] * dU[:-1] + w[:, 1:] * dU[1:]                      # (N, 3)
+        out[k, :3] = np.sum(0.5 * h[:, None] * dV * np.einsum("nij,nj->ni", CFF, dV)
+                            + 0.5 * dV * np.einsum("nij,nj->ni", CFM, kbar), axis=0)
+        out[k, 3:] = (np.sum(0.5 * wU[:, None] * dU * np.einsum("nij,nj->ni", CMM, dU),
+                             axis=0)
+                      + np.sum(0.5 * kbar * np.einsum("nji,nj->ni", CFM, dV), axis=0))
+    return out
 
 
 def _strain_vectors(lin: Linearization, Q: np.ndarray) -> list[np.ndarray]:

@@ -71,7 +71,7 @@ def write_modes(out: Path, problem, modes: Sequence, *, model, y_eq: np.ndarray 
                     reference=model.positions(model.reference))
     js = write_json(out / JSON_NAME, {
         "format": FORMAT, "problem": problem.name, "parameters": problem.to_mapping(),
-        "tau_E": float(problem.material.tau_E), "deformed": bool(deformed),
+        "tau_E": problem.tau_E, "deformed": bool(deformed),
         "static_tip": None if static_tip is None else [float(v) for v in static_tip],
         "target_omega": None if target is None else float(target),
         "shapes": NPZ_NAME,

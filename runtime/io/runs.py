@@ -69,8 +69,7 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
 
         # the state holds the internal strains of a generalized Maxwell rod's relaxation
         # terms too (as many as runtime.problem.assemble gives the rod's arrays)
-        terms = len(problem.material.rod_matrices(problem.section, np.array([0.5]))
-                    .get("theta", ()))
+        terms = problem.relaxation_terms()
         n = rod_layout.n_state(problem.rod.elements, terms)
         for key in ("y", "yp"):
             if np.shape(state[key]) != (n,) or not np.all(np.isfinite(state[key])):

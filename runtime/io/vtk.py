@@ -49,13 +49,16 @@ def element_fields(model: RodModel, t: float, y: np.ndarray, yp: np.ndarray | No
         inv = np.divide(1.0, damping, out=np.zeros_like(damping), where=damping > 0)
         return np.einsum("ij,ij,ij->j", viscous, inv, viscous)
 
-    Fv = F - a.seg_field("C_F").T * dV
-    Mv = M - a.jnt_field("C_M").T * dU
-    seg_2D = a.seg_field("h")[:, 0] * viscous_power(Fv, a.seg_field("V_F").T)
     w = a.jnt_field("h")[:, 0].copy()
     w[0] = w[0] if a.clamped("start") else 0.0
     w[N] = w[N] if a.clamped("end") else 0.0
-    joint_2D = w * viscous_power(Mv, a.jnt_field("V_M").T)
+    if getattr(model, "coupled", False):
+        seg_2D, joint_2D = _coupled_dissipation(model, t, y, w)
+    else:
+        Fv = F - a.seg_field("C_F").T * dV
+        Mv = M - a.jnt_field("C_M").T * dU
+        seg_2D = a.seg_field("h")[:, 0] * viscous_power(Fv, a.seg_field("V_F").T)
+        joint_2D = w * viscous_power(Mv, a.jnt_field("V_M").T)
     R = model.frames(y)                                                   # (N, 3, 3)
     pos = model.positions(y)
     vel = y[model.v_index]
@@ -64,6 +67,24 @@ def element_fields(model: RodModel, t: float, y: np.ndarray, yp: np.ndarray | No
     point = {"U": U.T, "M": M.T, "v": vel, "dissipation_rate_2D": joint_2D}
     point["position"] = pos.T
     return cell, point
+
+
+def _coupled_dissipation(model: RodModel, t: float, y: np.ndarray, w: np.ndarray
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """2D per segment and per joint of a rod with coupled sections (full viscosity
+    blocks), from the exact strain rates (``RodModel.strain_rates``): a segment
+    ``h Vdot^T V_FF Vdot + 2 Vdot^T V_FM (w_a Udot_a + w_b Udot_b)`` (its couplings'
+    share), a joint ``h_j Udot^T V_MM Udot``; they add up to the rod's 2D."""
+    a = model.arrays
+    Vd, Ud = (x.T for x in model.strain_rates(t, y))                     # (N, 3), (N+1, 3)
+    m = a.section_matrices()
+    wc = a.segc_field("w")
+    kd = wc[:, :1] * Ud[:-1] + wc[:, 1:] * Ud[1:]
+    h = a.seg_field("h")[:, 0]
+    seg = (h * np.einsum("ni,nij,nj->n", Vd, m["V_FF"], Vd)
+           + 2 * np.einsum("ni,nij,nj->n", Vd, m["V_FM"], kd))
+    jnt = w * np.einsum("ni,nij,nj->n", Ud, m["V_MM"], Ud)
+    return seg, jnt
 
 
 def write_vtp(path: Path, points: np.ndarray, cell_data: dict, point_data: dict) -> Path:

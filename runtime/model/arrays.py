@@ -36,7 +36,9 @@ class RodStruct(ctypes.Structure):
                 ("ku", ctypes.c_int), ("par", ctypes.c_void_p), ("seg", ctypes.c_void_p),
                 ("jnt", ctypes.c_void_p), ("nload", ctypes.c_void_p),
                 ("sload", ctypes.c_void_p), ("theta", ctypes.c_void_p),
-                ("segb", ctypes.c_void_p), ("jntb", ctypes.c_void_p)]
+                ("segb", ctypes.c_void_p), ("jntb", ctypes.c_void_p),
+                ("coupled", ctypes.c_int), ("segc", ctypes.c_void_p),
+                ("jntc", ctypes.c_void_p)]
 
 
 def _view(arr: np.ndarray, offsets: dict[str, int], fields, name: str) -> np.ndarray:
@@ -58,14 +60,26 @@ class RodArrays:
     theta: np.ndarray = field(default_factory=lambda: np.zeros(0))
     segb: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 3)))
     jntb: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 3)))
+    segc: np.ndarray | None = None
+    jntc: np.ndarray | None = None
 
     @classmethod
-    def zeros(cls, n_elements: int, branches: int = 0) -> RodArrays:
+    def zeros(cls, n_elements: int, branches: int = 0, coupled: bool = False) -> RodArrays:
         N, B = int(n_elements), int(branches)
+        if coupled and B:
+            raise ValueError("coupled sections with relaxation terms are not supported")
         return cls(N=N, par=np.zeros(L.N_PARAMS), seg=np.zeros((N, L.N_SEGMENT)),
                    jnt=np.zeros((N + 1, L.N_JOINT)), nload=np.zeros((N + 1, L.N_NODE_LOAD)),
                    sload=np.zeros((N, L.N_SEGMENT_LOAD)), theta=np.ones(B),
-                   segb=np.zeros((N, B, 3)), jntb=np.zeros((N + 1, B, 3)))
+                   segb=np.zeros((N, B, 3)), jntb=np.zeros((N + 1, B, 3)),
+                   segc=np.zeros((N, L.N_COUPLED_SEGMENT)) if coupled else None,
+                   jntc=np.zeros((N + 1, L.N_COUPLED_JOINT)) if coupled else None)
+
+    @property
+    def coupled(self) -> bool:
+        """A rod with coupled sections (``segc``, ``jntc``: full 6x6 stiffness and
+        viscosity, mass centre, product of inertia; docs/design.md, section 10)."""
+        return self.segc is not None
 
     @property
     def branches(self) -> int:
@@ -75,7 +89,9 @@ class RodArrays:
     def copy(self) -> RodArrays:
         return RodArrays(self.N, self.par.copy(), self.seg.copy(), self.jnt.copy(),
                          self.nload.copy(), self.sload.copy(), self.theta.copy(),
-                         self.segb.copy(), self.jntb.copy())
+                         self.segb.copy(), self.jntb.copy(),
+                         None if self.segc is None else self.segc.copy(),
+                         None if self.jntc is None else self.jntc.copy())
 
     # -- named access ----------------------------------------------------------------
     def param(self, name: str) -> np.ndarray:
@@ -93,6 +109,29 @@ class RodArrays:
     def jnt_field(self, name: str) -> np.ndarray:
         """View (N+1, size) of a joint parameter."""
         return _view(self.jnt, L.JOINT_OFFSETS, L.JOINT_PARAMS, name)
+
+    def segc_field(self, name: str) -> np.ndarray:
+        """View (N, size) of a coupled segment parameter (a coupled rod only)."""
+        return _view(self.segc, L.COUPLED_SEGMENT_OFFSETS, L.COUPLED_SEGMENT_PARAMS, name)
+
+    def jntc_field(self, name: str) -> np.ndarray:
+        """View (N+1, size) of a coupled joint parameter (a coupled rod only)."""
+        return _view(self.jntc, L.COUPLED_JOINT_OFFSETS, L.COUPLED_JOINT_PARAMS, name)
+
+    def section_matrices(self) -> dict[str, np.ndarray]:
+        """The full matrices of the rod whether coupled or not: per segment ``C_FF``,
+        ``V_FF``, ``C_FM``, ``V_FM`` (N, 3, 3), per joint ``C_MM``, ``V_MM`` (N+1, 3, 3)
+        (a diagonal rod: its diagonals, zero couplings)."""
+        N = self.N
+        if self.coupled:
+            out = {k: self.segc_field(k).reshape(N, 3, 3) for k in ("C_FF", "V_FF", "C_FM",
+                                                                  "V_FM")}
+            out.update({k: self.jntc_field(k).reshape(N + 1, 3, 3) for k in ("C_MM", "V_MM")})
+            return {k: v.copy() for k, v in out.items()}
+        diag = lambda d: d[:, :, None] * np.eye(3)  # noqa: E731
+        return {"C_FF": diag(self.seg_field("C_F")), "V_FF": diag(self.seg_field("V_F")),
+                "C_FM": np.zeros((N, 3, 3)), "V_FM": np.zeros((N, 3, 3)),
+                "C_MM": diag(self.jnt_field("C_M")), "V_MM": diag(self.jnt_field("V_M"))}
 
     def node_load(self, name: str) -> np.ndarray:
         """View (N+1, 3) of a node load."""
@@ -115,7 +154,8 @@ class RodArrays:
     def struct(self, kl: int | None = None, ku: int | None = None) -> RodStruct:
         """The ``kvrod_rod`` pointing at these arrays (keep ``self`` alive while used), for
         band storage with ``kl``, ``ku`` (default: the layout's band of this rod)."""
-        for name in ("par", "seg", "jnt", "nload", "sload", "theta", "segb", "jntb"):
+        names = ("par", "seg", "jnt", "nload", "sload", "theta", "segb", "jntb")
+        for name in names + (("segc", "jntc") if self.coupled else ()):
             a = getattr(self, name)
             if not (a.dtype == np.float64 and a.flags.c_contiguous):
                 raise TypeError(f"RodArrays.{name} must be C-contiguous float64")
@@ -124,11 +164,18 @@ class RodArrays:
             raise ValueError(f"relaxation moduli of shapes {self.segb.shape}, "
                              f"{self.jntb.shape}; expected {(self.N, B, 3)}, "
                              f"{(self.N + 1, B, 3)}")
-        bkl, bku = L.bandwidths(self.N, B)
+        c = self.coupled
+        if c and (self.segc.shape != (self.N, L.N_COUPLED_SEGMENT)
+                  or self.jntc.shape != (self.N + 1, L.N_COUPLED_JOINT)):
+            raise ValueError(f"coupled parameters of shapes {self.segc.shape}, "
+                             f"{self.jntc.shape}")
+        bkl, bku = L.bandwidths(self.N, B, c)
         return RodStruct(self.N, B, bkl if kl is None else kl, bku if ku is None else ku,
                          self.par.ctypes.data, self.seg.ctypes.data,
                          self.jnt.ctypes.data, self.nload.ctypes.data, self.sload.ctypes.data,
-                         self.theta.ctypes.data, self.segb.ctypes.data, self.jntb.ctypes.data)
+                         self.theta.ctypes.data, self.segb.ctypes.data, self.jntb.ctypes.data,
+                         int(c), self.segc.ctypes.data if c else None,
+                         self.jntc.ctypes.data if c else None)
 
     def node_masses(self) -> np.ndarray:
         """Lumped node masses (N+1,) in kg: half of each adjacent segment's rho A h."""
@@ -137,3 +184,69 @@ class RodArrays:
         m[:-1] += 0.5 * ms
         m[1:] += 0.5 * ms
         return m
+
+
+def coupled_arrays(base: RodArrays, stiffness: np.ndarray, viscosity: np.ndarray,
+                   rotary_inertia: np.ndarray | None = None,
+                   mass_centre: np.ndarray | None = None) -> RodArrays:
+    """A rod with coupled sections: ``base`` (lengths, reference strains, masses, loads and
+    ends already set) with the per-segment 6x6 matrices (docs/design.md, section 10).
+
+    stiffness, viscosity: (N, 6, 6) in the strain order (Gamma1, Gamma2, Gamma3, K1, K2, K3)
+    about the centreline (N, N m, N m^2 and N s, ...), symmetric (checked by the callers;
+    symmetrised here to round-off); rotary_inertia: (N, 3, 3) rho times the section's
+    inertia about its mass centre per length (kg m; default: ``diag(rhoI)`` of ``base``);
+    mass_centre: (N, 2) in the material frame (m; default 0).
+
+    Segments carry C_FF, V_FF and the coupling blocks C_FM, V_FM, with the weights h/2 of
+    their couplings with the two joints (0 where a joint is absent: a free end, where
+    C_FF, V_FF take the free end's condensation ``- 1/2 C_FM C_MM^-1 C_FM^T``, and V with
+    the pseudo-inverse); joints the length-weighted mean of their segments' C_MM, V_MM
+    (the end segment's at a clamp). ``base``'s diagonal fields C_F, V_F, C_M, V_M, rhoI
+    receive the diagonals (read by what reports on them; the kernels of a coupled rod
+    read the coupled tables only).
+    """
+    N = base.N
+    if base.branches:
+        raise ValueError("coupled sections with relaxation terms are not supported")
+    K = np.asarray(stiffness, dtype=float).reshape(N, 6, 6)
+    V = np.asarray(viscosity, dtype=float).reshape(N, 6, 6)
+    K = 0.5 * (K + K.transpose(0, 2, 1))
+    V = 0.5 * (V + V.transpose(0, 2, 1))
+    a = RodArrays(N, base.par.copy(), base.seg.copy(), base.jnt.copy(), base.nload.copy(),
+                  base.sload.copy(), base.theta.copy(), base.segb.copy(), base.jntb.copy(),
+                  np.zeros((N, L.N_COUPLED_SEGMENT)), np.zeros((N + 1, L.N_COUPLED_JOINT)))
+    h = a.seg_field("h")[:, 0]
+    if rotary_inertia is None:
+        J = a.seg_field("rhoI")[:, :, None] * np.eye(3)
+    else:
+        J = np.asarray(rotary_inertia, dtype=float).reshape(N, 3, 3)
+    e = np.zeros((N, 3))
+    if mass_centre is not None:
+        e[:, :2] = np.asarray(mass_centre, dtype=float).reshape(N, 2)
+    CFF, VFF = K[:, :3, :3].copy(), V[:, :3, :3].copy()
+    CFM, VFM = K[:, :3, 3:], V[:, :3, 3:]
+    CMM, VMM = K[:, 3:, 3:], V[:, 3:, 3:]
+    w = np.tile(0.5 * h[:, None], (1, 2))
+    for end, seg, col in (("start", 0, 0), ("end", N - 1, 1)):
+        if not a.clamped(end):        # no joint beyond the end segment: its condensation
+            w[seg, col] = 0.0
+            CFF[seg] -= 0.5 * CFM[seg] @ np.linalg.solve(CMM[seg], CFM[seg].T)
+            VFF[seg] -= 0.5 * VFM[seg] @ np.linalg.pinv(VMM[seg], hermitian=True) @ VFM[seg].T
+    for name, val in (("C_FF", CFF), ("V_FF", VFF), ("C_FM", CFM), ("V_FM", VFM),
+                      ("rhoJ", J)):
+        a.segc_field(name)[:] = val.reshape(N, 9)
+    a.segc_field("w")[:] = w
+    a.segc_field("e")[:] = e
+    for name, blk in (("C_MM", CMM), ("V_MM", VMM)):
+        jm = np.empty((N + 1, 3, 3))
+        jm[0], jm[-1] = blk[0], blk[-1]
+        jm[1:-1] = ((h[:-1, None, None] * blk[:-1] + h[1:, None, None] * blk[1:])
+                    / (h[:-1] + h[1:])[:, None, None])
+        a.jntc_field(name)[:] = jm.reshape(N + 1, 9)
+    d = lambda M: np.diagonal(M, axis1=1, axis2=2)  # noqa: E731
+    a.seg_field("C_F")[:], a.seg_field("V_F")[:] = d(K[:, :3, :3]), d(V[:, :3, :3])
+    a.seg_field("rhoI")[:] = d(J)
+    a.jnt_field("C_M")[:] = d(a.jntc_field("C_MM").reshape(N + 1, 3, 3))
+    a.jnt_field("V_M")[:] = d(a.jntc_field("V_MM").reshape(N + 1, 3, 3))
+    return a

@@ -27,7 +27,7 @@ from generated import rod_layout as L
 from runtime.errors import GeneratedCodeError, ParameterError
 from runtime.model import build
 from runtime.model.arrays import RodArrays
-from runtime.model.quaternion import end_quaternion, quat_rotation
+from runtime.model.quaternion import end_quaternion, quat_mul, quat_rotation
 
 
 class Drive(Protocol):
@@ -104,7 +104,9 @@ class RodModel:
         if self.reference.shape != (self.n,):
             raise ValueError(f"reference state has shape {self.reference.shape}, "
                              f"expected ({self.n},)")
-        self.kl, self.ku = L.bandwidths(N, B)
+        #: a rod with coupled sections (docs/design.md, section 10)
+        self.coupled = arrays.coupled
+        self.kl, self.ku = L.bandwidths(N, B, self.coupled)
         self.ldab = 2 * self.kl + self.ku + 1
         self.drive = drive
         self._key: tuple = ()       # (time, left?, load factor) the arrays were driven to
@@ -120,6 +122,12 @@ class RodModel:
         self._struct = arrays.struct(self.kl, self.ku)
         self._sp = None
         self._casadi = None
+        if lib is None and arrays.coupled:
+            raise GeneratedCodeError(
+                "a rod with coupled sections (full 6x6 matrices, a mass centre off the "
+                "centreline, a product of inertia) runs on the compiled backend only; the "
+                "CasADi fallback takes diagonal sections (a C compiler is needed: see the "
+                "warning above, or backend='c')")
         if lib is None:
             from runtime.model.casadi_oracle import CasadiOracle
 
@@ -425,7 +433,12 @@ class RodModel:
         i: segment i, node i, joint i). Couplings are nearest-neighbour, so the Newton
         systems condensed by :meth:`condensation_blocks` are block tridiagonal in these
         cells (``CondensedNewton`` checks it on :meth:`band_pattern`)."""
-        return [0] + [int(self.p_index[i][0]) for i in range(self.N)]
+        starts = [0] + [int(self.p_index[i][0]) for i in range(self.N)]
+        if self.coupled:
+            # a coupled segment reaches cells i-1..i+1 (its nodes and its neighbours'
+            # frames): nearest-neighbour in pairs of cells
+            return starts[::2]
+        return starts
 
     def describe_dof(self, index: int) -> str:
         """Human-readable name of state/residual component ``index``."""
@@ -478,7 +491,8 @@ class RodModel:
         return CKernels(address(lib.kvrod_residual), address(lib.kvrod_jacobian_band),
                         address(lib.kvrod_energies), ctypes.addressof(self._struct),
                         drive=drive, keep=self,
-                        jacobian_cells=address(lib.kvrod_jacobian_band_cells),
+                        jacobian_cells=(0 if self.coupled else
+                                        address(lib.kvrod_jacobian_band_cells)),
                         drive_constant=drive is not None and not self.drive.time_dependent,
                         n_energies=len(L.DIAG_SCALARS))
 
@@ -683,6 +697,43 @@ class RodModel:
         res["strains"] = {"V": V, "U": U}
         res["resultants"] = {"F": F, "M": M}
         return res
+
+    def strain_rates(self, t: float, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The exact rates of the discrete strains along the flow of state ``y``:
+        ``Vdot`` (3, N) = R^T (v_b - v_a)/h + V x Omega on segments and ``Udot`` (3, N+1) =
+        A w / h_j at joints (``w = Omega_b - R(r)^T Omega_a``, ``A = I + [u]x + u u^T``,
+        u = Im(r)/Re(r), r = conj(p_a) p_b; zero where a clamp joint is absent), the
+        rates whose viscous resultants the kernels form (``derive/discrete_rod.py``)."""
+        self._time(t)
+        a = self.arrays
+        N = self.N
+        h = a.seg_field("h")[:, 0]
+        p = y[self.p_index]
+        om = y[self.omega_index]
+        R = quat_rotation(p)                                            # (N, 3, 3)
+        phi, v = y[self.phi_index], y[self.v_index]
+        V = np.einsum("nji,nj->ni", R, np.diff(phi, axis=0)) / h[:, None]
+        Vd = np.einsum("nji,nj->ni", R, np.diff(v, axis=0)) / h[:, None] + np.cross(V, om)
+        pa, pb, oa, ob, on = [], [], [], [], []
+        for j in range(N + 1):
+            has_a, has_b = j >= 1, j + 1 <= N
+            if not ((has_a and has_b) or (j == 0 and a.clamped("start"))
+                    or (j == N and a.clamped("end"))):
+                on.append(False)
+                pa.append(p[0]), pb.append(p[0]), oa.append(om[0]), ob.append(om[0])
+                continue
+            on.append(True)
+            pa.append(p[j - 1] if has_a else a.param("p_start"))
+            pb.append(p[j] if has_b else a.param("p_end"))
+            oa.append(om[j - 1] if has_a else a.param("Omega_start"))
+            ob.append(om[j] if has_b else a.param("Omega_end"))
+        pa, pb, oa, ob = (np.array(x, dtype=float) for x in (pa, pb, oa, ob))
+        r = quat_mul(pa * np.array([1.0, -1.0, -1.0, -1.0]), pb)
+        u = r[:, 1:] / r[:, :1]
+        w = ob - np.einsum("nji,nj->ni", quat_rotation(r), oa)
+        Aw = w + np.cross(u, w) + u * np.sum(u * w, axis=1, keepdims=True)
+        Ud = np.where(np.array(on)[:, None], Aw / a.jnt_field("h"), 0.0)
+        return Vd.T, Ud.T
 
     def energy_floor(self) -> float:
         """Energy (J) of round-off-sized strains of this rod: below it there is nothing to

@@ -67,7 +67,8 @@ class RodStatics:
         self.model = m = model
         N = self.N = m.N
         self.n_static = L.n_static(N)
-        self.kl_static, self.ku_static = L.STATIC_KL, L.STATIC_KU
+        self.kl_static, self.ku_static = ((L.COUPLED_STATIC_KL, L.COUPLED_STATIC_KU)
+                                          if m.coupled else (L.STATIC_KL, L.STATIC_KU))
         nodes = np.arange(N + 1)
         self.static_rows = np.concatenate(
             [m.v_index[0]] + [np.r_[m.omega_index[i - 1], m.v_index[i]] for i in range(1, N + 1)])

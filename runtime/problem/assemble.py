@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from runtime.model.arrays import RodArrays
+from runtime.model.arrays import RodArrays, coupled_arrays
 from runtime.model.quaternion import (
     cayley_curvature,
     quat_exp,
@@ -244,6 +244,8 @@ def reference_arrays(problem: Problem) -> tuple[RodArrays, np.ndarray, np.ndarra
     a.set_param("r_end", disc.nodes[-1])
     a.set_param("p_start", p_start)
     a.set_param("p_end", p_end)
+    if "K6" in mats:          # coupled sections: the coupled kernels (docs/design.md, 10)
+        a = coupled_arrays(a, mats["K6"], mats["V6"], mats["rhoJ"], mats["mass_centre"])
     B = a.branches
     y = np.zeros(L.n_state(N, B))         # at rest, stress free: internal strains 0
     for i in range(N + 1):

@@ -108,8 +108,8 @@ KEYS: tuple[Key, ...] = (
     # -- [section] ----------------------------------------------------------------------
     _k("section", "kind", "-", '"rectangle"', "rectangle, ellipse, circle, tube, stiffness, "
        "composite", "shape of the cross-section, stiffnesses given directly, or a composite "
-       "section of named materials ([[section.regions]], [materials.NAME]; analysed by "
-       "kvrod section, not simulated yet: the rod kernels take diagonal matrices)",
+       "section of named materials ([[section.regions]], [materials.NAME]; its 6x6 "
+       "matrices from the finite-element section analysis, as kvrod section reports them)",
        invalid="hexagon"),
     _k("section", "damping", "-", '"consistent"', "consistent, naive; with "
        "material.damping (its earlier place, still read) the same route",
@@ -131,8 +131,25 @@ KEYS: tuple[Key, ...] = (
        "nu > 0 (circle, nu = 0.3: 0.851 against 0.886; far lower for a wide section "
        "sheared across its depth: a 20:1 strip 0.049); false all factors 1 (eq. (2))",
        invalid="yes", kinds=tuple(_SHAPES)),
-    *(_k("section", n, u, "required", "> 0", what, invalid=0.0, kinds=("stiffness",))
+    *(_k("section", n, u, "required" if n.startswith("rho") else "required (or "
+         "stiffness_matrix)", "> 0", what, invalid=0.0, kinds=("stiffness",))
       for n, (u, what) in _STIFF.items()),
+    _k("section", "stiffness_matrix", "N, N m, N m^2", "- (instead of EA ... GJ)",
+       "6x6, symmetric positive definite", "the section's 6x6 stiffness about the "
+       "centreline, strain order Gamma1, Gamma2, Gamma3, K1, K2, K3 (as kvrod section "
+       "reports it; blocks in N, N m, N m^2); off-diagonal entries couple shear, extension, "
+       "bending and torsion (the coupled kernels)", invalid=[[1.0]], kinds=("stiffness",)),
+    _k("section", "viscosity_matrix", "N s, N m s, N m^2 s", "from the material",
+       "6x6, symmetric positive semi-definite; with stiffness_matrix", "the section's 6x6 "
+       "viscosity, order as stiffness_matrix; without it V_ij = sqrt(t_i t_j) K_ij with "
+       "t = (tau_S, tau_S, tau_E, tau_E, tau_E, tau_S) of the material", invalid=[[1.0]],
+       kinds=("stiffness",)),
+    _k("section", "rhoI12", "kg m", "0", "|rhoI12| < sqrt(rhoI1 rhoI2)", "product of "
+       "inertia <rho x1 x2> per length about the mass centre", invalid="x",
+       kinds=("stiffness",)),
+    _k("section", "mass_centre", "m", "[0, 0]", "2 numbers (x1, x2)", "the mass centre in "
+       "the section (along d1, d2) relative to the centreline (the stiffness's reference "
+       "point); rhoI1 ... rhoI12 are about it", invalid=[1.0], kinds=("stiffness",)),
     _k("section", "regions", "-", "required", "at least one table [[section.regions]]; "
        "no two overlap, together one connected section", "the regions of a composite "
        "section (below)", invalid=[], kinds=("composite",)),
@@ -254,6 +271,20 @@ KEYS: tuple[Key, ...] = (
        "the branch's spring as G", invalid=-1.0),
     _k("material.branches", "bulk_modulus", "Pa", "-", ">= 0; with shear_modulus",
        "the branch's spring as K", invalid=-1.0),
+    # -- [[zones]] ----------------------------------------------------------------------
+    _k("zones", "from", "m", "required", "0 ... L", "where the zone starts (arc length): a "
+       "stretch of the rod with its own section and/or material; zones may not overlap, "
+       "the problem's [section] and [material] hold elsewhere; place the ends on nodes "
+       "(multiples of L/N): a segment belongs to the zone of its midpoint", invalid=-1.0),
+    _k("zones", "to", "m", "required", "from < to <= L", "where the zone ends",
+       invalid=-1.0),
+    _k("zones", "section", "-", "the problem's [section]", "a [section] table (every "
+       "kind; a composite names [materials.NAME]; tapers run over the zone)", "the zone's "
+       "section; joints across a sharp change take the mean of their two segments (first "
+       "order in h there)", invalid={"kind": "hexagon"}),
+    _k("zones", "material", "-", "the problem's [material]", "a Kelvin-Voigt [material] "
+       "table", "the zone's material (generalized Maxwell materials are the same along "
+       "the rod)", invalid={"density": -1.0}),
     # -- [start], [end] -----------------------------------------------------------------
     *(_k(end, "kind", "-", '"clamped"' if end == "start" else '"free"', "free, clamped, "
          "pinned", "what holds the end: nothing, position and frame, position",

@@ -118,9 +118,16 @@ class KelvinVoigt:
         x = np.atleast_1d(np.asarray(x, dtype=float))
         if isinstance(section, GivenStiffness):
             s = section
+            tS, tE = self.tau_S, self.tau_E
+            if s.coupled or s.viscosity_matrix is not None:
+                from runtime.problem.coupled import given_matrices
+
+                out = given_matrices(s, np.array([tS, tS, tE, tE, tE, tS]), x.size)
+                if not s.coupled:     # diagonal after all: the diagonal kernels take it
+                    out = {k: out[k] for k in ("C_F", "C_M", "V_F", "V_M", "rhoA", "rhoI")}
+                return out
             CF = np.tile([s.GA1, s.GA2, s.EA], (x.size, 1))
             CM = np.tile([s.EI1, s.EI2, s.GJ], (x.size, 1))
-            tS, tE = self.tau_S, self.tau_E
             return {"C_F": CF, "C_M": CM, "V_F": CF * [tS, tS, tE], "V_M": CM * [tE, tE, tS],
                     "rhoA": np.full(x.size, s.rhoA),
                     "rhoI": np.tile([s.rhoI1, s.rhoI2, s.rhoI3], (x.size, 1))}

@@ -41,7 +41,6 @@ from runtime.problem.materials import (
     material_from_mapping,
 )
 from runtime.problem.sections import (
-    COMPOSITE_REFUSAL,
     DAMPING_ROUTES,
     Composite,
     GivenStiffness,
@@ -87,7 +86,7 @@ GLASSY_RATIO_MAX = 1e10
 BETA1_L = 1.8751040687119611
 
 TOP_KEYS = ("name", "description", "rod", "section", "material", "materials", "start", "end",
-            "loads", "simulation", "statics", "analysis")
+            "loads", "simulation", "statics", "analysis", "zones")
 
 
 @dataclass(frozen=True)
@@ -203,6 +202,8 @@ class Problem:
     statics: Statics = field(default_factory=Statics)
     analysis: Analysis = field(default_factory=Analysis)
     base: Path | None = field(default=None, compare=False, repr=False)
+    #: stretches of the rod with their own section or material (runtime.problem.zones)
+    zones: tuple[Any, ...] = ()
 
     def __post_init__(self) -> None:
         from runtime.problem.sections import LENGTH_MAX, LENGTH_MIN, LENGTH_RANGE
@@ -237,6 +238,15 @@ class Problem:
             self._check_positions()
             self._check_input_frequencies()
             return
+        self._check_periods()
+        self._check_viscous_rate()
+        self._check_maxwell_springs()
+        self._check_load_magnitudes()
+        self._check_positions()
+        self._check_input_frequencies()
+        self._check_t_end()
+
+    def _check_periods(self) -> None:
         periods = self.simulation.t_end * self.characteristic_frequency() / (2 * math.pi)
         if periods > MAX_PERIODS:
             raise ParameterError(
@@ -248,11 +258,7 @@ class Problem:
                 f"{getattr(self.material, 'youngs_modulus', float('nan')):g} Pa); the run "
                 f"would need more than {50 * periods:.2g} steps")
 
-        self._check_viscous_rate()
-        self._check_maxwell_springs()
-        self._check_load_magnitudes()
-        self._check_positions()
-        self._check_input_frequencies()
+    def _check_t_end(self) -> None:
         w_max = math.sqrt(self.element_rates()[0])
         t_min = math.sqrt(float(np.finfo(float).eps)) / w_max
         soft = (not isinstance(self.section, GivenStiffness)
@@ -276,14 +282,43 @@ class Problem:
             return self.section.damping
         return getattr(self.material, "damping", "consistent")
 
-    def check_simulable(self) -> None:
-        """Raise :class:`~runtime.errors.ParameterError` (naming ``section.kind``) for a
-        problem today's rod kernels cannot run: a composite section (the message:
-        ``runtime.problem.sections.COMPOSITE_REFUSAL``). Every command that simulates,
-        solves statically, analyses modes or sweeps calls it before it writes anything;
-        the rod matrices refuse the same way."""
+    def describe_material(self) -> str:
+        """One line for reports: the material's retardation times, or a composite
+        section's regions and its damping route."""
         if isinstance(self.section, Composite):
-            raise ParameterError("section.kind", "composite", COMPOSITE_REFUSAL)
+            names = ", ".join(dict.fromkeys(r.material for r in self.section.regions))
+            return (f"composite section of {names} (Kelvin-Voigt regions, "
+                    f"{self.section.damping} rod viscosity, tau_E = {self.tau_E:.6g} s)")
+        return self.material.describe()
+
+    def relaxation_terms(self) -> int:
+        """The number B of the rod's relaxation terms (generalized Maxwell; else 0)."""
+        return len(self._end_matrices().get("theta", ()))
+
+    @property
+    def tau_E(self) -> float:
+        """The extensional retardation time (s): the material's tau_E (eq. (6)), or for a
+        composite section V33 / K33 of its rod matrices (the same number for a
+        homogeneous section)."""
+        if isinstance(self.section, Composite):
+            m = self._uniform_matrices()
+            return float(m["V_F"][0, 2] / m["C_F"][0, 2])
+        return float(self.material.tau_E)
+
+    def check_simulable(self) -> None:
+        """Raise :class:`~runtime.errors.ParameterError` for a problem the rod cannot
+        run. Every command that simulates, solves statically, analyses modes or sweeps
+        calls it before it writes anything. A composite section is checked here rather
+        than on construction: its rod matrices need its finite-element analysis (0.2 ... 2
+        s, once per distinct section in a process), which reading or writing the problem
+        does not; here they are computed and the checks that need them run (a naive
+        viscosity that is not symmetric is refused, naming ``section.damping``)."""
+        if isinstance(self.section, Composite) and not self.__dict__.get("_checked"):
+            self._end_matrices()
+            self._check_matrices()
+            self._check_periods()
+            self._check_load_magnitudes()
+            object.__setattr__(self, "_checked", True)
 
     def _check_maxwell_springs(self) -> None:
         """A generalized Maxwell rod: without an equilibrium spring (a Maxwell fluid) no
@@ -495,10 +530,32 @@ class Problem:
         return 5
 
     def segment_matrices(self) -> dict[str, np.ndarray]:
-        """Per segment: C_F, C_M, V_F, V_M diagonals (N, 3), rhoA (N,), rhoI (N, 3)."""
+        """Per segment: C_F, C_M, V_F, V_M diagonals (N, 3), rhoA (N,), rhoI (N, 3); a
+        coupled section also K6, V6 (N, 6, 6), rhoJ (N, 3, 3), mass_centre (N, 2)
+        (:mod:`runtime.problem.coupled`)."""
         self.check_simulable()
         N = self.rod.elements
         x = (np.arange(N) + 0.5) / N
+        m = self._matrices_at(x)
+        if self.zones:
+            from runtime.problem.zones import apply_zones
+
+            m = apply_zones(m, x * self.rod.length, self.zones, self._zone_matrices)
+        return m
+
+    @staticmethod
+    def _zone_matrices(zone: Any, x: np.ndarray) -> dict[str, np.ndarray]:
+        if isinstance(zone.section, Composite):
+            from runtime.problem.coupled import composite_matrices
+
+            return composite_matrices(zone.section, np.size(x))
+        return zone.material.rod_matrices(zone.section, x)
+
+    def _matrices_at(self, x: np.ndarray) -> dict[str, np.ndarray]:
+        if isinstance(self.section, Composite):
+            from runtime.problem.coupled import composite_matrices
+
+            return composite_matrices(self.section, np.size(x))
         return self.material.rod_matrices(self.section, x)
 
     def _end_matrices(self) -> dict[str, np.ndarray]:
@@ -506,8 +563,13 @@ class Problem:
         (the checks of every new problem use them)."""
         m = self.__dict__.get("_m3")
         if m is None:
-            self.check_simulable()
-            m = self.material.rod_matrices(self.section, np.array([0.0, 0.5, 1.0]))
+            x3 = np.array([0.0, 0.5, 1.0])
+            m = self._matrices_at(x3)
+            if self.zones:         # the checks see every zone's ends and middle too
+                parts = [m] + [self._zone_matrices(z, x3) for z in self.zones]
+                keys = set.intersection(*(set(p) for p in parts)) - {"theta", "segb", "jntb"}
+                m = {k: np.concatenate([p[k] for p in parts]) for k in keys
+                     } | {k: v for k, v in m.items() if k in ("theta", "segb", "jntb")}
             object.__setattr__(self, "_m3", m)
         return m
 
@@ -582,6 +644,11 @@ class Problem:
             material = self.material.to_mapping()
             material.pop("damping", None)               # the key is section.damping
             stuff = {"material": material}
+        if self.zones:
+            stuff["zones"] = [z.to_mapping() for z in self.zones]
+            for z in self.zones:
+                if isinstance(z.section, Composite):
+                    stuff.setdefault("materials", {}).update(z.section.materials_mapping())
         return {"name": self.name, "description": self.description, "rod": rod,
                 "section": section, **stuff,
                 "start": self.start.to_mapping(), "end": self.end.to_mapping(),
@@ -610,7 +677,18 @@ class Problem:
             raise ParameterError("loads", loads_m, "an array of tables [[loads]]")
         loads = tuple(load_from_mapping(f"loads[{i}]", ld, base)
                       for i, ld in enumerate(loads_m))
-        section, material = section_and_material(m)
+        zones_m = m.get("zones")
+        zone_composite = isinstance(zones_m, list) and any(
+            isinstance(z, Mapping) and isinstance(z.get("section"), Mapping)
+            and z["section"].get("kind") == "composite" for z in zones_m)
+        top = dict(m)
+        if zone_composite and "materials" in m and C.table(
+                "section", m.get("section") or {}).get("kind") != "composite":
+            top.pop("materials")         # the zones' composite sections name them
+        section, material = section_and_material(top)
+        from runtime.problem.zones import zones_from_mapping
+
+        zones = zones_from_mapping(zones_m, m, rod.length)
         return cls(
             name=C.string("name", m.get("name", name)),
             description=str(m.get("description", "")),
@@ -624,6 +702,7 @@ class Problem:
             statics=_settings(Statics, "statics", m.get("statics")),
             analysis=_settings(Analysis, "analysis", m.get("analysis")),
             base=base,
+            zones=zones,
         )
 
     def with_overrides(self, overrides: Mapping[str, Any]) -> Problem:

@@ -21,15 +21,17 @@ Their transverse shear factors (eq. (7)), ``shear_correction``:
 The torsion factor kappa_3 = J_T / I3 is exact either way.
 
 ``stiffness``: the rod's stiffnesses given directly (``EA``, ``GA1``, ``GA2`` in N;
-``EI1``, ``EI2``, ``GJ`` in N m^2) with the inertia per length (``rhoA`` in kg/m and
-``rhoI1``, ``rhoI2``, ``rhoI3`` in kg m), for benchmarks that prescribe them.
+``EI1``, ``EI2``, ``GJ`` in N m^2), or its 6x6 ``stiffness_matrix`` (and optionally
+``viscosity_matrix``) about the centreline, with the inertia per length (``rhoA`` in kg/m
+and ``rhoI1``, ``rhoI2``, ``rhoI3`` in kg m; optionally ``rhoI12`` and ``mass_centre``),
+for benchmarks that prescribe them and sections known from elsewhere (BECAS, VABS, a
+test rig).
 
 ``composite``: ``[[section.regions]]`` (each a ``material`` named in ``[materials.NAME]``
 and a ``shape``: circle, rectangle, ellipse, tube, polygon with holes; see
 :mod:`runtime.section`). Its 6x6 stiffness and viscosity come from the finite-element
-section analysis (``kvrod section``); the rod kernels take diagonal matrices today, so a
-composite problem is analysed but not simulated
-(:meth:`runtime.problem.schema.Problem.check_simulable`).
+section analysis (``kvrod section``) and the rod simulates them with its coupled kernels
+(:mod:`runtime.problem.coupled`; docs/design.md, section 10).
 
 ``damping`` (every kind): which rod viscosity the section gives, ``"consistent"`` (the
 dissipation on the section's elastic deformation, eta_E of eq. (5)) or ``"naive"`` (the
@@ -42,6 +44,7 @@ it then varies linearly along the rod, evaluated at each segment's midpoint.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from functools import lru_cache
@@ -57,6 +60,8 @@ CONSTANTS = ("A", "I1", "I2", "I3", "J_T", "kappa_1", "kappa_2", "kappa_3")
 #: the stiffness values of a ``stiffness`` section
 STIFFNESSES = ("EA", "GA1", "GA2", "EI1", "EI2", "GJ")
 INERTIAS = ("rhoA", "rhoI1", "rhoI2", "rhoI3")
+#: the coupled section's keys of a ``stiffness`` section (issue 26)
+MATRIX_KEYS = ("stiffness_matrix", "viscosity_matrix", "rhoI12", "mass_centre")
 
 
 def _constitutive():
@@ -250,9 +255,58 @@ def _tube(c, d: dict, nu: float) -> dict:
     return c.tube_section(d["outer_radius"], d["inner_radius"], nu)
 
 
+#: units of the 6x6 blocks (strain order Gamma1, Gamma2, Gamma3, K1, K2, K3)
+MATRIX_UNITS = "N (Gamma, Gamma), N m (Gamma, K), N m^2 (K, K)"
+
+
+def _matrix6(name: str, value: Any) -> np.ndarray:
+    """A 6x6 matrix of finite numbers (nested lists), or a ParameterError naming it."""
+    try:
+        M = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        M = np.zeros(0)
+    if M.shape != (6, 6) or not np.all(np.isfinite(M)):
+        raise ParameterError(name, value, f"a 6x6 matrix of finite numbers ({MATRIX_UNITS}; "
+                             "strain order Gamma1, Gamma2, Gamma3, K1, K2, K3 about the "
+                             "centreline, as `kvrod section` reports)")
+    return M
+
+
+def check_section_matrix(name: str, M: np.ndarray, definite: bool, units: str,
+                         symmetric_tol: float = 1e-9) -> np.ndarray:
+    """M symmetric (to ``symmetric_tol`` of the geometric mean of the diagonals) and
+    positive definite (``definite``) or semi-definite; returns its symmetric part.
+    Semi-definite allows -1e-12 of the largest eigenvalue (round-off)."""
+    d = np.sqrt(np.abs(np.outer(np.diag(M), np.diag(M))))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        asym = np.where(d > 0, np.abs(M - M.T) / np.where(d > 0, d, 1.0), np.abs(M - M.T))
+    if np.max(asym) > symmetric_tol:
+        i, j = np.unravel_index(int(np.argmax(asym)), M.shape)
+        raise ParameterError(name, M.tolist(), f"a symmetric matrix ({units}): entries "
+                             f"[{i}][{j}] = {M[i, j]:.6g} and [{j}][{i}] = {M[j, i]:.6g} differ")
+    S = 0.5 * (M + M.T)
+    ev = np.linalg.eigvalsh(S)
+    ok = ev.min() > 0 if definite else ev.min() >= -1e-12 * max(ev.max(), 0.0)
+    if not ok:
+        raise ParameterError(name, M.tolist(), f"a symmetric positive {'' if definite else 'semi-'}"
+                             f"definite matrix ({units}); its smallest eigenvalue is "
+                             f"{ev.min():.6g}")
+    return S
+
+
 @dataclass(frozen=True)
 class GivenStiffness:
-    """Stiffnesses and inertias given directly (constant along the rod)."""
+    """Stiffnesses and inertias given directly (constant along the rod).
+
+    Either the six diagonal stiffnesses (EA ... GJ) or ``stiffness_matrix``, the section's
+    symmetric positive definite 6x6 stiffness about the centreline (strain order Gamma1,
+    Gamma2, Gamma3, K1, K2, K3, as ``kvrod section`` reports), with optionally
+    ``viscosity_matrix`` (symmetric positive semi-definite, N s ...; else the material's
+    retardation times make it: :func:`runtime.problem.coupled.given_matrices`); ``rhoA``,
+    ``rhoI1..3`` as before (the rotary inertia about the mass centre), ``rhoI12`` (kg m, the
+    product <rho x1 x2>) and ``mass_centre`` (m, in the section's (x1, x2) along (d1, d2))
+    optional. With a matrix the diagonal fields hold its diagonal.
+    """
 
     EA: float = 1.0
     GA1: float = 1.0
@@ -264,29 +318,88 @@ class GivenStiffness:
     rhoI1: float = 1.0
     rhoI2: float = 1.0
     rhoI3: float = 1.0
+    stiffness_matrix: tuple[tuple[float, ...], ...] | None = None
+    viscosity_matrix: tuple[tuple[float, ...], ...] | None = None
+    rhoI12: float = 0.0
+    mass_centre: tuple[float, float] = (0.0, 0.0)
     kind: str = field(default="stiffness", init=False)
 
     def __post_init__(self) -> None:
         for f in fields(self):
-            if f.name != "kind":
+            if f.name in STIFFNESSES + INERTIAS:
                 C.positive(f"section.{f.name}", getattr(self, f.name))
+        if self.stiffness_matrix is not None:
+            K = check_section_matrix("section.stiffness_matrix",
+                                     _matrix6("section.stiffness_matrix",
+                                              self.stiffness_matrix), True, MATRIX_UNITS)
+            object.__setattr__(self, "stiffness_matrix", _tuple6(K))
+            for n, v in zip(STIFFNESSES, np.diag(K)[[2, 0, 1, 3, 4, 5]], strict=True):
+                object.__setattr__(self, n, float(v))
+        if self.viscosity_matrix is not None:
+            if self.stiffness_matrix is None:
+                raise ParameterError("section.viscosity_matrix", "given", "with "
+                                     "section.stiffness_matrix (the diagonal stiffnesses "
+                                     "take their viscosity from the material)")
+            V = check_section_matrix("section.viscosity_matrix",
+                                     _matrix6("section.viscosity_matrix",
+                                              self.viscosity_matrix), False,
+                                     "N s (Gamma, Gamma), N m s (Gamma, K), N m^2 s (K, K)")
+            object.__setattr__(self, "viscosity_matrix", _tuple6(V))
+        C.number("section.rhoI12", self.rhoI12)
+        if not self.rhoI12**2 < self.rhoI1 * self.rhoI2:
+            raise ParameterError("section.rhoI12", self.rhoI12, f"|rhoI12| < sqrt(rhoI1 "
+                                 f"rhoI2) = {math.sqrt(self.rhoI1 * self.rhoI2):.6g} kg m (a "
+                                 "positive definite rotary inertia)")
+        e = self.mass_centre
+        if not (isinstance(e, (tuple, list)) and len(e) == 2):
+            raise ParameterError("section.mass_centre", e, "2 numbers (x1, x2) in m")
+        object.__setattr__(self, "mass_centre", (C.number("section.mass_centre", e[0]),
+                                                 C.number("section.mass_centre", e[1])))
 
     tapered = False
 
+    @property
+    def coupled(self) -> bool:
+        """Couplings the diagonal kernels do not have: a stiffness or viscosity matrix
+        with off-diagonal entries, a product of inertia, a mass centre off the
+        centreline."""
+        off = lambda M: M is not None and bool(np.any(  # noqa: E731
+            np.asarray(M) - np.diag(np.diag(np.asarray(M)))))
+        return (off(self.stiffness_matrix) or off(self.viscosity_matrix)
+                or self.rhoI12 != 0.0 or self.mass_centre != (0.0, 0.0))
+
+    def matrix(self) -> np.ndarray:
+        """The 6x6 stiffness (the diagonal one from EA ... GJ without a matrix)."""
+        if self.stiffness_matrix is not None:
+            return np.array(self.stiffness_matrix)
+        return np.diag([self.GA1, self.GA2, self.EA, self.EI1, self.EI2, self.GJ])
+
     def to_mapping(self) -> dict[str, Any]:
-        return {"kind": "stiffness", **{f.name: getattr(self, f.name) for f in fields(self)
-                                        if f.name != "kind"}}
+        out: dict[str, Any] = {"kind": "stiffness"}
+        if self.stiffness_matrix is None:
+            out.update({n: getattr(self, n) for n in STIFFNESSES})
+        else:
+            out["stiffness_matrix"] = [list(r) for r in self.stiffness_matrix]
+            if self.viscosity_matrix is not None:
+                out["viscosity_matrix"] = [list(r) for r in self.viscosity_matrix]
+        out.update({n: getattr(self, n) for n in INERTIAS})
+        if self.rhoI12 != 0.0:
+            out["rhoI12"] = self.rhoI12
+        if self.mass_centre != (0.0, 0.0):
+            out["mass_centre"] = list(self.mass_centre)
+        return out
+
+
+def _tuple6(M: np.ndarray) -> tuple[tuple[float, ...], ...]:
+    return tuple(tuple(float(v) for v in r) for r in M)
 
 
 #: the rod viscosity a section gives: the dissipation route (eta_E) or the traction route
 DAMPING_ROUTES = ("consistent", "naive")
-#: what a composite problem cannot do yet, and what it can
+#: a composite section's rod matrices come from its section analysis, not a material
 COMPOSITE_REFUSAL = (
-    "a section the rod kernels take (rectangle, ellipse, circle, tube, stiffness) for "
-    "simulate, static, modes and sweep: a composite section's 6x6 stiffness and viscosity "
-    "are coupled (its mass centre may lie off the elastic centroid) and the rod kernels take "
-    "diagonal matrices; simulating coupled sections comes with the 6x6 kernels. `kvrod "
-    "section FILE.toml` computes this section's properties")
+    "a shape or stiffness section for a material's rod matrices: a composite section's "
+    "come from its finite-element analysis (runtime.problem.coupled.composite_matrices)")
 
 
 @dataclass(frozen=True, eq=False)
@@ -298,7 +411,7 @@ class Composite:
 
     Its properties come from the finite-element section analysis
     (:func:`runtime.problem.section_analysis.analyse_problem_section`, ``kvrod section``),
-    about the elastic centroid. Not simulated yet (``COMPOSITE_REFUSAL``).
+    about the elastic centroid, the rod's centreline (:mod:`runtime.problem.coupled`).
     """
 
     regions: tuple[Any, ...]
@@ -376,12 +489,34 @@ def section_from_mapping(m: Mapping[str, Any] | None,
                          damping=m.get("damping", "consistent"))
     damping = {"damping": m.pop("damping")} if "damping" in m else {}
     if kind == "stiffness":
-        C.no_unknown_keys("section", {**m, **damping}, STIFFNESSES + INERTIAS + ("damping",))
-        missing = [k for k in STIFFNESSES + INERTIAS if k not in m]
+        C.no_unknown_keys("section", {**m, **damping}, STIFFNESSES + INERTIAS + MATRIX_KEYS
+                          + ("damping",))
+        matrix = "stiffness_matrix" in m
+        kw: dict[str, Any] = {}
+        for k in ("stiffness_matrix", "viscosity_matrix"):
+            if k in m:
+                kw[k] = _tuple6(_matrix6(f"section.{k}", m[k]))
+        if matrix and any(k in m for k in STIFFNESSES):
+            k = next(k for k in STIFFNESSES if k in m)
+            raise ParameterError(f"section.{k}", m[k], "absent beside section."
+                                 "stiffness_matrix (its diagonal gives the stiffnesses)")
+        need = INERTIAS if matrix else STIFFNESSES + INERTIAS
+        missing = [k for k in need if k not in m]
         if missing:
             raise ParameterError(f"section.{missing[0]}", None, "a positive value (stiffness "
-                                 "sections give EA, GA1, GA2, EI1, EI2, GJ, rhoA, rhoI1..3)")
-        return GivenStiffness(**{k: C.positive(f"section.{k}", v) for k, v in m.items()})
+                                 "sections give EA, GA1, GA2, EI1, EI2, GJ or "
+                                 "stiffness_matrix, and rhoA, rhoI1..3)")
+        kw.update({k: C.positive(f"section.{k}", m[k]) for k in STIFFNESSES + INERTIAS
+                   if k in m})
+        if "rhoI12" in m:
+            kw["rhoI12"] = C.number("section.rhoI12", m["rhoI12"])
+        if "mass_centre" in m:
+            e = m["mass_centre"]
+            if not (isinstance(e, (list, tuple)) and len(e) == 2):
+                raise ParameterError("section.mass_centre", e, "2 numbers (x1, x2) in m")
+            kw["mass_centre"] = (C.number("section.mass_centre", e[0]),
+                                 C.number("section.mass_centre", e[1]))
+        return GivenStiffness(**kw)
     names = Shape.DIMENSIONS[kind]
     allowed = (*names, *(f"{n}_end" for n in names), "shear_correction", "damping")
     C.no_unknown_keys("section", {**m, **damping}, allowed)

@@ -248,7 +248,7 @@ class SimulationResult:
             "message": self.message,
             "problem": self.problem.name,
             "parameters": self.problem.to_mapping(),
-            "tau_E": float(self.problem.material.tau_E),
+            "tau_E": self.problem.tau_E,
             "linear_prediction": self.problem.linear_prediction(),
             "bdf_max_order": self.problem.bdf_max_order(),
             "error_control": None if self.control is None else self.control.describe(),

@@ -59,7 +59,12 @@ def test_layout_module_renders_the_derive_constants():
     for n in (1, 2, 3, 5):
         assert lay.bandwidths(n) == dr.bandwidths(n)
     assert (lay.STATIC_KL, lay.STATIC_KU) == dr.static_bandwidths(4)
-    assert set(lay.KERNELS) == {f.name() for f in dr.kernels()}
+    assert set(lay.KERNELS) == {f.name() for f in dr.kernels() + dr.coupled_kernels()}
+    for n in (1, 2, 3, 5):
+        assert lay.bandwidths(n, 0, True) == dr.bandwidths(n, 0, True)
+    assert (lay.COUPLED_STATIC_KL, lay.COUPLED_STATIC_KU) == dr.static_bandwidths(4, True)
+    assert lay.COUPLED_SEGMENT_OFFSETS == dr.COUPLED_SEGMENT_OFFSETS
+    assert lay.COUPLED_JOINT_OFFSETS == dr.COUPLED_JOINT_OFFSETS
 
 
 def _rel(a, b):
@@ -241,3 +246,35 @@ def test_four_lane_kernels_equal_the_scalar_kernel_bit_for_bit(name):
         for o in range(f.n_out()):
             want = np.asarray(ref[o]).ravel(order="F")
             assert np.allclose(outs[lane][o], want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
+
+
+def test_coupled_kernel_closed_forms_equal_casadi_ad_of_the_functionals():
+    """The coupled segment's forces and torques (closed form through its resultant and
+    its joints' moments) and the coupled joint's torques equal the CasADi AD of their W
+    and D (the definitions) to rounding, for random non-unit quaternions and random,
+    non-symmetric-looking blocks (the quadratic forms take their symmetric parts)."""
+    c = dr._csymbols()
+    ins = [c.phi_a, c.phi_b, c.p_a, c.p, c.p_b, c.v_a, c.v_b, c.omega_a, c.omega, c.omega_b,
+           c.sp, c.sc, c.ja, c.jb]
+    f = ca.Function("f", ins, [dr.coupled_segment_quantities(c)["Q"],
+                               dr.coupled_segment_forces_ad(c)])
+    s = dr._symbols()
+    jc = ca.SX.sym("jc", dr.N_COUPLED_JOINT)
+    jins = [s.p, s.p_b, s.omega, s.omega_b, s.jp, jc]
+    g = ca.Function("g", jins, [dr.coupled_joint_quantities(s, jc)["T"],
+                                dr.coupled_joint_torques_ad(s, jc)])
+    rng = np.random.default_rng(5)
+    for _ in range(3):
+        vals = [rng.standard_normal(x.numel()) for x in ins]
+        for k in (2, 3, 4):
+            vals[k][0] += 2.5                       # frames not far apart, |p| != 1
+        vals[10][0] = 0.3                           # h
+        vals[12][0], vals[13][0] = 0.25, 0.35       # joint lengths
+        a, b = f(*vals)
+        assert _rel(a, b) < 1e-12
+        jv = [rng.standard_normal(x.numel()) for x in jins]
+        jv[0][0] += 2.5
+        jv[1][0] += 2.5
+        jv[4][0] = 0.3
+        a, b = g(*jv)
+        assert _rel(a, b) < 1e-12

@@ -129,6 +129,10 @@ def _variant(table: str, kind: str | None) -> tuple[dict, dict]:
     if table == "<time>":
         m["loads"] = [{**LOAD["force"], "time": copy.deepcopy(TIME[kind or "constant"])}]
         return m, m["loads"][0]["time"]
+    if table == "zones":
+        m["zones"] = [{"from": 0.1, "to": 0.2, "material": {"tau": 0.01},
+                       "section": {"kind": "rectangle", "width": 0.02, "height": 0.01}}]
+        return m, m["zones"][0]
     if table == "":
         return m, m
     return m, m[table]
@@ -142,7 +146,7 @@ def _variants():
             yield table, kind
     for table in ("", "rod", "material.branches", "start", "end", "start.motion",
                   "end.motion", "simulation", "statics", "analysis", "section.regions",
-                  "materials.NAME.orientation"):
+                  "materials.NAME.orientation", "zones"):
         yield table, None
 
 

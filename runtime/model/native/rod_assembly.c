@@ -213,8 +213,70 @@ int kvrod_n_params(void) { return NPAR; }
  * layout's (a wider band is fine) */
 static int check_rod(const kvrod_rod* rod) {
   if (rod->N < 1 || rod->nb < 0 || rod->nb > MAX_NB) return -1;
+  if (rod->coupled) {
+    if (rod->nb) return -1;
+    if (rod->kl < (rod->N == 1 ? KLC_1 : rod->N == 2 ? KLC_2 : KLC) ||
+        rod->ku < (rod->N == 1 ? KUC_1 : rod->N == 2 ? KUC_2 : KUC)) return -2;
+    return 0;
+  }
   if (rod->kl < kvrod_kl(rod->N, rod->nb) || rod->ku < kvrod_ku(rod->N, rod->nb)) return -2;
   return 0;
+}
+
+/* ---- coupled sections (docs/design.md, section 10): segment i's kernels see its two
+ * nodes, its own frame and those of its neighbours (segments i-1, i+1, or the clamp
+ * frames, or itself where the joint is absent: its coupling weight is then 0) ---- */
+
+static inline const double* segcp(const kvrod_rod* r, int i) {
+  return r->segc + (size_t)(i - 1) * NSEGC;
+}
+static inline const double* jntcp(const kvrod_rod* r, int j) {
+  return r->jntc + (size_t)j * NJNTC;
+}
+
+/* a joint row for an absent joint (h = 1, U0 = 0: its coupling weight is 0) */
+static const double kNoJoint[NJNT] = {1.0};
+
+/* the quaternion and angular velocity on side a (k = i-1) or b (k = i+1) of segment i:
+ * segment k, a clamp frame, or segment i itself (no joint there) */
+static void c_side(const kvrod_rod* r, int i, int k, const double* y, const double** p,
+                   const double** om, const double** jrow) {
+  const int N = r->N, j = k < i ? i - 1 : i;   /* the joint between them, at node j */
+  if (k >= 1 && k <= N) {
+    *p = y + i_p(r, k); *om = y + i_om(r, k); *jrow = jntp(r, j);
+  } else if (k == 0 && r->par[PAR_CLAMP_START] > 0.5) {
+    *p = r->par + PAR_P_START; *om = r->par + PAR_OMEGA_START; *jrow = jntp(r, 0);
+  } else if (k == N + 1 && r->par[PAR_CLAMP_END] > 0.5) {
+    *p = r->par + PAR_P_END; *om = r->par + PAR_OMEGA_END; *jrow = jntp(r, N);
+  } else {
+    *p = y + i_p(r, i); *om = y + i_om(r, i); *jrow = kNoJoint;
+  }
+}
+
+/* the inputs of segment i's coupled kernels into a[0..13] */
+static void cseg_args(const kvrod_rod* r, int i, const double* y, const double** a) {
+  a[0] = y + i_phi(r, i - 1); a[1] = y + i_phi(r, i);
+  c_side(r, i, i - 1, y, &a[2], &a[7], &a[12]);
+  a[3] = y + i_p(r, i);
+  c_side(r, i, i + 1, y, &a[4], &a[9], &a[13]);
+  a[5] = y + i_v(r, i - 1); a[6] = y + i_v(r, i);
+  a[8] = y + i_om(r, i);
+  a[10] = segp(r, i); a[11] = segcp(r, i);
+}
+
+/* gravity times the load factor (the kernels' g) */
+static void c_gravity(const kvrod_rod* r, double* g) {
+  int k;
+  for (k = 0; k < 3; ++k) g[k] = r->par[PAR_LOAD_SCALE] * r->par[PAR_GRAVITY + k];
+}
+
+/* the inputs of segment i's coupled inertia kernel (9; then c_y, c_j for its Jacobian) */
+static void cin_args(const kvrod_rod* r, int i, const double* y, const double* yp,
+                     const double* g, const double** a) {
+  a[0] = y + i_p(r, i); a[1] = y + i_om(r, i);
+  a[2] = yp + i_p(r, i); a[3] = yp + i_om(r, i);
+  a[4] = yp + i_v(r, i - 1); a[5] = yp + i_v(r, i);
+  a[6] = segp(r, i); a[7] = segcp(r, i); a[8] = g;
 }
 
 /* the relaxation rows of one element: res = q' - (strain - q)/theta for each term
@@ -229,6 +291,47 @@ static void relax_rows(const kvrod_rod* rod, int q0, const double* strain, const
       res[o] = yp[o] - rate * ((strain ? strain[k] : 0.0) - y[o]);
     }
   }
+}
+
+/* the residual of a rod with coupled sections after its node rows: segment inertia
+ * (with the mass centre's coupling to the nodes), external torques, the segments'
+ * forces (with the couplings to their joints) and the joints' torques */
+static int residual_coupled(const kvrod_rod* rod, const double* y, const double* yp,
+                            double* res, work_t* W) {
+  const int N = rod->N;
+  const int free0 = !(node_held(rod, 0) > 0.5), freeN = !(node_held(rod, N) > 0.5);
+  double r13[13], T[6], Q[15], g[3];
+  int i, j, k;
+  c_gravity(rod, g);
+  for (i = 1; i <= N; ++i) {
+    cin_args(rod, i, y, yp, g, W->arg);
+    W->res[0] = r13;
+    if (rod_coupled_inertia(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    for (k = 0; k < 7; ++k) res[i_p(rod, i) + k] = r13[k];
+    if (i - 1 > 0 || free0) for (k = 0; k < 3; ++k) res[i_v(rod, i - 1) + k] += r13[7 + k];
+    if (i < N || freeN) for (k = 0; k < 3; ++k) res[i_v(rod, i) + k] += r13[10 + k];
+    if (segment_torque(rod, i, y, W, T)) return -3;
+    for (k = 0; k < 3; ++k) res[i_om(rod, i) + k] -= T[k];
+  }
+  for (i = 1; i <= N; ++i) {
+    cseg_args(rod, i, y, W->arg);
+    W->res[0] = Q;
+    if (rod_coupled_segment_forces(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    if (i - 1 > 0 || free0) for (k = 0; k < 3; ++k) res[i_v(rod, i - 1) + k] -= Q[k];
+    if (i < N || freeN) for (k = 0; k < 3; ++k) res[i_v(rod, i) + k] -= Q[3 + k];
+    if (i > 1) for (k = 0; k < 3; ++k) res[i_om(rod, i - 1) + k] -= Q[6 + k];
+    for (k = 0; k < 3; ++k) res[i_om(rod, i) + k] -= Q[9 + k];
+    if (i < N) for (k = 0; k < 3; ++k) res[i_om(rod, i + 1) + k] -= Q[12 + k];
+  }
+  for (j = 0; j <= N; ++j) {
+    if (!joint_args(rod, j, y, W)) continue;
+    W->arg[5] = jntcp(rod, j);
+    W->res[0] = T;
+    if (rod_coupled_joint_torques(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    if (j >= 1) for (k = 0; k < 3; ++k) res[i_om(rod, j) + k] -= T[k];
+    if (j + 1 <= N) for (k = 0; k < 3; ++k) res[i_om(rod, j + 1) + k] -= T[3 + k];
+  }
+  return 0;
 }
 
 int kvrod_residual(const kvrod_rod* rod, double t, const double* y, const double* yp,
@@ -251,6 +354,7 @@ int kvrod_residual(const kvrod_rod* rod, double t, const double* y, const double
     W.res[0] = res + i_phi(rod, i);
     if (rod_node_inertia(W.arg, W.res, W.iw, W.w, 0)) return -3;
   }
+  if (rod->coupled) return residual_coupled(rod, y, yp, res, &W);
   /* segments: kinematics, angular momentum, external torques */
   for (i = 1; i <= N; ++i) {
     W.arg[0] = y + i_p(rod, i); W.arg[1] = y + i_om(rod, i);
@@ -533,6 +637,103 @@ static int jac_joint(const kvrod_rod* rod, int j, const double* y, double cy, do
   return 0;
 }
 
+/* coupled sections: segment i's inertia (13 x 13: rows and columns p, Omega, v_a, v_b;
+ * the rows of held nodes are theirs) and the dead moment's dependence on p */
+static int jac_cinertia(const kvrod_rod* rod, int i, const double* y, const double* yp,
+                        double cy, double cj, const band_t* B, work_t* W, double* J) {
+  const int N = rod->N;
+  int idx[13], rows[13], r, c;
+  double g[3];
+  c_gravity(rod, g);
+  cin_args(rod, i, y, yp, g, W->arg);
+  W->arg[9] = &cy; W->arg[10] = &cj;
+  W->res[0] = J;
+  if (rod_coupled_inertia_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
+  for (r = 0; r < 7; ++r) idx[r] = rows[r] = i_p(rod, i) + r;
+  for (r = 0; r < 3; ++r) {
+    idx[7 + r] = i_v(rod, i - 1) + r;
+    idx[10 + r] = i_v(rod, i) + r;
+    rows[7 + r] = (i - 1 > 0 || !(node_held(rod, 0) > 0.5)) ? idx[7 + r] : -1;
+    rows[10 + r] = (i < N || !(node_held(rod, N) > 0.5)) ? idx[10 + r] : -1;
+  }
+  for (c = 0; c < 13; ++c)
+    for (r = 0; r < 13; ++r)
+      if (rows[r] >= 0) AB(rows[r], idx[c]) += J[r + 13 * c];
+  const double* sl = slp(rod, i);
+  if (cy != 0.0 && has_follower(sl + SL_M_DEAD)) {
+    const double s = cy * rod->par[PAR_LOAD_SCALE];
+    const int o = i_p(rod, i);
+    W->arg[0] = y + o; W->arg[1] = sl + SL_M_DEAD;
+    W->res[0] = J;
+    if (rod_rotate_transposed_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    for (c = 0; c < 4; ++c)
+      for (r = 0; r < 3; ++r) AB(i_om(rod, i) + r, o + c) -= s * J[r + 3 * c];
+  }
+  return 0;
+}
+
+/* coupled sections: segment i's forces (15 rows: nodes i-1, i, segments i-1, i, i+1)
+ * over 33 columns (phi_a, phi_b, p_a, p, p_b, v_a, v_b, Omega_a, Omega, Omega_b); the
+ * neighbours' columns exist only where they are segments of the rod */
+static int jac_cseg(const kvrod_rod* rod, int i, const double* y, double cy,
+                    const band_t* B, work_t* W, double* J) {
+  const int N = rod->N, has_a = i > 1, has_b = i < N;
+  int rows[15], cols[33], r, c;
+  cseg_args(rod, i, y, W->arg);
+  W->res[0] = J;
+  if (rod_coupled_segment_forces_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
+  for (r = 0; r < 3; ++r) {
+    rows[r] = (i - 1 > 0 || !(node_held(rod, 0) > 0.5)) ? i_v(rod, i - 1) + r : -1;
+    rows[3 + r] = (i < N || !(node_held(rod, N) > 0.5)) ? i_v(rod, i) + r : -1;
+    rows[6 + r] = has_a ? i_om(rod, i - 1) + r : -1;
+    rows[9 + r] = i_om(rod, i) + r;
+    rows[12 + r] = has_b ? i_om(rod, i + 1) + r : -1;
+    cols[r] = i_phi(rod, i - 1) + r; cols[3 + r] = i_phi(rod, i) + r;
+    cols[18 + r] = i_v(rod, i - 1) + r; cols[21 + r] = i_v(rod, i) + r;
+    cols[24 + r] = has_a ? i_om(rod, i - 1) + r : -1;
+    cols[27 + r] = i_om(rod, i) + r;
+    cols[30 + r] = has_b ? i_om(rod, i + 1) + r : -1;
+  }
+  for (r = 0; r < 4; ++r) {
+    cols[6 + r] = has_a ? i_p(rod, i - 1) + r : -1;
+    cols[10 + r] = i_p(rod, i) + r;
+    cols[14 + r] = has_b ? i_p(rod, i + 1) + r : -1;
+  }
+  for (c = 0; c < 33; ++c) {
+    if (cols[c] < 0) continue;
+    for (r = 0; r < 15; ++r)
+      if (rows[r] >= 0) AB(rows[r], cols[c]) -= cy * J[r + 15 * c];
+  }
+  return 0;
+}
+
+/* coupled sections: joint j with its full C_MM, V_MM (as jac_joint, no relaxation) */
+static int jac_cjoint(const kvrod_rod* rod, int j, const double* y, double cy,
+                      const band_t* B, work_t* W, double* J) {
+  const int N = rod->N, has_a = j >= 1, has_b = j + 1 <= N;
+  int jrows[6], jcols[14], r, c;
+  if (!joint_args(rod, j, y, W)) return 0;
+  W->arg[5] = jntcp(rod, j);
+  W->res[0] = J;
+  if (rod_coupled_joint_torques_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
+  for (r = 0; r < 3; ++r) {
+    jrows[r] = has_a ? i_om(rod, j) + r : -1;
+    jrows[3 + r] = has_b ? i_om(rod, j + 1) + r : -1;
+    jcols[8 + r] = has_a ? i_om(rod, j) + r : -1;
+    jcols[11 + r] = has_b ? i_om(rod, j + 1) + r : -1;
+  }
+  for (r = 0; r < 4; ++r) {
+    jcols[r] = has_a ? i_p(rod, j) + r : -1;
+    jcols[4 + r] = has_b ? i_p(rod, j + 1) + r : -1;
+  }
+  for (c = 0; c < 14; ++c) {
+    if (jcols[c] < 0) continue;
+    for (r = 0; r < 6; ++r)
+      if (jrows[r] >= 0) AB(jrows[r], jcols[c]) -= cy * J[r + 6 * c];
+  }
+  return 0;
+}
+
 static void zero_cell(const kvrod_rod* rod, int i, const band_t* B) {
   const int c0 = cs(rod, i), c1 = i == 0 ? c0size(rod) : c0 + csize(rod);
   int c;
@@ -562,6 +763,17 @@ int kvrod_jacobian_band_cells(const kvrod_rod* rod, double t, const double* y,
   /* one sweep over the cells; the columns of cell i+1 are zeroed just before the
    * elements of cell i (which reach one cell ahead) are added: cache friendly */
   if (i0 == 0) zero_cell(rod, 0, B);
+  if (rod->coupled) {      /* element i: node i, segment i (reaching cells i-1..i+1), joint i */
+    for (i = i0; i <= i1; ++i) {
+      if (i + 1 <= N) zero_cell(rod, i + 1, B);
+      if (jac_node(rod, i, y, yp, cy, cj, B, &W, J)) return -3;
+      if (i >= 1 && jac_cinertia(rod, i, y, yp, cy, cj, B, &W, J)) return -3;
+      if (cy == 0.0) continue;
+      if (i >= 1 && jac_cseg(rod, i, y, cy, B, &W, J)) return -3;
+      if (jac_cjoint(rod, i, y, cy, B, &W, J)) return -3;
+    }
+    return 0;
+  }
   for (i = i0; i <= i1; ++i) {
     if (cy != 0.0 && i >= 1 && i + 3 <= i1 && (g0 < 0 || i >= g0 + 4)) {
       g0 = i;
@@ -619,8 +831,12 @@ static void relax_energy(const kvrod_rod* rod, const double* C0, size_t stride, 
 
 /* energies and powers of one state; per-element strains and resultants if out_el != 0
  * (V (3N), F (3N), U (3(N+1)), M (3(N+1))) */
+static int energies_coupled(const kvrod_rod* rod, const double* y, const double* yp,
+                            double* e, double* out_el, work_t* W);
+
 static int energies_one(const kvrod_rod* rod, const double* y, const double* yp,
                         double* e, double* out_el, work_t* W) {
+  if (rod->coupled) return energies_coupled(rod, y, yp, e, out_el, W);
   const int N = rod->N;
   double Tk, Wel, Dd, S3[3], R3[3], Q[9], T6[6], f[3], m, nq[3], dX[3];
   double Fint[2][3] = {{0, 0, 0}, {0, 0, 0}};
@@ -699,6 +915,107 @@ static int energies_one(const kvrod_rod* rod, const double* y, const double* yp,
     const double* a = held_a(rod, i);
     for (k = 0; k < 3; ++k) {
       R[k] = m * a[k] - f[k] - Fint[j][k];
+      e[4] += R[k] * y[i_v(rod, i) + k];
+    }
+  }
+  return 0;
+}
+
+/* energies_one for a rod with coupled sections: the segments' kinetic energy with the
+ * mass centre's coupling and the power of gravity at it, the couplings' energy and
+ * dissipation, their shares of the joints' moments, and their torques on the clamp
+ * frames (part of the clamps' moments and of the boundary power) */
+static int energies_coupled(const kvrod_rod* rod, const double* y, const double* yp,
+                            double* e, double* out_el, work_t* W) {
+  const int N = rod->N;
+  double Tk, Pg, Wel, Dd, S3[3], R3[3], Ma[3], Mb[3], Q[15], T6[6], f[3], m, g[3], r13[13];
+  double Fint[2][3] = {{0, 0, 0}, {0, 0, 0}}, Tclamp[2][3] = {{0, 0, 0}, {0, 0, 0}};
+  double Fin[2][3] = {{0, 0, 0}, {0, 0, 0}};
+  double* oV = out_el;
+  double* oF = out_el ? oV + 3 * N : 0;
+  double* oU = out_el ? oF + 3 * N : 0;
+  double* oM = out_el ? oU + 3 * (N + 1) : 0;
+  int i, j, k;
+  for (k = 0; k < NDIAG; ++k) e[k] = 0.0;
+  c_gravity(rod, g);
+  for (i = 0; i <= N; ++i) {
+    m = node_mass(rod, i);
+    W->arg[0] = y + i_v(rod, i); W->arg[1] = &m;
+    W->res[0] = &Tk;
+    if (rod_node_kinetic(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    e[0] += Tk;
+    if (node_force(rod, i, y, W, f)) return -3;
+    for (k = 0; k < 3; ++k) e[3] += f[k] * y[i_v(rod, i) + k];
+  }
+  if (out_el) memset(oM, 0, sizeof(double) * 3 * (size_t)(N + 1));
+  for (i = 1; i <= N; ++i) {
+    W->arg[0] = y + i_v(rod, i - 1); W->arg[1] = y + i_v(rod, i);
+    W->arg[2] = y + i_p(rod, i); W->arg[3] = y + i_om(rod, i);
+    W->arg[4] = segp(rod, i); W->arg[5] = segcp(rod, i); W->arg[6] = g;
+    W->res[0] = &Tk; W->res[1] = &Pg;
+    if (rod_coupled_kinetic(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    e[0] += Tk; e[3] += Pg;
+    if (segment_torque(rod, i, y, W, S3)) return -3;
+    for (k = 0; k < 3; ++k) e[3] += S3[k] * y[i_om(rod, i) + k];
+    cseg_args(rod, i, y, W->arg);
+    W->res[0] = &Wel; W->res[1] = &Dd; W->res[2] = S3; W->res[3] = R3;
+    W->res[4] = Ma; W->res[5] = Mb;
+    if (rod_coupled_segment_diagnostics(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    e[1] += Wel; e[2] += 2.0 * Dd;
+    if (out_el)
+      for (k = 0; k < 3; ++k) {
+        oV[3 * (i - 1) + k] = S3[k]; oF[3 * (i - 1) + k] = R3[k];
+        oM[3 * (i - 1) + k] += Ma[k]; oM[3 * i + k] += Mb[k];
+      }
+    if (i == 1 || i == N) {   /* forces on the end nodes, torques on the clamp frames */
+      W->res[0] = Q;
+      if (rod_coupled_segment_forces(W->arg, W->res, W->iw, W->w, 0)) return -3;
+      for (k = 0; k < 3; ++k) {
+        if (i == 1) { Fint[0][k] += Q[k]; Tclamp[0][k] += Q[6 + k]; }
+        if (i == N) { Fint[1][k] += Q[3 + k]; Tclamp[1][k] += Q[12 + k]; }
+      }
+      cin_args(rod, i, y, yp, g, W->arg);   /* the mass centre's inertia on the end nodes */
+      W->res[0] = r13;
+      if (rod_coupled_inertia(W->arg, W->res, W->iw, W->w, 0)) return -3;
+      for (k = 0; k < 3; ++k) {
+        if (i == 1) Fin[0][k] += r13[7 + k];
+        if (i == N) Fin[1][k] += r13[10 + k];
+      }
+    }
+  }
+  for (j = 0; j <= N; ++j) {
+    if (!joint_args(rod, j, y, W)) continue;
+    W->arg[5] = jntcp(rod, j);
+    W->res[0] = &Wel; W->res[1] = &Dd; W->res[2] = S3; W->res[3] = R3;
+    if (rod_coupled_joint_diagnostics(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    e[1] += Wel; e[2] += 2.0 * Dd;
+    if (out_el) for (k = 0; k < 3; ++k) { oU[3 * j + k] = S3[k]; oM[3 * j + k] += R3[k]; }
+    if (j == 0 || j == N) {             /* the clamp's moment and its power */
+      W->res[0] = T6;
+      if (rod_coupled_joint_torques(W->arg, W->res, W->iw, W->w, 0)) return -3;
+      const double* om = rod->par + (j == 0 ? PAR_OMEGA_START : PAR_OMEGA_END);
+      const double* pc = rod->par + (j == 0 ? PAR_P_START : PAR_P_END);
+      double mTc[3];
+      const double* Tc = j == 0 ? T6 : T6 + 3;
+      const double* Ts = Tclamp[j == 0 ? 0 : 1];
+      for (k = 0; k < 3; ++k) {
+        e[4] -= (Tc[k] + Ts[k]) * om[k];
+        mTc[k] = -(Tc[k] + Ts[k]);
+      }
+      W->arg[0] = pc; W->arg[1] = mTc;
+      W->res[0] = e + NDIAG_E + (j == 0 ? 3 : 9);
+      if (rod_rotate(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    }
+  }
+  for (j = 0; j < 2; ++j) {
+    i = j == 0 ? 0 : N;
+    if (!(node_held(rod, i) > 0.5)) continue;
+    m = node_mass(rod, i);
+    if (node_force(rod, i, y, W, f)) return -3;
+    double* R = e + NDIAG_E + 6 * j;
+    const double* a = held_a(rod, i);
+    for (k = 0; k < 3; ++k) {
+      R[k] = m * a[k] + Fin[j][k] - f[k] - Fint[j][k];
       e[4] += R[k] * y[i_v(rod, i) + k];
     }
   }

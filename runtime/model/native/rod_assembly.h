@@ -7,7 +7,9 @@
  * JOINT_PARAMS, joint j at node j), the node loads (N+1 rows of NODE_LOADS) and the
  * segment loads (N rows of SEGMENT_LOADS), all row-major; for a generalized Maxwell rod
  * also nb relaxation terms: their times theta (nb) and moduli C_b of every segment
- * (N x nb x 3) and joint ((N+1) x nb x 3); nb = 0 for Kelvin-Voigt (the pointers unused).
+ * (N x nb x 3) and joint ((N+1) x nb x 3); nb = 0 for Kelvin-Voigt (the pointers unused);
+ * for a rod with coupled sections (coupled = 1, nb = 0) the rows of COUPLED_SEGMENT_PARAMS
+ * and COUPLED_JOINT_PARAMS (docs/design.md, section 10).
  * y, yp: state and its time derivative (length kvrod_n_state(N, nb)); res: the residual
  * F(t, y, y') (same length). Band storage is LAPACK dgbtrf's with the rod's kl, ku
  * (at least kvrod_kl(N, nb), kvrod_ku(N, nb)): ab has ldab >= 2*kl+ku+1 rows and n
@@ -33,6 +35,10 @@ typedef struct {
   const double* theta;    /* nb relaxation times (s) */
   const double* segb;     /* N x nb x 3 moduli of the relaxation terms on segments (N) */
   const double* jntb;     /* (N+1) x nb x 3 moduli on joints (N m^2) */
+  int coupled;            /* 1: coupled sections (nb = 0): the kernels rod_coupled_* with
+                             segc, jntc instead of the diagonal ones; band KLC, KUC */
+  const double* segc;     /* N x NSEGC coupled segment parameters (coupled only) */
+  const double* jntc;     /* (N+1) x NJNTC coupled joint parameters (coupled only) */
 } kvrod_rod;
 
 int kvrod_n_state(int N, int nb);

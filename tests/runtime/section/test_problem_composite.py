@@ -1,7 +1,7 @@
 """Composite sections and named materials in problem files (runtime/problem): parsing,
 errors naming the key, the damping key for every section kind, writing a problem back,
-the refusal to simulate a composite section, and the energy shear factors of the
-closed-form shapes."""
+composite sections in every command (their rod matrices from the section analysis), and
+the energy shear factors of the closed-form shapes."""
 
 from __future__ import annotations
 
@@ -109,36 +109,56 @@ def test_non_spd_and_asymmetric_matrices_are_named_with_their_unit():
 
 
 @pytest.mark.parametrize("command", ["simulate", "static", "modes"])
-def test_simulating_a_composite_is_refused_in_one_line_before_writing(tmp_path, capsys,
-                                                                       command):
+def test_a_composite_problem_runs_in_every_command(tmp_path, capsys, command):
+    """Composite sections are simulated with the coupled kernels (issue 26; the 6x6
+    matrices of the section analysis)."""
     import tomli_w
 
     f = tmp_path / "cable.toml"
-    f.write_text(tomli_w.dumps(cable()))
+    f.write_text(tomli_w.dumps(cable(**{"simulation": {"t_end": 0.02, "initial": "static"}})))
     out = tmp_path / "out"
-    assert main([command, str(f), "--out", str(out)]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and err[0].startswith(f"kvrod {command}")
-    assert "section.kind" in err[0] and "kvrod section" in err[0]
-    assert not out.exists()
+    assert main([command, str(f), "--out", str(out)]) == 0, capsys.readouterr().err
+    assert (out / ("modes.json" if command == "modes" else "summary.json")).exists()
 
 
-def test_the_library_refuses_the_rod_matrices_of_a_composite():
+def test_the_rod_matrices_of_a_composite_are_its_section_analysis():
+    from runtime.problem.coupled import composite_analysis
+
     p = Problem.from_mapping(cable())
-    for call in (p.segment_matrices, p.characteristic_frequency, p.check_simulable):
-        with pytest.raises(ParameterError, match=r"section\.kind.*6x6 kernels"):
-            call()
+    m = p.segment_matrices()
+    res = composite_analysis(p.section)
+    assert composite_analysis(p.section) is res               # cached per section
+    K = 0.5 * (res.stiffness + res.stiffness.T)
+    assert np.allclose(m["K6"], K) and m["K6"].shape == (8, 6, 6)
+    assert np.allclose(m["V6"], 0.5 * (res.viscosity + res.viscosity.T))
+    assert np.allclose(m["rhoA"], res.mass_per_length)
+    assert np.allclose(m["mass_centre"], np.subtract(res.mass_centre, res.elastic_centroid))
+    assert p.characteristic_frequency() > 0.0
+    p.check_simulable()
 
 
-def test_a_study_of_a_composite_problem_is_refused_at_its_points(tmp_path):
+def test_a_study_of_a_composite_problem_checks_its_points(tmp_path):
     import tomli_w
 
-    from runtime.study.sweep import StudyError, check_point
+    from runtime.study.sweep import check_point
 
     f = tmp_path / "cable.toml"
     f.write_text(tomli_w.dumps(cable()))
-    with pytest.raises(StudyError, match=r"point 1.*section\.kind"):
-        check_point(str(f), {"materials.pvc.tau_S": 0.02}, "point 1")
+    check_point(str(f), {"materials.pvc.tau_S": 0.02}, "point 1")
+
+
+def test_a_non_symmetric_naive_viscosity_is_refused_naming_the_damping_key():
+    import tomllib
+
+    from runtime.problem.registry import EXAMPLES_DIR
+
+    doc = tomllib.loads((EXAMPLES_DIR / "fibre_strip_section.toml").read_text())
+    doc.update(rod={"length": 0.2, "elements": 4})
+    doc["section"]["damping"] = "naive"
+    doc.pop("description", None)
+    p = Problem.from_mapping(doc)
+    with pytest.raises(ParameterError, match=r"section\.damping.*'consistent'.*not symmetric"):
+        p.check_simulable()
 
 
 def test_the_damping_key_lives_in_section_and_the_old_key_is_still_read():

@@ -1,0 +1,157 @@
+"""Zones of a rod with their own section or material (issue 26; docs/design.md, section 10).
+
+``[[zones]]`` tables, each with ``from`` and ``to`` (arc length, m, 0 <= from < to <= L)
+and a ``section`` and/or a ``material`` table that replace the problem's ``[section]`` /
+``[material]`` on that stretch (a ``composite`` zone section names ``[materials.NAME]``
+tables as the top-level one does). Zones may not overlap; where no zone lies the
+problem's own section and material hold (a cable with a stiffer clip region is one zone).
+A zone's tapers (``*_end``) run over the zone. A segment belongs to the zone that holds
+its midpoint, so a zone boundary between two nodes moves to the nearer node (place
+boundaries on nodes: multiples of L/N).
+
+Joints between segments of different zones take the mean of the two segments' joint
+matrices, as everywhere (``materials.joint_average``): the moment across a sharp change
+in bending stiffness then sees the arithmetic mean where the continuum's compliance
+integral over the joint's cell is the harmonic one, so a sharp change costs first order
+in h (the tip response of a two-zone cantilever converges like h, tested against the
+closed form of the stepped beam); inside each zone the rod stays second order. The
+arithmetic mean keeps the positive-definiteness argument of coupled sections (section 10)
+and every existing problem's numbers.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from runtime.errors import ParameterError
+from runtime.problem import coerce as C
+
+ZONE_KEYS = ("from", "to", "section", "material")
+
+
+@dataclass(frozen=True)
+class Zone:
+    """``start`` .. ``end`` (m) of the rod with its own ``section`` and ``material`` (the
+    problem's where the zone gives none); ``index`` its place in ``[[zones]]``."""
+
+    index: int
+    start: float
+    end: float
+    section: Any
+    material: Any
+    section_mapping: Mapping[str, Any] | None = None
+    material_mapping: Mapping[str, Any] | None = None
+
+    def to_mapping(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"from": self.start, "to": self.end}
+        if self.section_mapping is not None:
+            out["section"] = dict(self.section_mapping)
+        if self.material_mapping is not None:
+            out["material"] = dict(self.material_mapping)
+        return out
+
+
+def zones_from_mapping(value: Any, top: Mapping[str, Any], length: float) -> tuple[Zone, ...]:
+    """The ``[[zones]]`` of a problem table ``top`` (its ``section``, ``material`` and
+    ``materials`` are what a zone replaces or names), checked against the rod length."""
+    from runtime.problem.schema import section_and_material
+
+    if value is None:
+        return ()
+    if not isinstance(value, list):
+        raise ParameterError("zones", value, "an array of tables [[zones]], each with from, "
+                             "to (m) and a section and/or material table")
+    out = []
+    for k, z in enumerate(value):
+        path = f"zones[{k}]"
+        z = C.table(path, z)
+        C.no_unknown_keys(path, z, ZONE_KEYS)
+        for key in ("from", "to"):
+            if key not in z:
+                raise ParameterError(f"{path}.{key}", None, f"an arc length in m, 0 ... "
+                                     f"{length:g} (the rod length)")
+        a = C.number(f"{path}.from", z["from"], low=0.0, high=length,
+                     allowed=f"0 ... {length:g} m (the rod length)")
+        b = C.number(f"{path}.to", z["to"], low=0.0, high=length * (1 + 1e-12),
+                     allowed=f"{a:g} < to <= {length:g} m (the rod length)")
+        if not b > a:
+            raise ParameterError(f"{path}.to", b, f"> from = {a:g} m")
+        if "section" not in z and "material" not in z:
+            raise ParameterError(path, dict(z), "a section and/or a material table for the "
+                                 "zone (else it changes nothing)")
+        sec_m = z.get("section", top.get("section"))
+        mat_m = z.get("material", top.get("material"))
+        doc: dict[str, Any] = {"section": sec_m}
+        if C.table("section", sec_m or {}).get("kind") == "composite":
+            if "materials" in top:
+                doc["materials"] = top["materials"]
+        elif mat_m is not None:
+            doc["material"] = mat_m
+        try:
+            section, material = section_and_material(doc)
+        except ParameterError as exc:
+            raise ParameterError(f"{path}.{exc.name}", exc.value, exc.allowed,
+                                 exc.where) from None
+        if getattr(material, "model", "kelvin_voigt") != "kelvin_voigt":
+            raise ParameterError(f"{path}.material.model", material.model, "'kelvin_voigt' "
+                                 "in zones (a generalized Maxwell rod's relaxation terms "
+                                 "are the same along the rod)")
+        out.append(Zone(k, a, b, section, material,
+                        dict(z["section"]) if "section" in z else None,
+                        dict(z["material"]) if "material" in z else None))
+    order = sorted(out, key=lambda zz: zz.start)
+    for z0, z1 in zip(order, order[1:], strict=False):
+        if z1.start < z0.end:
+            raise ParameterError(f"zones[{z1.index}].from", z1.start, f">= {z0.end:g} m, "
+                                 f"the end of zones[{z0.index}] (zones may not overlap)")
+    return tuple(out)
+
+
+def full_form(m: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Rod matrices (``Problem.segment_matrices``) with the coupled entries K6, V6, rhoJ,
+    mass_centre, made from the diagonals where a section has none."""
+    if "K6" in m:
+        return m
+    n = m["rhoA"].shape[0]
+    out = dict(m)
+    out["K6"] = np.zeros((n, 6, 6))
+    out["V6"] = np.zeros((n, 6, 6))
+    idx = np.arange(3)
+    out["K6"][:, idx, idx] = m["C_F"]
+    out["K6"][:, idx + 3, idx + 3] = m["C_M"]
+    out["V6"][:, idx, idx] = m["V_F"]
+    out["V6"][:, idx + 3, idx + 3] = m["V_M"]
+    out["rhoJ"] = m["rhoI"][:, :, None] * np.eye(3)
+    out["mass_centre"] = np.zeros((n, 2))
+    return out
+
+
+def apply_zones(base: dict[str, np.ndarray], s_mid: np.ndarray, zones: tuple[Zone, ...],
+                matrices_of) -> dict[str, np.ndarray]:
+    """The rod matrices of segments with midpoints ``s_mid`` (m): ``base``, replaced in
+    each zone by ``matrices_of(zone, x)`` at the zone's fractions x; in the coupled form
+    (:func:`full_form`) for all when any part is coupled."""
+    parts = []
+    for z in zones:
+        sel = (s_mid >= z.start) & (s_mid < z.end)
+        if np.any(sel):
+            x = (s_mid[sel] - z.start) / (z.end - z.start)
+            parts.append((sel, matrices_of(z, x)))
+    if not parts:
+        return base
+    if "theta" in base:
+        raise ParameterError("zones", "given", "a Kelvin-Voigt [material] with zones (a "
+                             "generalized Maxwell rod's relaxation terms are the same along "
+                             "the rod)")
+    coupled = "K6" in base or any("K6" in m for _, m in parts)
+    out = {k: np.array(v, dtype=float) for k, v in
+           (full_form(base) if coupled else base).items()}
+    for sel, m in parts:
+        m = full_form(m) if coupled else m
+        for k in out:
+            out[k][sel] = m[k]
+    return out
