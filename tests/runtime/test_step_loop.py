@@ -102,6 +102,19 @@ def test_same_steps_on_the_rod_kernels(kw, chunk, monkeypatch):
     assert py.nstep > 50
 
 
+def test_same_steps_with_the_configuration_error_test_and_the_order_bound():
+    """A generalized Maxwell rod as simulate runs it: velocities out of the error test,
+    orders 3-5 only on steps above D_k / sigma_g (issue 27)."""
+    m = rod_model(8, tau=None, **MAXWELL)
+    y0, yp0 = _released(m)
+    sigma = m.glassy_decay_rate()
+    assert math.isfinite(sigma) and sigma > 0.0
+    py, c = _pair(m, y0, yp0, 0.5, rtol=1e-6, atol=1e-8, error_mask=~m.velocity_mask,
+                  stiff_decay_rate=sigma)
+    _assert_same_steps(py, c)
+    assert py.nstep > 50
+
+
 def test_same_steps_with_time_dependent_loads_through_the_drive_callback():
     p = load_problem("examples/base_excitation.toml",
                      {"rod.elements": 6, "simulation.t_end": 0.6})
