@@ -1058,6 +1058,12 @@ density = 1200.0
 tau_S = 0.01
 """
 SEC = ("section", "{tmp}/sec.toml")
+#: the composite's sheath as a generalized Maxwell material (refused in a composite)
+MAXWELL_REGION = (SECTION_OK.replace('name = "two_layers"', "")
+                  .replace("[materials.sheath]\n", '[materials.sheath]\nmodel = '
+                           '"generalized_maxwell"\n')
+                  .replace("tau_S = 0.01\n", "[[materials.sheath.branches]]\n"
+                           "youngs_modulus = 1e6\npoisson_ratio = 0.45\ntau = 0.01\n"))
 
 
 def section_file(old: str = "", new: str = "") -> Callable:
@@ -1857,13 +1863,14 @@ CASES: list[Case] = [
          (section_file(), template("section")),
          (json_is("section.json", lambda d: d["materials"]["sheath"]["tau_S"] == 0.02,
                   "the new analysis (tau_S = 0.02)"),)),
-    Case("simulate-composite-section-refused", "message",
-         ("simulate", "{tmp}/rod.toml", *OUT), 2, ("section.kind", "composite",
-                                                   "kvrod section"),
-         (write("rod.toml", '[rod]\nlength = 0.3\nelements = 4\n'
-                + SECTION_OK.replace('name = "two_layers"', "")),), (ABSENT,), **GUARDED),
-    Case("static-composite-section-refused", "message",
-         ("static", "{tmp}/rod.toml", *OUT), 2, ("section.kind", "composite"),
-         (write("rod.toml", '[rod]\nlength = 0.3\nelements = 4\n'
-                + SECTION_OK.replace('name = "two_layers"', "")),), (ABSENT,), **GUARDED),
+    # composite sections run since issue 26 (tests/runtime/section/test_problem_composite.py);
+    # a generalized Maxwell region is refused, naming its material
+    Case("simulate-composite-maxwell-region-refused", "message",
+         ("simulate", "{tmp}/rod.toml", *OUT), 2, ("materials.sheath.model", "kelvin_voigt"),
+         (write("rod.toml", '[rod]\nlength = 0.3\nelements = 4\n' + MAXWELL_REGION),),
+         (ABSENT,), **GUARDED),
+    Case("static-composite-maxwell-region-refused", "message",
+         ("static", "{tmp}/rod.toml", *OUT), 2, ("materials.sheath.model", "kelvin_voigt"),
+         (write("rod.toml", '[rod]\nlength = 0.3\nelements = 4\n' + MAXWELL_REGION),),
+         (ABSENT,), **GUARDED),
 ]
