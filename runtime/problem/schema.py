@@ -518,7 +518,7 @@ class Problem:
         """The highest BDF order of a run: ``simulation.max_order`` if given, else 5.
 
         A generalized Maxwell rod's glassy high-frequency modes are lightly damped and
-        BDF3-5 are not A-stable: on steps too small to damp them (|h| sigma_g < D_k) the
+        BDF3-5 are not A-stable: on steps too small to damp them (``|h| sigma_g < D_k``) the
         integrator itself keeps the order at 2
         (:class:`~runtime.solvers.bdf.BDF`'s ``stiff_decay_rate``). Before that bound the
         default here was 2 for a Maxwell rod (157694 steps at order 5, 26816 at order 2

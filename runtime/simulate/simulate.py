@@ -112,7 +112,7 @@ class SimulationResult:
     t_last: float = 0.0
     y_last: np.ndarray | None = None
     atol: np.ndarray | None = None
-    #: what the error test controlled (:func:`error_control`)
+    #: what the error test controlled (``error_control``)
     control: ErrorControl | None = None
     model: RodModel | None = None
     interrupt: BaseException | None = None

@@ -149,7 +149,7 @@ class BDF:
     stiff_decay_rate : float
         Slowest decay rate sigma (1/s) of the problem's stiff, lightly damped modes
         (default 0: none). Order k >= 3 is then chosen only on steps with
-        ``|h| sigma >= D_k`` (:func:`stability_extents`): BDF3-5 are not A-stable, and
+        ``|h| sigma >= D_k`` (``stability_extents``): BDF3-5 are not A-stable, and
         a mode ``h lambda`` with ``Re(h lambda) > -D_k`` near the imaginary axis may fall
         in their unstable lobe, where its growth, caught by the error test only, holds
         the step at the stability limit (CVODE's STALD detects this after the fact;
@@ -232,7 +232,7 @@ class BDF:
         self.max_order = int(max_order)
         if not (math.isfinite(stiff_decay_rate) and stiff_decay_rate >= 0.0):
             raise ParameterError("stiff_decay_rate", stiff_decay_rate, "finite, >= 0 (1/s)")
-        #: smallest |h| at which order k may be chosen (index k; 0: no bound)
+        #: smallest step size ``|h|`` at which order k may be chosen (index k; 0: no bound)
         self._stab_hmin = [0.0] * (MAX_ORDER + 2)
         if stiff_decay_rate > 0.0:
             for k, extent in stability_extents().items():
