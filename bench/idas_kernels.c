@@ -6,9 +6,11 @@
  * of runtime/model/native/rod_assembly.c, compiled together with generated/rod_kernels.c
  * (and rod_kernels_x4.c) into one shared library whose size does not depend on N.
  *
- * The rod (its arrays), the scaling and the Jacobian pattern are handed over at run time
- * by kv_setup (from Python, ctypes) before casadi.external loads the library; each rod
- * gets its own copy of the library file, so globals are per rod.
+ * The rod (its arrays; for a generalized Maxwell rod also its nb relaxation terms: times
+ * theta and moduli segb, jntb, whose internal strains q are state entries with rows
+ * q' - (strain - q)/theta, dF/dq' = 1), the scaling and the Jacobian pattern are handed
+ * over at run time by kv_setup (from Python, ctypes) before casadi.external loads the
+ * library; each rod gets its own copy of the library file, so globals are per rod.
  *
  * ode_k = -g(y)_{d_k} / (D_{d_k} s_k) with y_{d_k} = s_k x_k and the other (algebraic)
  * entries of y fixed; g(y) = F(t, y, 0). The Jacobian entry e (row k, column j) is
@@ -43,17 +45,21 @@ EXPORT int kv_setup(int N, const double *par, const double *seg, const double *j
                     const double *nload, const double *sload, int n_state, int n_x,
                     int ld, const int *d_idx, const double *s, const double *fac,
                     const double *y_fixed, casadi_int n_nz, const casadi_int *src,
-                    const double *coef, const casadi_int *sp) {
+                    const double *coef, const casadi_int *sp, int nb,
+                    const double *theta, const double *segb, const double *jntb) {
   rod.N = N;
-  rod.nb = 0;                    /* Kelvin-Voigt: no relaxation terms */
-  rod.kl = kvrod_kl(N, 0);       /* the band the caller allocated (ldab = 2 kl + ku + 1) */
-  rod.ku = kvrod_ku(N, 0);
+  rod.nb = nb;                   /* relaxation terms (0: Kelvin-Voigt, pointers unused) */
+  rod.kl = kvrod_kl(N, nb);      /* the band the caller allocated (ldab = 2 kl + ku + 1) */
+  rod.ku = kvrod_ku(N, nb);
   if (ld < 2 * rod.kl + rod.ku + 1) return 2;
   rod.par = par;
   rod.seg = seg;
   rod.jnt = jnt;
   rod.nload = nload;
   rod.sload = sload;
+  rod.theta = theta;
+  rod.segb = segb;
+  rod.jntb = jntb;
   n = n_state;
   nx = n_x;
   ldab = ld;

@@ -70,9 +70,10 @@ import casadi as ca
 import numpy as np
 
 from runtime import native
+from runtime.errors import ParameterError
 from runtime.model import build
 from runtime.problem.assemble import build_model
-from runtime.problem.registry import load_problem
+from runtime.problem.registry import ProblemFileError, load_problem
 from runtime.simulate.simulate import default_atol, static_equilibrium
 from runtime.solvers.integrator import consistent_initial
 
@@ -85,6 +86,11 @@ CFLAGS = ("-O2", "-march=native", "-fPIC", "-shared")
 KERNEL_CFLAGS = ("-O3", "-march=native", "-ffp-contract=off", "-fPIC", "-shared")
 FORMS = ("ode", "dae")
 BUILDS = ("flat", "kernels", "map", "sx", "mx")
+ERROR_CONTROLS = ("state", "configuration")
+#: factor on the absolute tolerances of the velocities (and, for CVODES, on their scaling)
+#: that takes them out of the error test: their weights 1/(rtol |y| + atol) become ~1e-12
+#: of the others' (a power of two, so the scaling is exact in floating point)
+OUT_OF_TEST = 2.0**40
 KERNELS_C = Path(__file__).resolve().with_name("idas_kernels.c")
 
 
@@ -95,9 +101,10 @@ KERNELS_C = Path(__file__).resolve().with_name("idas_kernels.c")
 
 @dataclass
 class ReleasedRod:
-    """The cantilever after release: model (tip load off), consistent (y0, yp0), the
-    constant diagonal D of dF/dy', differential/algebraic indices, tip indices, and the
-    per-field tolerance scales ``scale`` (atol = rtol * scale for rtol >= 1e-8)."""
+    """A rod after release (by default the paper's cantilever): model (tip load off),
+    consistent (y0, yp0), the constant diagonal D of dF/dy', differential/algebraic
+    indices, tip indices, and the per-field tolerance scales ``scale`` (atol = rtol *
+    scale for rtol >= 1e-8)."""
 
     problem: Any
     model: Any
@@ -125,19 +132,44 @@ class ReleasedRod:
         p = self.problem.with_overrides({"rtol": rtol})
         return default_atol(p, self.model, self.static_y)
 
+    @property
+    def velocity_mask(self) -> np.ndarray:
+        """(n,) bool: the velocities (node v, segment Omega), which kvrod's default error
+        test leaves out for a generalized Maxwell rod (``RodModel.velocity_mask``)."""
+        return self.model.velocity_mask
 
-def released_rod(n_elements: int, t_end: float = 10.0, rtol: float = 1e-6,
-                 overrides: dict | None = None) -> ReleasedRod:
-    """The paper's cantilever with ``n_elements``, deflected statically and released."""
-    problem = load_problem("cantilever", {"n_elements": int(n_elements), "t_end": t_end,
-                                          "rtol": rtol, **(overrides or {})})
+    def default_error_control(self) -> str:
+        """What ``kvrod simulate`` controls on this problem by default: "configuration"
+        for a generalized Maxwell rod, "state" otherwise (``Problem.error_control``)."""
+        return self.problem.error_control()
+
+
+def released_rod(n_elements: int | None = None, t_end: float | None = None,
+                 rtol: float = 1e-6, overrides: dict | None = None,
+                 problem: str | Path = "cantilever") -> ReleasedRod:
+    """A problem (default the paper's cantilever; a built-in name or a TOML file) with
+    ``n_elements`` (default: the problem's), deflected statically and released (its
+    loads at t = 0-, then at t = 0 from the right: the released tip load is off).
+
+    As ``kvrod simulate`` with ``initial = "static"``: the relaxation terms of a
+    generalized Maxwell rod start relaxed (``RodModel.relaxed``: the load was held long
+    enough; the identity for Kelvin-Voigt). The ODE form needs F linear in y' with a
+    constant diagonal dF/dy' (node masses and inertias, 1 on the kinematic rows and on the
+    internal strains' rows q' - (strain - q)/theta), zero on the algebraic rows, and the
+    held nodes at rest: checked here."""
+    ov: dict[str, Any] = {}
+    if n_elements is not None:
+        ov["n_elements"] = int(n_elements)
+    if t_end is not None:
+        ov["t_end"] = t_end
+    problem = load_problem(problem, {**ov, "rtol": rtol, **(overrides or {})})
     model = build_model(problem)
     t0 = time.perf_counter()
     st = static_equilibrium(problem, model)
     ts = time.perf_counter() - t0
     model.at(0.0)          # dynamic from t = 0: the released tip load is off
     zero = np.zeros(model.n)
-    y0, yp0 = consistent_initial(model, 0.0, st.y, zero)
+    y0, yp0 = consistent_initial(model, 0.0, model.relaxed(st.y), zero)
     D = model.dF_dyp_sparse(0.0, y0, yp0).diagonal()
     di, ai = np.nonzero(model.differential)[0], np.nonzero(~model.differential)[0]
     if np.any(D[di] == 0) or np.any(D[ai] != 0):
@@ -175,13 +207,30 @@ class Opponent:
     c_bytes: int = 0
     library: str = ""
     keep: Any = None          # what the compiled code points into (build "kernels")
+    #: the scaling's error control: "configuration" multiplies the velocities' scales by
+    #: OUT_OF_TEST (CVODES's scalar abstol then leaves them out of its error test)
+    error_control: str = "state"
 
     @property
     def label(self) -> str:
-        return f"{self.form}, {self.build}"
+        ec = "" if self.error_control == "state" else ", velocities scaled out"
+        return f"{self.form}, {self.build}{ec}"
 
 
-def _cache_key(rod: ReleasedRod, form: str, build_kind: str, cc: str) -> str:
+def _scales(rod: ReleasedRod, form: str, error_control: str) -> np.ndarray:
+    """The ODE form's scaling s of x (y[di] = s * x): kvrod's default atol per unit rtol,
+    times OUT_OF_TEST on the velocities for ``error_control = "configuration"``; ones
+    for the DAE form."""
+    if form != "ode":
+        return np.ones(rod.di.size)
+    s = rod.scale[rod.di].copy()
+    if error_control == "configuration":
+        s[rod.velocity_mask[rod.di]] *= OUT_OF_TEST
+    return s
+
+
+def _cache_key(rod: ReleasedRod, form: str, build_kind: str, cc: str,
+               error_control: str = "state") -> str:
     h = hashlib.sha256()
     gdir = build.generated_dir()
     h.update((gdir / "MANIFEST.json").read_bytes())
@@ -189,14 +238,20 @@ def _cache_key(rod: ReleasedRod, form: str, build_kind: str, cc: str) -> str:
     for arr in (a.par, a.seg, a.jnt, a.nload, a.sload, rod.D, rod.scale,
                 rod.y0[rod.ai], rod.di.astype(np.int64)):
         h.update(np.ascontiguousarray(arr).tobytes())
+    if a.branches:      # relaxation terms (a Kelvin-Voigt rod's key is unchanged)
+        for arr in (a.theta, a.segb, a.jntb):
+            h.update(np.ascontiguousarray(arr).tobytes())
     meta = [BUILDER_VERSION, form, build_kind, ca.__version__, cc, *CFLAGS,
             str(a.held("start")), str(a.held("end")), str(a.clamped("start")),
             str(a.clamped("end"))]
+    if error_control != "state":
+        meta.append(f"{error_control} {OUT_OF_TEST!r}")
     h.update("\0".join(meta).encode())
     return h.hexdigest()[:32]
 
 
-def _symbolic(rod: ReleasedRod, form: str, sym) -> tuple[Any, ...]:
+def _symbolic(rod: ReleasedRod, form: str, sym,
+              error_control: str = "state") -> tuple[Any, ...]:
     """(t, x, z, ode, alg, xs, s, zs) in SX or MX (``sym``) with the arrays as constants."""
     from runtime.model.casadi_oracle import CasadiOracle
 
@@ -207,7 +262,7 @@ def _symbolic(rod: ReleasedRod, form: str, sym) -> tuple[Any, ...]:
     t = sym.sym("t")
     di, ai = rod.di, rod.ai
     if form == "ode":
-        s = rod.scale[di]
+        s = _scales(rod, form, error_control)
         x = sym.sym("x", di.size)
         z = sym.sym("z", 0)
         parts = [x * ca.DM(s), ca.DM(rod.y0[ai])]
@@ -272,11 +327,13 @@ def _remove_copies() -> None:
 atexit.register(_remove_copies)
 
 
-def _kernels_function(rod: ReleasedRod, so: Path) -> tuple[ca.Function, Any]:
-    """casadi.external over a private copy of the kernels library, set up for this rod."""
+def _kernels_function(rod: ReleasedRod, so: Path,
+                      error_control: str = "state") -> tuple[ca.Function, Any]:
+    """casadi.external over a private copy of the kernels library, set up for this rod
+    (with its relaxation terms, if any)."""
     m = rod.model
     di = rod.di
-    s = rod.scale[di]
+    s = _scales(rod, "ode", error_control)
     pat = m.sparsity()[di][:, di].tocsc()
     pat.sort_indices()
     rows = pat.indices.astype(np.int64)
@@ -293,7 +350,10 @@ def _kernels_function(rod: ReleasedRod, so: Path) -> tuple[ca.Function, Any]:
             "di": di.astype(np.int32), "s": np.ascontiguousarray(s),
             "fac": np.ascontiguousarray(-1.0 / (rod.D[di] * s)),
             "yfix": rod.y0.copy(), "src": np.ascontiguousarray(src, dtype=np.int64),
-            "coef": np.ascontiguousarray(coef), "sp": sp}
+            "coef": np.ascontiguousarray(coef), "sp": sp,
+            "theta": np.ascontiguousarray(a.theta, dtype=float),
+            "segb": np.ascontiguousarray(a.segb, dtype=float),
+            "jntb": np.ascontiguousarray(a.jntb, dtype=float)}
     tmp = tempfile.mkdtemp(prefix="kvrod_idas_kernels_")
     _COPIES.append(tmp)
     path = Path(tmp) / so.name
@@ -301,14 +361,20 @@ def _kernels_function(rod: ReleasedRod, so: Path) -> tuple[ca.Function, Any]:
     lib = ctypes.CDLL(str(path))
     P = ctypes.c_void_p
     lib.kv_setup.argtypes = [ctypes.c_int, P, P, P, P, P, ctypes.c_int, ctypes.c_int,
-                             ctypes.c_int, P, P, P, P, ctypes.c_longlong, P, P, P]
+                             ctypes.c_int, P, P, P, P, ctypes.c_longlong, P, P, P,
+                             ctypes.c_int, P, P, P]
     lib.kv_setup.restype = ctypes.c_int
+    if (lib.kvrod_kl(m.N, a.branches), lib.kvrod_ku(m.N, a.branches)) != (m.kl, m.ku):
+        raise RuntimeError(f"the kernels library's band ({lib.kvrod_kl(m.N, a.branches)}, "
+                           f"{lib.kvrod_ku(m.N, a.branches)}) is not the model's "
+                           f"({m.kl}, {m.ku})")
     k = keep
     rc = lib.kv_setup(m.N, *(k[x].ctypes.data for x in ("par", "seg", "jnt", "nload",
                                                          "sload")),
                       m.n, nx, m.ldab, k["di"].ctypes.data, k["s"].ctypes.data,
                       k["fac"].ctypes.data, k["yfix"].ctypes.data, int(src.size),
-                      k["src"].ctypes.data, k["coef"].ctypes.data, k["sp"].ctypes.data)
+                      k["src"].ctypes.data, k["coef"].ctypes.data, k["sp"].ctypes.data,
+                      a.branches, *(k[x].ctypes.data for x in ("theta", "segb", "jntb")))
     if rc:
         raise RuntimeError("kv_setup failed: " + ("out of memory" if rc == 1 else
                                                   f"band storage ldab = {m.ldab} too small"))
@@ -317,7 +383,7 @@ def _kernels_function(rod: ReleasedRod, so: Path) -> tuple[ca.Function, Any]:
 
 
 def build_function(rod: ReleasedRod, form: str = "ode", build_kind: str = "flat",
-                   cache_dir: Path | None = None) -> Opponent:
+                   cache_dir: Path | None = None, error_control: str = "state") -> Opponent:
     """The rod as CasADi's DAE function (see the module docstring).
 
     build_kind: "flat" (SX, generated with its Jacobian into one C file, gcc, cached),
@@ -325,33 +391,43 @@ def build_function(rod: ReleasedRod, form: str = "ode", build_kind: str = "flat"
     CasADi's external-function API, ``bench/idas_kernels.c``), "map" (the MX function
     over the kernel maps, generated and compiled like "flat"), "sx" (SX virtual machine),
     "mx" (MX virtual machine).
+    error_control: the ODE form's scaling (:func:`_scales`): "state" (kvrod's default
+    atol per unit rtol) or "configuration" (the velocities' scales times OUT_OF_TEST, so
+    that CVODES's scalar abstol leaves them out of its error test; IDAS does not need it:
+    :func:`integrate` gives it per-component tolerances).
     """
     if form not in FORMS:
         raise ValueError(f"form = {form!r} is outside the allowed range: {FORMS}")
     if build_kind not in BUILDS:
         raise ValueError(f"build = {build_kind!r} is outside the allowed range: {BUILDS}")
+    if error_control not in ERROR_CONTROLS:
+        raise ValueError(f"error_control = {error_control!r} is outside the allowed range: "
+                         f"{ERROR_CONTROLS}")
+    if form != "ode" and error_control != "state":
+        raise ValueError("the velocities scaled out of the error test: ODE form only")
     name = f"rod_{form}"
     di, ai = rod.di, rod.ai
     xs = di
-    s = rod.scale[di] if form == "ode" else np.ones(di.size)
+    s = _scales(rod, form, error_control)
     zs = ai if form == "dae" else np.zeros(0, dtype=int)
     seconds: dict[str, float] = {}
+    ec = error_control
     if build_kind == "kernels":
         if form != "ode":
             raise ValueError("the kernels build has the ODE form only")
         so, sec, cached = kernels_library(cache_dir)
         seconds["compile"] = sec
         t0 = time.perf_counter()
-        fn, keep = _kernels_function(rod, so)
+        fn, keep = _kernels_function(rod, so, error_control)
         seconds["load"] = time.perf_counter() - t0
         return Opponent(fn, form, build_kind, xs, s, zs, seconds, cached=cached,
-                        library=str(so), keep=keep)
+                        library=str(so), keep=keep, error_control=ec)
     compiled = build_kind in ("flat", "map")
     if compiled:
         cc = native.find_compiler()
         if cc is None:
             raise RuntimeError("no C compiler for the compiled IDAS opponent")
-        key = _cache_key(rod, form, build_kind, cc)
+        key = _cache_key(rod, form, build_kind, cc, error_control)
         cdir = _cache_dir(cache_dir)
         so = cdir / f"{name}_{build_kind}_N{rod.N}_{key}.so"
         if so.exists():
@@ -359,16 +435,16 @@ def build_function(rod: ReleasedRod, form: str = "ode", build_kind: str = "flat"
             fn = ca.external(name, str(so))
             seconds["load"] = time.perf_counter() - t0
             return Opponent(fn, form, build_kind, xs, s, zs, seconds, cached=True,
-                            library=str(so))
+                            library=str(so), error_control=ec)
     t0 = time.perf_counter()
     sym = ca.SX if build_kind in ("flat", "sx") else ca.MX
-    t, x, z, ode, alg, xs, s, zs = _symbolic(rod, form, sym)
+    t, x, z, ode, alg, xs, s, zs = _symbolic(rod, form, sym, error_control)
     p, u = sym.sym("p", 0), sym.sym("u", 0)
     fn = ca.Function(name, [t, x, z, p, u], [ode, alg, sym(0, 1), sym(0, 1)],
                      ca.dyn_in(), ca.dyn_out())
     seconds["build"] = time.perf_counter() - t0
     if not compiled:
-        return Opponent(fn, form, build_kind, xs, s, zs, seconds)
+        return Opponent(fn, form, build_kind, xs, s, zs, seconds, error_control=ec)
     cdir.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(dir=cdir, prefix="codegen_") as tmp:
         t0 = time.perf_counter()
@@ -384,7 +460,7 @@ def build_function(rod: ReleasedRod, form: str = "ode", build_kind: str = "flat"
     fn = ca.external(name, str(so))
     seconds["load"] = time.perf_counter() - t0
     return Opponent(fn, form, build_kind, xs, s, zs, seconds, c_bytes=c_bytes,
-                    library=str(so))
+                    library=str(so), error_control=ec)
 
 
 # --------------------------------------------------------------------------------------
@@ -424,7 +500,8 @@ def integrate(rod: ReleasedRod, opp: Opponent, t_end: float, output_step: float,
               rtol: float, atol: np.ndarray | float | None = None, solver: str = "idas",
               linear_solver: str = "csparse", repeat: int = 1,
               extra: dict | None = None, grid: np.ndarray | None = None,
-              keep_states: bool = False) -> Run:
+              keep_states: bool = False, error_control: str | None = None,
+              max_order: int | None = None) -> Run:
     """Integrate the released rod with IDAS or CVODES over [0, t_end], output every
     ``output_step`` (or on ``grid``, which starts at 0).
 
@@ -434,18 +511,35 @@ def integrate(rod: ReleasedRod, opp: Opponent, t_end: float, output_step: float,
     rtol on the ODE form's scaled state, i.e. rtol * scale per component, which is
     kvrod's default atol for rtol >= 1e-8 (below, default_atol's round-off floors differ);
     other atol values are refused for CVODES.
+    error_control: "state" (every component in the error test) or "configuration" (the
+    velocities out of it: their atol times OUT_OF_TEST, weights ~1e-12 of the others',
+    kvrod's error mask; CVODES needs an opponent built with that scaling); default: the
+    opponent's.
+    max_order: the highest BDF order (CasADi's ``max_multistep_order``; default 5).
     ``repeat``: integrate that many times and keep the median wall time.
     """
     if solver not in ("idas", "cvodes"):
         raise ValueError(f"solver = {solver!r} is outside the allowed range: idas, cvodes")
     if solver == "cvodes" and opp.form != "ode":
         raise ValueError("CVODES needs the ODE form")
+    ec = opp.error_control if error_control is None else error_control
+    if ec not in ERROR_CONTROLS:
+        raise ValueError(f"error_control = {ec!r} is outside the allowed range: "
+                         f"{ERROR_CONTROLS}")
+    if solver == "cvodes" and ec != opp.error_control:
+        raise ValueError(f"CVODES controls what the opponent's scaling says "
+                         f"({opp.error_control!r}): build it with error_control={ec!r}")
+    if max_order is not None and not 1 <= max_order <= 5:
+        raise ValueError(f"max_order = {max_order} is outside the allowed range: 1..5")
     if grid is None:
         grid = np.linspace(0.0, t_end, int(round(t_end / output_step)) + 1)
     if atol is None:
         atol_y = rod.atol(rtol)
     else:
         atol_y = np.broadcast_to(np.asarray(atol, dtype=float), (rod.n,))
+    if ec == "configuration":
+        atol_y = np.array(atol_y)
+        atol_y[rod.velocity_mask] *= OUT_OF_TEST
     idx = np.concatenate([opp.xs, opp.zs])
     scale = np.concatenate([opp.s, np.ones(opp.zs.size)])
     atol_v = atol_y[idx] / scale
@@ -459,8 +553,14 @@ def integrate(rod: ReleasedRod, opp: Opponent, t_end: float, output_step: float,
     else:
         raise ValueError("CVODES takes per-component tolerances only through the ODE "
                          "form's scaling: atol must be None")
+    if max_order is not None:
+        opts["max_multistep_order"] = int(max_order)
     opts.update(extra or {})
     label = f"{solver} ({opp.label}, {linear_solver})"
+    if ec != "state" and solver == "idas":
+        label = label[:-1] + ", velocities out of the error test)"
+    if max_order is not None:
+        label = label[:-1] + f", max order {max_order})"
     t0 = time.perf_counter()
     integ = ca.integrator("I", solver, opp.fn, 0.0, grid[1:].tolist(), opts)
     setup = time.perf_counter() - t0
@@ -528,8 +628,14 @@ def tip_maxima(t: np.ndarray, x: np.ndarray, v: np.ndarray, offset: float = 0.0,
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m bench.idas_script",
                                  description=__doc__.splitlines()[0])
-    ap.add_argument("--n-elements", type=int, default=50)
-    ap.add_argument("--t-end", type=float, default=10.0, help="s (default 10)")
+    ap.add_argument("--problem", default="cantilever",
+                    help="a built-in problem name or a TOML file, released from its static "
+                         "deflection (default: cantilever); e.g. "
+                         "examples/maxwell_cantilever.toml")
+    ap.add_argument("--n-elements", type=int, default=None,
+                    help="default: the problem's (50 for the cantilever)")
+    ap.add_argument("--t-end", type=float, default=None,
+                    help="s (default: the problem's, 10 for the cantilever)")
     ap.add_argument("--rtol", type=float, default=1e-6)
     ap.add_argument("--atol", type=float, default=None,
                     help="scalar absolute tolerance (default: kvrod's per-component "
@@ -539,36 +645,58 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--solver", choices=("idas", "cvodes"), default="idas")
     ap.add_argument("--form", choices=FORMS, default="ode")
     ap.add_argument("--build", choices=BUILDS, default="flat")
+    ap.add_argument("--error-control", choices=("auto", *ERROR_CONTROLS), default="auto",
+                    help="what the error test controls: state (every component), "
+                         "configuration (velocities out: their atol times 2^40, as kvrod's "
+                         "error mask) or auto (default: kvrod's default for the problem, "
+                         "configuration for a generalized Maxwell rod, else state)")
+    ap.add_argument("--max-order", type=int, default=None, choices=range(1, 6),
+                    metavar="{1..5}", help="highest BDF order (default 5)")
     ap.add_argument("--json", action="store_true", help="print one JSON line instead")
     args = ap.parse_args(argv)
-    if args.n_elements < 1:
+    if args.n_elements is not None and args.n_elements < 1:
         ap.error(f"--n-elements = {args.n_elements} is outside the allowed range: >= 1")
-    if not (args.t_end > 0 and args.rtol > 0):
+    if not ((args.t_end is None or args.t_end > 0) and args.rtol > 0):
         ap.error("--t-end and --rtol must be > 0")
     wall0 = time.perf_counter()
-    rod = released_rod(args.n_elements, args.t_end, args.rtol)
+    try:
+        rod = released_rod(args.n_elements, args.t_end, args.rtol, problem=args.problem)
+    except (ProblemFileError, ParameterError) as exc:
+        ap.error(f"--problem {args.problem}: {exc}")
+    except RuntimeError as exc:      # not in the ODE form's reach (released_rod's checks)
+        ap.error(f"--problem {args.problem}: {exc}")
     t_rod = time.perf_counter() - wall0
+    t_end = rod.problem.simulation.t_end
+    ec = (rod.default_error_control() if args.error_control == "auto"
+          else args.error_control)
     t0 = time.perf_counter()
-    opp = build_function(rod, args.form, args.build)
+    if args.solver == "cvodes" and ec != "state" and args.form != "ode":
+        ap.error("--error-control configuration with CVODES needs --form ode")
+    opp = build_function(rod, args.form, args.build,
+                         error_control=ec if args.solver == "cvodes" else "state")
     t_build = time.perf_counter() - t0
     dt = args.output_step or rod.problem.simulation.output_step
-    run = integrate(rod, opp, args.t_end, dt, args.rtol, args.atol, args.solver)
+    run = integrate(rod, opp, t_end, dt, args.rtol, args.atol, args.solver,
+                    error_control=ec, max_order=args.max_order)
     if not run.ok:
         print(f"{run.label} failed: {run.message}", file=sys.stderr)
         return 1
     offset = float(rod.model.reference[rod.tip_x])
     pt, px = tip_maxima(run.t, run.tip_x, run.tip_vx, offset)
-    out = {"solver": run.label, "N": rod.N, "n": rod.n, "t_end": args.t_end,
+    out = {"solver": run.label, "N": rod.N, "n": rod.n, "t_end": t_end,
            "rtol": args.rtol, "atol": "default_atol" if args.atol is None else args.atol,
            "integration_s": run.wall, "setup_s": run.setup, "steps": run.steps,
            "us_per_step": run.us_per_step, **run.stats,
            "rod_and_statics_s": t_rod, "build_s": t_build, "library_cached": opp.cached,
            "peaks_t": pt.tolist(), "peaks_x": px.tolist(),
            "process_s_so_far": time.perf_counter() - wall0}
+    if args.problem != "cantilever":       # (the cantilever's output as it always was)
+        out.update(problem=rod.problem.name, error_control=ec)
     if args.json:
         print(json.dumps(out))
         return 0
-    print(f"{run.label}: N = {rod.N} (n = {rod.n}), {args.t_end:g} s, rtol {args.rtol:g}, "
+    what = "" if args.problem == "cantilever" else f"{rod.problem.name}, "
+    print(f"{run.label}: {what}N = {rod.N} (n = {rod.n}), {t_end:g} s, rtol {args.rtol:g}, "
           f"atol {out['atol']}")
     print(f"integration {run.wall:.3f} s, {run.steps} steps ({run.us_per_step:.1f} us/step), "
           f"{run.stats.get('nlinsetups', 0)} Jacobian+LU; set-up {run.setup:.3f} s; rod and "
