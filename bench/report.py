@@ -6,6 +6,8 @@ import math
 from typing import Any
 
 from bench.energy_audit import markdown as energy_audit_md
+from bench.maxwell import QUICK as MAXWELL_QUICK
+from bench.maxwell import markdown as maxwell_md
 from bench.meta import targets_md
 from bench.modes import markdown as modes_md
 
@@ -245,7 +247,7 @@ def kernels_md(doc: dict) -> list[str]:
 #: the README's sections, in order: document name -> Markdown lines
 SECTION_MD = {"integrators": integrators_md, "scaling": scaling_md, "codegen": codegen_md,
               "peers": peers_md, "kernels": kernels_md, "energy_audit": energy_audit_md,
-              "modes": modes_md}
+              "modes": modes_md, "maxwell": maxwell_md}
 
 
 def markdown(docs: dict) -> str:
@@ -263,7 +265,8 @@ def markdown(docs: dict) -> str:
         lines += ["Quick mode: N = 25 (scaling: 25, 50) only, 2 s simulated, IDAS and CVODES "
                   "on kvrod's compiled kernels (no flat SX compile), SciPy BDF only, no "
                   "codegen timing, PyElastica, kernel table or energy audit; modes at N = 50 "
-                  "only. Use the full run for the quoted figures.", ""]
+                  f"only; the Maxwell rod at N = {MAXWELL_QUICK.N}, {MAXWELL_QUICK.T:g} s. "
+                  "Use the full run for the quoted figures.", ""]
     for name, section_md in SECTION_MD.items():
         if name in docs:
             lines += section_md(docs[name])
