@@ -7,7 +7,10 @@ that does what a strong CasADi user would do with kvrod's rod, and prints the ti
 1. the paper's cantilever (``load_problem("cantilever")``, ``build_model``) and its static
    deflection under the tip force (kvrod's ``static_equilibrium``); the force is then
    released (``model.at(0.0)``) and the consistent (y0, y0') taken from
-   ``consistent_initial``;
+   ``consistent_initial``; ``--problem`` takes another built-in name or TOML file of that
+   kind, e.g. ``examples/maxwell_cantilever.toml`` (a generalized Maxwell rod: its
+   internal strains are state entries, released relaxed; by default, as kvrod, its
+   velocities are out of the error test, ``--error-control``; :mod:`bench.maxwell`);
 2. the rod's residual F(t, y, y') from :class:`runtime.model.casadi_oracle.CasadiOracle` (MX over
    the per-element kernels) with the released arrays as constants, expanded to SX;
 3. the **ODE form** (the default): F is linear in y' with a constant diagonal D = dF/dy'

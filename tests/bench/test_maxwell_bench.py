@@ -58,8 +58,9 @@ def test_matched_runs_are_at_least_as_accurate_as_kvrod(tiny):
         assert m["pass"] and m["error"] <= E, c["config"]
         assert m["rtol"] in TINY.ladder
         assert c["timing"]["median"] > 0 and c["ratio_to_kvrod"] > 0
-        looser = [r for r in c["scan"] if r["rtol"] > m["rtol"]]
-        assert all(not r["pass"] for r in looser) or m["rtol"] == max(TINY.ladder)
+        passing = [r for r in c["scan"] if r["pass"]]
+        assert m["wall"] == min(r["wall"] for r in passing)
+        assert c["loosest_passing"] == max(r["rtol"] for r in passing)
 
 
 def test_document_and_markdown(tiny):
@@ -111,10 +112,10 @@ def test_maxima_error():
     assert t == [1.0] and x == [0.1]                  # the release at t = 0 is no maximum
 
 
-def _fake(errors: dict[float, float]):
+def _fake(errors: dict[float, float], walls: dict[float, float] | None = None):
     """A runner whose error at rtol is ``errors[rtol]`` (one maximum, reference 0)."""
     def runner(rtol):
-        return {"ok": True, "rtol": rtol, "wall": 1.0, "steps": 10,
+        return {"ok": True, "rtol": rtol, "wall": (walls or {}).get(rtol, 1.0), "steps": 10,
                 "peaks_t": [1.0], "peaks_x": [errors[rtol]]}
     return runner
 
@@ -126,8 +127,12 @@ LAD = (1e-5, 3e-6, 1e-6, 3e-7, 1e-7)
 def test_scan_goes_looser_from_a_pass_and_tighter_from_a_fail():
     errs = {1e-5: 9.0, 3e-6: 2.0, 1e-6: 1.0, 3e-7: 0.5, 1e-7: 0.1}
     s = mx.scan(_fake(errs), REF0, 2.0, LAD, start=1e-6)
-    assert s["matched"]["rtol"] == 3e-6
+    assert s["matched"]["rtol"] == 1e-6 and s["loosest_passing"] == 3e-6  # equal walls
     assert [r["rtol"] for r in s["scan"]] == [1e-6, 3e-6, 1e-5]
+    s = mx.scan(_fake(errs, {1e-6: 2.0, 3e-6: 0.5, 1e-5: 0.7}), REF0, 2.0, LAD, start=1e-6)
+    assert s["matched"]["rtol"] == 3e-6 and s["loosest_passing"] == 3e-6
+    s = mx.scan(_fake(errs, {1e-6: 0.4, 3e-6: 0.5}), REF0, 2.0, LAD, start=1e-6)
+    assert s["matched"]["rtol"] == 1e-6 and s["loosest_passing"] == 3e-6
     s = mx.scan(_fake(errs), REF0, 0.2, LAD, start=1e-6)
     assert s["matched"]["rtol"] == 1e-7
     assert [r["rtol"] for r in s["scan"]] == [1e-6, 3e-7, 1e-7]
