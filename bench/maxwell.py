@@ -61,6 +61,8 @@ KV_PROBLEM = "cantilever"
 LADDER = (3e-5, 1e-5, 3e-6, 1e-6, 3e-7, 1e-7, 3e-8, 1e-8)
 #: the references must agree to this fraction of kvrod's error E (target)
 REF_FRACTION = 0.1
+#: issue 27: a Maxwell run costs at most this many Kelvin-Voigt runs (target)
+MAXWELL_OVER_KV_MAX = 3.0
 
 
 @dataclass(frozen=True)
@@ -414,10 +416,11 @@ def run(quick: bool = False, log=print, size: Size | None = None,
         target(f"references (kvrod and IDAS at rtol {sz.ref_rtol:g}) agree on the first "
                f"maxima to <= {REF_FRACTION:g} of kvrod's error E (m)", cross["error"],
                REF_FRACTION * E, note=note),
-        target("strongest SUNDIALS configuration at matched accuracy / kvrod default, "
-               "wall time >= 1", doc["ratio_strongest_over_kvrod"], 1.0, below=False,
-               note=(f"strongest: {doc['strongest']}" if doc["strongest"] else
-                     "no configuration matched") + (f"; {note}" if note else ""))]
+        target(f"kvrod Maxwell / Kelvin-Voigt cantilever wall time (in-process simulate(), "
+               f"same N, T, rtol) <= {MAXWELL_OVER_KV_MAX:g}",
+               doc["ratio_maxwell_over_kelvin_voigt"], MAXWELL_OVER_KV_MAX,
+               note="issue 27's limit is for whole processes (docs/design.md section 11)"
+               + (f"; {note}" if note else ""))]
     doc["meta"] = metadata()
     return doc
 
