@@ -518,7 +518,9 @@ def integrate(rod: ReleasedRod, opp: Opponent, t_end: float, output_step: float,
     velocities out of it: their atol times OUT_OF_TEST, weights ~1e-12 of the others',
     kvrod's error mask; CVODES needs an opponent built with that scaling); default: the
     opponent's.
-    max_order: the highest BDF order (CasADi's ``max_multistep_order``; default 5).
+    max_order: the highest BDF order (default 5): CasADi's ``max_multistep_order`` and
+    ``max_order``; CasADi 3.8's CVODES ignores the first (same steps for 1..5) and obeys
+    the second, its IDAS obeys either.
     ``repeat``: integrate that many times and keep the median wall time.
     """
     if solver not in ("idas", "cvodes"):
@@ -557,7 +559,7 @@ def integrate(rod: ReleasedRod, opp: Opponent, t_end: float, output_step: float,
         raise ValueError("CVODES takes per-component tolerances only through the ODE "
                          "form's scaling: atol must be None")
     if max_order is not None:
-        opts["max_multistep_order"] = int(max_order)
+        opts.update(max_multistep_order=int(max_order), max_order=float(max_order))
     opts.update(extra or {})
     label = f"{solver} ({opp.label}, {linear_solver})"
     if ec != "state" and solver == "idas":

@@ -177,3 +177,22 @@ def test_idas_script_maxwell_tip_agrees_with_kvrod():
         assert run.ok, run.message
         np.testing.assert_allclose(run.t, res.t, atol=1e-12)
         assert np.max(np.abs(run.tip_x - res.tip[0])) < 2e-6
+
+
+def test_max_order_reaches_both_solvers():
+    """The BDF order cap reaches IDAS and CVODES (CasADi's CVODES ignores
+    ``max_multistep_order``: integrate sets ``max_order`` too)."""
+    _need_cc()
+    from bench.idas_script import build_function, integrate, released_rod
+
+    rod = released_rod(4, 0.2, 1e-6, problem="maxwell_cantilever")
+    for solver in ("idas", "cvodes"):
+        opp = build_function(rod, "ode", "kernels", error_control="configuration")
+        steps = {}
+        for order in (1, 5):
+            run = integrate(rod, opp, 0.2, 0.005, 1e-6, None, solver,
+                            error_control="configuration", max_order=order)
+            assert run.ok, run.message
+            assert f"max order {order}" in run.label
+            steps[order] = run.steps
+        assert steps[1] != steps[5], (solver, steps)
