@@ -308,9 +308,8 @@ def run_scipy(r: ReleasedRod, T: float, rtol: float, method: str) -> dict:
 
 
 def matched(runner, ref: np.ndarray, rtols=RTOL_SCAN, budget: float = math.inf,
-            start: float | None = None, tol: float = TIP_TOL) -> dict:
-    """The loosest rtol of the scan with max tip error <= ``tol`` (default TIP_TOL), and
-    the runs made.
+            start: float | None = None) -> dict:
+    """The loosest rtol of the scan with max tip error <= TIP_TOL, and the runs made.
 
     Without ``start``: from loose to tight, stopping at the first pass. With ``start`` (an
     rtol of the scan, e.g. another integrator's match): from there looser while it
@@ -324,7 +323,7 @@ def matched(runner, ref: np.ndarray, rtols=RTOL_SCAN, budget: float = math.inf,
         if r.get("ok"):
             r["tip_error"] = tip_error(r["tip"], ref)
         entry = {k: v for k, v in r.items() if k != "tip"}
-        entry["pass"] = bool(r.get("ok") and r["tip_error"] <= tol)
+        entry["pass"] = bool(r.get("ok") and r["tip_error"] <= TIP_TOL)
         scan.append(entry)
         return entry
 
