@@ -506,7 +506,8 @@ def markdown(doc: dict) -> list[str]:
     if doc.get("skipped"):
         out += ["Skipped: " + "; ".join(f"{s['config']}: {s['why']}"
                                         for s in doc["skipped"]) + ".", ""]
-    if any(c.get("at_loosest_rung") for c in doc["configs"]):
+    if any(c.get("at_loosest_rung") and c["matched"]
+           and c["matched"]["rtol"] == max(doc["ladder"]) for c in doc["configs"]):
         out += ["(loosest rung): error <= E at the ladder's loosest rtol; a looser one "
                 "might match too.", ""]
     if doc.get("strongest"):
