@@ -60,6 +60,10 @@ def _modes_into(args, problem, out: Path) -> int:
     if res["static_tip"] is not None:
         print(f"static tip [m]: {[round(float(v), 6) for v in res['static_tip']]}")
     print(modes_table(modes))
+    for m in modes:
+        if m.doubt:
+            print(f"kvrod modes: warning: mode {m.index} ({m.family}): {m.doubt}",
+                  file=sys.stderr)
     paths = write_modes(res, out)
     print(f"wrote {out}/{', '.join(p.name for p in paths)}")
     return 0

@@ -93,6 +93,7 @@ torsion mode of a loaded, bent rod, which mixes with bending) this pairing is no
 
 from __future__ import annotations
 
+import cmath
 import math
 import warnings
 from dataclasses import asdict, dataclass, field
@@ -284,7 +285,8 @@ class Mode:
     continuum beam/bar value where known (straight clamped-free rod), else None.
     A rigid mode (family ``rigid``, not resisted by the stiffness) has omega 0,
     eigenvalues (0, 0), zeta and zeta_modal NaN (no damping ratio: ``None`` in
-    :meth:`to_dict`) and zero energy fractions.
+    :meth:`to_dict`) and zero energy fractions. An overdamped mode of which only one of
+    its two real eigenvalues could be found has the other NaN, zeta NaN and a ``doubt``.
     """
 
     index: int
@@ -299,6 +301,9 @@ class Mode:
     displacement: np.ndarray = field(repr=False)
     rotation: np.ndarray = field(repr=False)
     analytic_omega: float | None = None
+    #: why this mode's damped values are doubtful ("" when they are not): printed by
+    #: ``kvrod modes`` and kept in modes.json
+    doubt: str = ""
 
     @property
     def frequency_hz(self) -> float:
@@ -535,11 +540,50 @@ def _finish_pair(vals: list[complex]) -> tuple[complex, complex]:
     if len(vals) == 1 and abs(vals[0].imag) > 0:
         return vals[0], vals[0].conjugate()
     if len(vals) == 2:
+        if not all(map(cmath.isfinite, vals)):     # a partner not found: NaN second
+            return tuple(sorted(vals, key=lambda z: not cmath.isfinite(z)))
         a, b = sorted(vals, key=lambda z: -z.real)
         return a, b
-    if len(vals) == 1:  # a lone real eigenvalue (the partner went elsewhere)
-        return vals[0], vals[0]
+    if len(vals) == 1:  # a lone real eigenvalue (the partner not found)
+        return vals[0], complex(math.nan)
     return complex(math.nan), complex(math.nan)
+
+
+def _overdamped_pair(so, phi: np.ndarray, vals: list[complex]) -> tuple[list[complex], str]:
+    """The two real eigenvalues of an overdamped Kelvin-Voigt mode, checked against the
+    mode's own quadratic ``phi^T T(mu) phi = 0`` (exact for proportional damping, where
+    its roots multiply to omega^2): one value near each of its two roots, a missing one
+    refined from its root by Rayleigh-functional steps on T (``_SecondOrder.polish``).
+    Why: near a high target the slow roots of all overdamped modes crowd at about
+    -1/tau (within 1e-5), so the participation-based assignment can give a mode a
+    neighbour's slow root in place of its own fast one, or leave it one root (zeta came
+    out 1 where it is 126). Returns the pair (NaN for a root not found) and a doubt ("" if
+    none). Modes whose quadratic is not clearly overdamped (roots within a factor 4) and
+    generalized Maxwell rods (whose real roots are no modes) are left as assigned."""
+    if not so.ok or so.groups or any(v.imag != 0 for v in vals):
+        return vals, ""
+    m, c, k = (float(phi @ (X @ phi)) for X in (so.M, so.C, so.K))
+    roots = np.roots([m, c, k])
+    if np.any(roots.imag != 0) or np.any(roots.real >= 0):
+        return vals, ""
+    slow, fast = sorted(roots.real, key=abs)
+    if fast / slow < 4.0:
+        return vals, ""
+    out: list[complex] = []
+    for r in (slow, fast):
+        near = [v for v in vals
+                if v.real < 0 and abs(math.log(v.real / r)) < 0.5 * math.log(fast / slow)]
+        if near:
+            out.append(min(near, key=lambda v: abs(v.real - r)))
+            continue
+        got = complex(so.polish(np.array([r]), phi[:, None])[0])
+        if abs(got.imag) <= 1e-7 * abs(got) and abs(got.real - r) <= 1e-2 * abs(r):
+            out.append(complex(got.real, 0.0))
+        else:
+            return [*out, complex(math.nan)], ("only one of the two real eigenvalues of "
+                                                "this overdamped mode was found: no "
+                                                "damping ratio")
+    return out, ""
 
 
 def _m_orthonormal(Z: np.ndarray, M) -> np.ndarray:
@@ -835,6 +879,10 @@ def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int =
         lo = max(int(sel.min()) - ms.EXTRA_MODES, 0) if sel.size else 0
         hi = min(int(sel.max()) + 1 + ms.EXTRA_MODES, omega.size) if sel.size else 0
     else:
+        if w_t > 0:
+            # above the spectrum the nearest modes are the highest ones, in the same order
+            # for every such target: shift at the spectrum's upper bound instead
+            w_t = min(w_t, math.sqrt(ms.highest_omega2(lin)))
         while True:
             w2, Phi = ms.undamped_modes(lin, m, Zn, w_t**2)
             if _covered(w2, k0, count, w_t) or m >= lin.nq - k0 - 2:
@@ -858,7 +906,11 @@ def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int =
                        )[:, None]
     pairs = _assign(lam, Pmat, omega[lo:hi], hi - lo) if hi > lo else []
     used = [v for k in sel for v in pairs[k - lo]]
-    worst = max((float(errs[int(np.argmin(np.abs(lam - v)))]) for v in used), default=0.0)
+
+    def backward_error(v: complex) -> float:
+        return float(errs[int(np.argmin(np.abs(lam - v)))]) if lam.size else 0.0
+
+    worst = max((backward_error(v) for v in used), default=0.0)
     if worst > ms.BACKWARD_ERROR_WARN:
         warnings.warn(f"kvrod: a damped eigenvalue was refined only to a backward error of "
                       f"{worst:.1e} in the pencil (doubtful)", RuntimeWarning, stacklevel=2)
@@ -876,6 +928,7 @@ def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int =
                           displacement=dx[lin.statics.phi_cols].T,
                           rotation=dx[lin.statics.theta_cols].T))
     Cd = lin.C
+    second_order = None
     # omega^2 below this is round-off of the eigensolvers (eps ~ 1e-16 times the largest
     # stiffness-to-mass ratio, with room for n and the conditioning)
     w2_floor = 1e-12 * float(np.max(np.abs(lin.K.diagonal()) / lin.M.diagonal()))
@@ -884,8 +937,19 @@ def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int =
         fr = e / e.sum() if e.sum() > 0 else e
         fam = "rigid" if rigid_share[i] > 0.5 else _classify(fr)
         family_count[fam] = family_count.get(fam, 0) + 1
-        l1, l2 = _finish_pair(pairs[k - lo])
+        vals, doubt = list(pairs[k - lo]), ""
+        if not maxwell and vals and abs(w2[k]) > w2_floor:
+            if second_order is None:
+                second_order = ms._SecondOrder(lin)
+            vals, doubt = _overdamped_pair(second_order, Phi[:, k], vals)
+        worst_k = max((backward_error(v) for v in pairs[k - lo]), default=0.0)
+        if worst_k > ms.BACKWARD_ERROR_WARN:
+            doubt = (f"eigenvalue refined only to a backward error of {worst_k:.1e} in the "
+                     "pencil")
+        l1, l2 = _finish_pair(vals)
         wn, zeta = _pair_zeta(l1, l2)
+        if doubt.startswith("only one"):
+            zeta = math.nan
         phi = Phi[:, k]
         w = float(omega[k])
         zm = float(phi @ (Cd @ phi)) / (2 * w) if w > 0 else math.inf
@@ -901,7 +965,7 @@ def modal_analysis(model: RodModel, y_eq: np.ndarray | None = None, count: int =
                           omega_damped=float(abs(l1.imag)), zeta_modal=zm,
                           energy_fractions=dict(zip(STRAIN_COMPONENTS, map(float, fr),
                                                     strict=True)),
-                          displacement=disp, rotation=rot))
+                          displacement=disp, rotation=rot, doubt=doubt))
     return modes
 
 

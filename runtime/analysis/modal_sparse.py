@@ -136,6 +136,23 @@ def undamped_modes(lin: Linearization, m: int, Zn: np.ndarray, shift: float = 0.
     return w2, Phi
 
 
+def highest_omega2(lin: Linearization) -> float:
+    """An upper bound (rad^2/s^2) of the discrete rod's natural frequencies squared: the
+    largest eigenvalue of ``K phi = omega^2 M phi`` by Lanczos (ARPACK, regular mode with
+    M; ``eigs`` for a non-symmetric K), a Ritz value converged to 1e-10 and raised by
+    1e-6 so that it bounds the spectrum. A shift beyond it is no use to shift-invert (the
+    nearest modes are the highest ones whatever the target) and a shift far beyond it
+    loses every digit of ``K - shift M`` (a target of 1e30 Hz gave 1.7e22 Hz)."""
+    v0 = _start_vector(lin.nq)
+    if _is_symmetric(lin.K):
+        top = spla.eigsh(lin.K, k=1, M=lin.M, which="LA", v0=v0, tol=1e-10,
+                         return_eigenvectors=False)
+    else:
+        top = spla.eigs(lin.K, k=1, M=lin.M, which="LR", v0=v0, tol=1e-10,
+                        return_eigenvectors=False)
+    return float(np.max(top.real)) * (1.0 + 1e-6)
+
+
 def _z_basis(lin: Linearization, Phi: np.ndarray) -> np.ndarray:
     """Orthonormal basis (nz, r) of the internal strains driven by the modes Phi: the
     columns of the z rows' coupling to q and w (``A[z, q] Phi``, ``A[z, w] Phi``), split by

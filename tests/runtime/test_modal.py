@@ -617,3 +617,30 @@ def test_cli_modes_near_a_frequency(tmp_path, capsys):
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and err[0].startswith("kvrod") and "--near" in err[0]
         assert not (tmp_path / "bad").exists()
+
+
+def test_overdamped_modes_near_a_high_target_keep_both_real_roots():
+    """Modes nearest a high frequency are overdamped (omega tau / 2 >> 1) and their slow
+    roots crowd at -1/tau: each mode still gets both of its real eigenvalues. Reference:
+    stiffness-proportional Kelvin-Voigt damping (tau_S = tau_B = tau), for which every
+    mode has zeta = omega tau / 2 and lambda_1 lambda_2 = omega^2 exactly (closed form)."""
+    tau = 0.04
+    model = RodModel(rod(50, tau_S=tau, tau_B=tau))
+    for target in (2 * math.pi * 1e3, 2 * math.pi * 1e5):
+        for m in modal_analysis(model, count=4, target=target):
+            l1, l2 = m.eigenvalues
+            assert l1.imag == 0 and l2.imag == 0 and l1 != l2, m
+            assert m.zeta == pytest.approx(m.omega * tau / 2, rel=1e-6)
+            assert (l1 * l2).real == pytest.approx(m.omega**2, rel=1e-6)
+            assert m.doubt == ""
+
+
+def test_a_target_above_the_spectrum_gives_the_highest_modes():
+    """A target beyond the discrete rod's highest natural frequency (1e30 Hz) gives the
+    highest modes, the same as the dense oracle's top of the full spectrum (it gave
+    1.7e22 Hz of round-off)."""
+    model = RodModel(rod(8, tau_S=0.04, tau_B=0.04))
+    every = modal_analysis(model, count=48, dense_max=10**6)
+    top = modal_analysis(model, count=2, target=2 * math.pi * 1e30)
+    assert [m.omega for m in top] == pytest.approx([m.omega for m in every[-2:]], rel=1e-9)
+    assert [m.zeta for m in top] == pytest.approx([m.zeta for m in every[-2:]], rel=1e-7)
