@@ -291,6 +291,11 @@ def _error_line(prefix: str, exc: BaseException) -> tuple[str, int]:
 _NO_COMPILE = ("derive", "generate", "problem-keys", "section", "notes-sections")
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A warning as one stderr line (its message), not Python's file:line format."""
+    print(str(message), file=sys.stderr, flush=True)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the `kvrod` console script: the one error boundary of the CLI.
 
@@ -314,6 +319,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             # message for the user: whatever they foreshadow is checked and reported as
             # one line (a non-finite solve, a rejected fit)
             warnings.simplefilter("ignore", RuntimeWarning)
+            # kvrod's own warnings (a degraded path, a doubtful result: their message
+            # starts with "kvrod") are one line on stderr each, whatever their category
+            warnings.filterwarnings("always", message="kvrod")
+            warnings.showwarning = _show_warning
             parser = build_parser()
             args = parser.parse_args(argv)
             import shlex
