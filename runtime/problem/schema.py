@@ -900,7 +900,9 @@ def apply_override(m: dict[str, Any], key: str, value: Any) -> str:
             node = node[_list_index(here, part, len(node), append=False)]
         else:
             if part not in node or not isinstance(node[part], (dict, list)):
-                node[part] = {}
+                # an index next (zones.0 on a problem without zones): an array of tables,
+                # so the index appends its first entry as in a file's [[zones]]
+                node[part] = [] if parts[i + 1].isdigit() else {}
             node = node[part]
     last = parts[-1]
     if parts[0] == "loads" and len(parts) == 3 and isinstance(node, dict):
