@@ -275,7 +275,8 @@ KEYS: tuple[Key, ...] = (
     _k("zones", "from", "m", "required", "0 ... L", "where the zone starts (arc length): a "
        "stretch of the rod with its own section and/or material; zones may not overlap, "
        "the problem's [section] and [material] hold elsewhere; place the ends on nodes "
-       "(multiples of L/N): a segment belongs to the zone of its midpoint", invalid=-1.0),
+       "(multiples of L/N): a segment belongs to the zone of its midpoint (a zone that holds "
+       "no segment midpoint is refused)", invalid=-1.0),
     _k("zones", "to", "m", "required", "from < to <= L", "where the zone ends",
        invalid=-1.0),
     _k("zones", "section", "-", "the problem's [section]", "a [section] table (every "

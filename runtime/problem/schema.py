@@ -688,7 +688,7 @@ class Problem:
         section, material = section_and_material(top)
         from runtime.problem.zones import zones_from_mapping
 
-        zones = zones_from_mapping(zones_m, m, rod.length)
+        zones = zones_from_mapping(zones_m, m, rod.length, rod.elements)
         return cls(
             name=C.string("name", m.get("name", name)),
             description=str(m.get("description", "")),

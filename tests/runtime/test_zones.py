@@ -59,6 +59,18 @@ def test_overlapping_zones_are_refused():
         Problem.from_mapping(m)
 
 
+@pytest.mark.parametrize("span", [(0.0, 0.05), (0.3, 0.33), (0.26, 0.374)])
+def test_a_zone_holding_no_segment_midpoint_is_refused(span):
+    """At N = 4 (midpoints 0.125, 0.375, ...) these zones hold no midpoint: they used to
+    change nothing, silently (the run equal to the one without the zone)."""
+    m = two_zones(4)
+    m["zones"][0].update({"from": span[0], "to": span[1]})
+    with pytest.raises(ParameterError, match=r"zones\[0\].*segment midpoint.*0\.25 m"):
+        Problem.from_mapping(m)
+    m["rod"]["elements"] = 40                  # the same zone on a finer rod is taken
+    assert Problem.from_mapping(m).zones[0].start == span[0]
+
+
 def test_two_zone_cantilever_converges_to_the_stepped_beam_at_first_order():
     """Tip deflection and rotation under a small tip force against the moment-area
     closed form of a cantilever with EI1 on [0, L/2] and EI2 = 4 EI1 on [L/2, L]; the
