@@ -289,6 +289,9 @@ class Problem:
             names = ", ".join(dict.fromkeys(r.material for r in self.section.regions))
             return (f"composite section of {names} (Kelvin-Voigt regions, "
                     f"{self.section.damping} rod viscosity, tau_E = {self.tau_E:.6g} s)")
+        if self._given_viscosity():
+            return (f"6x6 stiffness and viscosity matrices of the section "
+                    f"({self.damping}; tau_E = V33 / K33 = {self.tau_E:.6g} s)")
         return self.material.describe()
 
     def relaxation_terms(self) -> int:
@@ -300,10 +303,16 @@ class Problem:
         """The extensional retardation time (s): the material's tau_E (eq. (6)), or for a
         composite section V33 / K33 of its rod matrices (the same number for a
         homogeneous section)."""
-        if isinstance(self.section, Composite):
+        if isinstance(self.section, Composite) or self._given_viscosity():
             m = self._uniform_matrices()
             return float(m["V_F"][0, 2] / m["C_F"][0, 2])
         return float(self.material.tau_E)
+
+    def _given_viscosity(self) -> bool:
+        """A ``stiffness`` section with its own ``viscosity_matrix`` (the material's
+        retardation times are then 0: :func:`section_and_material`)."""
+        return (isinstance(self.section, GivenStiffness)
+                and self.section.viscosity_matrix is not None)
 
     def check_simulable(self) -> None:
         """Raise :class:`~runtime.errors.ParameterError` for a problem the rod cannot
@@ -779,7 +788,17 @@ def section_and_material(m: Mapping[str, Any]) -> tuple[Section, Material | None
             raise ParameterError("section.damping" if new is not None else "material.damping",
                                  route, "'consistent' for a generalized Maxwell material "
                                  "(the naive route is a Kelvin-Voigt notion)")
-    return section, material_from_mapping(mat_m)
+    material = material_from_mapping(mat_m)
+    if (isinstance(section, GivenStiffness) and section.viscosity_matrix is not None
+            and (getattr(material, "tau_S", 0.0) or getattr(material, "tau_B", 0.0))):
+        # the given viscosity is the rod's whole viscosity: a retardation time of the
+        # material beside it would be reported (tau_E) but act nowhere
+        key = next((k for k in ("tau", "tau_S", "tau_B", "eta", "zeta")
+                    if mat_m.get(k)), "tau_S")
+        raise ParameterError(f"material.{key}", mat_m[key] if key in mat_m else "given",
+                             "0 (or absent) beside section.viscosity_matrix: the section's "
+                             "6x6 viscosity is the rod's whole viscosity; give one of them")
+    return section, material
 
 
 def _time_peak(tf: Any) -> float:
