@@ -330,3 +330,20 @@ def test_poisson_mismatch_visible():
     assert rel(r.viscosity_naive[2, 2], lame["V_naive"]) < 1e-5
     assert r.viscosity[2, 2] / summed.V[2] - 1 == pytest.approx(0.0245, abs=0.001)
     assert r.stiffness[2, 2] / summed.K[2] - 1 == pytest.approx(0.0045, abs=0.0003)
+
+
+@pytest.mark.parametrize("shape", [
+    {"kind": "rectangle", "width": 1e-9, "height": 0.001, "centre": [0.0, 0.0015]},
+    {"kind": "tube", "inner_radius": 0.001, "outer_radius": 0.001 * (1 + 1e-7)},
+])
+def test_a_region_too_thin_for_any_mesh_is_refused_before_meshing(shape):
+    """A 1e-9 m wide ply on a 2 x 2 mm square asked for ~1e6 six-node triangles in its
+    first mesh (elements of 1.5 times a region's thickness): `kvrod section` took all the
+    memory and was killed (exit 137). Now refused at once, naming the region."""
+    mats = {"m": isotropic("m", E, NU, RHO, TS, TB)}
+    first = ({"kind": "rectangle", "width": 0.002, "height": 0.002}
+             if shape["kind"] == "rectangle" else {"kind": "circle", "radius": 0.001})
+    regions = regions_from_mapping([{"material": "m", "shape": first},
+                                    {"material": "m", "shape": shape}])
+    with pytest.raises(ParameterError, match=r"section\.regions\[1\]\.shape.*thick.*nodes"):
+        analyse_section(regions, mats)
