@@ -68,6 +68,15 @@ def zones_from_mapping(value: Any, top: Mapping[str, Any], length: float,
     if not isinstance(value, list):
         raise ParameterError("zones", value, "an array of tables [[zones]], each with from, "
                              "to (m) and a section and/or material table")
+    top_material = top.get("material")
+    if value and isinstance(top_material, Mapping) and top_material.get(
+            "model") == "generalized_maxwell":
+        # said here, before a zone's own tables are read: a zone with a section only
+        # inherits the Maxwell material and was refused as zones[k].material.model
+        raise ParameterError("zones", f"{len(value)} zone(s)", "no [[zones]] with a "
+                             "generalized Maxwell [material] (material.model): its "
+                             "relaxation terms are the same along the rod; zones are for "
+                             "Kelvin-Voigt rods")
     out = []
     for k, z in enumerate(value):
         path = f"zones[{k}]"

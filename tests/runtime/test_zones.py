@@ -121,3 +121,16 @@ def test_a_coupled_clip_zone_on_a_diagonal_rod():
     m["simulation"] = {"t_end": 0.02, "initial": "reference"}
     res = simulate(Problem.from_mapping(m))
     assert res.status == "finished" and res.audit().max_rel < 1e-4
+
+
+@pytest.mark.parametrize("zone", [
+    {"section": {"kind": "rectangle", "width": 0.02, "height": 0.01}},
+    {"material": {"youngs_modulus": 2e6}},
+])
+def test_zones_on_a_maxwell_rod_are_refused_naming_the_material_model(zone):
+    """A section-only zone was refused as zones[0].material.model (a key not written),
+    a material zone as 'zones' = 'given' only when the matrices were built."""
+    from runtime.problem.registry import load_problem
+
+    with pytest.raises(ParameterError, match=r"'zones'.*generalized Maxwell.*material\.model"):
+        load_problem("maxwell_cantilever", {"zones": [{"from": 0.0, "to": 0.15, **zone}]})
