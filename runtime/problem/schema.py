@@ -326,6 +326,7 @@ class Problem:
             self._end_matrices()
             self._check_matrices()
             self._check_periods()
+            self._check_viscous_rate()
             self._check_load_magnitudes()
             object.__setattr__(self, "_checked", True)
 
@@ -488,19 +489,30 @@ class Problem:
         if lam <= VISCOUS_RATE_MAX:
             return
         mat = self.material
-        if mat.tau_S == mat.tau_B:
+        value: Any
+        if isinstance(self.section, Composite):
+            # the region material with the longest retardation time (max |V| / max |C|);
+            # the composite has no [material] (an internal error used to follow)
+            mats = self.section.used_materials()
+            worst = max(mats, key=lambda k: float(np.max(np.abs(mats[k].viscosity)))
+                        / float(np.max(np.abs(mats[k].stiffness))))
+            name, value = f"materials.{worst}", self.section.materials_mapping()[worst]
+        elif self._given_viscosity():
+            name, value = "section.viscosity_matrix", "given"
+        elif mat.tau_S == mat.tau_B:
             name, value = "material.tau", mat.tau_S
         elif mat.tau_S > mat.tau_B:
             name, value = "material.tau_S", mat.tau_S
         else:
             name, value = "material.tau_B", mat.tau_B
+        tau = lam / w2 if isinstance(value, (str, dict)) else value   # the equivalent tau
         raise ParameterError(
             name, value, f"retardation times with tau * omega_max^2 <= {VISCOUS_RATE_MAX:.2g} "
             f"1/s, i.e. tau <= {VISCOUS_RATE_MAX / w2:.3g} s for this rod (N = "
             f"{self.rod.elements} elements: its stiffest element mode has omega_max^2 = "
             f"{w2:.3g} 1/s^2); beyond it the viscous forces exceed the inertia by more than "
             "1/(10 eps) and the integrator loses the inertia to round-off (the first mode's "
-            f"damping ratio would be {self.characteristic_frequency() * value / 2:.3g})")
+            f"damping ratio would be {self.characteristic_frequency() * tau / 2:.3g})")
 
     # -- derived figures ---------------------------------------------------------------
     def error_control(self) -> str:

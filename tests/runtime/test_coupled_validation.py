@@ -72,6 +72,19 @@ def test_tau_e_of_a_given_viscosity_matrix_is_its_own():
     assert load_problem(STRIP, {"material.tau": 0.0}).tau_E == pytest.approx(want)
 
 
+def test_a_viscosity_beyond_the_inertia_is_named_for_composites_and_given_matrices():
+    """A composite's viscous rate was not checked (materials.pvc.tau_S = 1e12: kvrod
+    simulate ended in an 'internal error' of the initial Newton); a given viscosity_matrix
+    too stiff was named material.tau = 0 (a key not written)."""
+    p = load_problem(CABLE, {"rod.elements": 20, "materials.pvc.tau_S": 1e12})
+    with pytest.raises(ParameterError, match=r"'materials\.pvc'.*tau \* omega_max\^2"):
+        p.check_simulable()
+    V = _doc(STRIP)["section"]["viscosity_matrix"]
+    V[2][2] = 1e12
+    with pytest.raises(ParameterError, match=r"'section\.viscosity_matrix'.*omega_max"):
+        load_problem(STRIP, {"rod.elements": 6, "section.viscosity_matrix": V})
+
+
 def test_coupled_strip_transient_energy_audit():
     """The strip pulled by a step load: a damped transient of the coupled extension and
     twist, whose energy audit closes, and which settles to the static stretch."""
