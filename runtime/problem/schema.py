@@ -261,17 +261,18 @@ class Problem:
     def _check_t_end(self) -> None:
         w_max = math.sqrt(self.element_rates()[0])
         t_min = math.sqrt(float(np.finfo(float).eps)) / w_max
-        soft = (not isinstance(self.section, GivenStiffness)
+        soft = (not isinstance(self.section, (GivenStiffness, Composite))
                 and getattr(self.material, "youngs_modulus", 1.0) < SOFT_E_MIN)
         if self.simulation.t_end < t_min and not soft:   # (soft: see SOFT_E_MIN)
+            source = ("its section's matrices" if isinstance(self.section, Composite) else
+                      f"density {getattr(self.material, 'density', float('nan')):g} kg/m^3, "
+                      f"material.youngs_modulus = "
+                      f"{getattr(self.material, 'youngs_modulus', float('nan')):g} Pa")
             raise ParameterError(
                 "simulation.t_end", self.simulation.t_end,
                 f">= sqrt(eps) / omega_max = {t_min:.3g} s for this rod (omega_max = "
                 f"{w_max:.4g} rad/s, its stiffest element mode at N = {self.rod.elements}, "
-                f"from length {self.rod.length:g} m, density "
-                f"{getattr(self.material, 'density', float('nan')):g} kg/m^3, "
-                f"material.youngs_modulus = "
-                f"{getattr(self.material, 'youngs_modulus', float('nan')):g} Pa): in a "
+                f"from length {self.rod.length:g} m, {source}): in a "
                 "shorter run not even that mode moves the rod by more than round-off (a "
                 "displacement ~ (omega t)^2 of its scale)")
 
@@ -328,6 +329,7 @@ class Problem:
             self._check_periods()
             self._check_viscous_rate()
             self._check_load_magnitudes()
+            self._check_t_end()
             object.__setattr__(self, "_checked", True)
 
     def _check_maxwell_springs(self) -> None:

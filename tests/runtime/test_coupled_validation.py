@@ -85,6 +85,15 @@ def test_a_viscosity_beyond_the_inertia_is_named_for_composites_and_given_matric
         load_problem(STRIP, {"rod.elements": 6, "section.viscosity_matrix": V})
 
 
+def test_a_composite_run_shorter_than_round_off_is_refused_as_a_homogeneous_one():
+    """t_end = 1e-20 s: refused for a homogeneous rod, taken for a composite one (the
+    check was skipped, and its message would have printed the missing material's nan)."""
+    p = load_problem(CABLE, {"rod.elements": 6, "simulation.t_end": 1e-20})
+    with pytest.raises(ParameterError, match=r"simulation\.t_end.*section's matrices") as e:
+        p.check_simulable()
+    assert "nan" not in str(e.value)
+
+
 def test_coupled_strip_transient_energy_audit():
     """The strip pulled by a step load: a damped transient of the coupled extension and
     twist, whose energy audit closes, and which settles to the static stretch."""
