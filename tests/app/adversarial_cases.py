@@ -1889,6 +1889,21 @@ CASES: list[Case] = [
          (section_file(), template("section")),
          (json_is("section.json", lambda d: d["materials"]["sheath"]["tau_S"] == 0.02,
                   "the new analysis (tau_S = 0.02)"),)),
+    # zones and given section matrices (issue 26): the hostile review of helper-13
+    Case("static-set-zones-0-appends-the-first-zone", "message",
+         ("static", "cantilever", "--n-elements", "4", "--set",
+          "zones.0={{from=0.0, to=0.15, material={{youngs_modulus=2e6}}}}", *OUT), 0, (), (),
+         (summary_is(lambda s: len(s["parameters"]["zones"]) == 1, "one zone"),),
+         note="was refused: 'zones' = {'0': ...} is not an array of tables"),
+    Case("static-zone-without-a-segment-midpoint-named", "wrong_answer",
+         ("static", "cantilever", "--n-elements", "4", "--set",
+          "zones=[{{from=0.0, to=0.03, material={{youngs_modulus=2e6}}}}]", *OUT), 2,
+         ("zones[0]", "segment midpoint", "0.075"), (), (ABSENT,),
+         note="the zone changed nothing, silently"),
+    Case("modes-tau-beside-a-viscosity-matrix-named", "wrong_answer",
+         ("modes", "coupled_strip", "--n-elements", "4", "--count", "2", "--tau", "0.1",
+          *OUT), 2, ("material.tau", "section.viscosity_matrix"), (), (ABSENT,),
+         note="taken, reported as tau_E = 0.1 s, acting nowhere"),
     # composite sections run since issue 26 (tests/runtime/section/test_problem_composite.py);
     # a generalized Maxwell region is refused, naming its material
     Case("simulate-composite-maxwell-region-refused", "message",
