@@ -804,6 +804,12 @@ def section_and_material(m: Mapping[str, Any]) -> tuple[Section, Material | None
                                  "(the naive route is a Kelvin-Voigt notion)")
     material = material_from_mapping(mat_m)
     if (isinstance(section, GivenStiffness) and section.viscosity_matrix is not None
+            and route == "naive"):
+        raise ParameterError("section.damping" if new is not None else "material.damping",
+                             route, "'consistent' (or absent) beside section.viscosity_matrix: "
+                             "the route derives a rod viscosity from a material; the given "
+                             "matrix is the rod's viscosity already")
+    if (isinstance(section, GivenStiffness) and section.viscosity_matrix is not None
             and (getattr(material, "tau_S", 0.0) or getattr(material, "tau_B", 0.0))):
         # the given viscosity is the rod's whole viscosity: a retardation time of the
         # material beside it would be reported (tau_E) but act nowhere

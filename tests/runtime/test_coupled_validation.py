@@ -63,6 +63,12 @@ def test_a_material_viscosity_beside_a_given_viscosity_matrix_is_refused(key, va
         load_problem(STRIP, {key: value})
 
 
+def test_the_naive_route_beside_a_given_viscosity_matrix_is_refused():
+    """--damping naive was taken and reported, and acted nowhere."""
+    with pytest.raises(ParameterError, match=r"section\.damping.*viscosity_matrix"):
+        load_problem(STRIP, {"damping": "naive"})
+
+
 def test_tau_e_of_a_given_viscosity_matrix_is_its_own():
     doc = _doc(STRIP)
     p = load_problem(STRIP)
