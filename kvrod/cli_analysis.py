@@ -45,7 +45,8 @@ def _cmd_modes(args) -> int:
     from runtime.io.folder import results_folder
 
     with results_folder(out, "modes", markers=("modes.json",), overwrite=args.overwrite,
-                        names=("modes.json", "modes.npz")):
+                        names=("modes.json", "modes.npz", "mode_shapes.png",
+                               "mode_shapes_3d.png")):
         return _modes_into(args, problem, out)
 
 
@@ -204,7 +205,8 @@ def _cmd_compare(args) -> int:
                     args.rtol)
     with results_folder(Path(args.out), "compare-damping", markers=("compare_damping.json",),
                         overwrite=args.overwrite,
-                        names=("compare_damping.json", "compare_damping.md")):
+                        names=("compare_damping.json", "compare_damping.md",
+                               "compare_signals.png", "compare_zeta.png")):
         res = cd.compare_damping(n_elements=args.n_elements, tau_S=args.tau_S,
                                  tau_B=args.tau_B, poisson_ratio=args.nu,
                                  tip_force=args.tip_force, rtol=args.rtol)

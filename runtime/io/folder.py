@@ -208,9 +208,15 @@ def remove_previous(path: Path, names: Iterable[str] = (), patterns: Iterable[st
 
 
 #: what each command writes into its folder (removed by --overwrite)
+#: the figures of a run or a static result (``--plots``, ``kvrod plot``); named, not
+#: globbed: a folder may hold another command's figures (section.png, mode_shapes.png,
+#: which cannot all be redrawn) and the user's own pictures
+RUN_FIGURES = ("ends.png", "energy.png", "damping_ratio.png", "centreline.png",
+               "centreline.gif", "centreline.mp4", "shape.png")
 RUN_FILES = ("summary.json", "series.npz", "checkpoint.npz", "vtk", "problem.toml",
-             "static.npz")
-RUN_PATTERNS = ("*.png", "*.gif", "*.mp4", ".*.tmp", ".*.tmp.npz", ".*.tmp.*")
+             "static.npz", *RUN_FIGURES)
+#: half-written files of an earlier process
+RUN_PATTERNS = (".*.tmp", ".*.tmp.npz", ".*.tmp.*")
 
 
 @contextlib.contextmanager
@@ -258,7 +264,7 @@ def is_disk_full(exc: BaseException) -> bool:
 
 @contextlib.contextmanager
 def results_folder(out: Path, command: str, *, markers: Iterable[str], overwrite: bool,
-                   names: Iterable[str], patterns: Iterable[str] = ("*.png", ".*.tmp")
+                   names: Iterable[str], patterns: Iterable[str] = RUN_PATTERNS
                    ) -> Iterator[Path]:
     """Check, refuse-or-overwrite and lock ``out`` for ``kvrod COMMAND`` before anything is
     computed; yields the path.

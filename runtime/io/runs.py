@@ -163,7 +163,7 @@ def static_and_write(problem, out: Path, overwrite: bool = False) -> tuple[dict,
     state (status "failed")."""
     import time
 
-    from runtime.io.folder import results_folder
+    from runtime.io.folder import RUN_FILES, results_folder
     from runtime.io.results import jsonable, write_json, write_npz, write_problem
     from runtime.model import build
     from runtime.model.statics import largest_displacement
@@ -176,7 +176,7 @@ def static_and_write(problem, out: Path, overwrite: bool = False) -> tuple[dict,
     model = build_model(problem)
     check_statics(model)            # an ill-posed problem is refused before the folder
     with results_folder(out, "static", markers=("summary.json",), overwrite=overwrite,
-                        names=("summary.json", "static.npz", "problem.toml")):
+                        names=RUN_FILES):   # a run's files too: the same marker
         params = jsonable(problem.to_mapping())
         gauge = None
         try:

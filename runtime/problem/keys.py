@@ -140,7 +140,8 @@ KEYS: tuple[Key, ...] = (
        "reports it; blocks in N, N m, N m^2); off-diagonal entries couple shear, extension, "
        "bending and torsion (the coupled kernels)", invalid=[[1.0]], kinds=("stiffness",)),
     _k("section", "viscosity_matrix", "N s, N m s, N m^2 s", "from the material",
-       "6x6, symmetric positive semi-definite; with stiffness_matrix", "the section's 6x6 "
+       "6x6, symmetric positive semi-definite; with stiffness_matrix; the material's "
+       "retardation times then 0", "the section's 6x6 "
        "viscosity, order as stiffness_matrix; without it V_ij = sqrt(t_i t_j) K_ij with "
        "t = (tau_S, tau_S, tau_E, tau_E, tau_E, tau_S) of the material", invalid=[[1.0]],
        kinds=("stiffness",)),
@@ -275,7 +276,8 @@ KEYS: tuple[Key, ...] = (
     _k("zones", "from", "m", "required", "0 ... L", "where the zone starts (arc length): a "
        "stretch of the rod with its own section and/or material; zones may not overlap, "
        "the problem's [section] and [material] hold elsewhere; place the ends on nodes "
-       "(multiples of L/N): a segment belongs to the zone of its midpoint", invalid=-1.0),
+       "(multiples of L/N): a segment belongs to the zone of its midpoint (a zone that holds "
+       "no segment midpoint is refused)", invalid=-1.0),
     _k("zones", "to", "m", "required", "from < to <= L", "where the zone ends",
        invalid=-1.0),
     _k("zones", "section", "-", "the problem's [section]", "a [section] table (every "

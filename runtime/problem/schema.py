@@ -261,17 +261,18 @@ class Problem:
     def _check_t_end(self) -> None:
         w_max = math.sqrt(self.element_rates()[0])
         t_min = math.sqrt(float(np.finfo(float).eps)) / w_max
-        soft = (not isinstance(self.section, GivenStiffness)
+        soft = (not isinstance(self.section, (GivenStiffness, Composite))
                 and getattr(self.material, "youngs_modulus", 1.0) < SOFT_E_MIN)
         if self.simulation.t_end < t_min and not soft:   # (soft: see SOFT_E_MIN)
+            source = ("its section's matrices" if isinstance(self.section, Composite) else
+                      f"density {getattr(self.material, 'density', float('nan')):g} kg/m^3, "
+                      f"material.youngs_modulus = "
+                      f"{getattr(self.material, 'youngs_modulus', float('nan')):g} Pa")
             raise ParameterError(
                 "simulation.t_end", self.simulation.t_end,
                 f">= sqrt(eps) / omega_max = {t_min:.3g} s for this rod (omega_max = "
                 f"{w_max:.4g} rad/s, its stiffest element mode at N = {self.rod.elements}, "
-                f"from length {self.rod.length:g} m, density "
-                f"{getattr(self.material, 'density', float('nan')):g} kg/m^3, "
-                f"material.youngs_modulus = "
-                f"{getattr(self.material, 'youngs_modulus', float('nan')):g} Pa): in a "
+                f"from length {self.rod.length:g} m, {source}): in a "
                 "shorter run not even that mode moves the rod by more than round-off (a "
                 "displacement ~ (omega t)^2 of its scale)")
 
@@ -289,6 +290,9 @@ class Problem:
             names = ", ".join(dict.fromkeys(r.material for r in self.section.regions))
             return (f"composite section of {names} (Kelvin-Voigt regions, "
                     f"{self.section.damping} rod viscosity, tau_E = {self.tau_E:.6g} s)")
+        if self._given_viscosity():
+            return (f"6x6 stiffness and viscosity matrices of the section "
+                    f"({self.damping}; tau_E = V33 / K33 = {self.tau_E:.6g} s)")
         return self.material.describe()
 
     def relaxation_terms(self) -> int:
@@ -300,10 +304,16 @@ class Problem:
         """The extensional retardation time (s): the material's tau_E (eq. (6)), or for a
         composite section V33 / K33 of its rod matrices (the same number for a
         homogeneous section)."""
-        if isinstance(self.section, Composite):
+        if isinstance(self.section, Composite) or self._given_viscosity():
             m = self._uniform_matrices()
             return float(m["V_F"][0, 2] / m["C_F"][0, 2])
         return float(self.material.tau_E)
+
+    def _given_viscosity(self) -> bool:
+        """A ``stiffness`` section with its own ``viscosity_matrix`` (the material's
+        retardation times are then 0: :func:`section_and_material`)."""
+        return (isinstance(self.section, GivenStiffness)
+                and self.section.viscosity_matrix is not None)
 
     def check_simulable(self) -> None:
         """Raise :class:`~runtime.errors.ParameterError` for a problem the rod cannot
@@ -317,7 +327,9 @@ class Problem:
             self._end_matrices()
             self._check_matrices()
             self._check_periods()
+            self._check_viscous_rate()
             self._check_load_magnitudes()
+            self._check_t_end()
             object.__setattr__(self, "_checked", True)
 
     def _check_maxwell_springs(self) -> None:
@@ -479,19 +491,30 @@ class Problem:
         if lam <= VISCOUS_RATE_MAX:
             return
         mat = self.material
-        if mat.tau_S == mat.tau_B:
+        value: Any
+        if isinstance(self.section, Composite):
+            # the region material with the longest retardation time (max |V| / max |C|);
+            # the composite has no [material] (an internal error used to follow)
+            mats = self.section.used_materials()
+            worst = max(mats, key=lambda k: float(np.max(np.abs(mats[k].viscosity)))
+                        / float(np.max(np.abs(mats[k].stiffness))))
+            name, value = f"materials.{worst}", self.section.materials_mapping()[worst]
+        elif self._given_viscosity():
+            name, value = "section.viscosity_matrix", "given"
+        elif mat.tau_S == mat.tau_B:
             name, value = "material.tau", mat.tau_S
         elif mat.tau_S > mat.tau_B:
             name, value = "material.tau_S", mat.tau_S
         else:
             name, value = "material.tau_B", mat.tau_B
+        tau = lam / w2 if isinstance(value, (str, dict)) else value   # the equivalent tau
         raise ParameterError(
             name, value, f"retardation times with tau * omega_max^2 <= {VISCOUS_RATE_MAX:.2g} "
             f"1/s, i.e. tau <= {VISCOUS_RATE_MAX / w2:.3g} s for this rod (N = "
             f"{self.rod.elements} elements: its stiffest element mode has omega_max^2 = "
             f"{w2:.3g} 1/s^2); beyond it the viscous forces exceed the inertia by more than "
             "1/(10 eps) and the integrator loses the inertia to round-off (the first mode's "
-            f"damping ratio would be {self.characteristic_frequency() * value / 2:.3g})")
+            f"damping ratio would be {self.characteristic_frequency() * tau / 2:.3g})")
 
     # -- derived figures ---------------------------------------------------------------
     def error_control(self) -> str:
@@ -688,7 +711,7 @@ class Problem:
         section, material = section_and_material(top)
         from runtime.problem.zones import zones_from_mapping
 
-        zones = zones_from_mapping(zones_m, m, rod.length)
+        zones = zones_from_mapping(zones_m, m, rod.length, rod.elements)
         return cls(
             name=C.string("name", m.get("name", name)),
             description=str(m.get("description", "")),
@@ -779,7 +802,23 @@ def section_and_material(m: Mapping[str, Any]) -> tuple[Section, Material | None
             raise ParameterError("section.damping" if new is not None else "material.damping",
                                  route, "'consistent' for a generalized Maxwell material "
                                  "(the naive route is a Kelvin-Voigt notion)")
-    return section, material_from_mapping(mat_m)
+    material = material_from_mapping(mat_m)
+    if (isinstance(section, GivenStiffness) and section.viscosity_matrix is not None
+            and route == "naive"):
+        raise ParameterError("section.damping" if new is not None else "material.damping",
+                             route, "'consistent' (or absent) beside section.viscosity_matrix: "
+                             "the route derives a rod viscosity from a material; the given "
+                             "matrix is the rod's viscosity already")
+    if (isinstance(section, GivenStiffness) and section.viscosity_matrix is not None
+            and (getattr(material, "tau_S", 0.0) or getattr(material, "tau_B", 0.0))):
+        # the given viscosity is the rod's whole viscosity: a retardation time of the
+        # material beside it would be reported (tau_E) but act nowhere
+        key = next((k for k in ("tau", "tau_S", "tau_B", "eta", "zeta")
+                    if mat_m.get(k)), "tau_S")
+        raise ParameterError(f"material.{key}", mat_m[key] if key in mat_m else "given",
+                             "0 (or absent) beside section.viscosity_matrix: the section's "
+                             "6x6 viscosity is the rod's whole viscosity; give one of them")
+    return section, material
 
 
 def _time_peak(tf: Any) -> float:
@@ -900,7 +939,9 @@ def apply_override(m: dict[str, Any], key: str, value: Any) -> str:
             node = node[_list_index(here, part, len(node), append=False)]
         else:
             if part not in node or not isinstance(node[part], (dict, list)):
-                node[part] = {}
+                # an index next (zones.0 on a problem without zones): an array of tables,
+                # so the index appends its first entry as in a file's [[zones]]
+                node[part] = [] if parts[i + 1].isdigit() else {}
             node = node[part]
     last = parts[-1]
     if parts[0] == "loads" and len(parts) == 3 and isinstance(node, dict):

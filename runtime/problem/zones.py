@@ -55,9 +55,12 @@ class Zone:
         return out
 
 
-def zones_from_mapping(value: Any, top: Mapping[str, Any], length: float) -> tuple[Zone, ...]:
+def zones_from_mapping(value: Any, top: Mapping[str, Any], length: float,
+                       elements: int | None = None) -> tuple[Zone, ...]:
     """The ``[[zones]]`` of a problem table ``top`` (its ``section``, ``material`` and
-    ``materials`` are what a zone replaces or names), checked against the rod length."""
+    ``materials`` are what a zone replaces or names), checked against the rod length and,
+    given the number of ``elements``, refused where a zone holds no segment midpoint
+    (it would change nothing: a zone shorter than a segment, or between two midpoints)."""
     from runtime.problem.schema import section_and_material
 
     if value is None:
@@ -65,6 +68,15 @@ def zones_from_mapping(value: Any, top: Mapping[str, Any], length: float) -> tup
     if not isinstance(value, list):
         raise ParameterError("zones", value, "an array of tables [[zones]], each with from, "
                              "to (m) and a section and/or material table")
+    top_material = top.get("material")
+    if value and isinstance(top_material, Mapping) and top_material.get(
+            "model") == "generalized_maxwell":
+        # said here, before a zone's own tables are read: a zone with a section only
+        # inherits the Maxwell material and was refused as zones[k].material.model
+        raise ParameterError("zones", f"{len(value)} zone(s)", "no [[zones]] with a "
+                             "generalized Maxwell [material] (material.model): its "
+                             "relaxation terms are the same along the rod; zones are for "
+                             "Kelvin-Voigt rods")
     out = []
     for k, z in enumerate(value):
         path = f"zones[{k}]"
@@ -103,12 +115,29 @@ def zones_from_mapping(value: Any, top: Mapping[str, Any], length: float) -> tup
         out.append(Zone(k, a, b, section, material,
                         dict(z["section"]) if "section" in z else None,
                         dict(z["material"]) if "material" in z else None))
+    if elements is not None:
+        s_mid = segment_midpoints(length, elements)
+        for z in out:
+            if not np.any((s_mid >= z.start) & (s_mid < z.end)):
+                h = length / elements
+                raise ParameterError(
+                    f"zones[{z.index}]", f"from = {z.start:g}, to = {z.end:g} m",
+                    f"a stretch that holds at least one segment midpoint (a segment belongs "
+                    f"to the zone of its midpoint; with rod.elements = {elements} the "
+                    f"segments are {h:g} m long: place from and to on nodes, multiples of "
+                    f"{h:g} m, or refine the rod)")
     order = sorted(out, key=lambda zz: zz.start)
     for z0, z1 in zip(order, order[1:], strict=False):
         if z1.start < z0.end:
             raise ParameterError(f"zones[{z1.index}].from", z1.start, f">= {z0.end:g} m, "
                                  f"the end of zones[{z0.index}] (zones may not overlap)")
     return tuple(out)
+
+
+def segment_midpoints(length: float, elements: int) -> np.ndarray:
+    """Arc lengths (m) of the midpoints of a uniform rod's segments, where each segment's
+    matrices are taken (:meth:`~runtime.problem.schema.Problem.segment_matrices`)."""
+    return (np.arange(elements) + 0.5) / elements * length
 
 
 def full_form(m: dict[str, np.ndarray]) -> dict[str, np.ndarray]:

@@ -64,12 +64,25 @@ def required(path: str, m: Mapping[str, Any], key: str, allowed: str) -> Any:
     return m[key]
 
 
+#: lengths of a section (m), as the problem's section dimensions take them: beyond them
+#: the powers of a length in the section's integrals leave the normal floating-point range
+LENGTH_MIN, LENGTH_MAX = 1e-30, 1e30
+
+
+def length(path: str, value: Any) -> float:
+    """A length in m, LENGTH_MIN ... LENGTH_MAX."""
+    return number(path, value, f"a length {LENGTH_MIN:g} ... {LENGTH_MAX:g} m (> 0; beyond "
+                  "any section, its powers must stay normal floating-point numbers)",
+                  low=LENGTH_MIN, high=LENGTH_MAX)
+
+
 def point(path: str, value: Any) -> tuple[float, float]:
-    """A point (x1, x2) in m."""
+    """A point (x1, x2) in m, each coordinate at most LENGTH_MAX in size."""
     if isinstance(value, (str, bytes, Mapping)) or not hasattr(value, "__len__") \
-            or len(value) != 2 or not all(is_number(v) and math.isfinite(float(v))
+            or len(value) != 2 or not all(is_number(v) and abs(float(v)) <= LENGTH_MAX
                                           for v in value):
-        raise ParameterError(path, value, "two finite numbers [x1, x2] in m")
+        raise ParameterError(path, value, f"two finite numbers [x1, x2] in m, each at most "
+                             f"{LENGTH_MAX:g} m in size")
     return float(value[0]), float(value[1])
 
 

@@ -236,6 +236,27 @@ def _mass(mesh: Mesh, mats: Sequence[SectionMaterial]) -> dict[str, Any]:
             "inertia": {"I11": I11, "I22": I22, "I12": I12, "polar": I11 + I22}}
 
 
+def _check_first_mesh(regions: Sequence[Region], polys: Sequence[Any], h: float,
+                      factors: Sequence[float]) -> None:
+    """Refuse a section whose first mesh would already exceed MAX_NODES (a region so thin
+    against the section that its elements, about 1.5 times its thickness, number in the
+    millions: a 20 mm strip with a ply 1e-9 m wide took all the memory and was killed)."""
+    # six-node triangles: about two nodes per element; equilateral elements of edge h_i
+    per_region = [2.0 * p.area / (hi * hi * math.sqrt(3.0) / 4.0)
+                  for p, hi in zip(polys, (h * f for f in factors), strict=True)]
+    if sum(per_region) <= MAX_NODES:
+        return
+    i = int(np.argmax(per_region))
+    p = polys[i]
+    name = regions[i].name or f"section.regions[{i}]"
+    raise ParameterError(
+        f"section.regions[{i}].shape", regions[i].shape.kind,
+        f"a region not too thin against the section: {name!r} is about "
+        f"{2.0 * p.area / p.length:.3g} m thick (2 area / perimeter) and its elements of "
+        f"about that size would need ~{per_region[i]:.2g} mesh nodes, more than the "
+        f"{MAX_NODES} the analysis allows; make it thicker or leave it out")
+
+
 def analyse_section(regions: Sequence[Region] | Any,
                     materials: Mapping[str, SectionMaterial] | Any, *,
                     tol: float = DEFAULT_TOL, h: float | None = None,
@@ -291,6 +312,7 @@ def analyse_section(regions: Sequence[Region] | Any,
     if h is None:
         h = L / 8.0
     factors = [min(1.0, 1.5 * t / h) for t in thin]
+    _check_first_mesh(regions, polys, h, factors)
     levels: list[_Level] = []
     history: list[tuple[float, float]] = []
     warnings = [w for m in used for w in m.warnings]

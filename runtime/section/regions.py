@@ -8,6 +8,7 @@ Every region's material must be one of the named materials.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -70,7 +71,9 @@ def check_regions(regions: Sequence[Region], materials: Mapping[str, SectionMate
         if r.material not in materials:
             raise ParameterError(f"{path}[{i}].material", r.material, "one of the materials "
                                  + (", ".join(map(repr, materials)) or "(none given)"))
-    size = max(r.shape.polygon(1e9).length for r in regions)
+    # the coarsest polygons (16 sides for a curve): a fixed h of 1e9 m gave a 1e20 m
+    # circle 6e11 vertices (an out-of-memory error)
+    size = max(r.shape.polygon(math.inf).length for r in regions)
     hh0 = h if h is not None else size / 64
     hh = hh0
     polys = [r.shape.polygon(hh) for r in regions]

@@ -217,7 +217,7 @@ def shape_from_mapping(m: Any, path: str = "shape") -> Shape:
 
     def length(key: str) -> float:
         ck.required(path, m, key, f"a length in m (> 0) for a {kind}")
-        return ck.positive(f"{path}.{key}", m[key], "m")
+        return ck.length(f"{path}.{key}", m[key])
 
     angle = ck.number(f"{path}.angle", m.get("angle", 0.0), "an angle in degrees")
     if kind == "circle":

@@ -457,6 +457,14 @@ def write(name: str, text: str | bytes) -> Callable:
     return setup
 
 
+def in_out(name: str, text: str) -> Callable:
+    """A file of the user's own in the results folder (after a template made it)."""
+    def setup(ctx: Ctx) -> None:
+        ctx.out.mkdir(parents=True, exist_ok=True)
+        (ctx.out / name).write_text(text)
+    return setup
+
+
 def config(text: str) -> Callable:
     return write("run.toml", 'scenario = "cantilever"\n' + text)
 
@@ -1127,6 +1135,24 @@ CASES: list[Case] = [
           summary_is(lambda s: s["parameters"]["simulation"]["t_end"] == 0.2,
                      "the new run's t_end 0.2"),
           series_covers(0.2))),
+    Case("simulate-overwrite-keeps-the-users-pictures", "data_loss",
+         (*SIM, *OVR, *OUT), 0, (), (template("finished"), in_out("my_photo.png", "mine"),
+                                     in_out("sketch.gif", "mine")),
+         (status("finished"), has("my_photo.png", "sketch.gif"), lacks("damping_ratio.png")),
+         note="--overwrite removed every *.png, *.gif, *.mp4 of the folder"),
+    Case("simulate-overwrite-keeps-a-section-result-beside-it", "data_loss",
+         (*SIM, *OVR, *OUT), 0, (), (template("section"),),
+         (status("finished"), has("section.json", "section.png")),
+         note="section.png (not redrawable: its mesh is not stored) went, section.json stayed"),
+    Case("static-overwrite-of-a-run-leaves-no-run-series", "wrong_answer",
+         ("static", "cantilever", "--n-elements", "4", *OVR, *OUT), 0, (),
+         (template("finished"),),
+         (has("summary.json", "static.npz"), lacks("series.npz", "vtk", "damping_ratio.png")),
+         note="the run's series.npz stayed beside the static summary: kvrod plot drew the "
+              "old run as the folder's result"),
+    Case("modes-overwrite-keeps-a-run-beside-it", "data_loss",
+         (*MODES, *OVR, *OUT), 0, (), (template("finished"),),
+         (has("modes.json", "mode_shapes.png", "damping_ratio.png", "series.npz"),)),
     Case("simulate-overwrite-replaces-killed-run-and-checkpoint", "data_loss",
          (*SIM, *OVR, *OUT), 0, (), (template("killed"),),
          (status("finished"), lacks("checkpoint.npz"), series_covers(0.2))),
@@ -1863,6 +1889,21 @@ CASES: list[Case] = [
          (section_file(), template("section")),
          (json_is("section.json", lambda d: d["materials"]["sheath"]["tau_S"] == 0.02,
                   "the new analysis (tau_S = 0.02)"),)),
+    # zones and given section matrices (issue 26): the hostile review of helper-13
+    Case("static-set-zones-0-appends-the-first-zone", "message",
+         ("static", "cantilever", "--n-elements", "4", "--set",
+          "zones.0={{from=0.0, to=0.15, material={{youngs_modulus=2e6}}}}", *OUT), 0, (), (),
+         (summary_is(lambda s: len(s["parameters"]["zones"]) == 1, "one zone"),),
+         note="was refused: 'zones' = {'0': ...} is not an array of tables"),
+    Case("static-zone-without-a-segment-midpoint-named", "wrong_answer",
+         ("static", "cantilever", "--n-elements", "4", "--set",
+          "zones=[{{from=0.0, to=0.03, material={{youngs_modulus=2e6}}}}]", *OUT), 2,
+         ("zones[0]", "segment midpoint", "0.075"), (), (ABSENT,),
+         note="the zone changed nothing, silently"),
+    Case("modes-tau-beside-a-viscosity-matrix-named", "wrong_answer",
+         ("modes", "coupled_strip", "--n-elements", "4", "--count", "2", "--tau", "0.1",
+          *OUT), 2, ("material.tau", "section.viscosity_matrix"), (), (ABSENT,),
+         note="taken, reported as tau_E = 0.1 s, acting nowhere"),
     # composite sections run since issue 26 (tests/runtime/section/test_problem_composite.py);
     # a generalized Maxwell region is refused, naming its material
     Case("simulate-composite-maxwell-region-refused", "message",

@@ -17,6 +17,7 @@ import pytest
 from references import coupled_rods as ref
 from references import section_analysis as sref
 from runtime.analysis.modal import modal_analysis
+from runtime.errors import ParameterError
 from runtime.problem.assemble import build_model
 from runtime.problem.coupled import composite_analysis
 from runtime.problem.registry import EXAMPLES_DIR, load_problem
@@ -50,6 +51,53 @@ def test_coupled_strip_stretches_and_twists_as_the_inverse_stiffness_says():
     R = model.end_frames(0.0, st.y)["end"]
     twist = np.arctan2(R[1, 0], R[0, 0])          # d1 turned about the axis e3
     assert twist == pytest.approx(L * want[5], rel=1e-3)
+
+
+@pytest.mark.parametrize("key,value", [("material.tau", 0.1), ("material.tau_S", 0.02),
+                                       ("material.eta", 3.0)])
+def test_a_material_viscosity_beside_a_given_viscosity_matrix_is_refused(key, value):
+    """The section's viscosity_matrix is the rod's whole viscosity: --tau 0.1 was taken,
+    reported (tau_E = 0.1 s, the modes header) and acted nowhere."""
+    with pytest.raises(ParameterError, match=key.replace(".", r"\.")
+                       + r".*section\.viscosity_matrix"):
+        load_problem(STRIP, {key: value})
+
+
+def test_the_naive_route_beside_a_given_viscosity_matrix_is_refused():
+    """--damping naive was taken and reported, and acted nowhere."""
+    with pytest.raises(ParameterError, match=r"section\.damping.*viscosity_matrix"):
+        load_problem(STRIP, {"damping": "naive"})
+
+
+def test_tau_e_of_a_given_viscosity_matrix_is_its_own():
+    doc = _doc(STRIP)
+    p = load_problem(STRIP)
+    want = doc["section"]["viscosity_matrix"][2][2] / doc["section"]["stiffness_matrix"][2][2]
+    assert p.tau_E == pytest.approx(want, rel=1e-12)          # was the material's 0
+    assert "viscosity matrices" in p.describe_material()
+    assert load_problem(STRIP, {"material.tau": 0.0}).tau_E == pytest.approx(want)
+
+
+def test_a_viscosity_beyond_the_inertia_is_named_for_composites_and_given_matrices():
+    """A composite's viscous rate was not checked (materials.pvc.tau_S = 1e12: kvrod
+    simulate ended in an 'internal error' of the initial Newton); a given viscosity_matrix
+    too stiff was named material.tau = 0 (a key not written)."""
+    p = load_problem(CABLE, {"rod.elements": 20, "materials.pvc.tau_S": 1e12})
+    with pytest.raises(ParameterError, match=r"'materials\.pvc'.*tau \* omega_max\^2"):
+        p.check_simulable()
+    V = _doc(STRIP)["section"]["viscosity_matrix"]
+    V[2][2] = 1e12
+    with pytest.raises(ParameterError, match=r"'section\.viscosity_matrix'.*omega_max"):
+        load_problem(STRIP, {"rod.elements": 6, "section.viscosity_matrix": V})
+
+
+def test_a_composite_run_shorter_than_round_off_is_refused_as_a_homogeneous_one():
+    """t_end = 1e-20 s: refused for a homogeneous rod, taken for a composite one (the
+    check was skipped, and its message would have printed the missing material's nan)."""
+    p = load_problem(CABLE, {"rod.elements": 6, "simulation.t_end": 1e-20})
+    with pytest.raises(ParameterError, match=r"simulation\.t_end.*section's matrices") as e:
+        p.check_simulable()
+    assert "nan" not in str(e.value)
 
 
 def test_coupled_strip_transient_energy_audit():

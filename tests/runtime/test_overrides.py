@@ -91,3 +91,22 @@ def test_whole_table_overrides_are_validated_as_a_file(ov, needle):
     with pytest.raises(ParameterError) as exc:
         load_problem("cantilever", ov)
     assert needle in str(exc.value)
+
+
+def test_index_zero_of_a_missing_array_appends_its_first_entry():
+    """``--set zones.0={...}`` on a problem without zones (and ``loads.0`` without loads)
+    makes the array of tables, as the index one past the last entry does; it used to make
+    a table {"0": ...} that was refused as "an array of tables [[zones]]"."""
+    zone = {"from": 0.0, "to": 0.15, "material": {"youngs_modulus": 2e6}}
+    p = load_problem("cantilever", {"zones.0": zone})
+    assert len(p.zones) == 1 and (p.zones[0].start, p.zones[0].end) == (0.0, 0.15)
+    assert p.zones[0].material.youngs_modulus == 2e6
+    q = load_problem("cantilever", {"loads": [], "loads.0": FORCE})
+    assert len(q.loads) == 1
+    base = load_problem("cantilever").to_mapping()
+    base.pop("loads")
+    r = Problem.from_mapping(base).with_overrides({"loads.0": FORCE})
+    assert len(r.loads) == 1 and r.loads[0].vector == (0.0, 0.0, 0.01)
+    with pytest.raises(ParameterError) as exc:     # a sub-key of a missing entry
+        load_problem("cantilever", {"zones.0.from": 0.1})
+    assert "zones.0" in str(exc.value) and "append" in str(exc.value)

@@ -59,6 +59,18 @@ def test_overlapping_zones_are_refused():
         Problem.from_mapping(m)
 
 
+@pytest.mark.parametrize("span", [(0.0, 0.05), (0.3, 0.33), (0.26, 0.374)])
+def test_a_zone_holding_no_segment_midpoint_is_refused(span):
+    """At N = 4 (midpoints 0.125, 0.375, ...) these zones hold no midpoint: they used to
+    change nothing, silently (the run equal to the one without the zone)."""
+    m = two_zones(4)
+    m["zones"][0].update({"from": span[0], "to": span[1]})
+    with pytest.raises(ParameterError, match=r"zones\[0\].*segment midpoint.*0\.25 m"):
+        Problem.from_mapping(m)
+    m["rod"]["elements"] = 40                  # the same zone on a finer rod is taken
+    assert Problem.from_mapping(m).zones[0].start == span[0]
+
+
 def test_two_zone_cantilever_converges_to_the_stepped_beam_at_first_order():
     """Tip deflection and rotation under a small tip force against the moment-area
     closed form of a cantilever with EI1 on [0, L/2] and EI2 = 4 EI1 on [L/2, L]; the
@@ -109,3 +121,16 @@ def test_a_coupled_clip_zone_on_a_diagonal_rod():
     m["simulation"] = {"t_end": 0.02, "initial": "reference"}
     res = simulate(Problem.from_mapping(m))
     assert res.status == "finished" and res.audit().max_rel < 1e-4
+
+
+@pytest.mark.parametrize("zone", [
+    {"section": {"kind": "rectangle", "width": 0.02, "height": 0.01}},
+    {"material": {"youngs_modulus": 2e6}},
+])
+def test_zones_on_a_maxwell_rod_are_refused_naming_the_material_model(zone):
+    """A section-only zone was refused as zones[0].material.model (a key not written),
+    a material zone as 'zones' = 'given' only when the matrices were built."""
+    from runtime.problem.registry import load_problem
+
+    with pytest.raises(ParameterError, match=r"'zones'.*generalized Maxwell.*material\.model"):
+        load_problem("maxwell_cantilever", {"zones": [{"from": 0.0, "to": 0.15, **zone}]})

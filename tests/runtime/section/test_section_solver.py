@@ -330,3 +330,43 @@ def test_poisson_mismatch_visible():
     assert rel(r.viscosity_naive[2, 2], lame["V_naive"]) < 1e-5
     assert r.viscosity[2, 2] / summed.V[2] - 1 == pytest.approx(0.0245, abs=0.001)
     assert r.stiffness[2, 2] / summed.K[2] - 1 == pytest.approx(0.0045, abs=0.0003)
+
+
+@pytest.mark.parametrize("shape", [
+    {"kind": "rectangle", "width": 1e-9, "height": 0.001, "centre": [0.0, 0.0015]},
+    {"kind": "tube", "inner_radius": 0.001, "outer_radius": 0.001 * (1 + 1e-7)},
+])
+def test_a_region_too_thin_for_any_mesh_is_refused_before_meshing(shape):
+    """A 1e-9 m wide ply on a 2 x 2 mm square asked for ~1e6 six-node triangles in its
+    first mesh (elements of 1.5 times a region's thickness): `kvrod section` took all the
+    memory and was killed (exit 137). Now refused at once, naming the region."""
+    mats = {"m": isotropic("m", E, NU, RHO, TS, TB)}
+    first = ({"kind": "rectangle", "width": 0.002, "height": 0.002}
+             if shape["kind"] == "rectangle" else {"kind": "circle", "radius": 0.001})
+    regions = regions_from_mapping([{"material": "m", "shape": first},
+                                    {"material": "m", "shape": shape}])
+    with pytest.raises(ParameterError, match=r"section\.regions\[1\]\.shape.*thick.*nodes"):
+        analyse_section(regions, mats)
+
+
+@pytest.mark.parametrize("shape,key", [
+    ({"kind": "circle", "radius": 1e-300}, "radius"),     # was an internal ZeroDivisionError
+    ({"kind": "circle", "radius": 1e31}, "radius"),
+    ({"kind": "rectangle", "width": 1e300, "height": 1.0}, "width"),
+    ({"kind": "polygon", "points": [[0, 0], [1e300, 0], [0, 1e300]]}, r"points\[1\]"),
+    ({"kind": "circle", "radius": 1.0, "centre": [1e300, 0.0]}, "centre"),
+])
+def test_section_lengths_out_of_range_are_named(shape, key):
+    with pytest.raises(ParameterError, match=r"section\.regions\[0\]\.shape\." + key):
+        regions = regions_from_mapping([{"material": "m", "shape": shape}])
+        analyse_section(regions, {"m": isotropic("m", E, NU, RHO, TS, TB)})
+
+
+def test_a_huge_section_is_checked_without_a_fine_polygon():
+    """check_regions polygonised every curve at h = 1e9 m: a 1e25 m circle (a length
+    within the allowed 1e30 m) asked for 6e16 vertices, a MemoryError ("out of memory")."""
+    from runtime.section.regions import check_regions
+
+    mats = {"m": isotropic("m", E, NU, RHO, TS, TB)}
+    check_regions(regions_from_mapping([{"material": "m", "shape": {
+        "kind": "circle", "radius": 1e25}}]), mats)
