@@ -282,11 +282,14 @@ KEYS: tuple[Key, ...] = (
        invalid=-1.0),
     _k("zones", "section", "-", "the problem's [section]", "a [section] table (every "
        "kind; a composite names [materials.NAME]; tapers run over the zone)", "the zone's "
-       "section; joints across a sharp change take the mean of their two segments (first "
-       "order in h there)", invalid={"kind": "hexagon"}),
+       "section: without a kind, its keys override the problem's [section] (the others "
+       "kept, tapers not); with a kind, given whole; joints across a sharp change take the "
+       "mean of their two segments (first order in h there)", invalid={"kind": "hexagon"}),
     _k("zones", "material", "-", "the problem's [material]", "a Kelvin-Voigt [material] "
-       "table", "the zone's material (generalized Maxwell materials are the same along "
-       "the rod)", invalid={"density": -1.0}),
+       "table", "the zone's material: its keys override the problem's [material] (the "
+       "others kept; naming tau, tau_S/tau_B or eta/zeta drops the problem's other damping "
+       "keys); generalized Maxwell materials are the same along the rod",
+       invalid={"density": -1.0}),
     # -- [start], [end] -----------------------------------------------------------------
     *(_k(end, "kind", "-", '"clamped"' if end == "start" else '"free"', "free, clamped, "
          "pinned", "what holds the end: nothing, position and frame, position",

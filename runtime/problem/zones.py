@@ -1,13 +1,15 @@
 """Zones of a rod with their own section or material (issue 26; docs/design.md, section 10).
 
 ``[[zones]]`` tables, each with ``from`` and ``to`` (arc length, m, 0 <= from < to <= L)
-and a ``section`` and/or a ``material`` table that replace the problem's ``[section]`` /
-``[material]`` on that stretch (a ``composite`` zone section names ``[materials.NAME]``
-tables as the top-level one does). Zones may not overlap; where no zone lies the
-problem's own section and material hold (a cable with a stiffer clip region is one zone).
-A zone's tapers (``*_end``) run over the zone. A segment belongs to the zone that holds
-its midpoint, so a zone boundary between two nodes moves to the nearer node (place
-boundaries on nodes: multiples of L/N).
+and a ``section`` and/or a ``material`` table that override the problem's ``[section]`` /
+``[material]`` on that stretch key by key (:func:`overlay`: a zone that gives only
+``youngs_modulus`` keeps the problem's density, Poisson ratio and damping, not the
+defaults; a section that names its ``kind`` is given whole; a ``composite`` zone
+section names ``[materials.NAME]`` tables as the top-level one does). Zones may not
+overlap; where no zone lies the problem's own section and material hold (a cable with a
+stiffer clip region is one zone). A zone's tapers (``*_end``) run over the zone. A
+segment belongs to the zone that holds its midpoint, so a zone boundary between two nodes
+moves to the nearer node (place boundaries on nodes: multiples of L/N).
 
 Joints between segments of different zones take the mean of the two segments' joint
 matrices, as everywhere (``materials.joint_average``): the moment across a sharp change
@@ -55,6 +57,43 @@ class Zone:
         return out
 
 
+#: mutually exclusive ways of giving a Kelvin-Voigt material's damping
+#: (``materials.material_from_mapping``): a zone naming one drops the problem's others
+_DAMPING_ALTERNATIVES = (("tau",), ("tau_S", "tau_B"), ("eta", "zeta"))
+
+
+def overlay(base: Mapping[str, Any] | None, own: Mapping[str, Any],
+            material: bool = False) -> dict[str, Any]:
+    """A zone's ``section`` or ``material`` table ``own`` over the problem's ``base``, key
+    by key: the zone's keys win; a section that names its ``kind`` is given whole (its
+    kind's keys may exclude the problem's: ``stiffness_matrix`` beside ``EA``); the
+    problem's tapers (``*_end``, over the whole rod) are not inherited (a
+    zone's own run over the zone). For a material, naming one way of giving the damping
+    (``tau``; ``tau_S``/``tau_B``; ``eta``/``zeta``) drops the problem's others, and a
+    problem's ``tau`` counts as ``tau_S = tau_B = tau`` beside a zone's ``tau_S`` or
+    ``tau_B``.
+
+    Why not replace: a zone table that gives one key silently took the defaults for the
+    others (``material = {youngs_modulus = 2e6}`` made the stretch undamped, density 1000,
+    nu 0.3, whatever the problem's material)."""
+    if not isinstance(base, Mapping) or not isinstance(own, Mapping):
+        return dict(own) if isinstance(own, Mapping) else own
+    if "kind" in own:       # a section given with its kind is given whole
+        return dict(own)
+    out = {k: v for k, v in base.items() if not str(k).endswith("_end")}
+    if material:
+        named = [alt for alt in _DAMPING_ALTERNATIVES if any(k in own for k in alt)]
+        if named:
+            if named[0] == ("tau_S", "tau_B") and "tau" in out:
+                out["tau_S"] = out["tau_B"] = out.pop("tau")
+            for alt in _DAMPING_ALTERNATIVES:
+                if alt not in named:
+                    for k in alt:
+                        out.pop(k, None)
+    out.update(own)
+    return out
+
+
 def zones_from_mapping(value: Any, top: Mapping[str, Any], length: float,
                        elements: int | None = None) -> tuple[Zone, ...]:
     """The ``[[zones]]`` of a problem table ``top`` (its ``section``, ``material`` and
@@ -95,8 +134,10 @@ def zones_from_mapping(value: Any, top: Mapping[str, Any], length: float,
         if "section" not in z and "material" not in z:
             raise ParameterError(path, dict(z), "a section and/or a material table for the "
                                  "zone (else it changes nothing)")
-        sec_m = z.get("section", top.get("section"))
-        mat_m = z.get("material", top.get("material"))
+        sec_m = (overlay(top.get("section"), z["section"]) if "section" in z
+                 else top.get("section"))
+        mat_m = (overlay(top.get("material"), z["material"], material=True)
+                 if "material" in z else top.get("material"))
         doc: dict[str, Any] = {"section": sec_m}
         if C.table("section", sec_m or {}).get("kind") == "composite":
             if "materials" in top:

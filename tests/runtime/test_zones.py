@@ -134,3 +134,33 @@ def test_zones_on_a_maxwell_rod_are_refused_naming_the_material_model(zone):
 
     with pytest.raises(ParameterError, match=r"'zones'.*generalized Maxwell.*material\.model"):
         load_problem("maxwell_cantilever", {"zones": [{"from": 0.0, "to": 0.15, **zone}]})
+
+
+def test_a_zone_overrides_the_problem_material_and_section_key_by_key():
+    """A zone giving only youngs_modulus keeps the problem's density, Poisson ratio and
+    damping (it took the defaults: undamped, density 1000, nu 0.3, silently); a zone's
+    tau_S beside the problem's tau keeps tau_B = tau; a zone section without a kind
+    changes only the keys it names, one with its kind is given whole."""
+    base = {"name": "z", "rod": {"length": 1.0, "elements": 10},
+            "section": {"kind": "rectangle", "width": 0.02, "height": 0.01},
+            "material": {"youngs_modulus": 5e6, "poisson_ratio": 0.4, "density": 1300.0,
+                         "tau": 0.03},
+            "start": {"kind": "clamped"}, "end": {"kind": "free"},
+            "simulation": {"t_end": 0.1}}
+    m = {**base, "zones": [{"from": 0.5, "to": 1.0, "material": {"youngs_modulus": 2e6}}]}
+    z = Problem.from_mapping(m).zones[0].material
+    assert (z.youngs_modulus, z.poisson_ratio, z.density) == (2e6, 0.4, 1300.0)
+    assert z.tau_S == z.tau_B == 0.03
+    m["zones"][0]["material"] = {"tau_S": 0.1}
+    z = Problem.from_mapping(m).zones[0].material
+    assert (z.tau_S, z.tau_B, z.youngs_modulus) == (0.1, 0.03, 5e6)
+    m["zones"][0]["material"] = {"eta": 1e3}
+    z = Problem.from_mapping(m).zones[0].material
+    assert z.tau_B == 0.0 and z.tau_S > 0       # eta alone: no bulk viscosity
+    m = {**base, "zones": [{"from": 0.5, "to": 1.0, "section": {"height": 0.005}}]}
+    p = Problem.from_mapping(m)
+    sec = p.zones[0].section
+    assert dict(sec.dims) == {"width": 0.02, "height": 0.005}
+    assert p.to_mapping()["zones"][0]["section"] == {"height": 0.005}   # written as given
+    m["zones"][0]["section"] = {"kind": "circle", "radius": 0.004}
+    assert dict(Problem.from_mapping(m).zones[0].section.dims) == {"radius": 0.004}
