@@ -102,6 +102,7 @@ def _cmd_derive_export(args) -> int:
     if bad:
         raise CliError(f"kvrod derive export: unknown step(s) {', '.join(map(repr, bad))}; "
                        f"steps are: {', '.join(STEP_NAMES)}")
+    _check_output(args.out, "kvrod derive export")
     steps = derivation("kvrod derive export")
     doc = {n: {"title": steps[n].title, "equations": list(steps[n].equations),
                "assumptions": list(steps[n].assumptions), "inputs": list(steps[n].inputs),
@@ -117,10 +118,27 @@ def _cmd_derive_export(args) -> int:
     return 0
 
 
+def _check_output(path: str | Path | None, command: str, folder: bool = False) -> None:
+    """Refuse an output path that cannot be written before the derivation runs (half a
+    minute on an empty cache): a file where a folder must be, or a folder where the file
+    must be."""
+    if path is None:
+        return
+    p = Path(path)
+    if p.is_dir() and not folder:
+        raise CliError(f"{command}: --out {path} is a folder; give a file name")
+    for anc in ([p] if folder else []) + list(p.parents):
+        if anc.exists():
+            if not anc.is_dir():
+                raise CliError(f"{command}: --out {path}: {anc} is a file, not a folder")
+            return
+
+
 def _cmd_derive_notes(args) -> int:
     from derive.notes import write_derivation_notes
     from kvrod.notices import derivation
 
+    _check_output(args.out, "kvrod derive notes")
     derivation("kvrod derive notes")
     path = write_derivation_notes(Path(args.out))
     print(f"wrote {path}")
@@ -131,6 +149,7 @@ def _cmd_generate(args) -> int:
     from derive.artifacts import check_tree, write_tree
     from kvrod.notices import derivation
 
+    _check_output(args.out, "kvrod generate", folder=True)
     derivation("kvrod generate")
     if args.check:
         problems = check_tree(Path(args.out) if args.out else None)

@@ -96,6 +96,13 @@ def background(request, tmp_path_factory, templates):
                 and getattr(item, "originalname", "") == "test_case"
                 and item.callspec.params["case"].background]
     selected.sort(key=lambda c: -c.timeout)
+    if selected:
+        # the compiled library in the cache first: on an empty cache (a fresh CI machine)
+        # the first subprocess compiles and says so on stderr, beside the one line a case
+        # checks (and two lanes would compile at once)
+        from runtime.model.build import compile_native
+
+        compile_native()
     pool = ThreadPoolExecutor(max_workers=BACKGROUND_LANES)
     lane: dict[str, tuple[A.Ctx, Future]] = {}
     for case in selected:
