@@ -580,10 +580,34 @@ static int jac_segment(const kvrod_rod* rod, int i, const double* y, double cy, 
   return 0;
 }
 
+/* joint j's torque Jacobian Jk (6 rows: the omega rows of segments j, j+1; 14 columns:
+   p_j, p_j+1, omega_j, omega_j+1; column-major) into the band, times -cy; a side the
+   joint does not have (a clamp frame) is skipped (index -1 in jrows, jcols, which are
+   returned for the relaxation terms). Diagonal and coupled joints alike. */
+static void scatter_joint(const kvrod_rod* rod, int j, double cy, const band_t* B,
+                          const double* Jk, int jrows[6], int jcols[14]) {
+  const int has_a = j >= 1, has_b = j + 1 <= rod->N;
+  int r, c;
+  for (r = 0; r < 3; ++r) {
+    jrows[r] = has_a ? i_om(rod, j) + r : -1;
+    jrows[3 + r] = has_b ? i_om(rod, j + 1) + r : -1;
+    jcols[8 + r] = has_a ? i_om(rod, j) + r : -1;
+    jcols[11 + r] = has_b ? i_om(rod, j + 1) + r : -1;
+  }
+  for (r = 0; r < 4; ++r) {
+    jcols[r] = has_a ? i_p(rod, j) + r : -1;
+    jcols[4 + r] = has_b ? i_p(rod, j + 1) + r : -1;
+  }
+  for (c = 0; c < 14; ++c) {
+    if (jcols[c] < 0) continue;
+    for (r = 0; r < 6; ++r)
+      if (jrows[r] >= 0) AB(jrows[r], jcols[c]) -= cy * Jk[r + 6 * c];
+  }
+}
+
 /* joint j sits at node j: between segments j and j+1, or a clamp frame and a segment */
 static int jac_joint(const kvrod_rod* rod, int j, const double* y, double cy, double cj,
                      const band_t* B, work_t* W, double* J, const double* Jx) {
-  const int N = rod->N, has_a = j >= 1, has_b = j + 1 <= N;
   int jrows[6], jcols[14], r, c, b, k;
   double mq[3];
   if (!joint_args(rod, j, y, W)) {          /* absent clamp joint: its terms only decay */
@@ -602,21 +626,7 @@ static int jac_joint(const kvrod_rod* rod, int j, const double* y, double cy, do
     if (rod_joint_torques_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
     Jk = J;
   }
-  for (r = 0; r < 3; ++r) {
-    jrows[r] = has_a ? i_om(rod, j) + r : -1;
-    jrows[3 + r] = has_b ? i_om(rod, j + 1) + r : -1;
-    jcols[8 + r] = has_a ? i_om(rod, j) + r : -1;
-    jcols[11 + r] = has_b ? i_om(rod, j + 1) + r : -1;
-  }
-  for (r = 0; r < 4; ++r) {
-    jcols[r] = has_a ? i_p(rod, j) + r : -1;
-    jcols[4 + r] = has_b ? i_p(rod, j + 1) + r : -1;
-  }
-  for (c = 0; c < 14; ++c) {
-    if (jcols[c] < 0) continue;
-    for (r = 0; r < 6; ++r)
-      if (jrows[r] >= 0) AB(jrows[r], jcols[c]) -= cy * Jk[r + 6 * c];
-  }
+  scatter_joint(rod, j, cy, B, Jk, jrows, jcols);
   if (!rod->nb) return 0;
   double dU[3], dUx[24], G[18];
   W->arg[2] = jntp(rod, j);                 /* (p_a, p_b) are still in arg[0], arg[1] */
@@ -710,27 +720,12 @@ static int jac_cseg(const kvrod_rod* rod, int i, const double* y, double cy,
 /* coupled sections: joint j with its full C_MM, V_MM (as jac_joint, no relaxation) */
 static int jac_cjoint(const kvrod_rod* rod, int j, const double* y, double cy,
                       const band_t* B, work_t* W, double* J) {
-  const int N = rod->N, has_a = j >= 1, has_b = j + 1 <= N;
-  int jrows[6], jcols[14], r, c;
+  int jrows[6], jcols[14];
   if (!joint_args(rod, j, y, W)) return 0;
   W->arg[5] = jntcp(rod, j);
   W->res[0] = J;
   if (rod_coupled_joint_torques_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
-  for (r = 0; r < 3; ++r) {
-    jrows[r] = has_a ? i_om(rod, j) + r : -1;
-    jrows[3 + r] = has_b ? i_om(rod, j + 1) + r : -1;
-    jcols[8 + r] = has_a ? i_om(rod, j) + r : -1;
-    jcols[11 + r] = has_b ? i_om(rod, j + 1) + r : -1;
-  }
-  for (r = 0; r < 4; ++r) {
-    jcols[r] = has_a ? i_p(rod, j) + r : -1;
-    jcols[4 + r] = has_b ? i_p(rod, j + 1) + r : -1;
-  }
-  for (c = 0; c < 14; ++c) {
-    if (jcols[c] < 0) continue;
-    for (r = 0; r < 6; ++r)
-      if (jrows[r] >= 0) AB(jrows[r], jcols[c]) -= cy * J[r + 6 * c];
-  }
+  scatter_joint(rod, j, cy, B, J, jrows, jcols);
   return 0;
 }
 
