@@ -390,26 +390,15 @@ def _strain_vectors(lin: Linearization, Q: np.ndarray) -> list[np.ndarray]:
     ``static_retract``; weights ``sqrt(h C / 2)`` (segments) and ``sqrt(h_j C_M / 2)``
     (joints; h_j = h/2 at a clamp), so the squared norms are strain energies (J).
     """
-    model, st = lin.model, lin.statics
-    a = model.arrays
+    a = lin.model.arrays
     h = a.seg_field("h")[:, 0]
     CF, CM = a.seg_field("C_F").T, a.jnt_field("C_M").T          # (3, N), (3, N+1)
     wU = a.jnt_field("h")[:, 0].copy()
     wU[0] = wU[0] if a.clamped("start") else 0.0
     wU[-1] = wU[-1] if a.clamped("end") else 0.0
-    L = float(np.sum(h))
     comps: list[list[np.ndarray]] = [[] for _ in range(6)]
     for k in range(Q.shape[1]):
-        dx = lin.expand(Q[:, k])
-        th = dx[st.theta_cols]
-        scale = max(float(np.max(np.abs(dx[st.phi_cols.ravel()]))) / L,
-                    float(np.max(np.abs(th))), 1e-300)
-        eps = 1e-6 / scale
-        with model.statics():
-            sp_ = model.diagnostics(0.0, st.static_retract(lin.y_eq, eps * dx))["strains"]
-            sm_ = model.diagnostics(0.0, st.static_retract(lin.y_eq, -eps * dx))["strains"]
-        dV = (sp_["V"] - sm_["V"]) / (2 * eps)
-        dU = (sp_["U"] - sm_["U"]) / (2 * eps)
+        dV, dU = _mode_strains(lin, lin.expand(Q[:, k]))
         for c in range(3):
             comps[c].append(np.sqrt(0.5 * CF[c] * h) * dV[c])
             comps[3 + c].append(np.sqrt(0.5 * CM[c] * wU) * dU[c])
