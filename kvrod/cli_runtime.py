@@ -34,11 +34,17 @@ def _print_summary(s: dict, out: Path, vtk: bool, plots: bool) -> None:
         print("\n".join(_static_lines(s["static"])))
     if s.get("peaks"):
         z = s["damping_ratios"]
-        print(f"maxima: {len(s['peaks'])}, damping ratios: {[round(v, 4) for v in z]}")
+        c = s.get("vibration_centre") or {}
+        about = (f" (amplitudes about the {c['source']}, {c['coordinate']} = "
+                 f"{c['displacement']:+.6g} m from the reference)"
+                 if c.get("source", "reference") != "reference" else "")
+        print(f"maxima: {len(s['peaks'])}, damping ratios: {[round(v, 4) for v in z]}{about}")
     lp = s.get("linear_prediction")
     if lp:
         print(f"linear prediction zeta_1 = {lp.get('formula', 'omega_1 tau / 2')} = "
-              f"{lp['zeta_1']:.4f}")
+              f"{lp['zeta_1']:.4f} for the {lp.get('mode', 'first bending mode')}")
+    elif s.get("linear_prediction_note"):
+        print(f"linear prediction: not applicable ({s['linear_prediction_note']})")
     eb = s["energy_balance_max_rel"]
     print(f"energy balance max rel. error: {eb:.2e}" if eb is not None
           else f"energy balance: not applicable ({s['energy_audit']['note']})")

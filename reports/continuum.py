@@ -8,7 +8,8 @@ cantilever of ``references.viscoelastic_beam``; ``references.supported`` for the
 supports); the section constants come from ``references.sections`` too, so the column
 ``analytic omega`` of ``kvrod modes`` is an independent check of the discrete rod, not a
 copy of it. Where no reference exists (rigid and shear modes, a Maxwell rod that is not a
-cantilever, a root the reference cannot track) the column stays empty.
+cantilever, a root the reference cannot track, zones that make the rod vary; a zone over
+the whole rod is the rod's section and material) the column stays empty.
 """
 
 from __future__ import annotations
@@ -41,6 +42,8 @@ def support(problem) -> str | None:
 
     if problem.material is None or getattr(problem.section, "coupled", False):
         return None                     # a composite or coupled section: no closed form here
+    if problem.zones:                   # see uniform_equivalent (attach folds a whole-rod zone)
+        return None
     if not (isinstance(problem.rod.geometry, Straight) and problem.rod.geometry.twist == 0
             and problem.start.motion is None and problem.end.motion is None
             and not getattr(problem.section, "tapered", False)
@@ -127,7 +130,8 @@ def attach(problem, modes) -> None:
     """Set ``analytic_omega`` of each mode where the references apply: the k-th mode of a
     family gets the family's k-th continuum frequency; None where there is none (or the
     reference cannot compute it)."""
-    if not applies(problem):
+    problem = problem.uniform_equivalent()     # zones: the rod's own, or none at all
+    if problem is None or not applies(problem):
         return
     counts: dict[str, int] = {}
     for md in modes:

@@ -27,7 +27,9 @@ import numpy as np
 __all__ = [
     "BETA1_L",
     "EnergyAudit",
+    "BEAT_SCATTER",
     "EnvelopeFit",
+    "beat_warning",
     "cumulative_integral",
     "damping_ratios",
     "energy_audit",
@@ -37,6 +39,7 @@ __all__ = [
     "log_decrements",
     "period_euler_bernoulli",
     "periods",
+    "ratio_scatter",
     "tip_summary",
 ]
 
@@ -204,6 +207,51 @@ def damping_ratios(delta: ArrayLike) -> np.ndarray:
     """
     delta = _as_1d("delta", delta, min_len=1)
     return delta / np.sqrt(4.0 * math.pi**2 + delta**2)
+
+
+#: successive damping ratios whose scatter about their linear trend exceeds this fraction
+#: of their mean magnitude are taken for two or more modes beating in the signal
+BEAT_SCATTER = 0.25
+#: fewest ratios the beat test looks at (three points always lie near some trend)
+BEAT_MIN_RATIOS = 4
+
+
+def ratio_scatter(zeta: ArrayLike) -> float:
+    """RMS deviation of successive damping ratios from their least-squares line in the
+    cycle number, over their mean magnitude (NaN for fewer than ``BEAT_MIN_RATIOS``).
+
+    One mode decaying gives ratios that lie on a smooth curve (constant in the linear
+    regime, rising towards the linear value after a large release: the paper's
+    cantilever, whose first ratios grow by ~40 % over five cycles with a scatter of
+    ~1 %); two modes in the signal make the maxima beat and the ratios jump up and down
+    about their trend."""
+    z = np.asarray(zeta, dtype=float)
+    z = z[np.isfinite(z)]
+    if z.size < BEAT_MIN_RATIOS:
+        return math.nan
+    k = np.arange(z.size, dtype=float)
+    slope, icpt = np.polyfit(k, z, 1)
+    scale = float(np.mean(np.abs(z)))
+    if scale == 0.0:
+        return math.nan
+    return float(np.sqrt(np.mean((z - (icpt + slope * k)) ** 2)) / scale)
+
+
+def beat_warning(zeta: ArrayLike, coordinate: str | None = None) -> str | None:
+    """A warning when successive damping ratios scatter by more than ``BEAT_SCATTER`` of
+    their mean about their linear trend (:func:`ratio_scatter`): the maxima-based ratios
+    then mix modes and say little about any one of them; else None."""
+    r = ratio_scatter(zeta)
+    if not (r > BEAT_SCATTER):
+        return None
+    z = np.asarray(zeta, dtype=float)
+    where = f" of {coordinate}" if coordinate else ""
+    return (f"the damping ratios of successive maxima{where} scatter by {100 * r:.0f} % about "
+            f"their trend ({float(np.min(z)):.3g} ... {float(np.max(z)):.3g}; more than "
+            f"{100 * BEAT_SCATTER:.0f} %): two or more modes beat in this signal, so the "
+            "maxima-based ratios mix them; take the modal damping from `kvrod modes` "
+            "(--deformed about a loaded equilibrium), or analyse a coordinate that one mode "
+            "dominates")
 
 
 def periods(t_k: ArrayLike) -> np.ndarray:

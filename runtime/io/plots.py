@@ -39,6 +39,15 @@ def padded_limits(values: Sequence[float] | np.ndarray, margin: float = 0.08
     return lo - pad, hi + pad
 
 
+def _centre_x(run) -> float:
+    """The tip x the maxima of a run decay towards (its vibration centre: the reference
+    plus the centre's displacement, ``SimulationResult.centre``), 0 where unknown."""
+    centre, model = getattr(run, "centre", None), getattr(run, "model", None)
+    if centre is None or model is None or run.problem.analysis.maxima != "end.x":
+        return 0.0
+    return float(model.reference[model.phi_index[-1][0]]) + centre.value
+
+
 def plot_tip(runs: Sequence, labels: Sequence[str], path: Path, envelopes: bool = True) -> Path:
     """Tip x(t) like the paper's Fig. 3, with exponential envelopes fitted to the later
     (linear) maxima."""
@@ -49,8 +58,9 @@ def plot_tip(runs: Sequence, labels: Sequence[str], path: Path, envelopes: bool 
         if envelopes and run.peaks_x.size >= 4:
             fit = exponential_envelope(run.peaks_t, run.peaks_x, first=max(0, run.peaks_x.size - 4))
             tt = np.linspace(0, run.t[-1], 200)
-            ax.plot(tt, fit(tt), "--", color=line.get_color(), lw=0.8)
-            ax.plot(tt, -fit(tt), "--", color=line.get_color(), lw=0.8)
+            c = _centre_x(run)          # the envelope about the equilibrium it decays to
+            ax.plot(tt, c + fit(tt), "--", color=line.get_color(), lw=0.8)
+            ax.plot(tt, c - fit(tt), "--", color=line.get_color(), lw=0.8)
     ax.set_xlabel("time t after release [s]")
     ax.set_ylabel("tip displacement x(t) = e1 . phi(L, t) [m]")
     ax.axhline(0, color="0.7", lw=0.5)

@@ -186,6 +186,71 @@ class RodArrays:
         return m
 
 
+def _positive_sides(F: np.ndarray, B: np.ndarray, M: np.ndarray, strict: bool) -> bool:
+    """Whether the 6x6 ``[[F, B], [B^T, M]]`` is positive definite (``strict``) or semi-
+    definite to round-off: the form a segment holds with one of its joints."""
+    S = np.block([[F, B], [B.T, M]])
+    S = 0.5 * (S + S.T)
+    w = np.linalg.eigvalsh(S)
+    tol = 1e-12 * max(float(np.max(np.abs(w))), 1e-300)
+    return bool(w[0] > tol) if strict else bool(w[0] >= -tol)
+
+
+def coupled_joint_series(stiffness: np.ndarray, viscosity: np.ndarray,
+                         h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Joint blocks C_MM, V_MM (N+1, 3, 3) of a rod with coupled sections from its
+    segments' 6x6 matrices (N, 6, 6) and lengths h (N,): the two half cells in series
+    (``runtime.problem.materials.joint_series`` in matrix form:
+    ``h_j C_j^-1 = w_a C_a^-1 + w_b C_b^-1``,
+    ``h_j C_j^-1 V_j C_j^-1 = w_a C_a^-1 V_a C_a^-1 + w_b C_b^-1 V_b C_b^-1``, w = h/2),
+    equal neighbours their own blocks, the ends the end segment's.
+
+    Where a neighbour has force-moment couplings (C_FM or V_FM), the joint keeps the
+    length-weighted mean: in series, the coupling's moment C_FM^T dG of that half cell
+    would need the weight ``C_j C_a^-1 w_a / h_j`` instead of the kernels' scalar w/h_j
+    (each half's curvature is ``C_a^-1 (m - C_FM^T dG)``); with the scalar weight the
+    series block doubles the curvature that the coupling drives in the joint (a coupled
+    clip's total twist went from 0.5 to 1 element's worth of error). A change between
+    coupled sections therefore stays first order at the joint (docs/design.md, 10).
+
+    Positive definiteness (docs/design.md, section 10): segment i's share of the energy is
+    ``h/4 ([dG; U_a]^T K_a [dG; U_a] + [dG; U_b]^T K_b [dG; U_b])`` with
+    ``K_x = [[C_FF, C_FM], [C_FM^T, C_x]]``, C_x its joint's block; the series block is
+    softer than the mean, so next to a strongly coupled segment K_x could lose
+    definiteness. Such a joint keeps the length-weighted mean, whose split gives each
+    segment its own C_MM (positive by the section's K); the same for V (semi-definite)."""
+    K = np.asarray(stiffness, dtype=float)
+    V = np.asarray(viscosity, dtype=float)
+    h = np.asarray(h, dtype=float).reshape(-1)
+    N = K.shape[0]
+    CMM, VMM = K[:, 3:, 3:], V[:, 3:, 3:]
+    jC, jV = np.empty((N + 1, 3, 3)), np.empty((N + 1, 3, 3))
+    jC[0], jC[-1], jV[0], jV[-1] = CMM[0], CMM[-1], VMM[0], VMM[-1]
+    for j in range(1, N):
+        a, b = j - 1, j
+        wa, wb = 0.5 * h[a], 0.5 * h[b]
+        hj = wa + wb
+        mean_C = (h[a] * CMM[a] + h[b] * CMM[b]) / (h[a] + h[b])
+        mean_V = (h[a] * VMM[a] + h[b] * VMM[b]) / (h[a] + h[b])
+        if np.array_equal(K[a], K[b]) and np.array_equal(V[a], V[b]):
+            jC[j], jV[j] = mean_C, mean_V       # equal neighbours (to round-off, as before)
+            continue
+        Fa, Fb = np.linalg.inv(CMM[a]), np.linalg.inv(CMM[b])
+        Cs = hj * np.linalg.inv(wa * Fa + wb * Fb)
+        Cs = 0.5 * (Cs + Cs.T)
+        Vs = Cs @ (wa * Fa @ VMM[a] @ Fa + wb * Fb @ VMM[b] @ Fb) @ Cs / hj
+        Vs = 0.5 * (Vs + Vs.T)
+        uncoupled = not (np.any(K[a, :3, 3:]) or np.any(K[b, :3, 3:])
+                         or np.any(V[a, :3, 3:]) or np.any(V[b, :3, 3:]))
+        ok_C = uncoupled and all(_positive_sides(K[k, :3, :3], K[k, :3, 3:], Cs, True)
+                                 for k in (a, b))
+        ok_V = uncoupled and all(_positive_sides(V[k, :3, :3], V[k, :3, 3:], Vs, False)
+                                 for k in (a, b))
+        jC[j] = Cs if ok_C else mean_C
+        jV[j] = Vs if ok_V else mean_V
+    return jC, jV
+
+
 def coupled_arrays(base: RodArrays, stiffness: np.ndarray, viscosity: np.ndarray,
                    rotary_inertia: np.ndarray | None = None,
                    mass_centre: np.ndarray | None = None) -> RodArrays:
@@ -201,10 +266,10 @@ def coupled_arrays(base: RodArrays, stiffness: np.ndarray, viscosity: np.ndarray
     Segments carry C_FF, V_FF and the coupling blocks C_FM, V_FM, with the weights h/2 of
     their couplings with the two joints (0 where a joint is absent: a free end, where
     C_FF, V_FF take the free end's condensation ``- 1/2 C_FM C_MM^-1 C_FM^T``, and V with
-    the pseudo-inverse); joints the length-weighted mean of their segments' C_MM, V_MM
-    (the end segment's at a clamp). ``base``'s diagonal fields C_F, V_F, C_M, V_M, rhoI
-    receive the diagonals (read by what reports on them; the kernels of a coupled rod
-    read the coupled tables only).
+    the pseudo-inverse); joints their segments' C_MM, V_MM in series
+    (:func:`coupled_joint_series`; the end segment's at a clamp). ``base``'s diagonal
+    fields C_F, V_F, C_M, V_M, rhoI receive the diagonals (read by what reports on them;
+    the kernels of a coupled rod read the coupled tables only).
     """
     N = base.N
     if base.branches:
@@ -238,12 +303,9 @@ def coupled_arrays(base: RodArrays, stiffness: np.ndarray, viscosity: np.ndarray
         a.segc_field(name)[:] = val.reshape(N, 9)
     a.segc_field("w")[:] = w
     a.segc_field("e")[:] = e
-    for name, blk in (("C_MM", CMM), ("V_MM", VMM)):
-        jm = np.empty((N + 1, 3, 3))
-        jm[0], jm[-1] = blk[0], blk[-1]
-        jm[1:-1] = ((h[:-1, None, None] * blk[:-1] + h[1:, None, None] * blk[1:])
-                    / (h[:-1] + h[1:])[:, None, None])
-        a.jntc_field(name)[:] = jm.reshape(N + 1, 9)
+    jC, jV = coupled_joint_series(K, V, h)
+    a.jntc_field("C_MM")[:] = jC.reshape(N + 1, 9)
+    a.jntc_field("V_MM")[:] = jV.reshape(N + 1, 9)
     d = lambda M: np.diagonal(M, axis1=1, axis2=2)  # noqa: E731
     a.seg_field("C_F")[:], a.seg_field("V_F")[:] = d(K[:, :3, :3]), d(V[:, :3, :3])
     a.seg_field("rhoI")[:] = d(J)

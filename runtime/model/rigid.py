@@ -204,10 +204,11 @@ def external_wrench(st, y: np.ndarray, centre: np.ndarray) -> tuple[np.ndarray, 
     r1, r0 = np.empty(model.n), np.empty(model.n)
     y0 = st.at_rest(y)
     try:
+        t = getattr(st, "time", 0.0)
         st.load_scale = 1.0
-        model.residual(0.0, y0, model._zeros, r1)
+        model.residual(t, y0, model._zeros, r1)
         st.load_scale = 0.0
-        model.residual(0.0, y0, model._zeros, r0)
+        model.residual(t, y0, model._zeros, r0)
     finally:
         st.load_scale = saved
     d = r0 - r1                                          # the loads (residual = K x - f)

@@ -60,11 +60,15 @@ def _half_L(p: np.ndarray) -> np.ndarray:
 class RodStatics:
     """:class:`~runtime.solvers.protocols.StaticProblem` of a :class:`RodModel`.
 
-    Use inside ``with model.statics():`` so that loads and ends are driven as in statics.
+    Use inside ``with model.statics(time):`` so that loads and ends are driven as in
+    statics (at ``time-``, 0 by default).
     """
 
-    def __init__(self, model: RodModel) -> None:
+    def __init__(self, model: RodModel, time: float = 0.0) -> None:
         self.model = m = model
+        #: the time (s) whose loads and end positions statics sees (at ``time-``; 0: the
+        #: loads before a run, a later time: the equilibrium a released rod settles to)
+        self.time = float(time)
         N = self.N = m.N
         self.n_static = L.n_static(N)
         self.kl_static, self.ku_static = ((L.COUPLED_STATIC_KL, L.COUPLED_STATIC_KU)
@@ -122,7 +126,7 @@ class RodStatics:
     @load_scale.setter
     def load_scale(self, value: float) -> None:
         self.model.load_scale = value
-        self.model.at(0.0)
+        self.model.at(self.time)
 
     def at_rest(self, y: np.ndarray) -> np.ndarray:
         """y with every velocity zero (copy)."""
@@ -139,7 +143,7 @@ class RodStatics:
         segment i torques (material) and node i forces; zero on held nodes."""
         m = self.model
         r = np.empty(m.n)
-        m.residual(0.0, self.at_rest(y), m._zeros, r)
+        m.residual(self.time, self.at_rest(y), m._zeros, r)
         out[:] = r[self.static_rows]
         out[~self._rowmask] = 0.0
         if self.gauge is not None:
@@ -151,7 +155,7 @@ class RodStatics:
         m = self.model
         y0 = self.at_rest(y)
         ab = np.zeros((m.ldab, m.n), order="F")
-        m.jacobian_band2(0.0, y0, m._zeros, 1.0, 0.0, ab)
+        m.jacobian_band2(self.time, y0, m._zeros, 1.0, 0.0, ab)
         Jd = m.band_to_csc(ab, m.kl, m.ku).tocsr()[self.static_rows]
         J = (Jd @ self.tangent(y0)).tocsr()
         keep = sp.diags(self._rowmask.astype(float))
@@ -236,7 +240,7 @@ class RodStatics:
         m = self.model
         y0 = self.at_rest(y)
         ab = np.zeros((m.ldab, m.n), order="F")
-        m.jacobian_band2(0.0, y0, m._zeros, 1.0, 0.0, ab)
+        m.jacobian_band2(self.time, y0, m._zeros, 1.0, 0.0, ab)
         Lm = _half_L(y0[m.p_index])
         weights = np.concatenate([[1.0], Lm.ravel()])
         vals = ab.ravel(order="F")[src] * weights[widx]

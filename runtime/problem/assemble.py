@@ -25,7 +25,7 @@ from runtime.model.quaternion import (
 )
 from runtime.model.rod import RodModel
 from runtime.problem.geometry import Straight, discretize
-from runtime.problem.materials import joint_average
+from runtime.problem.materials import joint_average, joint_series
 from runtime.problem.schema import Problem
 from runtime.problem.timefunctions import TimeFunction
 
@@ -48,7 +48,8 @@ class ProblemDrive:
         self.ends = (problem.start, problem.end)
         self.time_dependent = any(not ld.time.is_constant for ld in self.loads) or any(
             e.motion is not None and e.motion.time_dependent for e in self.ends)
-        self._nodes = [ld.node(N, self.length) for ld in self.loads]
+        s_nodes = problem.node_arc_lengths()
+        self._nodes = [ld.node(N, self.length, s_nodes) for ld in self.loads]
         #: an end has prescribed motion (statics must move the held nodes)
         self.moving_ends = any(e.motion is not None and e.motion.moves for e in self.ends)
 
@@ -191,7 +192,7 @@ def reference_arrays(problem: Problem) -> tuple[RodArrays, np.ndarray, np.ndarra
     from generated import rod_layout as L
 
     N = problem.rod.elements
-    disc = discretize(problem.rod.geometry, N)
+    disc = discretize(problem.rod.geometry, N, problem.node_arc_lengths())
     mats = problem.segment_matrices()
     a = RodArrays.zeros(N, len(mats.get("theta", ())))
     h = disc.h
@@ -224,8 +225,7 @@ def reference_arrays(problem: Problem) -> tuple[RodArrays, np.ndarray, np.ndarra
     hj[1:-1] = 0.5 * (h[:-1] + h[1:])
     hj[0], hj[-1] = 0.5 * h[0], 0.5 * h[-1]
     a.jnt_field("h")[:, 0] = hj
-    a.jnt_field("C_M")[:] = joint_average(mats["C_M"])
-    a.jnt_field("V_M")[:] = joint_average(mats["V_M"])
+    a.jnt_field("C_M")[:], a.jnt_field("V_M")[:] = joint_series(mats["C_M"], mats["V_M"], h)
     if a.branches:            # generalized Maxwell: the rod's relaxation terms
         a.theta[:] = mats["theta"]
         a.segb[:] = mats["segb"]

@@ -401,16 +401,73 @@ class Discrete:
     h: np.ndarray
 
 
-def discretize(geom: Geometry, n_elements: int) -> Discrete:
-    """Nodes at s_i = i h (h = L/N), segment frames at the midpoints, end frames at 0
-    and L."""
-    N, Lr = int(n_elements), geom.length
+#: breakpoints closer than this (relative to the rod length) to a uniform node, or to each
+#: other, are that node (one breakpoint)
+NODE_SNAP_RTOL = 1e-9
+
+
+def node_arc_lengths(length: float, n_elements: int, breakpoints=(),
+                     key: str = "rod.elements") -> np.ndarray:
+    """Arc lengths (N+1,) of the nodes (m): ``i L/N`` where no breakpoint asks otherwise,
+    else a node at every breakpoint (a zone boundary, a point load's ``s``, a named point
+    of an assembly) with the N elements shared among the stretches between them in
+    proportion to their lengths (at least one each, largest remainders; uniform inside a
+    stretch). Breakpoints within ``NODE_SNAP_RTOL L`` of a uniform node keep the uniform
+    grid (bit for bit the rod without them).
+
+    Why not move the nearest node: the elements stay uniform inside each stretch, so a
+    stretch keeps the second order of a uniform rod, and nothing depends on which node
+    happened to be nearest."""
+    N, Lr = int(n_elements), float(length)
     h = Lr / N
-    s = np.arange(N + 1) * h
-    mid = (np.arange(N) + 0.5) * h
+    tol = NODE_SNAP_RTOL * Lr
+    pts: list[float] = []
+    for b in sorted(float(v) for v in breakpoints):
+        if tol < b < Lr - tol and (not pts or b - pts[-1] > tol):
+            pts.append(b)
+    if all(abs(b - round(b / h) * h) <= tol for b in pts):
+        return np.arange(N + 1) * h
+    edges = np.array([0.0, *pts, Lr])
+    lengths = np.diff(edges)
+    if lengths.size > N:
+        raise ParameterError(key, N, f">= {lengths.size}: a node goes at each of the "
+                             f"{lengths.size - 1} zone boundaries, point loads and named "
+                             "points, and every stretch between them needs an element")
+    share = N * lengths / Lr
+    n = np.maximum(np.floor(share).astype(int), 1)
+    while n.sum() > N:           # the minimum of one took elements from the long stretches
+        k = int(np.argmax(np.where(n > 1, n - share, -np.inf)))
+        n[k] -= 1
+    order = np.argsort(-(share - n), kind="stable")
+    for k in order[: N - int(n.sum())]:
+        n[k] += 1
+    s = [np.array([0.0])]
+    for a, b, m in zip(edges[:-1], edges[1:], n, strict=True):
+        s.append(a + (b - a) * np.arange(1, m + 1) / m)
+    out = np.concatenate(s)
+    out[-1] = Lr
+    return out
+
+
+def discretize(geom: Geometry, n_elements: int, s: np.ndarray | None = None) -> Discrete:
+    """Nodes at the arc lengths ``s`` (N+1,) (default ``s_i = i h``, ``h = L/N``), segment
+    frames at the midpoints, end frames at 0 and L."""
+    N, Lr = int(n_elements), geom.length
+    if s is None:
+        h = Lr / N
+        s = np.arange(N + 1) * h
+        mid = (np.arange(N) + 0.5) * h
+        hs = np.full(N, h)
+    else:
+        s = np.asarray(s, dtype=float)
+        if s.shape != (N + 1,):
+            raise ValueError(f"s has shape {s.shape}, expected ({N + 1},)")
+        if np.array_equal(s, np.arange(N + 1) * (Lr / N)):   # uniform: its own arithmetic
+            return discretize(geom, N)
+        mid, hs = 0.5 * (s[:-1] + s[1:]), np.diff(s)
     return Discrete(nodes=geom.position(s), frames=geom.frame(mid),
                     start_frame=geom.frame(np.array(0.0)), end_frame=geom.frame(np.array(Lr)),
-                    h=np.full(N, h))
+                    h=hs)
 
 
 KINDS = ("straight", "arc", "helix", "points")

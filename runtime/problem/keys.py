@@ -380,7 +380,14 @@ KEYS: tuple[Key, ...] = (
     _k("statics", "report", "-", "[]", "load factors in (0, 1)", "load factors at which "
        "the end positions are recorded on the way", invalid=[1.5]),
     _k("analysis", "maxima", "-", "none", "end.x, end.y, end.z, start.x, start.y, start.z",
-       "the coordinate whose maxima give log decrements and damping ratios",
+       "the coordinate whose maxima give log decrements and damping ratios. A maximum is "
+       "where its velocity turns from + to -; the amplitudes are taken about the "
+       "equilibrium the rod vibrates about (the stress-free reference when no load is left "
+       "on the rod and no end has moved; else the static equilibrium under the loads that "
+       "remain after the first maximum; the run's final state, with a warning, when they "
+       "still change or no equilibrium exists: summary.json vibration_centre), and only "
+       "maxima above it count. A warning flags successive damping ratios that scatter by "
+       "more than 25 % about their linear trend (two modes beating)",
        invalid="tip"),
 )
 

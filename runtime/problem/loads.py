@@ -27,6 +27,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from runtime.errors import ParameterError
 from runtime.problem import coerce as C
 from runtime.problem.timefunctions import TimeFunction
@@ -141,10 +143,14 @@ class Load:
             raise ParameterError("loads.frame", self.frame, "'dead' for gravity and "
                                  "distributed loads")
 
-    def node(self, n_elements: int, length: float) -> int:
-        """The node index (0..N) the load acts at."""
+    def node(self, n_elements: int, length: float,
+             s_nodes: np.ndarray | None = None) -> int:
+        """The node index (0..N) the load acts at; ``s_nodes``: the nodes' arc lengths
+        (m), which hold a node at the load's ``s`` (``Problem.node_arc_lengths``)."""
         if self.s is not None:
-            return int(round(self.s / length * n_elements))
+            if s_nodes is None:
+                return int(round(self.s / length * n_elements))
+            return int(np.argmin(np.abs(np.asarray(s_nodes) - self.s)))
         if self.at == "start":
             return 0
         if self.at == "end" or self.at is None:

@@ -425,9 +425,46 @@ def material_from_mapping(m: Mapping[str, Any] | None) -> Material:
 
 def joint_average(per_segment: np.ndarray) -> np.ndarray:
     """Joint values (N+1, ...) from segment values (N, ...): the mean of the two adjacent
-    segments inside, the end segment's value at the ends (the clamp joints)."""
+    segments inside, the end segment's value at the ends (the clamp joints). Used for the
+    relaxation terms of generalized Maxwell rods (uniform along the rod but for tapers);
+    the Kelvin-Voigt stiffness and viscosity take :func:`joint_series`."""
     a = np.asarray(per_segment, dtype=float)
     out = np.empty((a.shape[0] + 1,) + a.shape[1:])
     out[0], out[-1] = a[0], a[-1]
     out[1:-1] = 0.5 * (a[:-1] + a[1:])
     return out
+
+
+def joint_series(stiffness: np.ndarray, viscosity: np.ndarray,
+                 h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Joint stiffness and viscosity (N+1, 3) from the segments' diagonals (N, 3) of
+    lengths h (N,) (m): the two half cells of a joint's cell in series.
+
+    A joint's cell reaches half a segment into each neighbour (h_j = (h_i + h_i+1)/2);
+    its compliance is that of the two halves in series,
+    ``h_j / C_j = (h_i/2) / C_i + (h_i+1/2) / C_i+1``, which is what the continuum's
+    moment-curvature integral over the cell gives where C jumps at the node: a sharp change
+    of section or material stays second order in h (the arithmetic mean made it first
+    order: docs/design.md, section 10). The viscosity follows from the series combination
+    of the two Kelvin-Voigt half cells at low frequency (their compliances
+    ``1/(C + s V)`` added and expanded to first order in s):
+    ``h_j V_j / C_j^2 = (h_i/2) V_i / C_i^2 + (h_i+1/2) V_i+1 / C_i+1^2``, so a common
+    retardation time stays that time (V = tau C gives V_j = tau C_j) and a damped half
+    beside an undamped one damps the joint. Equal neighbours give their own values
+    exactly; the ends (clamp joints) the end segment's."""
+    C = np.asarray(stiffness, dtype=float)
+    V = np.asarray(viscosity, dtype=float)
+    h = np.asarray(h, dtype=float).reshape(-1)
+    Cj = np.empty((C.shape[0] + 1,) + C.shape[1:])
+    Vj = np.empty_like(Cj)
+    Cj[0], Cj[-1], Vj[0], Vj[-1] = C[0], C[-1], V[0], V[-1]
+    if C.shape[0] > 1:
+        wa, wb = 0.5 * h[:-1, None], 0.5 * h[1:, None]
+        Ca, Cb, Va, Vb = C[:-1], C[1:], V[:-1], V[1:]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            c = (wa + wb) / (wa / Ca + wb / Cb)
+            v = c * c * (wa * Va / (Ca * Ca) + wb * Vb / (Cb * Cb)) / (wa + wb)
+        same_c = Ca == Cb
+        Cj[1:-1] = np.where(same_c, Ca, c)
+        Vj[1:-1] = np.where(same_c & (Va == Vb), Va, v)
+    return Cj, Vj

@@ -25,7 +25,7 @@ from __future__ import annotations
 import copy
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -33,7 +33,14 @@ import numpy as np
 
 from runtime.errors import ParameterError
 from runtime.problem import coerce as C
-from runtime.problem.geometry import Curve, Geometry, Straight, geometry_from_mapping
+from runtime.problem.geometry import (
+    NODE_SNAP_RTOL,
+    Curve,
+    Geometry,
+    Straight,
+    geometry_from_mapping,
+    node_arc_lengths,
+)
 from runtime.problem.loads import End, Load, end_from_mapping, load_from_mapping
 from runtime.problem.materials import (
     GeneralizedMaxwell,
@@ -183,6 +190,13 @@ class Analysis:
             C.choice("analysis.maxima", self.maxima, MAXIMA)
 
 
+#: a section's coupling coefficient |M_ij| / sqrt(M_ii M_jj) (and mass-centre offset over
+#: the radius of gyration, product of inertia over sqrt(I11 I22)) below which a closed-form
+#: prediction takes the bending as uncoupled: a finite-element section's round-off
+#: couplings (~1e-7 for a circular cable) change omega by far less
+COUPLING_TOL = 1e-5
+
+
 @dataclass(frozen=True)
 class Problem:
     """A rod problem (see the module docstring)."""
@@ -226,6 +240,7 @@ class Problem:
         if self.simulation.initial == "reference" and self.loads and all(
                 ld.kind == "gravity" for ld in self.loads):
             pass  # a falling rod (pendulum): nothing to check
+        self._check_zone_nodes()
         frames = self.simulation.centreline_frames
         if frames * 3 * (N + 1) > MAX_FRAME_VALUES:
             raise ParameterError("simulation.centreline_frames", frames,
@@ -245,6 +260,19 @@ class Problem:
         self._check_positions()
         self._check_input_frequencies()
         self._check_t_end()
+
+    def _check_zone_nodes(self) -> None:
+        """The nodes (one at every zone boundary and point load's s) exist, and every zone
+        holds a segment: a zone shorter than the nodes' snapping tolerance would change
+        nothing."""
+        s = self.node_arc_lengths()
+        mid = 0.5 * (s[:-1] + s[1:])
+        for z in self.zones:
+            if not np.any((mid >= z.start) & (mid < z.end)):
+                raise ParameterError(
+                    f"zones[{z.index}]", f"from = {z.start:g}, to = {z.end:g} m",
+                    f"a stretch longer than {NODE_SNAP_RTOL:g} of the rod length (nodes go "
+                    "at its boundaries; this one is shorter than their tolerance)")
 
     def _check_periods(self) -> None:
         periods = self.simulation.t_end * self.characteristic_frequency() / (2 * math.pi)
@@ -376,10 +404,10 @@ class Problem:
 
     def _check_positions(self) -> None:
         """Positions (origin, prescribed translations) and clamp rotations small enough
-        that round-off leaves the element strains meaningful: |r| eps <= 1e-8 L/N (a
-        strain error of 1e-8), |angle| eps <= 1e-8 rad."""
+        that round-off leaves the element strains meaningful: |r| eps <= 1e-8 h_min (a
+        strain error of 1e-8; h_min = L/N on a uniform grid), |angle| eps <= 1e-8 rad."""
         eps = float(np.finfo(float).eps)
-        r_max = 1e-8 * self.rod.length / self.rod.elements / eps
+        r_max = 1e-8 * self.shortest_element() / eps
         origin = getattr(self.rod.geometry, "origin", (0.0, 0.0, 0.0))
         if math.hypot(*origin) > r_max:
             raise ParameterError("rod.geometry.origin", list(origin),
@@ -470,7 +498,10 @@ class Problem:
         Kelvin-Voigt V = diag(tau) C (eqs. (7), (9)); evaluated at both ends and the middle
         (tapers are linear). A generalized Maxwell material has no V: rate 0."""
         m = self._end_matrices()
-        k2 = (self.rod.elements / self.rod.length) ** 2
+        N = self.rod.elements
+        h_min = self.shortest_element()
+        k2 = ((N / self.rod.length) ** 2 if h_min == self.rod.length / N
+              else 1.0 / h_min**2)
         rhoA, rhoI = m["rhoA"][:, None], m["rhoI"]
         rhoI12 = np.min(rhoI[:, :2], axis=1)[:, None]
 
@@ -552,13 +583,47 @@ class Problem:
             return self.simulation.max_order
         return 5
 
+    def breakpoints(self) -> tuple[float, ...]:
+        """Arc lengths (m) where the rod must have a node: the zone boundaries and the
+        points where point loads act by arc length (``loads.s``)."""
+        out = [b for z in self.zones for b in (z.start, z.end)]
+        out += [ld.s for ld in self.loads if ld.s is not None]
+        return tuple(out)
+
+    def node_arc_lengths(self) -> np.ndarray:
+        """Arc lengths (N+1,) of the nodes (m): uniform, or with a node at every
+        breakpoint (:meth:`breakpoints`; :func:`~runtime.problem.geometry.node_arc_lengths`)."""
+        s = self.__dict__.get("_s_nodes")
+        if s is None:
+            s = node_arc_lengths(self.rod.length, self.rod.elements, self.breakpoints())
+            s.setflags(write=False)
+            object.__setattr__(self, "_s_nodes", s)
+        return s
+
+    def segment_fractions(self) -> np.ndarray:
+        """The segments' midpoints (N,) as fractions of the rod length, where their
+        matrices are taken (uniform: ``(i + 1/2) / N``, the arithmetic of a rod whose
+        nodes nothing moved)."""
+        N = self.rod.elements
+        s = self.node_arc_lengths()
+        if np.array_equal(s, np.arange(N + 1) * (self.rod.length / N)):
+            return (np.arange(N) + 0.5) / N
+        return 0.5 * (s[:-1] + s[1:]) / self.rod.length
+
+    def shortest_element(self) -> float:
+        """The shortest element's length (m): L/N on a uniform grid."""
+        N = self.rod.elements
+        s = self.node_arc_lengths()
+        if np.array_equal(s, np.arange(N + 1) * (self.rod.length / N)):
+            return self.rod.length / N
+        return float(np.min(np.diff(s)))
+
     def segment_matrices(self) -> dict[str, np.ndarray]:
         """Per segment: C_F, C_M, V_F, V_M diagonals (N, 3), rhoA (N,), rhoI (N, 3); a
         coupled section also K6, V6 (N, 6, 6), rhoJ (N, 3, 3), mass_centre (N, 2)
-        (:mod:`runtime.problem.coupled`)."""
+        (:mod:`runtime.problem.coupled`), at the segments' midpoints."""
         self.check_simulable()
-        N = self.rod.elements
-        x = (np.arange(N) + 0.5) / N
+        x = self.segment_fractions()
         m = self._matrices_at(x)
         if self.zones:
             from runtime.problem.zones import apply_zones
@@ -608,22 +673,93 @@ class Problem:
         rhoA = float(m["rhoA"][0])
         return BETA1_L**2 * math.sqrt(EI / (rhoA * self.rod.length**4))
 
-    def linear_prediction(self) -> dict[str, float] | None:
+    def uniform_equivalent(self) -> Problem | None:
+        """The problem as a rod of one section and material, where it is one: itself
+        without zones; with zones, the problem whose section and material are the zone's
+        when one zone covers the whole rod (its segments all take the zone's); None when
+        zones make the rod vary along its length (no closed form applies)."""
+        if not self.zones:
+            return self
+        tol = 1e-12 * self.rod.length
+        if len(self.zones) == 1:
+            z = self.zones[0]
+            if z.start <= tol and z.end >= self.rod.length - tol:
+                return replace(self, section=z.section,
+                               material=None if isinstance(z.section, Composite)
+                               else z.material, zones=())
+        return None
+
+    def linear_prediction_note(self) -> str | None:
+        """Why :meth:`linear_prediction` is None (in words), or None when it is not."""
+        return self._linear_prediction()[1]
+
+    def linear_prediction(self) -> dict[str, Any] | None:
         """For a straight, uniform, clamped-free rod whose end maxima are analysed: the
-        Euler-Bernoulli first mode in the direction of the maxima and the Kelvin-Voigt
-        damping ratio omega_1 tau/2 (tau = tau_E, or tau~_E on the naive route); for a
-        generalized Maxwell material the mode with the complex modulus E*(i omega_1) at
-        its own frequency and zeta = Im E* / (2 Re E*); else None."""
+        Euler-Bernoulli first bending mode in the direction of the maxima (``mode`` names
+        it) and its Kelvin-Voigt damping ratio omega_1 tau_B / 2 (tau_B = V/C of that
+        bending stiffness, the consistent or naive one the rod takes); for a generalized
+        Maxwell material the mode with the complex modulus E*(i omega_1) at its own
+        frequency and zeta = Im E* / (2 Re E*). None where no closed form applies (the
+        reason: :meth:`linear_prediction_note`): other supports, shapes, end motion,
+        tapers, zones that make the rod vary, loads left on the rod after release that
+        act along its axis (a hanging rod's tension) or moments, a section whose bending
+        in that direction couples to other strains (full 6x6 matrices) or whose mass centre
+        or product of inertia couple it to twist."""
+        return self._linear_prediction()[0]
+
+    def _linear_prediction(self) -> tuple[dict[str, Any] | None, str | None]:
+        which = self.analysis.maxima
+        if not (which and which.startswith("end")):
+            return None, "analysis.maxima does not name a coordinate of the free end"
         if not (isinstance(self.rod.geometry, Straight) and self.start.kind == "clamped"
-                and self.start.motion is None and self.end.kind == "free"
-                and self.analysis.maxima and self.analysis.maxima.startswith("end")
-                and not getattr(self.section, "tapered", False)):
-            return None
-        m = self._uniform_matrices()
+                and self.start.motion is None and self.end.kind == "free"):
+            return None, ("the closed form is for a straight cantilever (clamped at s = 0 "
+                          "without motion, free at s = L)")
+        if getattr(self.section, "tapered", False) or getattr(
+                self.material, "youngs_modulus_end", None) is not None or getattr(
+                self.material, "density_end", None) is not None:
+            return None, "the rod is tapered: its properties vary along its length"
+        t_end = self.simulation.t_end
+        tangent = np.asarray(self.rod.geometry._basis()[:, 2], dtype=float)
+        for k, ld in enumerate(self.loads):
+            v = np.asarray(ld.vector, dtype=float) * ld.time.value_at(t_end)
+            axial = abs(float(v @ tangent)) if ld.kind != "moment" else float(np.linalg.norm(v))
+            if axial > 1e-9 * max(float(np.linalg.norm(v)), 1e-300) and np.any(v):
+                return None, (f"loads[{k}] ({ld.kind}) still acts at t_end and stresses the "
+                              "rod along its axis (or twists it): its frequencies are not the "
+                              "unloaded beam's; see kvrod modes --deformed")
+        eq = self.uniform_equivalent()
+        if eq is None:
+            return None, "zones make the rod's section or material vary along its length"
+        if eq is not self:
+            return eq._linear_prediction()
+        m = self.segment_matrices() if self.zones else self._uniform_matrices()
         basis = self.rod.geometry._basis()
-        e = np.eye(3)["xyz".index(self.analysis.maxima[-1])]
+        e = np.eye(3)["xyz".index(which[-1])]
         # a displacement along d1 bends about d2 (E I2), along d2 about d1 (E I1)
         along_d1 = abs(float(e @ basis[:, 0])) >= abs(float(e @ basis[:, 1]))
+        k = 4 if along_d1 else 3              # K2 or K1 in the 6x6 strain order
+        g = 0 if along_d1 else 1              # the shear in the same plane: Gamma1 / Gamma2
+        if "K6" in m:
+            K6, V6 = m["K6"][0], m["V6"][0]
+            for M6, what in ((K6, "stiffness"), (V6, "viscosity")):
+                d = np.sqrt(np.abs(np.diag(M6)))
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    corr = np.abs(M6[k]) / (d[k] * d)       # coupling coefficients
+                corr[[k, g]] = 0.0
+                if np.nanmax(corr) > COUPLING_TOL:
+                    return None, (f"the section's {what} couples the bending in "
+                                  f"{which} to other strains (its 6x6 matrix): no closed "
+                                  "form; see kvrod modes")
+            ec = np.asarray(m["mass_centre"][0], dtype=float)
+            J = np.asarray(m["rhoJ"][0], dtype=float)
+            gyration = math.sqrt(abs(J[2, 2]) / float(m["rhoA"][0]))
+            if (np.hypot(*ec[:2]) > COUPLING_TOL * gyration
+                    or abs(J[0, 1]) > COUPLING_TOL * math.sqrt(abs(J[0, 0] * J[1, 1]))):
+                return None, ("the section's mass centre or product of inertia couples its "
+                              "bending to twist: no closed form; see kvrod modes")
+        plane = "d1" if along_d1 else "d2"
+        axis = "d2 (E I2)" if along_d1 else "d1 (E I1)"
         EI = float(m["C_M"][0, 1] if along_d1 else m["C_M"][0, 0])
         rhoAL4 = float(m["rhoA"][0]) * self.rod.length**4
         if isinstance(self.material, GeneralizedMaxwell):
@@ -648,10 +784,12 @@ class Problem:
             omega = BETA1_L**2 * math.sqrt(EI / rhoAL4)
             zeta = omega * tau / 2.0
             formula = "omega_1 tau / 2"
-        return {"formula": formula, "omega_1": omega, "period_1": 2 * math.pi / omega,
-                "tau": tau, "zeta_1": zeta,
+        mode = (f"first bending mode of the clamped-free Euler-Bernoulli beam in {which} "
+                f"(along {plane}, bending about {axis})")
+        return {"formula": formula, "mode": mode, "omega_1": omega,
+                "period_1": 2 * math.pi / omega, "tau": tau, "zeta_1": zeta,
                 "log_decrement_1": 2 * math.pi * zeta / math.sqrt(1 - zeta**2)
-                if zeta < 1 else math.inf}
+                if zeta < 1 else math.inf}, None
 
     # -- mappings ------------------------------------------------------------------------
     def to_mapping(self) -> dict[str, Any]:
@@ -711,7 +849,7 @@ class Problem:
         section, material = section_and_material(top)
         from runtime.problem.zones import zones_from_mapping
 
-        zones = zones_from_mapping(zones_m, m, rod.length, rod.elements)
+        zones = zones_from_mapping(zones_m, m, rod.length)
         return cls(
             name=C.string("name", m.get("name", name)),
             description=str(m.get("description", "")),

@@ -300,7 +300,9 @@ class Maxima:
     refined by Brent's method on the step's interpolant. Values are reported relative to
     ``offset`` (the component's reference value: a displacement). ``positive_only`` keeps maxima
     with a positive value (the decay of a vibration about zero); ``initial`` also counts a
-    release from rest at a positive value as a maximum at the start time.
+    release from rest at a positive value (any value without ``positive_only``: whether
+    it is a maximum is decided against the vibration's centre afterwards) as a maximum at
+    the start time.
     """
 
     name = "maxima"
@@ -320,7 +322,8 @@ class Maxima:
 
     def begin(self, run: RunState) -> None:
         x0 = float(run.y[self.ix]) - self.offset
-        if self.initial and not self.t and x0 > 0 and self._keep(x0):
+        if self.initial and not self.t and self._keep(x0) and (
+                x0 > 0 or not self.positive_only):
             self.t.append(run.t)
             self.x.append(x0)
 

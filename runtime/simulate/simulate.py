@@ -22,7 +22,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from runtime.analysis.audit import audit_run, significant_maxima
-from runtime.analysis.decay import damping_ratios, log_decrements, periods
+from runtime.analysis.decay import beat_warning, damping_ratios, log_decrements, periods
 from runtime.model.quaternion import quat_log, quat_mul, quat_rotation
 from runtime.model.rod import RodModel
 from runtime.model.statics import RodStatics, largest_displacement
@@ -37,6 +37,7 @@ from runtime.simulate.observers import (
     Sampler,
     Snapshots,
 )
+from runtime.simulate.vibration_centre import VibrationCentre, vibration_centre
 from runtime.solvers.driver import run_loop
 from runtime.solvers.initial import consistent_initial
 from runtime.solvers.statics import StaticSolveError, solve_static
@@ -84,7 +85,9 @@ class SimulationResult:
     Series on the output grid ``t`` (s): ``tip`` / ``start`` (3, n) positions of the
     s = L and s = 0 ends (m), ``kinetic``, ``elastic`` energies and the running
     ``dissipated`` energy int 2D and ``external_work`` int P (J); ``peaks_t``, ``peaks_x``:
-    maxima of ``analysis.maxima`` (displacement from the reference, m);
+    maxima of ``analysis.maxima`` above the equilibrium the rod vibrates about, as
+    amplitudes about it (m; :attr:`centre`, the displacement of that equilibrium from the
+    reference);
     ``centreline_t`` (m,) and ``centreline`` (m, 3, N+1): node positions (m) at the
     ``simulation.centreline_frames`` frame times reached.
     """
@@ -102,6 +105,11 @@ class SimulationResult:
     external_work: np.ndarray = field(default_factory=lambda: np.zeros(0))
     peaks_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
     peaks_x: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    #: every maximum of ``analysis.maxima`` (times, s; displacements from the reference, m)
+    maxima_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    maxima_x: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    #: the value the maxima vibrate about (:mod:`runtime.simulate.vibration_centre`)
+    centre: VibrationCentre | None = None
     #: per held end ("start", "end"): the support's "force" (N) and "moment" (N m, about
     #: the held node) on the rod, spatial, (3, n) on the output grid (inertia included)
     reactions: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
@@ -139,6 +147,23 @@ class SimulationResult:
         """(T + W + int 2D - int P - E0) / E_scale on the output grid (zeros when the run
         holds no energy)."""
         return self.audit().relative
+
+    def centre_maxima(self) -> None:
+        """The amplitudes of the maxima about the vibration's centre: ``peaks_t``,
+        ``peaks_x`` are the maxima above the equilibrium the rod vibrates about, minus its
+        value (:func:`~runtime.simulate.vibration_centre.vibration_centre`)."""
+        if self.model is None or not self.problem.analysis.maxima or self.y_last is None:
+            return
+        if self.maxima_t.size == 0:
+            self.peaks_t, self.peaks_x = np.zeros(0), np.zeros(0)
+            return
+        ix = _maxima_indices(self.model, self.problem.analysis.maxima)[0]
+        self.centre = vibration_centre(self.problem, self.model, ix,
+                                       float(self.maxima_t[0]), float(self.t_last),
+                                       self.y_last)
+        a = self.maxima_x - self.centre.value
+        keep = a > 0.0
+        self.peaks_t, self.peaks_x = self.maxima_t[keep], a[keep]
 
     def noise_level(self) -> float:
         """Amplitude below which maxima are the integrator's round-off (1e3 atol)."""
@@ -229,11 +254,17 @@ class SimulationResult:
                             f"{self.peaks_t[n_sig]:.4g} s lie below the integrator's noise "
                             f"level ({self.noise_level():.3g} m) and are left out of the "
                             "decrements")
+        if self.centre is not None and self.centre.warning:
+            warnings.append(self.centre.warning)
         if n_sig >= 2:
             dl = log_decrements(self.peaks_x[:n_sig])
-            pk.update(log_decrements=dl.tolist(), damping_ratios=damping_ratios(dl).tolist(),
+            zeta = damping_ratios(dl)
+            pk.update(log_decrements=dl.tolist(), damping_ratios=zeta.tolist(),
                       periods=periods(self.peaks_t[:n_sig]).tolist())
-            if np.any(dl < 0):
+            beat = beat_warning(zeta, self.problem.analysis.maxima)
+            if beat:
+                warnings.append(beat)
+            elif np.any(dl < 0):
                 warnings.append("some maxima grow in a free decay (negative decrements): the "
                                 "result is doubtful; tighten --rtol")
         else:
@@ -250,6 +281,11 @@ class SimulationResult:
             "parameters": self.problem.to_mapping(),
             "tau_E": self.problem.tau_E,
             "linear_prediction": self.problem.linear_prediction(),
+            **({"linear_prediction_note": self.problem.linear_prediction_note()}
+               if self.problem.analysis.maxima and self.problem.linear_prediction() is None
+               else {}),
+            "vibration_centre": None if self.centre is None else {
+                "coordinate": self.problem.analysis.maxima, **self.centre.to_dict()},
             "bdf_max_order": self.problem.bdf_max_order(),
             "error_control": None if self.control is None else self.control.describe(),
             "static": {
@@ -586,7 +622,9 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
     maxima = None
     if problem.analysis.maxima:
         ix, iv = _maxima_indices(model, problem.analysis.maxima)
-        maxima = Maxima(ix, iv, offset=float(model.reference[ix]))
+        # every maximum, whatever its sign: which are maxima of the vibration is decided
+        # against its centre when the run is over (vibration_centre)
+        maxima = Maxima(ix, iv, offset=float(model.reference[ix]), positive_only=False)
         observers.append(maxima)
     if snapshot_every is not None:
         observers.append(Snapshots(snapshot_every, snapshot_sink or (
@@ -677,6 +715,7 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
     res.kinetic, res.elastic = a["kinetic"], a["elastic"]
     res.dissipated, res.external_work = a["dissipated"], a["external_work"]
     if maxima is not None:
-        res.peaks_t, res.peaks_x = np.array(maxima.t), np.array(maxima.x)
+        res.maxima_t, res.maxima_x = np.array(maxima.t), np.array(maxima.x)
+        res.centre_maxima()
     res.wall_time_s = time.perf_counter() - wall0
     return res

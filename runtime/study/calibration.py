@@ -211,6 +211,19 @@ def dominant_period(t: np.ndarray, x: np.ndarray) -> float:
     return 1.0 / f if f > 0 else math.inf
 
 
+def record_centre(t: np.ndarray, x: np.ndarray) -> float:
+    """The value a decaying record oscillates about (m): the mean over its last
+    :func:`dominant_period` (of the whole record when it is shorter than a period or has
+    none); 0 for a vibration about the reference, the sag for a rod left under load."""
+    from scipy.integrate import trapezoid
+
+    T = dominant_period(t, x)
+    sel = t >= t[-1] - T if math.isfinite(T) and T < t[-1] - t[0] else np.ones(t.size, bool)
+    if np.count_nonzero(sel) < 2:
+        return float(np.mean(x))
+    return float(trapezoid(x[sel], t[sel]) / (t[sel][-1] - t[sel][0]))
+
+
 def smoothed_maxima(t: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """:func:`signal_maxima` of the record smoothed over a tenth of its
     :func:`dominant_period` (a moving average on a uniform grid): the maxima of the
@@ -522,7 +535,9 @@ def calibrate_signal(t: Sequence[float], x: Sequence[float], problem=None,
     check_record(t, x, sc)
     lp = sc.linear_prediction()
     if tau0 is None:
-        _, xk = smoothed_maxima(t, x)
+        # maxima about the centre the record decays to (a loaded rod vibrates about its
+        # equilibrium, not about the reference): the mean of its last period
+        _, xk = smoothed_maxima(t, x - record_centre(t, x))
         z = float(np.mean(damping_ratios(log_decrements(xk)))) if xk.size >= 2 else 0.0
         tau0 = min(max(2 * z / lp["omega_1"], 1e-4), tau_range(sc)[1])
     t_end = float(t[-1]) + 2 * output_step
