@@ -37,7 +37,11 @@ from runtime.simulate.observers import (
     Sampler,
     Snapshots,
 )
-from runtime.simulate.vibration_centre import VibrationCentre, vibration_centre
+from runtime.simulate.vibration_centre import (
+    VibrationCentre,
+    inputs_constant,
+    vibration_centre,
+)
 from runtime.solvers.driver import run_loop
 from runtime.solvers.initial import consistent_initial
 from runtime.solvers.statics import StaticSolveError, solve_static
@@ -158,11 +162,16 @@ class SimulationResult:
             self.peaks_t, self.peaks_x = np.zeros(0), np.zeros(0)
             return
         ix = _maxima_indices(self.model, self.problem.analysis.maxima)[0]
-        self.centre = vibration_centre(self.problem, self.model, ix,
-                                       float(self.maxima_t[0]), float(self.t_last),
-                                       self.y_last)
+        # the start at rest (recorded as a candidate: it is a maximum when it lies above
+        # the centre) does not open the vibration's window: the loads may act after it
+        initial = self.maxima_t[0] == 0.0
+        t_first = float(self.maxima_t[1 if initial and self.maxima_t.size > 1 else 0])
+        self.centre = vibration_centre(self.problem, self.model, ix, t_first,
+                                       float(self.t_last), self.y_last)
         a = self.maxima_x - self.centre.value
         keep = a > 0.0
+        if initial and not inputs_constant(self.model, 0.0, t_first):
+            keep[0] = False      # loads acted after the start: not a free decay from it
         self.peaks_t, self.peaks_x = self.maxima_t[keep], a[keep]
 
     def noise_level(self) -> float:
@@ -217,9 +226,12 @@ class SimulationResult:
             x0 = _reference_value(self, which)
             d = ser[c] - x0
             lo, hi = float(np.min(d)), float(np.max(d))
-            why = (f"its displacement from the reference stays <= 0 (between {lo:.3g} and "
-                   f"{hi:.3g} m) and only maxima of a positive displacement are counted"
-                   if hi <= 0.0 else
+            centre = 0.0 if self.centre is None else self.centre.value
+            turns = self.maxima_t.size - int(self.maxima_t.size > 0
+                                             and self.maxima_t[0] == 0.0)
+            why = (f"its maxima lie at or below the equilibrium it vibrates about "
+                   f"({centre:.3g} m from the reference; it moves between {lo:.3g} and "
+                   f"{hi:.3g} m) and only maxima above it are counted" if turns > 0 else
                    f"it moves between {lo:.3g} and {hi:.3g} m from the reference without "
                    "turning back (no velocity sign change from + to -)")
             out.append(f"analysis.maxima = {which!r} found no maxima: {why}; choose the "

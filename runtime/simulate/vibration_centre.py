@@ -49,8 +49,9 @@ class VibrationCentre:
                 **({"warning": self.warning} if self.warning else {})}
 
 
-def _inputs_constant(problem: Problem, model: RodModel, t0: float, t1: float) -> bool:
-    """Whether every load and end motion is constant on [t0, t1]."""
+def inputs_constant(model: RodModel, t0: float, t1: float) -> bool:
+    """Whether every load and end motion is constant on [t0, t1] (from the right at t0:
+    a load released at t0 is off)."""
     drive = model.drive
     if drive is None or not getattr(drive, "time_dependent", False):
         return True
@@ -96,7 +97,7 @@ def vibration_centre(problem: Problem, model: RodModel, index: int, t_first: flo
     """The centre of the vibration of state component ``index`` (a node coordinate) over
     ``[t_first, t_last]`` (s): see the module docstring."""
     ref = float(model.reference[index])
-    if not _inputs_constant(problem, model, t_first, t_last):
+    if not inputs_constant(model, t_first, t_last):
         return VibrationCentre(
             float(y_last[index]) - ref, "final state",
             f"loads or end motion still change after the first maximum (t = {t_first:.4g} "

@@ -642,11 +642,16 @@ class BDF:
 
     def _setup(self, t: float) -> bool:
         """Evaluate and factorise J at the current iterate; False if J is singular."""
-        ab = self._ab
-        ab.fill(0.0)
-        self.problem.jacobian_band(t, self._yy, self._ypw, self._cj, ab)
-        self.njev += 1
-        info = self._newton.factor()
+        own = getattr(self._newton, "setup", None)
+        if own is not None:                 # coupled blocks: the problem's own Jacobian
+            info = own(t, self._yy, self._ypw, self._cj)
+            self.njev += 1
+        else:
+            ab = self._ab
+            ab.fill(0.0)
+            self.problem.jacobian_band(t, self._yy, self._ypw, self._cj, ab)
+            self.njev += 1
+            info = self._newton.factor()
         self.nlu += 1
         self._cjold = self._cj
         self._cjratio = 1.0

@@ -141,11 +141,42 @@ class CondensedSystem(NewtonSystem):
                                         p(ee), p(yy), p(ypw), cj)
 
 
+class BlocksSystem(NewtonSystem):
+    """A problem's own coupled band blocks (``native/blocks.py``: an assembly of rods, each
+    a block, the joints the couplings): :meth:`setup` has the problem write its Jacobian
+    into them (``problem.system_jacobian``) and factorises; the compiled step loop does
+    the same through ``blocks_ptr`` and the problem's compiled system Jacobian."""
+
+    def __init__(self, problem) -> None:
+        self.problem = problem
+        self.blocks = problem.blocks
+        self.blocks_ptr = self.blocks.ptr
+        n = self.blocks.n
+        super().__init__(np.zeros((1, max(n, 1)), order="F"), 0, 0)
+        self.ipiv = np.zeros(max(n, 1), dtype=np.int32)       # unused, kept for C
+        self.prof = np.zeros(2 * max(n, 1), dtype=np.int32)
+
+    def setup(self, t: float, y: np.ndarray, yp: np.ndarray, cj: float) -> int:
+        """J at (t, y, y') into the blocks, factorised; 0, or > 0 when singular."""
+        self.problem.system_jacobian(t, y, yp, cj)
+        return self.blocks.factor()
+
+    def factor(self) -> int:
+        raise RuntimeError("BlocksSystem: the Jacobian is the problem's (use setup)")
+
+    def correct(self, res, scale, ewt, ee, yy, ypw, cj) -> float:
+        return self.blocks.correct(res, scale, ewt, ee, yy, ypw, cj)
+
+
 def newton_system(problem, ab: np.ndarray, kl: int, ku: int, lib,
                   condense: bool = True) -> NewtonSystem:
-    """The best Newton system available for ``problem``: condensed when the problem names
-    its kinematic blocks (``condensation_blocks()``) and the compiled library ``lib`` is
-    there, else the compiled band LU, else LAPACK."""
+    """The best Newton system available for ``problem``: its own (``newton_system()``, an
+    assembly's coupled blocks), condensed when the problem names its kinematic blocks
+    (``condensation_blocks()``) and the compiled library ``lib`` is there, else the
+    compiled band LU, else LAPACK."""
+    own = getattr(problem, "newton_system", None)
+    if own is not None:
+        return own()
     if lib is None:
         return LapackSystem(ab, kl, ku)
     if condense:

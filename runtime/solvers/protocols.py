@@ -152,6 +152,11 @@ class DenseProblem:
         dense_to_band(a, self.kl, self.ku, out_ab)
 
 
+#: most values per state a problem's compiled energies may return (KV_MAXEN of the step
+#: loop: an assembly's joints and supports add six and three each)
+MAX_ENERGIES = 2048
+
+
 class CKernels:
     """Compiled functions of a problem for the C step loop: addresses of the residual, the
     banded Jacobian and (optional, 0 if none) the energies (signatures of
@@ -170,16 +175,22 @@ class CKernels:
     calls back into Python for it.
 
     ``n_energies``: values per state the energies return (at least 5: T, W, 2D, P_ext,
-    P_bc; the extras, e.g. the supports' reactions, are sampled with the outputs)."""
+    P_bc; the extras, e.g. the supports' reactions, are sampled with the outputs).
+
+    ``system_jacobian`` (optional, 0 if none): the Jacobian of a system of coupled band
+    blocks (an assembly: ``kvsys_jacobian``), for a problem whose Newton system is its own
+    coupled blocks."""
 
     def __init__(self, residual: int, jacobian: int, energies: int, ctx: int,
                  drive=None, keep: Any = None, jacobian_cells: int = 0,
                  drive_constant: bool = False, n_energies: int = 5) -> None:
         self.residual, self.jacobian, self.energies, self.ctx = residual, jacobian, energies, ctx
-        if not 5 <= n_energies <= 32:
-            raise ValueError(f"n_energies = {n_energies}: 5 ... 32 values per state")
+        if not 5 <= n_energies <= MAX_ENERGIES:
+            raise ValueError(f"n_energies = {n_energies}: 5 ... {MAX_ENERGIES} values per "
+                             "state")
         self.n_energies = int(n_energies)
         self.jacobian_cells = jacobian_cells
         self.drive_constant = drive_constant
         self.drive = drive
         self.keep = keep
+        self.system_jacobian = 0

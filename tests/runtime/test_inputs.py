@@ -305,10 +305,11 @@ def test_vtk_frames_carry_the_clamp_curvature_of_their_time(tmp_path):
 
 
 # ---- results that say when they are doubtful ----------------------------------------
-def test_warnings_for_coarse_outputs_and_missing_maxima():
-    """A steel tube cantilever sagging under gravity with maxima asked of end.z: no maxima,
-    and the summary says why; the default output step is coarse for its first mode, and
-    the summary says that too."""
+def test_warnings_for_coarse_outputs_and_maxima_about_the_sag():
+    """A steel tube cantilever sagging under gravity with maxima asked of end.z: it rings
+    about its sag (the maxima are counted about that equilibrium: they were all "below
+    the reference" and none was found); the default output step is coarse for its first
+    mode, and the summary says that."""
     p = _cantilever(0.2, **{
         "section": {"kind": "tube", "outer_radius": 0.01, "inner_radius": 0.008},
         "material.youngs_modulus": 2.1e11, "material.density": 7850.0,
@@ -318,13 +319,27 @@ def test_warnings_for_coarse_outputs_and_missing_maxima():
                     "time": {"kind": "ramp", "start": 0.0, "duration": 0.01}},
         "analysis.maxima": "end.z"})
     run = simulate(p)
-    w = run.summary()["warnings"]
-    assert run.status == "finished" and run.peaks_x.size == 0
-    assert any("found no maxima" in s and "<= 0" in s for s in w), w
+    s = run.summary()
+    w = s["warnings"]
+    assert run.status == "finished" and run.peaks_x.size > 3
+    assert s["vibration_centre"]["source"] == "static equilibrium"
+    assert s["vibration_centre"]["displacement"] < 0.0 and np.all(run.maxima_x[1:] < 0.0)
+    assert not any("found no maxima" in s for s in w), w
     omega = euler_bernoulli_frequencies(1, L=0.3, rho=7850.0, A=np.pi * (1e-4 - 0.64e-4),
                                         E=2.1e11, I=np.pi / 4 * (1e-8 - 0.8**4 * 1e-8))[0]
     assert 2 * np.pi / omega / 0.005 < 20
     assert any("samples per period" in s for s in w), w
+
+
+def test_maxima_that_never_turn_back_are_explained():
+    """An overdamped cantilever (tau = 10 s) pushed by a ramped tip force creeps towards
+    its equilibrium without turning back: no maxima, and the summary says why."""
+    p = _cantilever(0.3, **{"material.tau": 10.0, "rod.elements": 6,
+                            "loads.0.time": {"kind": "ramp", "start": 0.0, "duration": 0.05}})
+    run = simulate(p)
+    w = run.summary()["warnings"]
+    assert run.peaks_x.size == 0
+    assert any("found no maxima" in s and "without turning back" in s for s in w), w
 
 
 def test_a_load_too_small_to_see_is_flagged():

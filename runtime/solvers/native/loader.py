@@ -17,9 +17,9 @@ from runtime import native
 
 from .step_loop import CoreStruct
 
-#: the C sources, kept as files beside this module: step_loop.c includes band.c and
-#: condensed.c (one unit; the first is the one compiled)
-FILES = ("step_loop.c", "band.c", "condensed.c")
+#: the C sources, kept as files beside this module: step_loop.c includes band.c,
+#: condensed.c and blocks.c (one unit; the first is the one compiled)
+FILES = ("step_loop.c", "band.c", "condensed.c", "blocks.c")
 SOURCES = {name: Path(__file__).with_name(name).read_text() for name in FILES}
 SOURCE = "".join(SOURCES.values())
 
@@ -89,6 +89,12 @@ def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
     lib.kv_cond_solve.restype = None
     lib.kv_cond_newton.argtypes = [P, P, P, D, P, P, P, P, D]
     lib.kv_cond_newton.restype = D
+    lib.kv_blocks_factor.argtypes = [P]
+    lib.kv_blocks_factor.restype = I
+    lib.kv_blocks_solve.argtypes = [P, P]
+    lib.kv_blocks_solve.restype = None
+    lib.kv_blocks_newton.argtypes = [P, P, D, P, P, P, P, D]
+    lib.kv_blocks_newton.restype = D
     lib.kv_wrms.argtypes = [I, P, P, P]
     lib.kv_wrms.restype = D
     lib.kv_ida_sizeof.argtypes = []

@@ -19,6 +19,7 @@
 #include <time.h>
 #include "band.c"
 #include "condensed.c"
+#include "blocks.c"
 
 typedef int (*kv_res_fn)(const void *ctx, double t, const double *y, const double *yp,
                          double *res);
@@ -33,11 +34,16 @@ typedef int (*kv_jac_cells_fn)(const void *ctx, double t, const double *y, const
 typedef int (*kv_en_fn)(const void *ctx, int m, const double *ts, const double *ys,
                         const double *yps, double *out);
 typedef int (*kv_drive_fn)(double t);
+/* a system of coupled band blocks (an assembly of rods): J into the blocks' bands and
+   the couplings' values (kv_blocks in blocks.c) */
+typedef int (*kv_sysjac_fn)(const void *ctx, double t, const double *y, const double *yp,
+                            double cj, kv_blocks *B);
 
 #define KV_MAXORD 5
 #define KV_NH (KV_MAXORD + 2)
 #define KV_NEN 5            /* energies of a state: T, W, 2D, P_ext, P_bc (then extras) */
-#define KV_MAXEN 32         /* most values per state the energies may return (nen) */
+#define KV_MAXEN 2048       /* most values per state the energies may return (nen;
+                               protocols.MAX_ENERGIES) */
 #define KV_MAXWATCH 8
 
 /* IDA's constants (bdf.py) */
@@ -131,6 +137,10 @@ typedef struct {
     int nexact;
     const int *exact;
     double *exact_res;
+    /* a system of coupled band blocks (NULL: one band, condensed or not): sysjac fills
+       the blocks and the couplings, kv_blocks factors and solves (blocks.c) */
+    kv_blocks *blocks;
+    kv_sysjac_fn sysjac;
 } kv_ida;
 
 enum { SEC_RES, SEC_JAC, SEC_LU, SEC_NEWTON, SEC_EN, SEC_DRIVE };
@@ -389,12 +399,38 @@ static int jac_factor_cells(kv_run *R, double t, double cj)
     return info;
 }
 
+/* J of a system of coupled band blocks into the blocks and couplings, factorised */
+static int setup_blocks(kv_run *R, double t)
+{
+    kv_ida *S = R->S;
+    if (drive_to(R, t)) return -2;
+    int rc, info;
+    {
+        TIC(S);
+        USER_MODE(R);
+        rc = S->sysjac(S->ctx, t, S->yy, S->ypw, S->cj, S->blocks);
+        CORE_MODE(R);
+        TOC(S, SEC_JAC);
+    }
+    S->njev++;
+    if (rc) return -2;
+    {
+        TIC(S);
+        info = blocks_factor_raw(S->blocks);
+        TOC(S, SEC_LU);
+    }
+    return info;
+}
+
 /* evaluate and factorise J at the iterate; 1 ok, 0 singular, -1 callback failure */
 static int setup(kv_run *R, double t)
 {
     kv_ida *S = R->S;
     int info;
-    if (S->jac_cells && S->cond && S->cond->bt) {
+    if (S->blocks) {
+        info = setup_blocks(R, t);
+        if (info == -2) return -1;
+    } else if (S->jac_cells && S->cond && S->cond->bt) {
         info = jac_factor_cells(R, t, S->cj);
         if (info == -2) return -1;
     } else {
@@ -470,7 +506,10 @@ static int nls(kv_run *R, double tnew)   /* IDANls: simplified Newton for ee */
             double delnrm;
             exact_rows_keep(S);
             TIC(S);
-            if (S->cond)
+            if (S->blocks)
+                delnrm = blocks_newton_raw(S->blocks, S->res_v, scale, S->ewt, S->ee,
+                                           S->yy, S->ypw, cj);
+            else if (S->cond)
                 delnrm = kv_cond_newton(S->cond, S->ab, S->res_v, scale, S->ewt, S->ee,
                                         S->yy, S->ypw, cj);
             else

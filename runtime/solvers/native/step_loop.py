@@ -122,6 +122,7 @@ class CoreStruct(ctypes.Structure):
         + _fields(_I, "jwin_cols", "jchunk")
         + _fields(_I, "nexact")
         + _fields(_P, "exact", "exact_res")
+        + _fields(_P, "blocks", "sysjac")
     )
     #: names of the entries of ``sec`` (seconds per part when ``timing`` is set)
     SECTIONS = ("residual", "jacobian", "lu", "newton_solve_update", "energies", "drive")
@@ -172,6 +173,13 @@ class CoreLink:
         newton = solver._newton
         cond = getattr(newton, "cond", None)           # the condensed systems, if any
         s.cond = newton.cond_ptr
+        blocks = getattr(newton, "blocks_ptr", None)   # coupled band blocks (assemblies)
+        if blocks is not None:
+            sysjac = getattr(kern, "system_jacobian", 0) if kern is not None else 0
+            if not sysjac:
+                raise RuntimeError("coupled band blocks need the problem's compiled system "
+                                   "Jacobian (CKernels.system_jacobian)")
+            s.blocks, s.sysjac = blocks, sysjac
         if kern is not None and kern.jacobian_cells and cond is not None \
                 and cond.block_tridiagonal:
             self._jacobian_by_cells(kern.jacobian_cells, cond.cell_starts)
