@@ -207,7 +207,8 @@ def test_a_zero_second_frame_gets_exactly_zero_torque_and_changes_nothing():
 def test_objectivity(two_a, two_b):
     """A rigid rotation and translation of everything leaves e, the rate and the
     resultant unchanged, rotates the forces and leaves the material torques; a
-    superposed rigid spin (v += w x phi, Omega += R^T w) changes no rate and no force."""
+    superposed rigid spin (v += w x phi, Omega += R^T w) changes no rate and no force;
+    the forces and the torques (spatial: R(p_k) T_k) have no resultant."""
     rng = np.random.default_rng(14)
     x = _random_case(rng, two_a, two_b)
     q = _unit(rng)
@@ -233,6 +234,12 @@ def test_objectivity(two_a, two_b):
     dz = _diag(z)
     assert _rel(dz["s"], d["s"]) < 1e-12 and _rel(dz["D"], d["D"]) < 1e-12
     assert _rel(_Q(z), Q) < 1e-12
+    # hence the link's loads are in equilibrium: no net force, no net moment
+    assert np.abs(_block(Q, "f_a") + _block(Q, "f_b")).max() == 0.0
+    moment = (np.cross(x["phi_a"], _block(Q, "f_a")) + np.cross(x["phi_b"], _block(Q, "f_b"))
+              + sum(quat_rotation(x[p]) @ _block(Q, T) for p, _, T in FRAMES if x[p].any()))
+    assert np.abs(moment).max() < 1e-12 * np.abs(Q).max() * (1 + np.abs(x["phi_a"]).max()
+                                                              + np.abs(x["phi_b"]).max())
 
 
 def _flow(x, t):
