@@ -3,8 +3,9 @@ CasADi functions (docs/design.md, section 3).
 
 Files (all in ``generated/``):
 
-* ``rod_kernels.c`` / ``rod_kernels.h``: every kernel of :func:`derive.discrete_rod.kernels`
-  through one ``casadi.CodeGenerator`` (size independent of N);
+* ``rod_kernels.c`` / ``rod_kernels.h``: every kernel of :func:`derive.discrete_rod.kernels`,
+  :func:`derive.discrete_rod.coupled_kernels` and :func:`derive.links.kernels` (links
+  and rigid bodies) through one ``casadi.CodeGenerator`` (size independent of N);
 * ``rod_kernels_x4.c`` / ``rod_kernels_x4.h``: the hottest kernels four elements per
   call (:mod:`derive.codegen_lanes`, from their SX algorithms; bit for bit the scalar ones);
 * ``rod_layout.h``: the layout the C assembly (``runtime/model/native/rod_assembly.c``,
@@ -23,7 +24,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from derive import cache, codegen_lanes
+from derive import cache, codegen_lanes, links
 from derive import discrete_rod as dr
 from derive.artifact import Artifact, sha256_text
 from derive.templating import render
@@ -47,7 +48,7 @@ def _signature(f: ca.Function) -> dict:
 
 @lru_cache(maxsize=1)
 def _build() -> tuple[list[ca.Function], str, str, tuple, tuple]:
-    fns = dr.kernels() + dr.coupled_kernels()
+    fns = dr.kernels() + dr.coupled_kernels() + links.kernels()
     cg = ca.CodeGenerator("rod_kernels.c", CODEGEN_OPTIONS)
     for f in fns:
         cg.add(f)
@@ -124,6 +125,20 @@ def _context() -> dict:
         "coupled_joint_params": dr.COUPLED_JOINT_PARAMS,
         "n_coupled_joint": dr.N_COUPLED_JOINT,
         "coupled_joint_offsets": dr.COUPLED_JOINT_OFFSETS,
+        "link_params": links.LINK_PARAMS, "n_link": links.N_LINK,
+        "link_offsets": links.LINK_OFFSETS,
+        "body_params": links.BODY_PARAMS, "n_body": links.N_BODY,
+        "body_offsets": links.BODY_OFFSETS,
+        "link_forces": links.LINK_FORCES, "link_force_offsets": links.LINK_FORCE_OFFSETS,
+        "n_link_forces": links.N_LINK_FORCES,
+        "link_jac_columns": links.LINK_JAC_COLUMNS,
+        "link_jac_offsets": links.LINK_JAC_OFFSETS,
+        "n_link_jac_columns": links.N_LINK_JAC_COLUMNS,
+        "body_rows": links.BODY_ROWS, "body_row_offsets": links.BODY_ROW_OFFSETS,
+        "n_body_rows": links.N_BODY_ROWS,
+        "body_jac_columns": links.BODY_JAC_COLUMNS,
+        "body_jac_offsets": links.BODY_JAC_OFFSETS,
+        "n_body_jac_columns": links.N_BODY_JAC_COLUMNS,
         "cell0_fields_b": dr.CELL0_FIELDS_B, "cell_fields_b": dr.CELL_FIELDS_B,
         "cell0_offsets_b": _offsets_b(dr.CELL0_FIELDS_B),
         "cell_offsets_b": _offsets_b(dr.CELL_FIELDS_B),
@@ -176,7 +191,8 @@ def artifacts() -> list[Artifact]:
     ctx_json = json.dumps(ctx, sort_keys=True, default=str)
     out = [
         Artifact("rod_kernels.c", c_text, "casadi.CodeGenerator(derive.discrete_rod.kernels()"
-                 " + coupled_kernels())", STEP, kernels_hash, {"functions": sigs}),
+                 " + coupled_kernels() + derive.links.kernels())", STEP, kernels_hash,
+                 {"functions": sigs}),
         Artifact("rod_kernels.h", h_text, "casadi.CodeGenerator (header)", STEP, kernels_hash),
     ]
     x4 = [f for f in fns if f.name() in X4_KERNELS]

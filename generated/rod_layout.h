@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_layout.h.jinja
 // derivation step: discrete_rod
-// inputs sha256: 5d13964be16d090f1a3cd0dd044387313e3e10ad2942da907299d1682e813e1e
+// inputs sha256: 50b35fd97a4e336e6e1d3a87034eb41cd2e4bdf5fd217aca20d16ed3ef802057
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*
@@ -65,6 +65,47 @@
 #define JNTC_C_MM 0
 #define JNTC_V_MM 9
 
+/* links (derive/links.py): parameters per link; the blocks of Q (rod_link_forces); the
+ * columns of rod_link_forces_jac (NLNKQ x NLNKJ, dense, column-major) */
+#define NLNK 79
+#define LNK_K 0
+#define LNK_V 36
+#define LNK_D0 72
+#define LNK_R0 75
+#define NLNKQ 18
+#define LNKQ_F_A 0
+#define LNKQ_F_B 3
+#define LNKQ_T_A1 6
+#define LNKQ_T_A2 9
+#define LNKQ_T_B1 12
+#define LNKQ_T_B2 15
+#define NLNKJ 40
+#define LNKJ_PHI_A 0
+#define LNKJ_PHI_B 3
+#define LNKJ_P_A1 6
+#define LNKJ_P_A2 10
+#define LNKJ_P_B1 14
+#define LNKJ_P_B2 18
+#define LNKJ_V_A 22
+#define LNKJ_V_B 25
+#define LNKJ_OMEGA_A1 28
+#define LNKJ_OMEGA_A2 31
+#define LNKJ_OMEGA_B1 34
+#define LNKJ_OMEGA_B2 37
+/* rigid bodies at nodes: parameters per body; the rows of rod_body_inertia; the columns
+ * of rod_body_inertia_jac (NBDYR x NBDYJ, dense, column-major) */
+#define NBDY 13
+#define BDY_M 0
+#define BDY_J 1
+#define BDY_E 10
+#define NBDYR 6
+#define BDYR_V 0
+#define BDYR_OMEGA 3
+#define NBDYJ 10
+#define BDYJ_V 0
+#define BDYJ_P 3
+#define BDYJ_OMEGA 7
+
 /* most relaxation terms; parameters per rod, segment, joint, node load, segment load */
 #define MAX_NB 24
 #define NPAR 43
@@ -117,6 +158,6 @@
 #define MAXIW 1
 #define MAXARG 14
 #define MAXRES 6
-#define MAXJAC 495
+#define MAXJAC 720
 
 #endif
