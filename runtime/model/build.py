@@ -54,8 +54,8 @@ SOURCES = ("rod_kernels.c", "rod_kernels_x4.c")
 HEADERS = ("rod_kernels.h", "rod_kernels_x4.h", "rod_layout.h")
 #: the assembly, written by hand, compiled with them
 NATIVE_DIR = Path(__file__).resolve().parent / "native"
-ASSEMBLY_SOURCES = ("rod_assembly.c",)
-ASSEMBLY_HEADERS = ("rod_assembly.h",)
+ASSEMBLY_SOURCES = ("rod_assembly.c", "system.c")
+ASSEMBLY_HEADERS = ("rod_assembly.h", "system.h")
 
 
 def source_paths(gdir: Path | None = None) -> list[Path]:
@@ -200,7 +200,8 @@ def compile_library(compiler: str, gdir: Path | None = None, outdir: Path | None
 
 
 def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
-    """Argument and result types of the C API (runtime/model/native/rod_assembly.h)."""
+    """Argument and result types of the C API (runtime/model/native/rod_assembly.h and
+    system.h)."""
     i, d, p = ctypes.c_int, ctypes.c_double, ctypes.c_void_p
     lib.kvrod_residual.argtypes = [p, d, p, p, p]
     lib.kvrod_jacobian_band.argtypes = [p, d, p, p, d, d, i, p]
@@ -212,6 +213,13 @@ def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
                  "kvrod_energies", "kvrod_n_state"):
         getattr(lib, name).restype = i
     lib.kvrod_n_state.argtypes = [i, i]
+    # an assembly of rods (runtime/model/native/system.h)
+    lib.kvsys_residual.argtypes = [p, d, p, p, p]
+    lib.kvsys_jacobian.argtypes = [p, d, p, p, d, p]
+    lib.kvsys_energies.argtypes = [p, i, p, p, p, p]
+    lib.kvsys_link_values.argtypes = [p, i, p, p, p]
+    for name in ("kvsys_residual", "kvsys_jacobian", "kvsys_energies", "kvsys_link_values"):
+        getattr(lib, name).restype = i
     return lib
 
 

@@ -56,13 +56,16 @@ def consistent_initial(
         if r <= tol * scale:
             return y, yp
         f = res.copy()
-        ab.fill(0.0)
-        problem.jacobian_band(t0, y, yp, 0.0, ab)  # dF/dy
-        ab1.fill(0.0)
-        problem.jacobian_band(t0, y, yp, 1.0, ab1)  # dF/dy + dF/dy'
-        ab1 -= ab  # dF/dy'
-        ab[:, diff] = ab1[:, diff]
-        du, info = band_solve(ab, kl, ku, f)
+        if hasattr(problem, "newton_system"):   # coupled blocks (an assembly): sparse
+            du, info = _sparse_mixed_solve(problem, t0, y, yp, diff, f)
+        else:
+            ab.fill(0.0)
+            problem.jacobian_band(t0, y, yp, 0.0, ab)  # dF/dy
+            ab1.fill(0.0)
+            problem.jacobian_band(t0, y, yp, 1.0, ab1)  # dF/dy + dF/dy'
+            ab1 -= ab  # dF/dy'
+            ab[:, diff] = ab1[:, diff]
+            du, info = band_solve(ab, kl, ku, f)
         if info != 0:
             break
         lam = 1.0
@@ -91,3 +94,21 @@ def consistent_initial(
         residual_norm=r,
         worst_index=int(np.argmax(np.abs(res))) if n else -1,
     )
+
+
+def _sparse_mixed_solve(problem, t0: float, y: np.ndarray, yp: np.ndarray,
+                        diff: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, int]:
+    """The Newton step of :func:`consistent_initial` for a problem whose Jacobian is not
+    banded (``dF_dy_sparse``, ``dF_dyp_sparse``: an assembly of rods), by SciPy's sparse
+    LU; info 1 when singular."""
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+
+    Jy = problem.dF_dy_sparse(t0, y, yp).tocsc()
+    Jp = problem.dF_dyp_sparse(t0, y, yp).tocsc()
+    d = sp.diags(diff.astype(float))
+    M = (Jp @ d + Jy @ sp.diags((~diff).astype(float))).tocsc()
+    try:
+        return spla.splu(M).solve(f), 0
+    except RuntimeError:               # "Factor is exactly singular"
+        return f, 1

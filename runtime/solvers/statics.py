@@ -161,7 +161,10 @@ def solve_static(
         raise ParameterError("stations", stations, "load factors in (0, 1]")
     n = int(problem.n_static)
     kl, ku = int(problem.kl_static), int(problem.ku_static)
-    ab = band_storage(n, kl, ku)
+    #: the problem's own factorisation (``static_factor(y)`` -> ``.info``, ``.solve``:
+    #: a sparse static Jacobian), else its band Jacobian and a band LU
+    own_factor = getattr(problem, "static_factor", None)
+    ab = band_storage(n, kl, ku) if own_factor is None else None
     res = np.empty(n)
     counts = {"iters": 0, "backtracks": 0, "fev": 0, "watchdog": 0}
 
@@ -208,9 +211,12 @@ def solve_static(
             if it >= max_iter:
                 raise _NewtonFailure(f"no convergence in {max_iter} iterations", r)
             f = res.copy()
-            ab.fill(0.0)
-            problem.static_jacobian_band(y, ab)
-            lu = BandLU(ab, kl, ku)
+            if own_factor is not None:      # a sparse static problem (an assembly)
+                lu = own_factor(y)
+            else:
+                ab.fill(0.0)
+                problem.static_jacobian_band(y, ab)
+                lu = BandLU(ab, kl, ku)
             if lu.info != 0:
                 raise _NewtonFailure("singular Jacobian", r)
             dx = -lu.solve(f)

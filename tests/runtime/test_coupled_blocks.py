@@ -21,7 +21,7 @@ def _random_band(rng, n: int, kl: int, ku: int) -> np.ndarray:
     return A
 
 
-@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("seed", range(12))
 def test_woodbury_solve_matches_a_dense_solve(seed):
     from runtime.solvers.native.blocks import Block, CoupledBlocks
 
@@ -33,7 +33,7 @@ def test_woodbury_solve_matches_a_dense_solve(seed):
         blocks.append(Block(off, int(n), kl, ku))
         off += int(n)
     N = off
-    m = int(rng.integers(0, 8))
+    m = int(rng.integers(0, 24))
     rows = rng.choice(N, size=min(m, N), replace=False)
     coupling = {int(r): rng.choice(N, size=int(rng.integers(1, 6)), replace=False).tolist()
                 for r in rows}
@@ -44,7 +44,7 @@ def test_woodbury_solve_matches_a_dense_solve(seed):
         dense_to_band(A, b.kl, b.ku, ab)
         J[b.offset:b.offset + b.n, b.offset:b.offset + b.n] = A
     for k, (r, c) in enumerate(cb.entries):
-        cb.ev[k] = rng.normal()
+        cb.ev[k] = 30.0 * rng.normal()       # large: the capacitance needs pivoting
         J[r, c] += cb.ev[k]
     assert np.allclose(cb.dense(), J)
     assert cb.factor() == 0

@@ -77,11 +77,15 @@ static int blocks_lu(int m, double *C, int *piv)
     return 0;
 }
 
+/* x <- C^-1 x with blocks_lu's factors: the interchanges first (they swapped whole rows,
+   the multipliers of earlier columns too: LAPACK's getrf/getrs convention), then L, U */
 static void blocks_lu_solve(int m, const double *C, const int *piv, double *x)
 {
     for (int k = 0; k < m; ++k) {
         const int p = piv[k];
         if (p != k) { const double t = x[k]; x[k] = x[p]; x[p] = t; }
+    }
+    for (int k = 0; k < m; ++k) {
         const double xk = x[k];
         if (xk != 0.0)
             for (int i = k + 1; i < m; ++i) x[i] -= C[i + (size_t)k * m] * xk;
