@@ -123,6 +123,15 @@ def test_tip_body_no_body_is_the_cantilever():
                                             10.9955407349], rtol=1e-10)
 
 
+def test_tip_mass_tabulated_roots():
+    """First root b of a cantilever with an end mass M/(m L) = 0.2, 0.5, 1, 2 as tabulated
+    to four digits in the literature (e.g. Blevins, Formulas for Natural Frequency and
+    Mode Shape, cantilever with an end mass): 1.6164, 1.4200, 1.2479, 1.0762."""
+    for mu, b in ((0.2, 1.6164), (0.5, 1.4200), (1.0, 1.2479), (2.0, 1.0762)):
+        w1 = tip_mass_cantilever_frequencies(1, L=1.0, EI=1.0, m=1.0, M=mu)[0]
+        assert math.sqrt(w1) == pytest.approx(b, abs=6e-5)
+
+
 @pytest.mark.parametrize("M, J", [(0.3, 0.0), (0.0, 0.02), (0.7, 0.05), (5.0, 0.4)])
 def test_tip_body_against_finite_elements(M, J):
     L, EI, m = 0.8, 3.0, 1.7
