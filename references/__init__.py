@@ -23,6 +23,15 @@
 - :mod:`.supported`: simply supported (pinned-pinned) and free-free beams: linear
   Timoshenko midspan sag, natural frequencies (closed-form and transfer-matrix frequency
   equations), bars and shafts.
+- :mod:`.assemblies`: rod assemblies: cantilever with a tip body (mass and rotary
+  inertia; Euler-Bernoulli frequency equation and Timoshenko transfer matrix), L-frame
+  with a rigid corner (tip compliance by the unit-load method), propped cantilever and
+  two-span continuous beam (Timoshenko-exact reactions), hinged double pendulum of rigid
+  bars, free circular ring (Hoppe, Michell, and the linear Cosserat ring by Fourier modes).
+- :mod:`.contact`: rods against rigid bodies: heavy rod lifted off a table (Euler-Bernoulli
+  and Timoshenko rigid-contact solutions), incline with Coulomb friction (sliding, rolling),
+  capstan, flat drop, heavy cable draped over a cylinder (with friction), push force
+  through a bend (capstan limit, frictionless configurational force).
 
 Only NumPy and SciPy are used, so the references share no code with the simulator.
 """
