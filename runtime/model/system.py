@@ -233,12 +233,13 @@ class SystemModel:
 
     _piece_end = math.inf
 
-    def steady_interval(self) -> tuple[float, float]:
-        """The interval on which every rod's inputs hold (intersection)."""
+    def steady_interval(self, t: float | None = None) -> tuple[float, float]:
+        """The interval on which every rod's inputs hold (intersection): at ``t`` (the
+        drives' own answer), else the one each rod's arrays were last driven on."""
         lo, hi = -math.inf, math.inf
         for r in self.rods:
             if r.drive is not None and r.drive.time_dependent:
-                a, b = r._steady
+                a, b = r.drive.steady_interval(t) if t is not None else r._steady
                 lo, hi = max(lo, a), min(hi, b)
         return lo, hi
 
@@ -637,9 +638,26 @@ class SystemModel:
         return out
 
     def energies(self, ts: np.ndarray, ys: np.ndarray, yps: np.ndarray) -> np.ndarray:
-        """(m, 5) T, W, 2D, P_ext, P_bc of m states."""
-        return np.array([self.energy_values(float(t), y, yp)[:5]
+        """(m, 5 + extras) of m states (:meth:`energy_values`)."""
+        return np.array([self.energy_values(float(t), y, yp)
                          for t, y, yp in zip(ts, ys, yps, strict=True)])
+
+    def energy_scalars(self, t: float, y: np.ndarray, yp: np.ndarray | None = None
+                       ) -> tuple[float, float, float, float, float]:
+        """(T, W, 2D, P_ext, P_bc) of a state (J, J, W, W, W)."""
+        return tuple(float(v) for v in self.energy_values(t, y, yp)[:5])
+
+    @property
+    def reaction_names(self) -> tuple[str, ...]:
+        """Names of the extras of :meth:`energy_values` (after the five energies)."""
+        out = []
+        for name in self.names:
+            out += [f"{name}/{r}" for r in L.DIAG_REACTIONS]
+        for i in range(len(self.holds)):
+            out += [f"hold{i}_force_{c}" for c in "xyz"]
+        for i in range(len(self.links)):
+            out += [f"link{i}_{w}_{c}" for w in ("force", "moment") for c in "xyz"]
+        return tuple(out)
 
     def energy_floor(self) -> float:
         return sum(r.energy_floor() for r in self.rods)
