@@ -52,9 +52,14 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
         write_run,
         write_status,
     )
+    from runtime.io.assembly_results import is_assembly
     from runtime.model import build
     from runtime.simulate.simulate import simulate
 
+    if is_assembly(problem):
+        return run_assembly_and_write(problem, out, label, plots=plots, resume=resume,
+                                      vtk_every=vtk_every, checkpoint_every=checkpoint_every,
+                                      overwrite=overwrite, progress=progress)
     out = Path(out)
     params = jsonable(problem.to_mapping())
     F.check_output_path(out)
@@ -137,6 +142,87 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
     return run, summary
 
 
+def run_assembly_and_write(problem, out: Path, label: str, plots: bool = False,
+                           resume: bool = False, vtk_every: float | None = None,
+                           checkpoint_every: float = 1.0, overwrite: bool = False,
+                           progress: ProgressDisplay | None = None) -> tuple:
+    """:func:`run_and_write` for an assembly of rods (results: ``runtime.io.
+    assembly_results``): the same checks, lock, status, checkpoints and resume."""
+    from runtime.io import folder as F
+    from runtime.io.assembly_results import write_assembly_run
+    from runtime.io.results import (
+        CHECKPOINT,
+        CheckpointError,
+        jsonable,
+        load_checkpoint,
+        write_checkpoint,
+        write_status,
+    )
+    from runtime.model import build
+    from runtime.problem.assemble_system import build_system
+    from runtime.simulate.assembly import simulate_assembly
+
+    out = Path(out)
+    params = jsonable(problem.to_mapping())
+    F.check_output_path(out)
+    if not resume:
+        F.refuse_existing(out, "simulate", overwrite=overwrite, resumable=True)
+    state = load_checkpoint(out, params) if resume else None
+    build.require_generated()
+    amap = build_system(problem)
+    if state is not None:
+        import numpy as np
+
+        n = amap.model.n
+        for key in ("y", "yp"):
+            if np.shape(state[key]) != (n,) or not np.all(np.isfinite(state[key])):
+                raise CheckpointError(f"--resume: checkpoint {str(out / CHECKPOINT)!r} holds "
+                                      f"a state {key} of shape {np.shape(state[key])}, this "
+                                      f"assembly needs ({n},) finite values; start again "
+                                      "with --overwrite")
+    with F.claim(out, "simulate", overwrite=overwrite and not resume) as claimed:
+        t_start = float(state["t"]) if state else 0.0
+        write_status(out, params, "running", t_start)
+        claimed.keep()
+
+        def on_checkpoint(st):
+            write_checkpoint(out, params, st)
+            write_status(out, params, "running", st["t"])
+
+        cb, close = (progress(problem.simulation.t_end, label) if progress is not None
+                     else (None, lambda: None))
+        try:
+            run = simulate_assembly(problem, progress=cb, checkpoint=on_checkpoint,
+                                    checkpoint_every=checkpoint_every, resume=state,
+                                    amap=amap)
+        except BaseException as exc:
+            write_status(out, params, "failed", t_start, f"{type(exc).__name__}: {exc}")
+            raise
+        finally:
+            close()
+        if vtk_every is not None and run.centreline_t.size:
+            from runtime.io.vtk import write_assembly_frames
+
+            write_assembly_frames(out / "vtk", run)
+        extra = {"resumed_from_t": t_start} if state else None
+        try:
+            summary = write_assembly_run(out, run, extra=extra)
+        except BaseException as exc:
+            with contextlib.suppress(Exception):
+                write_status(out, params, "failed", run.t_last,
+                             f"the results could not be written: {exc}")
+            raise
+        if run.status == "finished":
+            (out / CHECKPOINT).unlink(missing_ok=True)
+        if run.interrupt is not None:
+            raise run.interrupt
+        if plots and run.t.size > 1:
+            from runtime.io.plots import plot_assembly_run
+
+            plot_assembly_run(run, out)
+    return run, summary
+
+
 def check_statics(model) -> None:
     """Refuse (:class:`runtime.errors.IllPosedError`) a static problem that has no
     equilibrium to compute as posed: loads along a rigid motion its supports leave free, a
@@ -171,6 +257,10 @@ def static_and_write(problem, out: Path, overwrite: bool = False) -> tuple[dict,
     from runtime.simulate.simulate import load_path_table, static_equilibrium
     from runtime.solvers.statics import StaticSolveError
 
+    from runtime.io.assembly_results import is_assembly, static_assembly_and_write
+
+    if is_assembly(problem):
+        return static_assembly_and_write(problem, out, overwrite=overwrite)
     build.require_generated()
     wall0 = time.perf_counter()
     model = build_model(problem)

@@ -587,26 +587,34 @@ class SystemModel:
         if cy == 0.0:
             return self.dF_dyp_sparse(t, y, yp) * cj
         self.system_jacobian(t, y, yp, cj)
-        cb = self._blocks
-        rows, cols, vals = [], [], []
-        for b, ab in zip(cb.blocks, cb.ab, strict=True):
-            kl, ku = b.kl, b.ku
-            for d in range(-kl, ku + 1):
-                row = kl + ku - d
-                i = np.arange(max(0, -d), min(b.n, b.n - d))
-                v = ab[row, i + d]
-                nz = v != 0.0
-                rows.append(b.offset + i[nz])
-                cols.append(b.offset + i[nz] + d)
-                vals.append(v[nz])
-        if cb.entries:
-            e = np.array(cb.entries)
-            rows.append(e[:, 0])
-            cols.append(e[:, 1])
-            vals.append(cb.ev[:len(cb.entries)])
-        J = sp.csc_matrix((np.concatenate(vals), (np.concatenate(rows),
-                                                  np.concatenate(cols))), shape=(self.n, self.n))
-        return J
+        rows, cols, flat = self._coo_pattern()
+        vals = self._blocks.buffer[flat]
+        nz = vals != 0.0
+        return sp.csc_matrix((vals[nz], (rows[nz], cols[nz])), shape=(self.n, self.n))
+
+    def _coo_pattern(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(rows, cols, flat index into the blocks' buffer) of every entry J may hold:
+        every band position of every block, then the couplings (built once)."""
+        pat = getattr(self, "_coo", None)
+        if pat is None:
+            cb = self.blocks
+            rows, cols, flat = [], [], []
+            for b, a0, ld in zip(cb.blocks, cb.ab_start, cb.ldab, strict=True):
+                j = np.arange(b.n)
+                for d in range(-b.kl, b.ku + 1):          # d = col - row
+                    i = j - d
+                    ok = (i >= 0) & (i < b.n)
+                    rows.append(b.offset + i[ok])
+                    cols.append(b.offset + j[ok])
+                    flat.append(a0 + (b.kl + b.ku - d) + j[ok] * int(ld))
+            if cb.entries:
+                e = np.array(cb.entries)
+                rows.append(e[:, 0])
+                cols.append(e[:, 1])
+                flat.append(cb.ev_start + np.arange(len(cb.entries)))
+            pat = self._coo = tuple(np.concatenate(x).astype(np.int64)
+                                    for x in (rows, cols, flat))
+        return pat
 
     def dF_dy_sparse(self, t, y, yp):
         return self.jacobian_sparse(t, y, yp, 1.0, 0.0)

@@ -257,8 +257,8 @@ def static_equilibrium(problem, amap: AssemblyMap, t: float = 0.0,
     model = amap.model
     st = SystemStatics(model, t)
     with model.statics(t):
-        if y_guess is not None:
-            res = solve_static(st, st.at_rest(model.constrain(y_guess)), load_steps=1)
+        if y_guess is not None:          # Newton at the full load from a nearby state
+            res = solve_static(st, st.at_rest(model.constrain(y_guess)), first_load=1.0)
         else:
             y0 = model.initial_state(t)
             st.hold_rigid_motions(y0)
@@ -280,7 +280,7 @@ def default_atol(problem, amap: AssemblyMap, y0: np.ndarray) -> np.ndarray:
     d = max(float(np.max(np.linalg.norm(y0[ix] - model.reference[ix], axis=1)))
             for ix in model.phi_index)
     theta = 0.0
-    if any(any(ld.vector) for ld in problem.loads) and (
+    if any(any(ld.load.vector) for ld in problem.loads) and (
             d < 1e-3 * Lr or problem.simulation.initial == "reference"):
         dl = _linear_response(problem)
         d = max(d, dl if dl is not None else Lr)
@@ -306,7 +306,7 @@ def _linear_response(problem) -> float | None:
     load at its peak value (one Newton step at the reference); None for a mechanism."""
     T = problem.simulation.t_end
     peak = problem.with_overrides({
-        f"loads.{k}.time": {"kind": "constant", "value": float(ld.time.peak(T))}
+        f"loads.{k}.time": {"kind": "constant", "value": float(ld.load.time.peak(T))}
         for k, ld in enumerate(problem.loads)})
     amap = build_system(peak)
     model = amap.model
@@ -444,7 +444,9 @@ def _centre_maxima(res: AssemblyResult, problem, amap: AssemblyMap) -> None:
     initial = res.maxima_t[0] == 0.0
     t_first = float(res.maxima_t[1 if initial and res.maxima_t.size > 1 else 0])
     ref = float(model.reference[ix])
-    if not inputs_constant(model, t_first, res.t_last):
+    if _unloaded(problem, res.t_last):
+        res.centre = VibrationCentre(0.0, "reference")
+    elif not inputs_constant(model, t_first, res.t_last):
         res.centre = VibrationCentre(float(res.y_last[ix]) - ref, "final state",
                                      f"loads still change after the first maximum (t = "
                                      f"{t_first:.4g} s): the decrements are taken about the "
@@ -463,6 +465,19 @@ def _centre_maxima(res: AssemblyResult, problem, amap: AssemblyMap) -> None:
     if initial and not inputs_constant(model, 0.0, t_first):
         keep[0] = False
     res.peaks_t, res.peaks_x = res.maxima_t[keep], a[keep]
+
+
+def _unloaded(problem, t: float) -> bool:
+    """No load acts at t and no rod's end moves away (the reference is the equilibrium)."""
+    if any(any(ld.load.vector) and ld.load.time.value_at(t) != 0.0 for ld in problem.loads):
+        return False
+    for rod in problem.rods.values():
+        for end in (rod.start, rod.end):
+            mo = end.motion
+            if mo is not None and ((any(mo.translation) and mo.translation_time.value_at(t))
+                                   or (mo.rotation_angle and mo.rotation_time.value_at(t))):
+                return False
+    return True
 
 
 def frame_at(amap: AssemblyMap, label: str, y: np.ndarray) -> np.ndarray:

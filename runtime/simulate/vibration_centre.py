@@ -85,8 +85,7 @@ def equilibrium_at(problem: Problem, model: RodModel, t: float,
         guess = model.constrain(np.array(y_guess, dtype=float))
         st.hold_rigid_motions(guess)
         try:
-            return solve_static(st, st.at_rest(guess), load_steps=1, max_iter=30,
-                                min_load_step=0.5).y.copy()
+            return solve_static(st, st.at_rest(guess), first_load=1.0, max_iter=30).y.copy()
         except StaticSolveError:
             y0 = model.initial_state()
             return solve_static(st, y0, load_steps=problem.statics.load_steps).y.copy()

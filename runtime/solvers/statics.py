@@ -107,6 +107,7 @@ def solve_static(
     watchdog: int = 4,
     stations: tuple[float, ...] = (),
     on_station=None,
+    first_load: float = 0.0,
 ) -> StaticResult:
     """Solve ``R(y; load_scale = 1) = 0`` starting from ``y0`` at zero load.
 
@@ -136,6 +137,8 @@ def solve_static(
         steps if it then falls below its earlier value (rotations make full steps
         non-monotone; plain Newton is fast there); else Newton returns to the last
         reference point and damps.  0 disables it (always damped).
+    first_load : the load factor the continuation starts from (default 0, the unloaded
+        state); 1: plain Newton at the full load from ``y0``.
     stations, on_station : load factors in (0, 1] the stepping lands on exactly (the
         increment is shortened to reach them); ``on_station(load_factor, y)`` is called
         with the converged state at each (a load-deflection path at chosen loads).
@@ -282,22 +285,27 @@ def solve_static(
     load_scales: list[float] = []
     cuts = 0
 
-    # Unloaded state first (usually already in equilibrium: zero iterations).
-    lam = 0.0
-    problem.load_scale = 0.0
+    # Unloaded state first (usually already in equilibrium: zero iterations); or Newton at
+    # ``first_load`` from a y0 that lies near that equilibrium (a mechanism, a pendulum,
+    # has no unloaded equilibrium where it hangs).
+    if not 0.0 <= first_load <= 1.0:
+        raise ParameterError("first_load", first_load, "a load factor in [0, 1]")
+    lam = float(first_load)
+    problem.load_scale = lam
     try:
         y, it, r = newton(np.array(y0, dtype=float))
     except _NewtonFailure as exc:
+        what = "the unloaded state" if lam == 0.0 else f"the state at load factor {lam:g}"
         raise StaticSolveError(
-            f"solve_static: the unloaded state does not converge ({exc.reason}; scaled "
+            f"solve_static: {what} does not converge ({exc.reason}; scaled "
             f"residual {exc.rnorm:.3g}). Check y0 and the boundary conditions.",
             y=np.array(y0, dtype=float),
-            load_scale=0.0,
+            load_scale=lam,
             iterations=[],
             residual_norm=exc.rnorm,
         ) from None
     iterations.append(it)
-    load_scales.append(0.0)
+    load_scales.append(lam)
 
     dlam = 1.0 / max(1, int(load_steps))
     while lam < 1.0:

@@ -150,8 +150,8 @@ def test_taper_varies_the_section_along_the_rod():
     r_mid = 0.01 + (0.005 - 0.01) * (np.arange(4) + 0.5) / 4
     assert np.allclose(EA, 1e6 * np.pi * r_mid**2, rtol=1e-12)
     EI_seg = 1e6 * np.pi / 4 * r_mid**4
-    CM = m.arrays.jnt_field("C_M")[:, 0]           # joints: mean of the adjacent segments
-    assert np.allclose(CM[1:-1], 0.5 * (EI_seg[:-1] + EI_seg[1:]), rtol=1e-12)
+    CM = m.arrays.jnt_field("C_M")[:, 0]      # joints: the adjacent half cells in series
+    assert np.allclose(CM[1:-1], 2.0 / (1.0 / EI_seg[:-1] + 1.0 / EI_seg[1:]), rtol=1e-12)
     assert CM[0] == pytest.approx(EI_seg[0]) and CM[-1] == pytest.approx(EI_seg[-1])
 
 
