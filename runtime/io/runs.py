@@ -44,6 +44,7 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
     a finished result. Returns (result, summary).
     """
     from runtime.io import folder as F
+    from runtime.io.assembly_results import is_assembly
     from runtime.io.results import (
         CHECKPOINT,
         jsonable,
@@ -52,7 +53,6 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
         write_run,
         write_status,
     )
-    from runtime.io.assembly_results import is_assembly
     from runtime.model import build
     from runtime.simulate.simulate import simulate
 
@@ -249,6 +249,7 @@ def static_and_write(problem, out: Path, overwrite: bool = False) -> tuple[dict,
     state (status "failed")."""
     import time
 
+    from runtime.io.assembly_results import is_assembly, static_assembly_and_write
     from runtime.io.folder import RUN_FILES, results_folder
     from runtime.io.results import jsonable, write_json, write_npz, write_problem
     from runtime.model import build
@@ -256,8 +257,6 @@ def static_and_write(problem, out: Path, overwrite: bool = False) -> tuple[dict,
     from runtime.problem.assemble import build_model
     from runtime.simulate.simulate import load_path_table, static_equilibrium
     from runtime.solvers.statics import StaticSolveError
-
-    from runtime.io.assembly_results import is_assembly, static_assembly_and_write
 
     if is_assembly(problem):
         return static_assembly_and_write(problem, out, overwrite=overwrite)
