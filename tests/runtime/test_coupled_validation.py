@@ -1,6 +1,6 @@
 """Validation of rods with coupled sections (issue 26) against references written
 separately (references/coupled_rods.py, references/section_analysis.py): the coupled
-strip pulled (stretch and twist from K^-1 f), the damped modes of a cable of one Poisson
+strip pulled and twisted (stretch and twist from K^-1 f), the damped modes of a cable of one Poisson
 ratio against the complex-modulus beam of its section and of the closed-form sums, the
 creep of a bimetal strip whose viscous extension-bending coupling bends it, and the
 energy audit of the runs."""
