@@ -57,7 +57,9 @@ Everything the runtime needs about the state and parameter vectors is defined he
 pretwisted rod), lengths and inertia are per segment and per joint, so sections and
 materials may vary along the rod; loads are per node and per segment; the global vector
 holds gravity, the distributed load, the load factor and the ends (held or free,
-clamped or not, their prescribed position, velocity, frame and angular velocity).
+clamped or not, their prescribed position, velocity, frame and angular velocity, and the
+point moments applied at the end nodes, which a coupled rod's free-end condensation
+carries).
 """
 
 from __future__ import annotations
@@ -140,6 +142,15 @@ PARAMS: tuple[tuple[str, int, str, str], ...] = (
     ("a_end", 3, "m/s^2", "prescribed acceleration of node N (its support's reaction)"),
     ("p_end", 4, "1", "clamp frame quaternion at s = L (scalar first)"),
     ("Omega_end", 3, "rad/s", "material angular velocity of the clamp frame at s = L"),
+    ("m_dead_start", 3, "N m", "dead point moment applied at node 0 (spatial; also in "
+                               "segment 1's m_dead): a free end's condensation of a "
+                               "coupled rod carries it"),
+    ("m_follower_start", 3, "N m", "follower point moment applied at node 0 (material; "
+                                   "also in segment 1's m_follower)"),
+    ("m_dead_end", 3, "N m", "dead point moment applied at node N (spatial; also in "
+                             "segment N's m_dead)"),
+    ("m_follower_end", 3, "N m", "follower point moment applied at node N (material; "
+                                 "also in segment N's m_follower)"),
 )
 
 
@@ -634,6 +645,9 @@ COUPLED_SEGMENT_PARAMS: tuple[tuple[str, int, str, str], ...] = (
     ("rhoJ", 9, "kg m", "rotary inertia per length about the mass centre, 3x3 "
                         "((I11, -I12, 0), (-I12, I22, 0), (0, 0, I33)) rho"),
     ("e", 3, "m", "mass centre in the material frame (e1, e2, 0)"),
+    ("C_FE", 9, "1/m", "a free end's share of its applied moment M (material) in the "
+                       "resultant: n += C_FE M (1/2 C_FM C_MM^-1 on a free end's segment, "
+                       "0 elsewhere; M enters with its sign at s = L, negated at s = 0)"),
 )
 #: per-joint parameters of a rod with coupled sections, beside :data:`JOINT_PARAMS`
 COUPLED_JOINT_PARAMS: tuple[tuple[str, int, str, str], ...] = (
@@ -670,7 +684,8 @@ def _sym3(v):
 class _CSym:
     """Inputs of the coupled segment kernels: segment i, its nodes a = i-1, b = i, its
     neighbours' quaternions and angular velocities (p_a: segment i-1 or the clamp frame
-    at s = 0; p_b: segment i+1 or the clamp frame at s = L) and the two joints' rows."""
+    at s = 0; p_b: segment i+1 or the clamp frame at s = L), the two joints' rows, and
+    the moment applied at the rod's free ends among its nodes (:func:`end_moment`)."""
 
     phi_a: ca.SX
     phi_b: ca.SX
@@ -686,6 +701,7 @@ class _CSym:
     sc: ca.SX       # COUPLED_SEGMENT_PARAMS
     ja: ca.SX       # JOINT_PARAMS of joint i-1
     jb: ca.SX       # JOINT_PARAMS of joint i
+    m_end: ca.SX    # (dead 3 spatial, follower 3 material): M_b - M_a of the free ends
 
 
 def _csymbols() -> _CSym:
@@ -693,7 +709,17 @@ def _csymbols() -> _CSym:
     return _CSym(S("phi_a", 3), S("phi_b", 3), S("p_a", 4), S("p", 4), S("p_b", 4),
                  S("v_a", 3), S("v_b", 3), S("Omega_a", 3), S("Omega", 3), S("Omega_b", 3),
                  S("seg", N_SEGMENT), S("segc", N_COUPLED_SEGMENT), S("jnt_a", N_JOINT),
-                 S("jnt_b", N_JOINT))
+                 S("jnt_b", N_JOINT), S("m_end", 6))
+
+
+def end_moment(c: _CSym) -> ca.SX:
+    """The moment M (material, N m) that the free ends among segment i's nodes apply,
+    in the segment's frame: ``R(p)^T m_dead + m_follower`` of the input ``m_end``, which
+    holds the moment at node i (a free end at s = L) minus that at node i-1 (a free end
+    at s = 0), scaled by the load factor; zero where no node of the segment is a free
+    end. The free end's condensation adds ``C_FE M`` to the segment's resultant
+    (docs/design.md, section 10, "Free ends")."""
+    return rotate_transposed(c.p, c.m_end[0:3]) + c.m_end[3:6]
 
 
 def coupled_segment_functionals(c: _CSym) -> dict[str, ca.SX]:
@@ -705,7 +731,8 @@ def coupled_segment_functionals(c: _CSym) -> dict[str, ca.SX]:
     p_a and p), ``dU_b = U_i - U0_i`` (joint at node i, between p and p_b) and
     ``w_a = w_b = h/2``: the coupling with the mean curvature (U_{i-1} + U_i)/2 of the
     segment's two joints; D likewise with V and the exact rates. The joints' own
-    ``h_j/2 dU^T C_MM dU`` is in :func:`coupled_joint_quantities`.
+    ``h_j/2 dU^T C_MM dU`` is in :func:`coupled_joint_quantities`. The end moment's
+    term of a free end's condensation is a load (:func:`coupled_segment_forces_ad`).
     """
     h = _seg(c.sp, "h")
     G = shear_strain(c.phi_a, c.phi_b, c.p, h)
@@ -730,14 +757,21 @@ def coupled_segment_forces_ad(c: _CSym) -> ca.SX:
     """Forces of a coupled segment on its nodes and torques on its own and neighbouring
     segments, ``Q = (f_a, f_b, T_a, T, T_b)`` (15), by CasADi AD of W and D (the
     definition, as :func:`segment_forces_ad`: the torque conjugate to each Omega is
-    ``-1/2 vec(L(p)^T dW/dp) - dD/dOmega``)."""
+    ``-1/2 vec(L(p)^T dW/dp) - dD/dOmega``).
+
+    A free end's applied moment M (:func:`end_moment`) adds the potential
+    ``h dG^T C_FE M`` of the condensed virtual joint, differentiated at fixed M (the
+    moment's own turning with a dead load is the applied torque's, not the joint's)."""
     f = coupled_segment_functionals(c)
-    gW = ca.gradient(f["W"], ca.vertcat(c.phi_a, c.phi_b, c.p_a, c.p, c.p_b))
+    M = ca.SX.sym("M_fixed", 3)
+    W = f["W"] + _seg(c.sp, "h") * ca.dot(f["dV"], _mat3(_cseg(c.sc, "C_FE")) @ M)
+    gW = ca.gradient(W, ca.vertcat(c.phi_a, c.phi_b, c.p_a, c.p, c.p_b))
     gD = ca.gradient(f["D"], ca.vertcat(c.v_a, c.v_b, c.omega_a, c.omega, c.omega_b))
-    return ca.vertcat(-gW[0:3] - gD[0:3], -gW[3:6] - gD[3:6],
-                      torque_from_gradient(c.p_a, gW[6:10]) - gD[6:9],
-                      torque_from_gradient(c.p, gW[10:14]) - gD[9:12],
-                      torque_from_gradient(c.p_b, gW[14:18]) - gD[12:15])
+    Q = ca.vertcat(-gW[0:3] - gD[0:3], -gW[3:6] - gD[3:6],
+                   torque_from_gradient(c.p_a, gW[6:10]) - gD[6:9],
+                   torque_from_gradient(c.p, gW[10:14]) - gD[9:12],
+                   torque_from_gradient(c.p_b, gW[14:18]) - gD[12:15])
+    return ca.substitute(Q, M, end_moment(c))
 
 
 def _joint_kinematics(p_l, p_r, o_l, o_r, hj):
@@ -765,6 +799,11 @@ def coupled_segment_quantities(c: _CSym) -> dict[str, ca.SX]:
     ``m_a = w_a/h_a (C_FM^T dG + V_FM^T Gdot)`` (m_b likewise), so Q is the segment's
     ``(R n, -R n, h Gamma x n)`` (:func:`segment_quantities`) plus each joint's torques for
     its m (:func:`joint_quantities`). Identically the AD of the definitions (tested).
+
+    A free end's applied moment M (:func:`end_moment`) adds ``n_M = C_FE M`` to n (the
+    condensed virtual joint's curvature ``C_MM^-1 (M - C_FM^T dG)``, docs/design.md,
+    section 10); its power through that joint, ``P_M = -h n_M . Gdot``, is part of the
+    external power (W and D are the moment-free ones).
     """
     h = _seg(c.sp, "h")
     G = rotate_transposed(c.p, c.phi_b - c.phi_a) / h
@@ -778,7 +817,8 @@ def coupled_segment_quantities(c: _CSym) -> dict[str, ca.SX]:
     CFF, VFF = _sym3(_cseg(c.sc, "C_FF")), _sym3(_cseg(c.sc, "V_FF"))
     CFM, VFM = _mat3(_cseg(c.sc, "C_FM")), _mat3(_cseg(c.sc, "V_FM"))
     kw, kd = wa * dUa + wb * dUb, wa * Uad + wb * Ubd
-    n = CFF @ dG + VFF @ Gd + (CFM @ kw + VFM @ kd) / h
+    nM = _mat3(_cseg(c.sc, "C_FE")) @ end_moment(c)
+    n = CFF @ dG + VFF @ Gd + (CFM @ kw + VFM @ kd) / h + nM
     mt = CFM.T @ dG + VFM.T @ Gd
     ma, mb = wa / ha * mt, wb / hb * mt
     Rn = rotate(c.p, n)
@@ -787,7 +827,8 @@ def coupled_segment_quantities(c: _CSym) -> dict[str, ca.SX]:
     Q = ca.vertcat(Rn, -Rn, Ta_l, h * ca.cross(G, n) + Ta_r + Tb_l, Tb_r)
     W = h / 2 * ca.dot(dG, CFF @ dG) + ca.dot(dG, CFM @ kw)
     D = h / 2 * ca.dot(Gd, VFF @ Gd) + ca.dot(Gd, VFM @ kd)
-    return {"V": G, "W": W, "D": D, "Q": Q, "F": n, "Ma": ma, "Mb": mb}
+    return {"V": G, "W": W, "D": D, "Q": Q, "F": n, "Ma": ma, "Mb": mb,
+            "P_M": -h * ca.dot(nM, Gd)}
 
 
 def coupled_joint_quantities(s: _Sym, jc) -> dict[str, ca.SX]:
@@ -864,8 +905,9 @@ def coupled_kernels() -> list[ca.Function]:
 
     ``rod_coupled_segment_forces``: Q = (f_a, f_b, T_a, T, T_b) (15) of
     :func:`coupled_segment_quantities`; ``_jac``: dQ/d(phi_a, phi_b, p_a, p, p_b, v_a,
-    v_b, Omega_a, Omega, Omega_b) (15 x 33); ``_diagnostics``: W, D, strain, resultant
-    and the joint-moment shares. ``rod_coupled_joint_torques`` (and ``_jac``:
+    v_b, Omega_a, Omega, Omega_b) (15 x 33); ``_diagnostics``: W, D, strain, resultant,
+    the joint-moment shares and the power of a free end's moment through its condensed
+    joint. ``rod_coupled_joint_torques`` (and ``_jac``:
     d/d(p_a, p_b, Omega_a, Omega_b), 6 x 14; ``_diagnostics``): the joint with full
     C_MM, V_MM. ``rod_coupled_inertia``: rows (p kinematics 4, angular momentum 3, node
     a 3, node b 3) of :func:`coupled_inertia`; ``_jac``: cy d/dy + cj d/dy' in the columns
@@ -877,7 +919,7 @@ def coupled_kernels() -> list[ca.Function]:
     seg_in = {"phi_a": c.phi_a, "phi_b": c.phi_b, "p_a": c.p_a, "p": c.p, "p_b": c.p_b,
               "v_a": c.v_a, "v_b": c.v_b, "Omega_a": c.omega_a, "Omega": c.omega,
               "Omega_b": c.omega_b, "seg": c.sp, "segc": c.sc, "jnt_a": c.ja,
-              "jnt_b": c.jb}
+              "jnt_b": c.jb, "m_end": c.m_end}
     q = coupled_segment_quantities(c)
     xs = ca.vertcat(c.phi_a, c.phi_b, c.p_a, c.p, c.p_b, c.v_a, c.v_b, c.omega_a, c.omega,
                     c.omega_b)
@@ -902,7 +944,7 @@ def coupled_kernels() -> list[ca.Function]:
             {"dQ_dx": ca.densify(ca.jacobian(q["Q"], xs))}),
         _fn("rod_coupled_segment_diagnostics", seg_in,
             {"W": q["W"], "D": q["D"], "V": q["V"], "F": q["F"], "M_a": q["Ma"],
-             "M_b": q["Mb"]}),
+             "M_b": q["Mb"], "P_M": q["P_M"]}),
         _fn("rod_coupled_joint_torques", jnt_in, {"T": jq["T"]}),
         _fn("rod_coupled_joint_torques_jac", jnt_in,
             {"dT_dx": ca.densify(ca.jacobian(jq["T"], xj))}),

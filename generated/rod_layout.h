@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_layout.h.jinja
 // derivation step: discrete_rod
-// inputs sha256: 50b35fd97a4e336e6e1d3a87034eb41cd2e4bdf5fd217aca20d16ed3ef802057
+// inputs sha256: aff475847aae28fe943e1fda7b15cca646873bad09e5289375641318e28ed2dc
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*
@@ -53,7 +53,7 @@
 #define KLC 25
 #define KUC 22
 /* coupled sections: parameters per segment and per joint beside NSEG, NJNT */
-#define NSEGC 50
+#define NSEGC 59
 #define NJNTC 18
 #define SEGC_C_FF 0
 #define SEGC_V_FF 9
@@ -62,6 +62,7 @@
 #define SEGC_W 36
 #define SEGC_RHOJ 38
 #define SEGC_E 47
+#define SEGC_C_FE 50
 #define JNTC_C_MM 0
 #define JNTC_V_MM 9
 
@@ -108,7 +109,7 @@
 
 /* most relaxation terms; parameters per rod, segment, joint, node load, segment load */
 #define MAX_NB 24
-#define NPAR 43
+#define NPAR 55
 #define NSEG 14
 #define NJNT 10
 #define NNL 6
@@ -134,6 +135,10 @@
 #define PAR_A_END 33
 #define PAR_P_END 36
 #define PAR_OMEGA_END 40
+#define PAR_M_DEAD_START 43
+#define PAR_M_FOLLOWER_START 46
+#define PAR_M_DEAD_END 49
+#define PAR_M_FOLLOWER_END 52
 
 #define SEG_H 0
 #define SEG_C_F 1
@@ -154,10 +159,10 @@
 #define SL_M_FOLLOWER 3
 
 /* work memory large enough for every kernel; the largest kernel Jacobian */
-#define MAXW 620
+#define MAXW 694
 #define MAXIW 1
-#define MAXARG 14
-#define MAXRES 6
+#define MAXARG 15
+#define MAXRES 7
 #define MAXJAC 720
 
 #endif

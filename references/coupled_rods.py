@@ -14,7 +14,10 @@ as in kvrod's sections; SI units. Each from textbook mechanics, none from the so
   freedom model V x' + K x = f of one section (the rod's inertia negligible against its
   retardation times): x(t) = K^-1 f + expm(-V^-1 K t) (x0 - K^-1 f);
 - the cantilever with a step in EI (two zones): the tip deflection and rotation under a
-  tip force by the moment-area method.
+  tip force by the moment-area method;
+- the linear cantilever of one coupled section under an end force and moment: statically
+  determinate, n = F and m(s) = M + (L - s) e3 x F, so x(s) = K^-1 (n, m(s)) is linear in
+  s and the tip displacement and rotation are its integrals in closed form.
 """
 
 from __future__ import annotations
@@ -67,3 +70,29 @@ def stepped_cantilever(EI_1: float, EI_2: float, L1: float, L: float, P: float
     r1, d1 = seg(EI_1, 0.0, L1)
     r2, d2 = seg(EI_2, L1, L)
     return {"rotation": P * (r1 + r2), "deflection": P * (d1 + d2)}
+
+
+def coupled_cantilever(K: np.ndarray, F, M, L: float) -> dict:
+    """The straight cantilever along e3 (clamped at s = 0, length L, m) of one section of
+    stiffness K (6x6, strain order Gamma1..3, K1..3) under a force F (N) and a moment M
+    (N m) at s = L, linear (small loads): the resultants are n = F and
+    m(s) = M + (L - s) e3 x F, so the strains x(s) = K^-1 (n, m(s)) = x0 + (L - s) x1
+    with x0 = K^-1 (F, M), x1 = K^-1 (0, e3 x F). The rotation is
+    theta(s) = int_0^s K = s k0 + (L s - s^2/2) k1 and the tip displacement
+    u(L) = int_0^L (Gamma - e3 + theta x e3) ds = L g0 + L^2/2 g1 + (L^2/2 k0 + L^3/3 k1) x e3.
+
+    Returns ``strains`` (a function of s (m, array) giving (len(s), 6)), ``tip`` (the
+    tip displacement, m) and ``rotation`` (the tip rotation vector, rad)."""
+    K = np.asarray(K, dtype=float)
+    F, M = np.asarray(F, dtype=float), np.asarray(M, dtype=float)
+    e3 = np.array([0.0, 0.0, 1.0])
+    x0 = np.linalg.solve(K, np.r_[F, M])
+    x1 = np.linalg.solve(K, np.r_[np.zeros(3), np.cross(e3, F)])
+    g0, k0, g1, k1 = x0[:3], x0[3:], x1[:3], x1[3:]
+
+    def strains(s):
+        s = np.atleast_1d(np.asarray(s, dtype=float))
+        return x0[None, :] + (L - s)[:, None] * x1[None, :]
+
+    tip = L * g0 + L**2 / 2 * g1 + np.cross(L**2 / 2 * k0 + L**3 / 3 * k1, e3)
+    return {"strains": strains, "tip": tip, "rotation": L * k0 + L**2 / 2 * k1}

@@ -4,7 +4,7 @@
 ``generated/rod_layout.py`` defines (the one source of every layout):
 
 * ``par`` (N_PARAMS,): load factor, gravity, distributed load, the ends (held, clamped,
-  prescribed position/velocity/frame/angular velocity);
+  prescribed position/velocity/frame/angular velocity, the moments applied at them);
 * ``seg`` (N, N_SEGMENT): per segment: length h, C_F, V_F, reference strain V0, rho A,
   rho I;
 * ``jnt`` (N+1, N_JOINT): per joint (at node j): length, C_M, V_M, reference curvature U0;
@@ -266,10 +266,12 @@ def coupled_arrays(base: RodArrays, stiffness: np.ndarray, viscosity: np.ndarray
     Segments carry C_FF, V_FF and the coupling blocks C_FM, V_FM, with the weights h/2 of
     their couplings with the two joints (0 where a joint is absent: a free end, where
     C_FF, V_FF take the free end's condensation ``- 1/2 C_FM C_MM^-1 C_FM^T``, and V with
-    the pseudo-inverse); joints their segments' C_MM, V_MM in series
-    (:func:`coupled_joint_series`; the end segment's at a clamp). ``base``'s diagonal
-    fields C_F, V_F, C_M, V_M, rhoI receive the diagonals (read by what reports on them;
-    the kernels of a coupled rod read the coupled tables only).
+    the pseudo-inverse, and ``C_FE = 1/2 C_FM C_MM^-1`` carries the moment applied
+    there into the resultant; the viscous condensation carries none); joints their
+    segments' C_MM, V_MM in series (:func:`coupled_joint_series`; the end segment's at a
+    clamp). ``base``'s diagonal fields C_F, V_F, C_M, V_M, rhoI receive the diagonals
+    (read by what reports on them; the kernels of a coupled rod read the coupled tables
+    only).
     """
     N = base.N
     if base.branches:
@@ -293,13 +295,15 @@ def coupled_arrays(base: RodArrays, stiffness: np.ndarray, viscosity: np.ndarray
     CFM, VFM = K[:, :3, 3:], V[:, :3, 3:]
     CMM, VMM = K[:, 3:, 3:], V[:, 3:, 3:]
     w = np.tile(0.5 * h[:, None], (1, 2))
+    CFE = np.zeros((N, 3, 3))
     for end, seg, col in (("start", 0, 0), ("end", N - 1, 1)):
         if not a.clamped(end):        # no joint beyond the end segment: its condensation
             w[seg, col] = 0.0
             CFF[seg] -= 0.5 * CFM[seg] @ np.linalg.solve(CMM[seg], CFM[seg].T)
             VFF[seg] -= 0.5 * VFM[seg] @ np.linalg.pinv(VMM[seg], hermitian=True) @ VFM[seg].T
+            CFE[seg] = 0.5 * np.linalg.solve(CMM[seg], CFM[seg].T).T   # C_MM symmetric
     for name, val in (("C_FF", CFF), ("V_FF", VFF), ("C_FM", CFM), ("V_FM", VFM),
-                      ("rhoJ", J)):
+                      ("rhoJ", J), ("C_FE", CFE)):
         a.segc_field(name)[:] = val.reshape(N, 9)
     a.segc_field("w")[:] = w
     a.segc_field("e")[:] = e

@@ -134,11 +134,16 @@ class ProblemDrive:
     def apply(self, a: RodArrays, t: float, *, left: bool = False, scale: float = 1.0,
               static: bool = False) -> None:
         grav, dist = np.zeros(3), np.zeros(3)
+        N = self.N
         fd, ff = a.node_load("f_dead"), a.node_load("f_follower")
         md, mf = a.segment_load("m_dead"), a.segment_load("m_follower")
-        for arr in (fd, ff, md, mf):
+        # the moments applied at the end nodes once more on their own (a coupled rod's
+        # free-end condensation carries them: docs/design.md, section 10)
+        ends = {(0, "dead"): a.param("m_dead_start"),
+                (0, "follower"): a.param("m_follower_start"),
+                (N, "dead"): a.param("m_dead_end"), (N, "follower"): a.param("m_follower_end")}
+        for arr in (fd, ff, md, mf, *ends.values()):
             arr[:] = 0.0
-        N = self.N
         for ld, node in zip(self.loads, self._nodes, strict=True):
             v = np.asarray(ld.vector) * ld.time.value_at(t, left=left)
             if ld.kind == "gravity":
@@ -149,6 +154,8 @@ class ProblemDrive:
                 (ff if ld.frame == "follower" else fd)[node] += v
             else:
                 target = mf if ld.frame == "follower" else md
+                if node in (0, N):
+                    ends[node, "follower" if ld.frame == "follower" else "dead"][:] += v
                 if node == 0:
                     target[0] += v
                 elif node == N:

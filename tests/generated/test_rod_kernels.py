@@ -257,7 +257,7 @@ def test_coupled_kernel_closed_forms_equal_casadi_ad_of_the_functionals():
     non-symmetric-looking blocks (the quadratic forms take their symmetric parts)."""
     c = dr._csymbols()
     ins = [c.phi_a, c.phi_b, c.p_a, c.p, c.p_b, c.v_a, c.v_b, c.omega_a, c.omega, c.omega_b,
-           c.sp, c.sc, c.ja, c.jb]
+           c.sp, c.sc, c.ja, c.jb, c.m_end]
     f = ca.Function("f", ins, [dr.coupled_segment_quantities(c)["Q"],
                                dr.coupled_segment_forces_ad(c)])
     s = dr._symbols()

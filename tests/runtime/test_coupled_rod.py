@@ -229,3 +229,140 @@ def test_the_casadi_backend_refuses_a_coupled_rod_with_a_clear_message():
     m = coupled_model(np.random.default_rng(18), 3)
     with pytest.raises(GeneratedCodeError, match="coupled sections.*compiled backend"):
         RodModel(m.arrays, m.reference, backend="casadi")
+
+
+#: point moments at both ends, dead and follower (the free ends' condensations carry
+#: them: docs/design.md, section 10, "Free ends"), beside a force and gravity
+END_MOMENTS = [
+    {"kind": "moment", "at": "end", "vector": [0.001, 0.002, -0.003]},
+    {"kind": "moment", "at": "end", "frame": "follower", "vector": [-0.002, 0.001, 0.002]},
+    {"kind": "moment", "at": "start", "vector": [0.002, -0.001, 0.001]},
+    {"kind": "moment", "at": "start", "frame": "follower", "vector": [0.001, 0.003, -0.002]},
+    {"kind": "force", "at": "end", "vector": [0.05, -0.02, 0.01]},
+    {"kind": "gravity", "vector": [0.0, -9.81, 1.0]},
+]
+
+
+@pytest.mark.parametrize("start,end", [("free", "free"), ("pinned", "free"),
+                                       ("free", "pinned")])
+def test_coupled_jacobians_with_end_moments_match_central_differences(start, end):
+    """Dead and follower moments at free and pinned ends: the condensation's resultant
+    C_FE M turns with the end segment for a dead moment (its Jacobian entry)."""
+    rng = np.random.default_rng(31)
+    m = coupled_model(rng, 4, start, end, loads=END_MOMENTS)
+    assert np.abs(m.arrays.segc_field("C_FE")[[0, -1]]).max() > 0
+    y, yp = random_state(m, rng), rng.standard_normal(m.n)
+    Jy = dense_jac(m, y, yp, 1.0, 0.0)
+    eps = 1e-6
+    Ny = np.empty_like(Jy)
+    for k in range(m.n):
+        e = np.zeros(m.n)
+        e[k] = eps
+        Ny[:, k] = (residual(m, y + e, yp) - residual(m, y - e, yp)) / (2 * eps)
+    assert np.abs(Jy - Ny).max() <= 1e-6 * np.abs(Jy).max()
+
+
+@pytest.mark.parametrize("start,end", [("free", "free"), ("pinned", "free")])
+def test_coupled_energy_identity_with_end_moments(start, end):
+    """d/dt (T + W) = -2D + P_ext + P_bc along the flow with moments at both ends: the
+    power of a free end's moment through its condensed joint is part of P_ext."""
+    rng = np.random.default_rng(32)
+    m = coupled_model(rng, 5, start, end, loads=END_MOMENTS, varying=True)
+    for _ in range(2):
+        y = random_state(m, rng, unit=True)
+        d = m.differential
+        B = dense_jac(m, y, np.zeros(m.n), 0.0, 1.0)
+        r0 = residual(m, y, np.zeros(m.n))
+        yp = np.zeros(m.n)
+        yp[d] = np.linalg.solve(B[np.ix_(d, d)], -r0[d])
+        diag = m.diagnostics(0.0, y, yp)
+        eps = 1e-6
+        E = lambda z: sum(m.energy_scalars(0.0, z)[:2])  # noqa: E731
+        lhs = (E(y + eps * yp) - E(y - eps * yp)) / (2 * eps)
+        rhs = -diag["dissipation_rate"] + diag["external_power"] + diag["boundary_power"]
+        scale = abs(diag["dissipation_rate"]) + abs(diag["external_power"]) + abs(lhs)
+        assert abs(lhs - rhs) <= 2e-7 * scale
+
+
+def _linear_static(m, f):
+    """f(y) of the linear static response: dx = -J0^-1 r from the reference (r the
+    residual of the loads, J0 the unloaded stiffness), f by central differences along it,
+    (f(y(dx)) - f(y(-dx)))/2, so that terms of second order in the loads drop out."""
+    import scipy.sparse.linalg as spl
+
+    with m.statics():
+        st = RodStatics(m)
+        y = m.initial_state()
+        r = np.empty(st.n_static)
+        st.load_scale = 1.0
+        st.static_residual(y, r)
+        st.load_scale = 0.0
+        dx = spl.spsolve(st.static_jacobian_sparse(y), -r)
+        return 0.5 * (f(st.static_retract(y, dx)) - f(st.static_retract(y, -dx)))
+
+
+def _section(m) -> np.ndarray:
+    a = m.arrays
+    B = a.segc_field("C_FM")[0].reshape(3, 3)
+    return np.block([[a.segc_field("C_FF")[1].reshape(3, 3), B],
+                     [B.T, a.jntc_field("C_MM")[1].reshape(3, 3)]])
+
+
+@pytest.mark.parametrize("start,end,at,frame,F", [
+    ("clamped", "free", "end", "dead", 0.0), ("clamped", "free", "end", "follower", 0.0),
+    ("clamped", "free", "end", "dead", 1.0), ("free", "clamped", "start", "dead", 0.0),
+    ("free", "clamped", "start", "follower", 1.0)])
+def test_random_sections_under_an_end_moment_strain_as_the_inverse_stiffness_says(
+        start, end, at, frame, F):
+    """A random coupled section under a moment (and an axial force) at its free end:
+    uniform strains K^-1 (n, m) in every segment and joint, the end segment's included
+    (its condensation carries the moment: it used to assume none, and the end segment
+    was O(1) off, the tip stretch O(h)). At s = 0 the resultants are minus the loads."""
+    Mv, Fv = np.array([0.3, -0.2, 0.5]) * 1e-7, np.array([0.0, 0.0, F * 1e-5])
+    for seed in (41, 42):
+        loads = [{"kind": "moment", "at": at, "frame": frame, "vector": list(Mv)},
+                 {"kind": "force", "at": at, "vector": list(Fv)}]
+        m = coupled_model(np.random.default_rng(seed), 8, start, end, loads=loads,
+                          offset=False)
+        sign = 1.0 if at == "end" else -1.0
+        want = np.linalg.solve(_section(m), sign * np.r_[Fv, Mv])
+        G = _linear_static(m, lambda y, m=m: m.diagnostics(0.0, y)["strains"]["V"])
+        U = _linear_static(m, lambda y, m=m: m.diagnostics(0.0, y)["strains"]["U"])
+        U = U[:, 0 if start == "clamped" else 1:-1 if end == "free" else None]
+        assert np.abs(G - want[:3, None]).max() <= 1e-6 * np.abs(want[:3]).max()
+        assert np.abs(U - want[3:, None]).max() <= 1e-6 * np.abs(want[3:]).max()
+
+
+def test_coupled_cantilever_under_a_tip_force_and_moment_converges_at_second_order():
+    """A random coupled section, clamped, under a transverse force and a moment at its
+    free end (the resultants vary along the rod): the linear tip displacement and
+    rotation against the closed form of references/coupled_rods.py converge at second
+    order (with the moment-free condensation the end segment was O(1) off and the tip
+    first order); the interior strains are the continuum's. The end segment's own
+    strain converges at first order when the strains vary along the rod (its virtual
+    joint takes the segment's strain for the end's, as the clamp joint does)."""
+    from references import coupled_rods as ref
+
+    Mv, Fv = np.array([0.3, -0.2, 0.5]) * 1e-7, np.array([1.0, -0.5, 0.0]) * 1e-7 / 0.3
+    errs = []
+    for N in (8, 16, 32):
+        m = coupled_model(np.random.default_rng(43), N, "clamped", "free", offset=False,
+                          loads=[{"kind": "moment", "at": "end", "vector": list(Mv)},
+                                 {"kind": "force", "at": "end", "vector": list(Fv)}])
+        assert np.allclose(m.arrays.param("p_start"), [1, 0, 0, 0])   # straight along e3
+        L = float(np.sum(m.arrays.seg_field("h")))
+        want = ref.coupled_cantilever(_section(m), Fv, Mv, L)
+        tip = _linear_static(m, m.tip_position)
+        R = _linear_static(m, lambda y, m=m: m.end_frames(0.0, y)["end"])
+        rot = np.array([R[2, 1], R[0, 2], R[1, 0]])        # the rotation's skew part
+        s_mid = (np.arange(N) + 0.5) * L / N
+        G = _linear_static(m, lambda y, m=m: m.diagnostics(0.0, y)["strains"]["V"]).T
+        g_want = want["strains"](s_mid)[:, :3]
+        errs.append([np.abs(tip - want["tip"]).max() / np.abs(want["tip"]).max(),
+                     np.abs(rot - want["rotation"]).max() / np.abs(want["rotation"]).max()])
+        inner = slice(N // 2 - 1, N // 2 + 1)      # exact for linear strain fields
+        assert np.abs(G[inner] - g_want[inner]).max() < 1e-5 * np.abs(g_want).max()
+    errs = np.array(errs)
+    orders = np.log2(errs[:-1] / errs[1:])
+    assert np.all(orders > 1.85), (errs, orders)
+    assert errs[-1, 0] < 1e-3

@@ -253,8 +253,28 @@ static void c_side(const kvrod_rod* r, int i, int k, const double* y, const doub
   }
 }
 
-/* the inputs of segment i's coupled kernels into a[0..13] */
-static void cseg_args(const kvrod_rod* r, int i, const double* y, const double** a) {
+/* the moments applied at the free (unclamped) ends among segment i's nodes, scaled:
+ * (dead, spatial; follower, material) at node N minus those at node 0 (the kernels'
+ * m_end: a free end's condensation carries its moment, docs/design.md, section 10) */
+static void c_end_moment(const kvrod_rod* r, int i, double* m6) {
+  const double ls = r->par[PAR_LOAD_SCALE];
+  int k;
+  for (k = 0; k < 6; ++k) m6[k] = 0.0;
+  if (i == r->N && !(r->par[PAR_CLAMP_END] > 0.5))
+    for (k = 0; k < 3; ++k) {
+      m6[k] += ls * r->par[PAR_M_DEAD_END + k];
+      m6[3 + k] += ls * r->par[PAR_M_FOLLOWER_END + k];
+    }
+  if (i == 1 && !(r->par[PAR_CLAMP_START] > 0.5))
+    for (k = 0; k < 3; ++k) {
+      m6[k] -= ls * r->par[PAR_M_DEAD_START + k];
+      m6[3 + k] -= ls * r->par[PAR_M_FOLLOWER_START + k];
+    }
+}
+
+/* the inputs of segment i's coupled kernels into a[0..14] (m6: room for its m_end) */
+static void cseg_args(const kvrod_rod* r, int i, const double* y, const double** a,
+                      double* m6) {
   a[0] = y + i_phi(r, i - 1); a[1] = y + i_phi(r, i);
   c_side(r, i, i - 1, y, &a[2], &a[7], &a[12]);
   a[3] = y + i_p(r, i);
@@ -262,6 +282,8 @@ static void cseg_args(const kvrod_rod* r, int i, const double* y, const double**
   a[5] = y + i_v(r, i - 1); a[6] = y + i_v(r, i);
   a[8] = y + i_om(r, i);
   a[10] = segp(r, i); a[11] = segcp(r, i);
+  c_end_moment(r, i, m6);
+  a[14] = m6;
 }
 
 /* gravity times the load factor (the kernels' g) */
@@ -300,7 +322,7 @@ static int residual_coupled(const kvrod_rod* rod, const double* y, const double*
                             double* res, work_t* W) {
   const int N = rod->N;
   const int free0 = !(node_held(rod, 0) > 0.5), freeN = !(node_held(rod, N) > 0.5);
-  double r13[13], T[6], Q[15], g[3];
+  double r13[13], T[6], Q[15], g[3], m6[6];
   int i, j, k;
   c_gravity(rod, g);
   for (i = 1; i <= N; ++i) {
@@ -314,7 +336,7 @@ static int residual_coupled(const kvrod_rod* rod, const double* y, const double*
     for (k = 0; k < 3; ++k) res[i_om(rod, i) + k] -= T[k];
   }
   for (i = 1; i <= N; ++i) {
-    cseg_args(rod, i, y, W->arg);
+    cseg_args(rod, i, y, W->arg, m6);
     W->res[0] = Q;
     if (rod_coupled_segment_forces(W->arg, W->res, W->iw, W->w, 0)) return -3;
     if (i - 1 > 0 || free0) for (k = 0; k < 3; ++k) res[i_v(rod, i - 1) + k] -= Q[k];
@@ -689,7 +711,8 @@ static int jac_cseg(const kvrod_rod* rod, int i, const double* y, double cy,
                     const band_t* B, work_t* W, double* J) {
   const int N = rod->N, has_a = i > 1, has_b = i < N;
   int rows[15], cols[33], r, c;
-  cseg_args(rod, i, y, W->arg);
+  double m6[6];
+  cseg_args(rod, i, y, W->arg, m6);
   W->res[0] = J;
   if (rod_coupled_segment_forces_jac(W->arg, W->res, W->iw, W->w, 0)) return -3;
   for (r = 0; r < 3; ++r) {
@@ -924,6 +947,7 @@ static int energies_coupled(const kvrod_rod* rod, const double* y, const double*
                             double* e, double* out_el, work_t* W) {
   const int N = rod->N;
   double Tk, Pg, Wel, Dd, S3[3], R3[3], Ma[3], Mb[3], Q[15], T6[6], f[3], m, g[3], r13[13];
+  double m6[6], Pm;
   double Fint[2][3] = {{0, 0, 0}, {0, 0, 0}}, Tclamp[2][3] = {{0, 0, 0}, {0, 0, 0}};
   double Fin[2][3] = {{0, 0, 0}, {0, 0, 0}};
   double* oV = out_el;
@@ -952,11 +976,11 @@ static int energies_coupled(const kvrod_rod* rod, const double* y, const double*
     e[0] += Tk; e[3] += Pg;
     if (segment_torque(rod, i, y, W, S3)) return -3;
     for (k = 0; k < 3; ++k) e[3] += S3[k] * y[i_om(rod, i) + k];
-    cseg_args(rod, i, y, W->arg);
+    cseg_args(rod, i, y, W->arg, m6);
     W->res[0] = &Wel; W->res[1] = &Dd; W->res[2] = S3; W->res[3] = R3;
-    W->res[4] = Ma; W->res[5] = Mb;
+    W->res[4] = Ma; W->res[5] = Mb; W->res[6] = &Pm;
     if (rod_coupled_segment_diagnostics(W->arg, W->res, W->iw, W->w, 0)) return -3;
-    e[1] += Wel; e[2] += 2.0 * Dd;
+    e[1] += Wel; e[2] += 2.0 * Dd; e[3] += Pm;
     if (out_el)
       for (k = 0; k < 3; ++k) {
         oV[3 * (i - 1) + k] = S3[k]; oF[3 * (i - 1) + k] = R3[k];
