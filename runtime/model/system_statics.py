@@ -103,16 +103,26 @@ class SystemStatics:
         y0[self.model.velocity_mask] = 0.0
         return y0
 
-    def hold_rigid_motions(self, y: np.ndarray) -> None:
-        """Refuse (IllPosedError, before any work) an assembly that its supports leave
-        free to move rigidly: its static Jacobian is singular at the reference."""
-        lu = self.static_factor(y)
-        if lu.info != 0:
-            raise IllPosedError(
-                "statics of this assembly: its supports leave a rigid motion free (the "
-                "static stiffness is singular); hold it with a joint to \"ground\" or a "
-                "clamped or pinned end, or simulate it (simulation.initial = \"reference\")")
-        return None
+    def hold_rigid_motions(self, y: np.ndarray) -> float:
+        """Check that statics from ``y`` is well posed: the static stiffness at ``y`` is
+        regular unloaded (then load stepping starts at 0, as for a rod), or else under the
+        full load (a mechanism that its loads hold, a pendulum hanging at ``y``: Newton
+        starts at the full load). Returns that first load factor; raises
+        :class:`~runtime.errors.IllPosedError` (before any work) when the supports and
+        loads leave a rigid motion free."""
+        saved = self.load_scale
+        try:
+            for lam in (0.0, 1.0):
+                self.load_scale = lam
+                if self.static_factor(y).info == 0:
+                    return lam
+        finally:
+            self.load_scale = saved
+        raise IllPosedError(
+            "statics of this assembly: its supports leave a rigid motion free (the static "
+            "stiffness is singular, unloaded and loaded); hold it with a joint to "
+            "\"ground\" or a clamped or pinned end, or simulate it (simulation.initial = "
+            "\"reference\")")
 
     def static_residual(self, y: np.ndarray, out: np.ndarray) -> None:
         m = self.model

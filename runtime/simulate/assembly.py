@@ -19,6 +19,7 @@ import numpy as np
 
 from runtime.analysis.audit import audit_run, significant_maxima
 from runtime.analysis.decay import beat_warning, damping_ratios, log_decrements, periods
+from runtime.errors import IllPosedError
 from runtime.model.quaternion import quat_rotation
 from runtime.model.system_statics import SystemStatics
 from runtime.problem.assemble_system import AssemblyMap, build_system, frames_of
@@ -261,10 +262,61 @@ def static_equilibrium(problem, amap: AssemblyMap, t: float = 0.0,
             res = solve_static(st, st.at_rest(model.constrain(y_guess)), first_load=1.0)
         else:
             y0 = model.initial_state(t)
-            st.hold_rigid_motions(y0)
-            res = solve_static(st, y0, load_steps=problem.statics.load_steps)
+            try:
+                first = st.hold_rigid_motions(y0)
+            except IllPosedError:
+                # singular where it starts, also loaded: a mechanism its loads hold only
+                # once they have stressed it (a pendulum's tension): pseudo-transient
+                # continuation reaches that state, Newton finishes
+                y0 = pseudo_transient(st, y0)
+                first = 1.0
+            res = solve_static(st, y0, load_steps=problem.statics.load_steps,
+                               first_load=first)
     return AssemblyStatic(res.y.copy(), res.total_iterations, list(res.iterations),
                           time.perf_counter() - wall0)
+
+
+def pseudo_transient(st: SystemStatics, y0: np.ndarray, tol: float = 1e-8,
+                     max_iter: int = 400) -> np.ndarray:
+    """A state near the loaded equilibrium of a mechanism whose static stiffness is
+    singular at ``y0``, by pseudo-transient continuation (Kelley and Keyes 1998):
+    ``(J + M / d) dx = -R`` with the reduced mass matrix M and a pseudo time step d grown
+    as the residual falls (switched evolution relaxation, d <- d |R_old| / |R|), so that
+    the first steps move the mechanism like damped dynamics and the last are Newton's.
+    Raises :class:`~runtime.errors.IllPosedError` when it does not converge."""
+    import scipy.sparse.linalg as spla
+
+    from runtime.analysis.system_modal import linear_matrices
+
+    model = st.model
+    st.load_scale = 1.0
+    M, _, _, _ = linear_matrices(model, y0, st.time)
+    y = np.array(y0, dtype=float)
+    r = np.empty(st.n_static)
+    st.static_residual(y, r)
+    J = st.static_jacobian_sparse(y)
+    scale = float(abs(J.diagonal()).max()) / max(float(abs(M.diagonal()).max()), 1e-300)
+    d = 1e-6 / scale
+    r0 = rn = float(np.linalg.norm(r))
+    for _ in range(max_iter):
+        if rn <= tol * max(r0, 1e-300):
+            return y
+        J = st.static_jacobian_sparse(y)
+        dx = spla.spsolve((J + M / d).tocsc(), -r)
+        y = st.static_retract(y, dx)
+        st.static_residual(y, r)
+        rn_new = float(np.linalg.norm(r))
+        if not np.isfinite(rn_new):
+            break
+        d *= min(max(rn / max(rn_new, 1e-300), 0.5), 10.0)
+        rn = rn_new
+        if d * scale > 1e12:             # Newton's regime: solve_static finishes
+            return y
+    raise IllPosedError(
+        "statics of this assembly: its supports leave a rigid motion free that its loads "
+        "do not hold (pseudo-transient continuation found no equilibrium); hold it with "
+        "a joint to \"ground\" or a clamped or pinned end, or simulate it "
+        "(simulation.initial = \"reference\")")
 
 
 def default_atol(problem, amap: AssemblyMap, y0: np.ndarray) -> np.ndarray:
