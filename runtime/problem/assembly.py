@@ -28,7 +28,7 @@ start). Every named point gets a node of its rod (``Problem.points``).
   ``rods = [...]``; a point force or moment acts at ``at = POINT``.
 
 The lead's system model (``runtime.model``) consumes these objects; nothing here knows
-of it. ``kvrod problem-keys`` lists every key (:data:`runtime.problem.keys.ASSEMBLY_KEYS`).
+of it. ``kvrod problem-keys`` lists every key (``runtime.problem.keys.ASSEMBLY_KEYS``).
 """
 
 from __future__ import annotations
@@ -172,8 +172,8 @@ def check_psd(path: str, value: Any, size: int, units: str,
               diagonal_ok: bool = False) -> np.ndarray:
     """A ``size`` x ``size`` symmetric positive semi-definite matrix of finite numbers
     (``diagonal_ok``: ``size`` numbers are its diagonal); returns its symmetric part.
-    Symmetric within :data:`SYMMETRY_RTOL` of its largest entry; eigenvalues >=
-    -:data:`PSD_RTOL` times the largest."""
+    Symmetric within ``SYMMETRY_RTOL`` of its largest entry; eigenvalues >=
+    ``-PSD_RTOL`` times the largest."""
     shape = f"a {size}x{size} matrix" + (f" (or {size} numbers: its diagonal)"
                                           if diagonal_ok else "")
     try:
@@ -856,7 +856,7 @@ def _same_place(p: Point, q: Point, lengths: Mapping[str, float]) -> bool:
 
 def _check_joints(joints: tuple[Joint, ...], geometry: Mapping[str, Geometry]) -> None:
     """Each joint's points coincide in the reference configuration (within
-    :data:`COINCIDE_RTOL` of the longest rod), differ, and no two joints hold the same
+    ``COINCIDE_RTOL`` of the longest rod), differ, and no two joints hold the same
     pair of points or the same point to ground."""
     lengths = {n: g.length for n, g in geometry.items()}
     tol = COINCIDE_RTOL * max(lengths.values())

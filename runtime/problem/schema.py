@@ -598,7 +598,7 @@ class Problem:
     def breakpoints(self) -> tuple[float, ...]:
         """Arc lengths (m) where the rod must have a node: the zone boundaries, the
         points where point loads act by arc length (``loads.s``) and an assembly's named
-        points on the rod (:attr:`points`)."""
+        points on the rod (``points``)."""
         out = [b for z in self.zones for b in (z.start, z.end)]
         out += [ld.s for ld in self.loads if ld.s is not None]
         out += list(self.points)
@@ -606,7 +606,7 @@ class Problem:
 
     def node_arc_lengths(self) -> np.ndarray:
         """Arc lengths (N+1,) of the nodes (m): uniform, or with a node at every
-        breakpoint (:meth:`breakpoints`; :func:`~runtime.problem.geometry.node_arc_lengths`)."""
+        breakpoint (:meth:`breakpoints`; ``runtime.problem.geometry.node_arc_lengths``)."""
         s = self.__dict__.get("_s_nodes")
         if s is None:
             s = node_arc_lengths(self.rod.length, self.rod.elements, self.breakpoints())
@@ -839,8 +839,8 @@ class Problem:
     def from_mapping(cls, m: Mapping[str, Any], base: Path | None = None,
                      name: str = "problem", points: tuple[float, ...] = ()) -> Problem:
         """Build and check a problem from a TOML table (see the module docstring);
-        ``points``: the arc lengths of an assembly's named points on the rod
-        (:attr:`points`, not a key of the table)."""
+        ``points``: the arc lengths of an assembly's named points on the rod (the
+        field ``points``, not a key of the table)."""
         m = C.table("", m)
         C.no_unknown_keys("", m, TOP_KEYS)
         rod_m = dict(C.table("rod", m.get("rod", {})))
