@@ -614,6 +614,11 @@ BAD = [
     ("rod material", _set("rods.b.material.youngs_modulus", -5.0),
      "rods.b.material.youngs_modulus", ""),
     ("rod end kind", _set("rods.b.end", {"kind": "glued"}), "rods.b.end.kind", "'free'"),
+    ("too few elements for the points",
+     _many(_set("rods.b.rod.elements", 2), _body(name="n", at="b@0.05", mass=1.0),
+           _body(name="o", at="b@0.15", mass=1.0)),
+     "rods.b.rod.elements", ">= 3: a node goes at each of the 2 zone boundaries, point "
+     "loads and named points"),
     ("rod zone", _set("rods.b.zones", [{"from": 0.0, "to": 0.5, "material": {"tau": 0.0}}]),
      "rods.b.zones[0].to", "0.2 m"),
     ("rod materials without composite", _set("rods.a.materials", {"x": MATERIAL}),
