@@ -42,7 +42,8 @@ SET_HELP = ("set any key of the problem (repeatable; TOML values, in order): "
             "replaces the material; an array of tables ([[loads]], "
             "[[material.branches]]) is indexed from 0 and the index one past its last "
             "entry appends one: --set 'loads.1={kind=\"force\", vector=[0,0,1]}' adds "
-            "a second load")
+            "a second load; in an assembly: --set rods.NAME.material.tau=0.02, --set "
+            "joints.0.rotational_stiffness=1, and the short flags set every rod")
 
 
 def add_problem_arguments(p: argparse.ArgumentParser, required: bool = False) -> None:

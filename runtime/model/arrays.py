@@ -268,7 +268,7 @@ def coupled_arrays(base: RodArrays, stiffness: np.ndarray, viscosity: np.ndarray
     C_FF, V_FF take the free end's condensation ``- 1/2 C_FM C_MM^-1 C_FM^T``, and V with
     the pseudo-inverse, and ``C_FE = 1/2 C_FM C_MM^-1`` carries the moment applied
     there into the resultant; the viscous condensation carries none); joints their
-    segments' C_MM, V_MM in series (:func:`coupled_joint_series`; the end segment's at a
+    segments' C_MM, V_MM in series (``coupled_joint_series``; the end segment's at a
     clamp). ``base``'s diagonal fields C_F, V_F, C_M, V_M, rhoI receive the diagonals
     (read by what reports on them; the kernels of a coupled rod read the coupled tables
     only).

@@ -392,6 +392,20 @@ KEYS: tuple[Key, ...] = (
 )
 
 
+#: what an assembly file is (shown by both renderings)
+ASSEMBLY_INTRO = (
+    "A problem file with `[rods.NAME]` tables is an assembly of rods. Each rod's table "
+    "holds what a single-rod file holds: `[rods.NAME.rod]` (its `geometry.origin` places "
+    "the rod), `[rods.NAME.section]`, `[rods.NAME.material]`, `[[rods.NAME.zones]]`, "
+    "`[rods.NAME.start]`, `[rods.NAME.end]` (the ends default to free: joints hold the "
+    "rods). `[simulation]`, `[statics]`, `[analysis]` and `[[loads]]` stay at the top; "
+    "gravity and distributed loads act on every rod unless `rods = [...]` names some; a "
+    "point force or moment acts at a point, `at = \"NAME.end\"`. Points: `NAME.start`, "
+    "`NAME.end`, `NAME@S` (arc length S in m from the rod's start); the rod has a node at "
+    "every named point (its elements need not be equal). A weld of one rod's end to the "
+    "next rod's start is the one rod made of both. Rigid bodies feel every gravity load. "
+    "Examples: `examples/assembly_*.toml`.")
+
 #: how the command line and the Python API change keys (shown by both renderings)
 OVERRIDES = (
     "Any key can be changed without editing the file: on the command line with `--set "
@@ -407,12 +421,146 @@ OVERRIDES = (
     "value is checked as in a problem file.")
 
 
-def by_table() -> dict[str, list[Key]]:
-    """The catalogue grouped by table, in file order."""
+_POINT = ('a point: NAME.start, NAME.end or NAME@S (S: arc length in m from the rod\'s '
+          'start, 0 ... its length)')
+_MATRIX6 = ("6x6, symmetric (to 1e-9 of its largest entry) positive semi-definite; "
+            "translation then rotation, as a section's matrices")
+
+#: the keys of an assembly file (``[rods.NAME]`` tables; :mod:`runtime.problem.assembly`),
+#: beside those of a single rod (:data:`KEYS`), which each rod's table holds
+ASSEMBLY_KEYS: tuple[Key, ...] = (
+    # -- top level ----------------------------------------------------------------------
+    _k("", "name", "-", "file name", "text", "the assembly's name (results folder "
+       "default)"),
+    _k("", "description", "-", '""', "text", "one line shown in reports"),
+    _k("", "rods", "-", "required", "at least one table [rods.NAME]; NAME: letters, "
+       "digits, _ and -, starting with a letter or _, not ground", "the rods, in file "
+       "order (an assembly file is one with [rods]; [rod], [section], [material], "
+       "[start], [end], [[zones]] beside it are refused: they go into rods.NAME)",
+       invalid={}),
+    _k("", "materials", "-", "-", "tables [materials.NAME] as in a single-rod file; "
+       "only beside a composite section in some rod", "named materials shared by every "
+       "rod's composite sections (a rod may add its own, rods.NAME.materials.X; a name "
+       "in both places must hold the same material)", invalid={"a": {"density": -1.0}}),
+    _k("", "joints", "-", "[]", "an array of tables [[joints]]", "the joints (below)",
+       invalid={"kind": "weld"}),
+    _k("", "bodies", "-", "[]", "an array of tables [[bodies]]", "the rigid bodies "
+       "(below)", invalid={"mass": 1.0}),
+    _k("", "loads", "-", "[]", "an array of tables [[loads]]", "as in a single-rod file, "
+       "with the placement below", invalid={"kind": "gravity"}),
+    _k("", "simulation", "-", "defaults", "the [simulation] table of a single rod",
+       "the run's settings, for the whole assembly", invalid={"t_end": 0.0}),
+    _k("", "statics", "-", "defaults", "the [statics] table of a single rod",
+       "the static solve's settings, for the whole assembly", invalid={"load_steps": 0}),
+    _k("", "analysis", "-", "none", "a table with maxima (below)", "what to analyse",
+       invalid={"maxima": "end.x"}),
+    # -- [rods.NAME] --------------------------------------------------------------------
+    _k("rods.NAME", "rod", "-", "required", "the [rod] table of a single rod (length, "
+       "elements, geometry)", "the rod's length, elements and reference geometry; "
+       "rods.NAME.rod.geometry.origin (m) places its start", invalid={"length": -1.0}),
+    _k("rods.NAME", "section", "-", "a 1 cm square", "the [section] table of a single rod",
+       "the rod's cross-section", invalid={"kind": "hexagon"}),
+    _k("rods.NAME", "material", "-", "the default material", "the [material] table of a "
+       "single rod", "the rod's material", invalid={"youngs_modulus": -1.0}),
+    _k("rods.NAME", "materials", "-", "-", "tables as [materials.NAME]", "named "
+       "materials of this rod's composite sections, beside the shared ones",
+       invalid={"a": {"density": -1.0}}),
+    _k("rods.NAME", "zones", "-", "[]", "[[zones]] of a single rod (from, to on this rod)",
+       "stretches of the rod with their own section or material",
+       invalid=[{"from": 0.0, "to": 99.0, "material": {"tau": 0.0}}]),
+    _k("rods.NAME", "start", "-", '"free" (not "clamped" as in a single-rod file)',
+       "the [start] table of a single rod (kind free, clamped, pinned; motion)",
+       "the rod's end at s = 0 (free: joints hold the rods)", invalid="glued"),
+    _k("rods.NAME", "end", "-", '"free"', "the [end] table of a single rod", "the rod's "
+       "end at s = L", invalid="glued"),
+    # -- [[joints]] ---------------------------------------------------------------------
+    _k("joints", "kind", "-", "required", "weld, ball, hinge, spring", "weld: all "
+       "relative motion held; ball: the relative position held, rotation free; hinge: "
+       "the position held, relative rotation only about axis; spring: the 6x6 matrices "
+       "on the relative displacement and rotation", invalid="glue"),
+    _k("joints", "between", "-", "required", "two points [P, Q] at the same place in the "
+       "reference configuration (to 1e-9 of the longest rod), or a point and \"ground\" "
+       "(a support or clip at the point's place); " + _POINT.replace("a point: ", "points: "),
+       "what the joint joins; no two joints may join the same points (or the same point "
+       "to ground); a spring's matrices act in P's frame (the point's, when the other is "
+       "ground)", invalid=["nowhere.end", "ground"]),
+    _k("joints", "axis", "-", "required (hinge)", _UNIT_VEC, "the hinge's axis, a "
+       "spatial direction in the reference configuration", invalid=[0, 0, 0],
+       kinds=("hinge",)),
+    _k("joints", "rotational_stiffness", "N m/rad", "0", ">= 0", "a torsion spring on "
+       "the free relative rotation (about the axis of a hinge)", invalid=-1.0,
+       kinds=("ball", "hinge")),
+    _k("joints", "rotational_viscosity", "N m s/rad", "0", ">= 0", "a rotational "
+       "damper on the free relative rotation", invalid=-1.0, kinds=("ball", "hinge")),
+    _k("joints", "stiffness_matrix", "N/m, N/rad, N m/rad", "required (spring)", _MATRIX6,
+       "the spring's stiffness on the relative displacement (m) and rotation (rad) of "
+       "Q against P in P's frame", invalid=[[1.0]], kinds=("spring",)),
+    _k("joints", "viscosity_matrix", "N s/m, N s/rad, N m s/rad", "zeros", _MATRIX6,
+       "the spring's viscosity on the rates of the same", invalid=[[1.0]],
+       kinds=("spring",)),
+    # -- [[bodies]] ---------------------------------------------------------------------
+    _k("bodies", "name", "-", '"bodyK" (K: its index)', "text, distinct", "the body's "
+       "name", invalid=""),
+    _k("bodies", "at", "-", "required", _POINT, "the point the body is welded at",
+       invalid="nowhere.end"),
+    _k("bodies", "mass", "kg", "required", ">= 0", "the body's mass", invalid=-1.0),
+    _k("bodies", "inertia", "kg m^2", "zeros (a point mass)", "3x3 symmetric positive "
+       "semi-definite, or 3 numbers (its diagonal)", "the rotary inertia about the mass "
+       "centre, in the rod's reference frame at the point (the frame of its segment)",
+       invalid=[-1.0, 1.0, 1.0]),
+    _k("bodies", "offset", "m", "[0, 0, 0]", _VEC, "the mass centre from the point, in "
+       "the same frame", invalid=[0, 0]),
+    # -- [[loads]] in an assembly -------------------------------------------------------
+    _k("loads", "at", "-", "required (force, moment)", _POINT + " (not s, not a node "
+       "index)", "where a point load acts", invalid="nowhere.end",
+       kinds=("force", "moment")),
+    _k("loads", "rods", "-", "every rod", "a non-empty list of rod names",
+       "the rods a gravity or distributed load acts on (a body feels every gravity "
+       "load, whatever its rods)", invalid=["nowhere"], kinds=("gravity", "distributed")),
+    # -- [analysis] in an assembly ------------------------------------------------------
+    _k("analysis", "maxima", "-", "none", "NAME.end.x, NAME.start.y, NAME@S.z, ...: a "
+       "point and a coordinate", "the coordinate whose maxima give log decrements and "
+       "damping ratios (as for a single rod)", invalid="end.x"),
+)
+
+#: which command-line aliases an assembly takes and how
+ASSEMBLY_OVERRIDES = (
+    "In an assembly, PATH runs through the file's tables: `rods.NAME.material."
+    "youngs_modulus`, `rods.NAME.rod.elements`, `joints.0.rotational_stiffness`, "
+    "`bodies.0.mass`, `loads.1.vector`, `materials.NAME.tau_S` (a shared material), "
+    "`simulation.t_end`; the index one past the last entry of `joints`, `bodies` or "
+    "`loads` appends one. The short aliases (`--tau`, `--tau-S`, `--tau-B`, `--E`, "
+    "`--nu`, `--n-elements` and the names tau, E, nu, density, damping, n_elements, "
+    "width, height, radius, shear_correction of sweeps) are broadcast: they set their "
+    "key on every rod (`--n-elements 20` gives each rod 20 elements). The simulation "
+    "and statics aliases (`--t-end`, `--rtol`, `--atol`, `--max-order`, "
+    "`--error-control`, min_step, output_step, load_steps) set the one top-level key. "
+    "`length` and `--tip-force` are refused in an assembly: set rods.NAME.rod.length or "
+    "loads.K.vector.")
+
+
+def by_table(keys: tuple[Key, ...] = KEYS) -> dict[str, list[Key]]:
+    """The catalogue (or ``keys``) grouped by table, in file order."""
     out: dict[str, list[Key]] = {}
-    for k in KEYS:
+    for k in keys:
         out.setdefault(k.table, []).append(k)
     return out
+
+
+def _table_rows(keys: list[Key]) -> list[str]:
+    lines = ["| key | kinds | unit | default | allowed | meaning |", "|---|---|---|---|---|---|"]
+    for k in keys:
+        cells = (f"`{k.name}`", ", ".join(k.kinds) or "all", k.unit, k.default,
+                 k.allowed, k.doc)
+        lines.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
+    return lines + [""]
+
+
+#: the assembly part's headings, by table
+_ASSEMBLY_HEADS = {"": "assembly file: top level", "rods.NAME": "`[rods.NAME]` (each rod)",
+                   "joints": "`[[joints]]`", "bodies": "`[[bodies]]`",
+                   "loads": "`[[loads]]` in an assembly",
+                   "analysis": "`[analysis]` in an assembly"}
 
 
 def markdown() -> str:
@@ -425,27 +573,34 @@ def markdown() -> str:
                 else f"`[[{table}]]`" if table in ("loads", "material.branches",
                                                    "section.regions")
                 else f"`[{table}]`")
-        lines += [f"### {head}", "", "| key | kinds | unit | default | allowed | meaning |",
-                  "|---|---|---|---|---|---|"]
-        for k in keys:
-            cells = (f"`{k.name}`", ", ".join(k.kinds) or "all", k.unit, k.default,
-                     k.allowed, k.doc)
-            lines.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
-        lines.append("")
+        lines += [f"### {head}", ""] + _table_rows(keys)
+    lines += ["### Assemblies: several rods, joints, bodies", "", ASSEMBLY_INTRO, "",
+              ASSEMBLY_OVERRIDES, ""]
+    for table, keys in by_table(ASSEMBLY_KEYS).items():
+        lines += [f"### {_ASSEMBLY_HEADS[table]}", ""] + _table_rows(keys)
     return "\n".join(lines)
 
 
 def text() -> str:
     """The reference as plain text (``kvrod problem-keys``): one key per entry."""
-    out = []
-    for k in KEYS:
-        path = f"<time>.{k.name}" if k.table == "<time>" else k.path
-        kinds = f" [{', '.join(k.kinds)}]" if k.kinds else ""
-        out.append(f"{path}{kinds}  unit: {k.unit}; default: {k.default}; allowed: "
-                   f"{k.allowed}\n    {k.doc}")
     import textwrap
 
-    out += ["", "changing keys (--set, overrides):",
-            textwrap.fill(OVERRIDES.replace("`", ""), 88, initial_indent="    ",
-                          subsequent_indent="    ")]
+    def entries(keys: tuple[Key, ...], prefix: str = "") -> list[str]:
+        out = []
+        for k in keys:
+            path = f"<time>.{k.name}" if k.table == "<time>" else prefix + k.path
+            kinds = f" [{', '.join(k.kinds)}]" if k.kinds else ""
+            out.append(f"{path}{kinds}  unit: {k.unit}; default: {k.default}; allowed: "
+                       f"{k.allowed}\n    {k.doc}")
+        return out
+
+    def para(text: str) -> str:
+        return textwrap.fill(text.replace("`", ""), 88, initial_indent="    ",
+                             subsequent_indent="    ")
+
+    out = entries(KEYS)
+    out += ["", "changing keys (--set, overrides):", para(OVERRIDES)]
+    out += ["", "assemblies (a file with [rods.NAME] tables):", para(ASSEMBLY_INTRO),
+            para(ASSEMBLY_OVERRIDES), ""]
+    out += entries(ASSEMBLY_KEYS, prefix="assembly: ")
     return "\n".join(out)

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from runtime.errors import ParameterError
+from runtime.problem.assembly import Assembly
 from runtime.problem.schema import ALIASES, Problem
 
 #: the built-in examples (a source checkout's examples/ folder)
@@ -45,11 +46,16 @@ def read_toml(path: Path, error: type[ValueError] = ProblemFileError,
 
 
 def _is_problem(doc: Mapping[str, Any]) -> bool:
-    return "rod" in doc
+    """A problem file: one rod (``[rod]``) or an assembly of rods (``[rods.NAME]``)."""
+    return "rod" in doc or "rods" in doc
+
+
+def _is_assembly(doc: Mapping[str, Any]) -> bool:
+    return "rods" in doc
 
 
 def builtin_names() -> list[str]:
-    """Names of the built-in example problems."""
+    """Names of the built-in example problems (single rods and assemblies)."""
     if not EXAMPLES_DIR.is_dir():
         return []
     names = []
@@ -84,15 +90,17 @@ def problem_path(spec: str | Path) -> Path:
                            "give a problem file (.toml)")
 
 
-def load_problem(spec: str | Path | Problem,
-                 overrides: Mapping[str, Any] | None = None) -> Problem:
+def load_problem(spec: str | Path | Problem | Assembly,
+                 overrides: Mapping[str, Any] | None = None) -> Problem | Assembly:
     """A problem by file, built-in name or object, with overrides applied (all checked).
 
     Parameters
     ----------
-    spec : str, Path or Problem
+    spec : str, Path, Problem or Assembly
         A problem file (TOML), the name of a built-in problem (``examples/NAME.toml``,
-        e.g. ``"cantilever"``) or a :class:`~runtime.problem.schema.Problem`.
+        e.g. ``"cantilever"``), a :class:`~runtime.problem.schema.Problem` or an
+        :class:`~runtime.problem.assembly.Assembly`. A file with ``[rods.NAME]`` tables
+        is an assembly of rods.
     overrides : mapping, optional
         ``{"material.tau": 0.02, "rod.elements": 30}``: dotted paths or the command
         line's short names (:data:`~runtime.problem.schema.ALIASES`), applied in order.
@@ -103,11 +111,13 @@ def load_problem(spec: str | Path | Problem,
         index one past the last entry appends a whole entry
         (``{"loads.1": {"kind": "force", "vector": [0, 0, 1.0]}}`` to a problem with one
         load; the same for ``material.branches``). Every value is checked exactly as in
-        a problem file.
+        a problem file. For an assembly: paths through ``rods.NAME``, ``joints``,
+        ``bodies``, ``loads``; the short names set their key on every rod
+        (:meth:`~runtime.problem.assembly.Assembly.with_overrides`).
 
     Returns
     -------
-    Problem
+    Problem or Assembly
 
     Raises
     ------
@@ -116,16 +126,17 @@ def load_problem(spec: str | Path | Problem,
     ParameterError
         A value is outside its allowed range (the message names the key and the file).
     """
-    if isinstance(spec, Problem):
+    if isinstance(spec, (Problem, Assembly)):
         return spec.with_overrides(overrides or {})
     path = problem_path(spec)
     doc, _ = read_toml(path)
     if not _is_problem(doc):
         hint = (" (a study: run it with `kvrod sweep`)" if "grid" in doc or "points" in doc
-                else " (no [rod] table)")
+                else " (no [rod] or [rods.NAME] table)")
         raise ProblemFileError(f"{path}: not a problem file{hint}")
+    kind = Assembly if _is_assembly(doc) else Problem
     try:
-        problem = Problem.from_mapping(doc, base=path.parent.resolve(), name=path.stem)
+        problem = kind.from_mapping(doc, base=path.parent.resolve(), name=path.stem)
     except ParameterError as exc:
         raise ParameterError(exc.name, exc.value, exc.allowed, where=str(path)) from None
     return problem.with_overrides(overrides or {})
@@ -138,7 +149,7 @@ def load_config(path: Path) -> tuple[str, dict[str, Any]]:
         [parameters]          # aliases: tau, n_elements, youngs_modulus, ...
         tau = 0.04
 
-    A problem file (with ``[rod]``) is returned as (its path, {}).
+    A problem file (with ``[rod]`` or ``[rods.NAME]``) is returned as (its path, {}).
     """
     path = Path(path)
     doc, _ = read_toml(path, what="config file")

@@ -11,6 +11,8 @@ A :class:`Problem` is a frozen tree of dataclasses::
     simulation  Simulation(t_end, rtol, atol, ...)  [simulation]
     statics     Statics(load_steps, report)         [statics]
     analysis    Analysis(maxima)                    [analysis]
+    zones       tuple[Zone, ...]                    [[zones]]
+    points      tuple[float, ...]                   (an assembly's named points on the rod)
 
 :meth:`Problem.from_mapping` builds it from a TOML table (every value checked, every
 error naming its key, value and allowed range), :meth:`Problem.to_mapping` writes it back
@@ -18,6 +20,8 @@ error naming its key, value and allowed range), :meth:`Problem.to_mapping` write
 ``{"material.tau": 0.02, "rod.elements": 30}`` (dotted paths, or the short
 :data:`ALIASES` of the command line and of sweeps) through the same checks. The problem
 file reference lists every key: ``kvrod problem-keys`` (:mod:`runtime.problem.keys`).
+A file of several rods (``[rods.NAME]`` tables, joints, bodies) is an
+:class:`~runtime.problem.assembly.Assembly` of such problems.
 """
 
 from __future__ import annotations
@@ -218,6 +222,10 @@ class Problem:
     base: Path | None = field(default=None, compare=False, repr=False)
     #: stretches of the rod with their own section or material (runtime.problem.zones)
     zones: tuple[Any, ...] = ()
+    #: arc lengths (m) of the named points of an assembly on this rod (its joints', bodies'
+    #: and point loads' points: runtime.problem.assembly); the rod has a node at each. A
+    #: single-rod file has none (and to_mapping does not write them)
+    points: tuple[float, ...] = ()
 
     def __post_init__(self) -> None:
         from runtime.problem.sections import LENGTH_MAX, LENGTH_MIN, LENGTH_RANGE
@@ -232,6 +240,10 @@ class Problem:
             raise ParameterError("rod.length", self.rod.length, LENGTH_RANGE)
         if not composite:
             self._check_matrices()
+        object.__setattr__(self, "points", tuple(
+            C.number("points", s, low=0.0, high=self.rod.length * (1 + 1e-12),
+                     allowed=f"arc lengths 0 ... {self.rod.length:g} m (the rod length)")
+            for s in self.points))
         for ld in self.loads:
             if ld.s is not None and ld.s > self.rod.length * (1 + 1e-12):
                 raise ParameterError("loads.s", ld.s, f"0 ... rod length {self.rod.length:g} m")
@@ -584,15 +596,17 @@ class Problem:
         return 5
 
     def breakpoints(self) -> tuple[float, ...]:
-        """Arc lengths (m) where the rod must have a node: the zone boundaries and the
-        points where point loads act by arc length (``loads.s``)."""
+        """Arc lengths (m) where the rod must have a node: the zone boundaries, the
+        points where point loads act by arc length (``loads.s``) and an assembly's named
+        points on the rod (``points``)."""
         out = [b for z in self.zones for b in (z.start, z.end)]
         out += [ld.s for ld in self.loads if ld.s is not None]
+        out += list(self.points)
         return tuple(out)
 
     def node_arc_lengths(self) -> np.ndarray:
         """Arc lengths (N+1,) of the nodes (m): uniform, or with a node at every
-        breakpoint (:meth:`breakpoints`; :func:`~runtime.problem.geometry.node_arc_lengths`)."""
+        breakpoint (:meth:`breakpoints`; ``runtime.problem.geometry.node_arc_lengths``)."""
         s = self.__dict__.get("_s_nodes")
         if s is None:
             s = node_arc_lengths(self.rod.length, self.rod.elements, self.breakpoints())
@@ -823,8 +837,10 @@ class Problem:
 
     @classmethod
     def from_mapping(cls, m: Mapping[str, Any], base: Path | None = None,
-                     name: str = "problem") -> Problem:
-        """Build and check a problem from a TOML table (see the module docstring)."""
+                     name: str = "problem", points: tuple[float, ...] = ()) -> Problem:
+        """Build and check a problem from a TOML table (see the module docstring);
+        ``points``: the arc lengths of an assembly's named points on the rod (the
+        field ``points``, not a key of the table)."""
         m = C.table("", m)
         C.no_unknown_keys("", m, TOP_KEYS)
         rod_m = dict(C.table("rod", m.get("rod", {})))
@@ -864,6 +880,7 @@ class Problem:
             analysis=_settings(Analysis, "analysis", m.get("analysis")),
             base=base,
             zones=zones,
+            points=tuple(points),
         )
 
     def with_overrides(self, overrides: Mapping[str, Any]) -> Problem:
@@ -891,7 +908,8 @@ class Problem:
         for key, value in overrides.items():
             used[apply_override(m, key, value)] = key
         try:
-            return Problem.from_mapping(m, base=self.base, name=self.name)
+            return Problem.from_mapping(m, base=self.base, name=self.name,
+                                        points=self.points)
         except ParameterError as exc:   # name the value as the caller wrote it
             if exc.name in used and used[exc.name] != exc.name:
                 raise ParameterError(f"{used[exc.name]} ({exc.name})", exc.value,

@@ -112,7 +112,7 @@ class SimulationResult:
     #: every maximum of ``analysis.maxima`` (times, s; displacements from the reference, m)
     maxima_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
     maxima_x: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    #: the value the maxima vibrate about (:mod:`runtime.simulate.vibration_centre`)
+    #: the value the maxima vibrate about (``runtime.simulate.vibration_centre``)
     centre: VibrationCentre | None = None
     #: per held end ("start", "end"): the support's "force" (N) and "moment" (N m, about
     #: the held node) on the rod, spatial, (3, n) on the output grid (inertia included)
@@ -155,7 +155,7 @@ class SimulationResult:
     def centre_maxima(self) -> None:
         """The amplitudes of the maxima about the vibration's centre: ``peaks_t``,
         ``peaks_x`` are the maxima above the equilibrium the rod vibrates about, minus its
-        value (:func:`~runtime.simulate.vibration_centre.vibration_centre`)."""
+        value (``runtime.simulate.vibration_centre.vibration_centre``)."""
         if self.model is None or not self.problem.analysis.maxima or self.y_last is None:
             return
         if self.maxima_t.size == 0:
