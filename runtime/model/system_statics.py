@@ -43,6 +43,29 @@ class _SparseLU:
         return self._lu.solve(np.asarray(b, dtype=float))
 
 
+class _Gauge:
+    """A penalty ``K_g Z Z^T d`` on the reduced displacement d from the gauge's state
+    along the orthonormal free motions Z (see :meth:`SystemStatics.hold_rigid_motions`);
+    K_g the static stiffness's mean singular value scale, so it neither dominates nor
+    vanishes in the factorisation."""
+
+    def __init__(self, st: SystemStatics, y0: np.ndarray, Z: np.ndarray, k: float) -> None:
+        self.st, self.y0, self.Z, self.k = st, np.array(y0, dtype=float), Z, k
+
+    def force(self, y: np.ndarray) -> np.ndarray:
+        d = self.st.reduced_difference(y, self.y0)
+        return self.k * (self.Z @ (self.Z.T @ d))
+
+    def stiffness(self):
+        import scipy.sparse as sp
+
+        return sp.csc_matrix(self.k * (self.Z @ self.Z.T))
+
+    def describe(self) -> str:
+        return (f"{self.Z.shape[1]} rigid motion(s) the supports leave free and the loads "
+                "do not move are held where they start (a penalty projected on them)")
+
+
 class SystemStatics:
     """:class:`~runtime.solvers.protocols.StaticProblem` of a :class:`SystemModel` (see the
     module docstring). Use inside ``with model.statics(time):``."""
@@ -103,32 +126,91 @@ class SystemStatics:
         y0[self.model.velocity_mask] = 0.0
         return y0
 
+    #: a singular value of the unloaded static stiffness below this fraction of the
+    #: largest is a rigid motion the supports leave free
+    RIGID_RTOL = 1e-9
+    #: largest reduced problem whose free motions are found (dense SVD)
+    RIGID_DENSE_MAX = 4000
+
     def hold_rigid_motions(self, y: np.ndarray) -> float:
-        """Check that statics from ``y`` is well posed: the static stiffness at ``y`` is
-        regular unloaded (then load stepping starts at 0, as for a rod), or else under the
-        full load (a mechanism that its loads hold, a pendulum hanging at ``y``: Newton
-        starts at the full load). Returns that first load factor; raises
-        :class:`~runtime.errors.IllPosedError` (before any work) when the supports and
-        loads leave a rigid motion free."""
+        """Check that statics from ``y`` is well posed and hold the rigid motions that
+        neither supports nor loads resist. Returns the load factor Newton starts from.
+
+        The unloaded static stiffness at ``y``: regular, statics starts unloaded (0, as a
+        rod's). Else its null space Z (the free rigid motions; dense SVD): the part along
+        which the loads do no work is held by a gauge (a penalty on the reduced
+        displacement from ``y`` projected on it, ``K_g Z Z^T``; it reacts only to a net
+        load along those motions, which there is none of: the spin of a beam on pins
+        about their line); a motion the loads work along (a pendulum not hanging
+        straight, a mechanism the loads move) is left to the loaded problem: the
+        stiffness under the full load must then be regular (1: Newton starts loaded) or
+        the caller must first move the mechanism (``pseudo_transient``). Raises
+        :class:`~runtime.errors.IllPosedError` (before any work) when the problem is too
+        large for the analysis and singular."""
+        self.gauge = None
         saved = self.load_scale
         try:
-            for lam in (0.0, 1.0):
-                self.load_scale = lam
-                if self.static_factor(y).info == 0:
-                    return lam
+            self.load_scale = 0.0
+            J0 = self.static_jacobian_sparse(y)
+            if _SparseLU(J0).info == 0:
+                return 0.0
+            if self.n_static > self.RIGID_DENSE_MAX:
+                raise IllPosedError(
+                    f"statics of this assembly: its supports leave a rigid motion free (the "
+                    f"static stiffness is singular; the free motions of {self.n_static} "
+                    "unknowns are not analysed); hold it with a joint to \"ground\" or a "
+                    "clamped or pinned end, or simulate it (simulation.initial = "
+                    "\"reference\")")
+            Jd = J0.toarray()
+            _, sv, vt = np.linalg.svd(Jd)
+            Z = vt[sv <= self.RIGID_RTOL * sv[0]].T                 # (n_static, k)
+            r0, r1 = np.empty(self.n_static), np.empty(self.n_static)
+            self.static_residual(y, r0)
+            self.load_scale = 1.0
+            self.static_residual(y, r1)
+            f = r1 - r0
+            c = Z.T @ f
+            free = Z
+            if np.linalg.norm(c) > 1e-9 * max(np.linalg.norm(f), 1e-300):
+                u = Z @ (c / np.linalg.norm(c))                        # the loaded motion
+                free = Z - np.outer(u, u @ Z)
+                q, rr, _ = np.linalg.svd(free, full_matrices=False)
+                free = q[:, rr > 1e-8]
+            if free.shape[1]:
+                self.gauge = _Gauge(self, y, free, float(sv[0]) / self.n_static)
+            if free.shape[1] == Z.shape[1]:
+                return 0.0
+            if self.static_factor(y).info == 0:       # at the full load, with the gauge
+                return 1.0
         finally:
             self.load_scale = saved
         raise IllPosedError(
-            "statics of this assembly: its supports leave a rigid motion free (the static "
-            "stiffness is singular, unloaded and loaded); hold it with a joint to "
-            "\"ground\" or a clamped or pinned end, or simulate it (simulation.initial = "
-            "\"reference\")")
+            "statics of this assembly: its loads act along a rigid motion its supports "
+            "leave free and do not hold it where it starts (a mechanism out of its "
+            "equilibrium); hold it with a joint to \"ground\" or a clamped or pinned end, "
+            "or simulate it (simulation.initial = \"reference\")")
 
     def static_residual(self, y: np.ndarray, out: np.ndarray) -> None:
         m = self.model
         r = np.empty(m.n)
         m.residual(self.time, self.at_rest(y), m._zeros, r)
         out[:] = r[self.static_rows]
+        if self.gauge is not None:
+            out += self.gauge.force(y)
+
+    def reduced_difference(self, y: np.ndarray, y0: np.ndarray) -> np.ndarray:
+        """The reduced coordinates of y relative to y0 (n_static,): the free nodes'
+        displacements, the segments' rotation vectors (material, 2 Im(conj(p0) p)/|.|)."""
+        m = self.model
+        dx = np.zeros(self.n_static)
+        for (r, i), c in self._phi_col.items():
+            ix = m.phi_index[r][i]
+            dx[c:c + 3] = y[ix] - y0[ix]
+        p, p0 = y[self._p_index], y0[self._p_index]
+        rel = quat_mul(p0 * np.array([1.0, -1.0, -1.0, -1.0]), p)
+        rel /= (np.linalg.norm(p, axis=1) * np.linalg.norm(p0, axis=1))[:, None]
+        dx[self._theta_cols[:, None] + np.arange(3)] = 2.0 * rel[:, 1:]
+        return dx
 
     def tangent(self, y: np.ndarray):
         """T (n x n_static): dy = T dx (positions, slaves with their masters; rotations
@@ -152,8 +234,12 @@ class SystemStatics:
         return (Jd @ self.tangent(y0)).tocsc()
 
     def static_factor(self, y: np.ndarray) -> _SparseLU:
-        """The factors of the static Jacobian at y (``solve_static`` uses them)."""
-        return _SparseLU(self.static_jacobian_sparse(y))
+        """The factors of the static Jacobian at y (``solve_static`` uses them), the
+        gauge's stiffness included."""
+        J = self.static_jacobian_sparse(y)
+        if self.gauge is not None:
+            J = J + self.gauge.stiffness()
+        return _SparseLU(J)
 
     def static_jacobian_band(self, y, out_ab) -> None:
         raise NotImplementedError("an assembly's static Jacobian is sparse (static_factor)")

@@ -266,8 +266,9 @@ def static_equilibrium(problem, amap: AssemblyMap, t: float = 0.0,
                 first = st.hold_rigid_motions(y0)
             except IllPosedError:
                 # singular where it starts, also loaded: a mechanism its loads hold only
-                # once they have stressed it (a pendulum's tension): pseudo-transient
-                # continuation reaches that state, Newton finishes
+                # once they have moved or stressed it (a pendulum released at an angle, or
+                # hanging unstretched): pseudo-transient continuation reaches that state,
+                # Newton finishes
                 y0 = pseudo_transient(st, y0)
                 first = 1.0
             res = solve_static(st, y0, load_steps=problem.statics.load_steps,
