@@ -29,7 +29,54 @@ def _static_lines(st: dict) -> list[str]:
     return lines
 
 
+def _joint_lines(joints: list[dict], run: bool) -> list[str]:
+    """What `kvrod static` and `kvrod simulate` print of an assembly's joints: the force
+    and moment each exerts on the rod of its first point (static, or the final and largest
+    of a run)."""
+    out = []
+    for j in joints:
+        head = f"  joint {j['index']} ({j['kind']} {' - '.join(j['between'])}):"
+        if "force" not in j:
+            out.append(head + " no samples")
+            continue
+        if run:
+            f, m = j["force"], j["moment"]
+            out.append(f"{head} final force [N] {[round(v, 9) for v in f['final']]}, moment "
+                       f"[N m] {[round(v, 9) for v in m['final']]}; largest |force| "
+                       f"{f['max_norm']:.6g} N at t = {f['t_of_max']:.6g} s")
+        else:
+            out.append(f"{head} force [N] {[round(v, 9) for v in j['force']]}, moment "
+                       f"[N m] {[round(v, 9) for v in j['moment']]}")
+    return out
+
+
+def _print_assembly(s: dict, out: Path, files: str) -> None:
+    a = s["assembly"]
+    print(f"{s['problem']}: an assembly of {len(a['rods'])} rods ({', '.join(a['rods'])}), "
+          f"{a['joints']} joints, {a['bodies']} bodies")
+    if s.get("static"):
+        print(f"static: Newton iterations {s['static']['newton_iterations']}")
+    for k, v in s.get("ends", {}).items():
+        print(f"  {k.replace('/', '.')} [m]: {[round(x, 9) for x in v]}")
+    print("\n".join(_joint_lines(s.get("joints", []), True)))
+    for name, b in s.get("bodies", {}).items():
+        print(f"  body {name}: position [m] {[round(x, 9) for x in b['position']]}")
+    if s.get("peaks"):
+        c = s.get("vibration_centre") or {}
+        print(f"maxima: {len(s['peaks'])}, damping ratios: "
+              f"{[round(v, 4) for v in s['damping_ratios']]} (about the {c.get('source')})")
+    eb = s["energy_balance_max_rel"]
+    print(f"energy balance max rel. error: {eb:.2e}" if eb is not None
+          else f"energy balance: not applicable ({s['energy_audit']['note']})")
+    print(f"counters: {s['counters']}, wall time {s['wall_time_s']:.2f} s")
+    print(f"wrote {out}/ {files}")
+
+
 def _print_summary(s: dict, out: Path, vtk: bool, plots: bool) -> None:
+    if "assembly" in s:
+        _print_assembly(s, out, "summary.json, series.npz, problem.toml"
+                        + (", vtk/*.pvd" if vtk else "") + (", *.png" if plots else ""))
+        return
     if s["static"]["tip"] is not None:
         print("\n".join(_static_lines(s["static"])))
     if s.get("peaks"):
@@ -89,6 +136,20 @@ def _cmd_static(args) -> int:
     out = Path(args.out) if args.out else Path("results") / f"{safe_name(problem.name)}-static"
     summary, _, _ = static_and_write(problem, out, overwrite=args.overwrite)
     st = summary["static"]
+    if "assembly" in summary:
+        print(f"{summary['problem']}: static equilibrium of an assembly of "
+              f"{len(summary['assembly']['rods'])} rods (Newton iterations "
+              f"{st['newton_iterations']})")
+        for k, v in st["ends"].items():
+            print(f"  {k} [m]: {[round(x, 9) for x in v]}")
+        print("\n".join(_joint_lines(summary["joints"], False)))
+        for name, b in summary.get("bodies", {}).items():
+            print(f"  body {name}: position [m] {[round(x, 9) for x in b['position']]}")
+        print(f"wrote {out}/ summary.json, static.npz, problem.toml")
+        if summary["status"] != "finished":
+            print(f"kvrod static: {summary['message']}", file=sys.stderr)
+            return 1
+        return 0
     print("\n".join(_static_lines(st)))
     for p in st["path"][:-1]:
         print(f"  at load factor {p['load_factor']:g}: tip [m] {p['tip']}")
