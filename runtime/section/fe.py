@@ -106,8 +106,11 @@ class Operator:
         ne, nq, na, nc = self.phi.shape
         nj, k = self.D.shape[1], u.shape[-1]
         phiT = self.phi.transpose(0, 1, 3, 2).reshape(ne, nq * nc, na)
-        grad = np.matmul(phiT, u.reshape(ne, na, nj * k)).reshape(ne, nq, nc * nj, k)
-        return np.matmul(self.D.transpose(0, 2, 1).reshape(6, nc * nj), grad)
+        grad = np.matmul(phiT, u.reshape(ne, na, nj * k)).reshape(ne * nq, nc * nj, k)
+        # one product with the selectors for all points: (6, nc nj) @ (nc nj, ne nq k)
+        cols = grad.transpose(1, 0, 2).reshape(nc * nj, ne * nq * k)
+        out = self.D.transpose(0, 2, 1).reshape(6, nc * nj) @ cols
+        return out.reshape(6, ne, nq, k).transpose(1, 2, 0, 3)
 
 
 @dataclass
@@ -125,16 +128,16 @@ class Geometry:
 def geometry(nodes: np.ndarray, elements: np.ndarray) -> Geometry:
     N, dNr = shape_functions(QUAD_L)
     xe = nodes[elements]                                   # (ne, 6, 2)
-    J = np.einsum("qab,eac->eqcb", dNr, xe)                # J[c, b] = dx_c / dxi_b
+    J = np.matmul(xe.transpose(0, 2, 1)[:, None], dNr)     # J[c, b] = dx_c / dxi_b
     det = J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0]
     if np.any(det <= 0):
         raise RuntimeError("the section mesh has an inverted element")
     inv = np.empty_like(J)
     inv[..., 0, 0], inv[..., 1, 1] = J[..., 1, 1] / det, J[..., 0, 0] / det
     inv[..., 0, 1], inv[..., 1, 0] = -J[..., 0, 1] / det, -J[..., 1, 0] / det
-    dN = np.einsum("qab,eqbc->eqac", dNr, inv)             # dN_a / dx_c
+    dN = np.matmul(dNr, inv)                               # dN_a / dx_c
     w = QUAD_W[None, :] * det
-    x = np.einsum("qa,eac->eqc", N, xe)
+    x = np.matmul(N, xe)
     return Geometry(w=w, x=x, N=N, dN=dN, area=w.sum(axis=1))
 
 
@@ -170,9 +173,11 @@ class ElementMaterial:
         return out
 
     def _form_points(self, g: Geometry, P: np.ndarray, R: np.ndarray) -> np.ndarray:
+        # per element: the material on all points' strains at once, then the point sum
         ne, nq = g.w.shape
-        MR = np.matmul(self.regular[:, None], R).reshape(ne, nq * 6, -1)
-        wP = (g.w[:, :, None, None] * P).reshape(ne, nq * 6, -1)
+        Rt = R.transpose(0, 2, 1, 3).reshape(ne, 6, -1)                # (ne, 6, nq r)
+        MR = np.matmul(self.regular, Rt).reshape(ne, 6 * nq, -1)
+        wP = (g.w[:, None, :, None] * P.transpose(0, 2, 1, 3)).reshape(ne, 6 * nq, -1)
         return np.matmul(wP.transpose(0, 2, 1), MR)
 
     def _form_operators(self, g: Geometry, P: Operator, R: Operator) -> np.ndarray:
