@@ -289,8 +289,9 @@ def solve(mesh: Mesh, stiff: ElementMaterial, visc: ElementMaterial) -> Solution
     CmdX = scatter(np.matmul(Cm, dXe) - np.matmul(Cm.transpose(0, 2, 1), dXe))  # (Cm - Cm^T) dX
     X, Y = bordered(CmdX + L @ dY, np.eye(6) - L.T @ dX)
     # strain of unit resultants at every point: W_theta (ne, nq, 6, 6)
-    W = B.apply(gather(X)) + S.apply(dXe) + Z.apply(np.broadcast_to(Y, (ne, 6, 6)))
+    Zp = Z.at_points()
+    W = B.apply(gather(X)) + S.apply(dXe) + Zp @ Y
     F = stiff.form(g, W, W).sum(axis=0)
     FV = visc.form(g, W, W).sum(axis=0)
-    NV = visc.form(g, Z, W).sum(axis=0)
+    NV = visc.form(g, Zp, W).sum(axis=0)
     return Solution(F=0.5 * (F + F.T), FV=0.5 * (FV + FV.T), NV=NV, n_dofs=n)
