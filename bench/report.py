@@ -10,6 +10,7 @@ from bench.maxwell import QUICK as MAXWELL_QUICK
 from bench.maxwell import markdown as maxwell_md
 from bench.meta import targets_md
 from bench.modes import markdown as modes_md
+from bench.sections import markdown as sections_md
 
 
 def _f(v: Any, fmt: str = ".3f") -> str:
@@ -247,7 +248,7 @@ def kernels_md(doc: dict) -> list[str]:
 #: the README's sections, in order: document name -> Markdown lines
 SECTION_MD = {"integrators": integrators_md, "scaling": scaling_md, "codegen": codegen_md,
               "peers": peers_md, "kernels": kernels_md, "energy_audit": energy_audit_md,
-              "modes": modes_md, "maxwell": maxwell_md}
+              "modes": modes_md, "maxwell": maxwell_md, "sections": sections_md}
 
 
 def markdown(docs: dict) -> str:
@@ -265,7 +266,8 @@ def markdown(docs: dict) -> str:
         lines += ["Quick mode: N = 25 (scaling: 25, 50) only, 2 s simulated, IDAS and CVODES "
                   "on kvrod's compiled kernels (no flat SX compile), SciPy BDF only, no "
                   "codegen timing, PyElastica, kernel table or energy audit; modes at N = 50 "
-                  f"only; the Maxwell rod at N = {MAXWELL_QUICK.N}, {MAXWELL_QUICK.T:g} s. "
+                  f"only; the Maxwell rod at N = {MAXWELL_QUICK.N}, {MAXWELL_QUICK.T:g} s; "
+                  "sections on a 4-ply strip (about 2,000 elements), one round. "
                   "Use the full run for the quoted figures.", ""]
     for name, section_md in SECTION_MD.items():
         if name in docs:

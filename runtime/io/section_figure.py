@@ -40,8 +40,7 @@ def draw_section(result: Any, regions: Sequence[Any], path: Path, title: str = "
     span = np.ptp(nodes, axis=0)
     height = float(np.clip(4.4 * span[1] / max(span[0], 1e-300) + 1.6, 2.6, 5.6))
     fig, ax = plt.subplots(figsize=(7.6, height), layout="constrained")
-    ax.add_collection(PolyCollection(tris, facecolors=[colours(k % 10) for k in
-                                                       np.tile(face, len(_SUB))],
+    ax.add_collection(PolyCollection(tris, facecolors=colours(np.tile(face, len(_SUB)) % 10),
                                      edgecolors="none", alpha=0.55))
     # element edges: corner-midside-corner polylines (curved where the element is)
     edges = np.concatenate([nodes[el[:, [0, 3, 1]]], nodes[el[:, [1, 4, 2]]],

@@ -180,7 +180,14 @@ def _element_materials(mesh: Mesh, mats: Sequence[SectionMaterial], c0: float, v
 def _solve_level(regions: Sequence[Region], mats: Sequence[SectionMaterial], h: float,
                  factors: Sequence[float], origin: np.ndarray, L: float, c0: float,
                  v0: float) -> _Level:
-    mesh = mesh_regions(regions, h, factors)
+    return _solve_mesh(mesh_regions(regions, h, factors), mats, origin, L, c0, v0)
+
+
+def _solve_mesh(mesh: Mesh, mats: Sequence[SectionMaterial], origin: np.ndarray, L: float,
+                c0: float, v0: float) -> _Level:
+    """The analysis on one mesh (region i of material mats[i]), solved in coordinates
+    (x - origin) / L with the stiffness over c0 and the viscosity over v0; SI results."""
+    h = mesh.h
     scaled = Mesh(nodes=(mesh.nodes - origin) / L, elements=mesh.elements,
                   region=mesh.region, h=h / L)
     stiff, visc = _element_materials(mesh, mats, c0, v0)

@@ -1,0 +1,88 @@
+"""The section's sparse Cholesky (runtime/section/cholesky.py) against SciPy's SuperLU and
+dense LAPACK solves: finite-element-like matrices with several unknowns per node, coupled
+and decoupled (independent blocks), nodes with fewer unknowns, many right-hand sides, and
+a matrix that is not positive definite."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from runtime.section.cholesky import NotPositiveDefinite, cholesky
+
+
+def _grid_matrix(nx: int, ny: int, per_node: int, coupled: bool, seed: int = 0):
+    """Sum of random SPD element matrices over the triangles of an nx x ny grid of nodes
+    (per_node unknowns each, node-major), plus a small shift: (A csr, node of each
+    unknown). Uncoupled: component c of a node couples only with component c."""
+    rng = np.random.default_rng(seed)
+    idx = np.arange(nx * ny).reshape(ny, nx)
+    tri = np.concatenate([
+        np.stack([idx[:-1, :-1], idx[:-1, 1:], idx[1:, :-1]], axis=-1).reshape(-1, 3),
+        np.stack([idx[1:, 1:], idx[1:, :-1], idx[:-1, 1:]], axis=-1).reshape(-1, 3)])
+    k = 3 * per_node
+    G = rng.standard_normal((tri.shape[0], k, k))
+    Ke = G @ G.transpose(0, 2, 1)
+    if not coupled:
+        comp = np.tile(np.arange(per_node), 3)
+        Ke = Ke * (comp[:, None] == comp[None, :])
+    dofs = (per_node * tri[:, :, None] + np.arange(per_node)).reshape(-1, k)
+    n = per_node * nx * ny
+    rows = np.repeat(dofs, k, axis=1).ravel()
+    cols = np.tile(dofs, (1, k)).ravel()
+    A = sp.csr_matrix((Ke.ravel(), (rows, cols)), shape=(n, n)) + 1e-3 * sp.eye(n)
+    return A.tocsr(), np.arange(n) // per_node
+
+
+@pytest.mark.parametrize("coupled", [True, False])
+def test_solves_like_superlu(coupled):
+    A, node = _grid_matrix(23, 17, 3, coupled)
+    b = np.random.default_rng(1).standard_normal((A.shape[0], 6))
+    f = cholesky(A, node)
+    x = f.solve(b)
+    ref = spla.splu(A.tocsc()).solve(b)
+    assert np.abs(x - ref).max() <= 1e-9 * np.abs(ref).max()
+    assert np.abs(A @ x - b).max() <= 1e-10 * np.abs(b).max() * np.abs(A).max()
+    # one right-hand side as a vector
+    assert np.allclose(f.solve(b[:, 2]), x[:, 2], rtol=0, atol=1e-12 * np.abs(x).max())
+
+
+def test_decoupled_components_are_factored_apart():
+    """An uncoupled matrix splits into one block per component; the result is the same as
+    for the whole matrix."""
+    A, node = _grid_matrix(15, 11, 3, coupled=False)
+    f = cholesky(A, node)
+    assert len(f._blocks) == 3
+    b = np.random.default_rng(2).standard_normal(A.shape[0])
+    assert np.allclose(f.solve(b), np.linalg.solve(A.toarray(), b), rtol=1e-10, atol=0)
+
+
+def test_pinned_unknowns_and_coo_duplicates():
+    """Some nodes with fewer unknowns (pinned dofs removed), the matrix given as COO with
+    duplicate entries (element contributions not yet summed)."""
+    A, node = _grid_matrix(12, 9, 3, coupled=True, seed=3)
+    keep = np.setdiff1d(np.arange(A.shape[0]), [0, 1, 2, 40, 41, 77])
+    Af = A[keep][:, keep].tocoo()
+    dup = sp.coo_matrix((np.r_[0.5 * Af.data, 0.5 * Af.data], (np.r_[Af.row, Af.row],
+                                                              np.r_[Af.col, Af.col])),
+                        shape=Af.shape)
+    f = cholesky(dup, node[keep])
+    b = np.random.default_rng(4).standard_normal((keep.size, 2))
+    assert np.allclose(f.solve(b), np.linalg.solve(Af.toarray(), b), rtol=1e-10, atol=0)
+
+
+def test_small_and_dense():
+    M = np.array([[4.0, 1.0, 0.5], [1.0, 3.0, 0.2], [0.5, 0.2, 2.0]])
+    f = cholesky(sp.csr_matrix(M), np.zeros(3, dtype=int))
+    assert np.allclose(f.solve(np.eye(3)), np.linalg.inv(M), rtol=1e-13, atol=0)
+    f1 = cholesky(sp.csr_matrix([[2.0]]), np.zeros(1, dtype=int))
+    assert f1.solve(np.array([3.0]))[0] == pytest.approx(1.5)
+
+
+def test_not_positive_definite_raises():
+    A, node = _grid_matrix(8, 8, 2, coupled=True, seed=5)
+    A = (A - 50.0 * sp.eye(A.shape[0])).tocsr()
+    with pytest.raises(NotPositiveDefinite, match="not positive definite"):
+        cholesky(A, node)
