@@ -129,12 +129,11 @@ def _support_reactions(p) -> list[np.ndarray]:
 
 
 def test_propped_cantilever_reactions():
-    """A cantilever (1 m) propped at its end (a ball joint to ground) under its own
-    weight, small: the prop and clamp carry 3qL/8 and 5qL/8 (Timoshenko-exact)."""
+    """examples/assembly_propped_cantilever.toml: a cantilever (1 m) propped at its end (a
+    ball joint to ground) under its own weight: the prop and clamp carry 3qL/8 and 5qL/8
+    (Timoshenko-exact) within 0.5 %."""
     L = 1.0
-    rods = {"beam": steel_rod(L, 64, [1, 0, 0], start={"kind": "clamped"})}
-    p = assembly(rods, joints=[{"kind": "ball", "between": ["beam.end", "ground"]}],
-                 loads=[{"kind": "gravity", "vector": [0.0, 0.0, -9.81]}])
+    p = load_problem("examples/assembly_propped_cantilever.toml")
     q = RHO * A * 9.81
     want = ref.propped_cantilever(q, L=L, EI=E * I, kGA=KAPPA * G * A)
     prop = _support_reactions(p)[0]
@@ -143,15 +142,11 @@ def test_propped_cantilever_reactions():
 
 
 def test_two_span_beam_reactions():
-    """A beam over three supports (pinned at both ends, a ball joint to ground at the
-    middle) under its own weight: 3qL/8, 10qL/8, 3qL/8."""
-    L = 0.5
-    rods = {"beam": steel_rod(2 * L, 64, [1, 0, 0], start={"kind": "pinned"},
-                              end={"kind": "pinned"})}
-    p = assembly(rods, joints=[{"kind": "ball", "between": [f"beam@{L}", "ground"]}],
-                 loads=[{"kind": "gravity", "vector": [0.0, 0.0, -9.81]}])
+    """examples/assembly_two_span.toml: a beam over three supports (pinned at both ends,
+    a ball joint to ground in the middle) under its own weight: 3qL/8, 10qL/8, 3qL/8."""
+    p = load_problem("examples/assembly_two_span.toml")
     q = RHO * A * 9.81
-    want = ref.two_span_beam(q, L1=L, EI=E * I, kGA=KAPPA * G * A)
+    want = ref.two_span_beam(q, L1=0.5, EI=E * I, kGA=KAPPA * G * A)
     middle = _support_reactions(p)[0]
     assert middle[2] == pytest.approx(want["R_B"], rel=5e-3)
 
@@ -173,17 +168,11 @@ def test_double_pendulum_frequencies():
 
 
 def test_closed_ring_in_plane_frequencies():
-    """A full circle (R = 0.2 m, 360 degrees) welded to itself, free: its in-plane
-    flexural frequencies n = 2, 3 against n (n^2 - 1)/sqrt(n^2 + 1) sqrt(EI/(m R^4))
-    within 1 % (the rigid motions come out at 0)."""
+    """examples/assembly_ring.toml: a full circle (R = 0.2 m, 360 degrees) welded to
+    itself, free: its flexural frequencies n = 2, 3, in and out of plane, within 1 % of
+    Hoppe's and Michell's (the rigid motions come out at 0)."""
     Rr = 0.2
-    rods = {"ring": {"rod": {"elements": 72, "geometry": {
-        "kind": "arc", "radius": Rr, "angle": 360.0, "direction": [1.0, 0.0, 0.0],
-        "toward": [0.0, 1.0, 0.0]}},
-        "section": {"kind": "circle", "radius": R},
-        "material": {"density": RHO, "youngs_modulus": E, "poisson_ratio": NU,
-                     "tau": 1e-4}}}
-    p = assembly(rods, joints=[{"kind": "weld", "between": ["ring.end", "ring.start"]}])
+    p = load_problem("examples/assembly_ring.toml")
     w = distinct(md.omega for md in modes_of(p, 16) if md.omega > 1.0)
     ip = ref.ring_inplane_frequencies(np.array([2, 3]), R=Rr, EI=E * I, m=RHO * A)
     op = ref.ring_out_of_plane_frequencies(np.array([2, 3]), R=Rr, EI=E * I,
@@ -193,7 +182,7 @@ def test_closed_ring_in_plane_frequencies():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["harness", "tip_body", "l_frame"])
+@pytest.mark.parametrize("name", ["harness", "tip_body", "l_frame", "soft_arm"])
 def test_assembly_examples_close_their_energy_audit(name):
     p = load_problem(f"examples/assembly_{name}.toml", {"simulation.t_end": 0.3})
     res = simulate_assembly(p)
