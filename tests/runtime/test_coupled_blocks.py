@@ -62,3 +62,42 @@ def test_a_singular_coupled_matrix_is_reported():
     cb.ab[0][0, 0] = cb.ab[1][0, 0] = 1.0
     cb.ev[:] = 1.0
     assert cb.factor() > 0
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_dynamic_couplings_add_to_the_fixed_ones(seed):
+    """Rows that change from one factorisation to the next (contact pairs), some repeating
+    a fixed coupling row: the solve against the dense matrix, twice with other rows."""
+    from runtime.solvers.native.blocks import Block, CoupledBlocks
+
+    rng = np.random.default_rng(100 + seed)
+    blocks = [Block(0, 20, 2, 3), Block(20, 15, 1, 1), Block(35, 12, 3, 2)]
+    N = 47
+    coupling = {3: [30, 40], 25: [1, 44]}
+    cb = CoupledBlocks(blocks, coupling, dynamic_rows=12, dynamic_entries=60)
+    base = np.zeros((N, N))
+    for b, ab in zip(blocks, cb.ab, strict=True):
+        A = _random_band(rng, b.n, b.kl, b.ku)
+        base[b.offset:b.offset + b.n, b.offset:b.offset + b.n] = A
+    for _ in range(2):
+        J = base.copy()
+        for b, ab in zip(blocks, cb.ab, strict=True):
+            dense_to_band(base[b.offset:b.offset + b.n, b.offset:b.offset + b.n], b.kl,
+                          b.ku, ab)
+        for k, (r, c) in enumerate(cb.entries):
+            cb.ev[k] = 30.0 * rng.normal()
+            J[r, c] += cb.ev[k]
+        rows = [3] + rng.choice(N, size=int(rng.integers(1, 10)), replace=False).tolist()
+        entries = []
+        for r in rows:
+            cols = rng.choice(N, size=int(rng.integers(1, 5)), replace=False)
+            row = [(int(c), float(20.0 * rng.normal())) for c in cols]
+            for c, v in row:
+                J[r, c] += v
+            entries.append(row)
+        cb.set_dynamic(rows, entries)
+        assert np.allclose(cb.dense(), J)
+        assert cb.factor() == 0
+        b = rng.normal(size=N)
+        x = cb.solve(b.copy())
+        assert np.allclose(J @ x, b, rtol=0, atol=1e-9 * np.abs(b).max() * np.linalg.cond(J))

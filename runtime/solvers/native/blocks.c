@@ -28,14 +28,46 @@ typedef struct {
     const int *er;                   /* m + 1: E's rows in CSR */
     const int *ec, *ecb;             /* nnz: global column, its block */
     double *ev;                      /* nnz: values (written with the Jacobian) */
-    const int *bs0;                  /* nb + 1: the coupling rows of block b are */
-    const int *bsl;                  /*   bsl[bs0[b] .. bs0[b + 1] - 1] (indices s) */
+    int *bs0;                        /* nb + 1: the coupling rows of block b are */
+    int *bsl;                        /*   bsl[bs0[b] .. bs0[b + 1] - 1] (indices s) */
     double *Z;                       /* columns A^-1 e_s over s's block, at zo[s] */
-    const long long *zo;
+    long long *zo;
     double *C;                       /* m x m column-major: the capacitance, then its LU */
     int *cpiv;                       /* m */
     double *w;                       /* m: work */
+    /* dynamic couplings (contact pairs: rows that change from one Jacobian to the next),
+       appended to the fixed ones as further Woodbury rows (a row may repeat one of S: the
+       two rank updates add): m2 rows srow2, E2 in CSR er2 (m2 + 1), ec2, ev2, written
+       with the Jacobian; at most m2cap rows and nz2cap entries. With m2cap > 0 the
+       arrays Z, zo, C, cpiv, w, bs0, bsl hold m + m2cap rows (zcap doubles of Z), and
+       sblk2, ecb2 are work of m2cap and nz2cap */
+    int m2, m2cap, nz2cap;
+    int *srow2, *er2, *ec2, *sblk2, *ecb2;
+    double *ev2;
+    long long zcap;
+    int mtot;                        /* m + m2 of the last factorisation */
 } kv_blocks;
+
+static int blocks_block_of(const kv_blocks *B, int i)
+{
+    int lo = 0, hi = B->nb;                  /* off[lo] <= i < off[hi] */
+    while (hi - lo > 1) {
+        const int mid = (lo + hi) / 2;
+        if (B->off[mid] <= i) lo = mid; else hi = mid;
+    }
+    return lo;
+}
+
+/* coupling row s of all (fixed, then dynamic): its global row and block */
+static inline int brow(const kv_blocks *B, int s)
+{
+    return s < B->m ? B->srow[s] : B->srow2[s - B->m];
+}
+
+static inline int bblk(const kv_blocks *B, int s)
+{
+    return s < B->m ? B->sblk[s] : B->sblk2[s - B->m];
+}
 
 static int blocks_solve_block(const kv_blocks *B, int b, double *x)
 {
@@ -98,8 +130,36 @@ static void blocks_lu_solve(int m, const double *C, const int *piv, double *x)
     }
 }
 
+/* the rows by block and the offsets of Z's columns for the current coupling rows (the
+   fixed and the dynamic ones); -1 when Z's capacity is exceeded */
+static int blocks_layout(kv_blocks *B)
+{
+    const int M = B->m + B->m2;
+    for (int t = 0; t < B->m2; ++t) B->sblk2[t] = blocks_block_of(B, B->srow2[t]);
+    for (int q = 0; q < (B->m2 ? B->er2[B->m2] : 0); ++q)
+        B->ecb2[q] = blocks_block_of(B, B->ec2[q]);
+    int *cnt = B->bs0;                       /* bs0[b + 1] counts, then prefix sums */
+    for (int b = 0; b <= B->nb; ++b) cnt[b] = 0;
+    for (int s = 0; s < M; ++s) cnt[bblk(B, s) + 1]++;
+    for (int b = 0; b < B->nb; ++b) cnt[b + 1] += cnt[b];
+    long long z = 0;
+    for (int s = 0; s < M; ++s) {
+        const int b = bblk(B, s);
+        B->zo[s] = z;
+        z += B->off[b + 1] - B->off[b];
+    }
+    if (B->m2 && z > B->zcap) return -1;
+    /* bsl: the rows of block b at bs0[b] .. bs0[b + 1] - 1, in order */
+    for (int b = 0, k = 0; b < B->nb; ++b)
+        for (int s = 0; s < M; ++s)
+            if (bblk(B, s) == b) B->bsl[k++] = s;
+    B->mtot = M;
+    return 0;
+}
+
 /* Factorise every block (its ab, filled by the Jacobian), then Z and C. Returns 0; > 0
-   when a block or C is singular (the block's info, or 1 + the step of C). */
+   when a block or C is singular (the block's info, or 1 + the step of C); -1 when the
+   dynamic couplings exceed their capacity. */
 int blocks_factor_raw(kv_blocks *B)
 {
     for (int b = 0; b < B->nb; ++b) {
@@ -110,24 +170,30 @@ int blocks_factor_raw(kv_blocks *B)
                         B->prof[b]);
         if (info) return info;
     }
-    const int m = B->m;
+    if (B->m2cap && blocks_layout(B)) return -1;
+    const int m = B->m2cap ? B->mtot : B->m;
+    B->mtot = m;
     if (m == 0) return 0;
     for (int s = 0; s < m; ++s) {
-        const int b = B->sblk[s];
+        const int b = bblk(B, s);
         const int n = B->off[b + 1] - B->off[b];
         double *z = B->Z + B->zo[s];
         memset(z, 0, sizeof(double) * (size_t)n);
-        z[B->srow[s] - B->off[b]] = 1.0;
+        z[brow(B, s) - B->off[b]] = 1.0;
         blocks_solve_block(B, b, z);
     }
     double *C = B->C;
     memset(C, 0, sizeof(double) * (size_t)m * (size_t)m);
     for (int i = 0; i < m; ++i) {
         C[i + (size_t)i * m] = 1.0;
-        for (int q = B->er[i]; q < B->er[i + 1]; ++q) {
-            const double v = B->ev[q];
+        const int fixed = i < B->m;
+        const int q0 = fixed ? B->er[i] : B->er2[i - B->m];
+        const int q1 = fixed ? B->er[i + 1] : B->er2[i - B->m + 1];
+        for (int q = q0; q < q1; ++q) {
+            const double v = fixed ? B->ev[q] : B->ev2[q];
             if (v == 0.0) continue;
-            const int cb = B->ecb[q], col = B->ec[q] - B->off[cb];
+            const int cb = fixed ? B->ecb[q] : B->ecb2[q];
+            const int col = (fixed ? B->ec[q] : B->ec2[q]) - B->off[cb];
             for (int t = B->bs0[cb]; t < B->bs0[cb + 1]; ++t) {
                 const int s = B->bsl[t];
                 C[i + (size_t)s * m] += v * B->Z[B->zo[s] + col];
@@ -142,19 +208,23 @@ int blocks_factor_raw(kv_blocks *B)
 void blocks_solve_raw(kv_blocks *B, double *x)
 {
     for (int b = 0; b < B->nb; ++b) blocks_solve_block(B, b, x + B->off[b]);
-    const int m = B->m;
+    const int m = B->mtot;
     if (m == 0) return;
     double *w = B->w;
     for (int i = 0; i < m; ++i) {
         double s = 0.0;
-        for (int q = B->er[i]; q < B->er[i + 1]; ++q) s += B->ev[q] * x[B->ec[q]];
+        if (i < B->m)
+            for (int q = B->er[i]; q < B->er[i + 1]; ++q) s += B->ev[q] * x[B->ec[q]];
+        else
+            for (int q = B->er2[i - B->m]; q < B->er2[i - B->m + 1]; ++q)
+                s += B->ev2[q] * x[B->ec2[q]];
         w[i] = s;
     }
     blocks_lu_solve(m, B->C, B->cpiv, w);
     for (int s = 0; s < m; ++s) {
         const double ws = w[s];
         if (ws == 0.0) continue;
-        const int b = B->sblk[s];
+        const int b = bblk(B, s);
         const int n = B->off[b + 1] - B->off[b];
         const double *z = B->Z + B->zo[s];
         double *xb = x + B->off[b];

@@ -23,7 +23,11 @@ class _BlocksStruct(ctypes.Structure):
                 + [("m", ctypes.c_int)]
                 + [(name, ctypes.c_void_p) for name in
                    ("srow", "sblk", "er", "ec", "ecb", "ev", "bs0", "bsl", "Z", "zo", "C",
-                    "cpiv", "w")])
+                    "cpiv", "w")]
+                + [(name, ctypes.c_int) for name in ("m2", "m2cap", "nz2cap")]
+                + [(name, ctypes.c_void_p) for name in
+                   ("srow2", "er2", "ec2", "sblk2", "ecb2", "ev2")]
+                + [("zcap", ctypes.c_longlong), ("mtot", ctypes.c_int)])
 
 
 @dataclass
@@ -49,7 +53,8 @@ class CoupledBlocks:
     :attr:`entries`) before :meth:`factor`).
     """
 
-    def __init__(self, blocks: Sequence[Block], coupling: dict[int, Sequence[int]]) -> None:
+    def __init__(self, blocks: Sequence[Block], coupling: dict[int, Sequence[int]],
+                 dynamic_rows: int = 0, dynamic_entries: int = 0) -> None:
         lib = load()
         if lib is None:
             raise RuntimeError("coupled band blocks need the compiled helpers (a C compiler)")
@@ -100,13 +105,27 @@ class CoupledBlocks:
         for s, b in enumerate(self.sblk):
             bsl[b].append(s)
         self.bs0 = np.array(np.cumsum([0] + [len(x) for x in bsl]), dtype=np.int32)
-        self.bsl = np.array([s for x in bsl for s in x] or [0], dtype=np.int32)
+        flat = [s for x in bsl for s in x]
+        self.bsl = np.zeros(max(len(flat) + int(dynamic_rows), 1), dtype=np.int32)
+        self.bsl[:len(flat)] = flat
         sizes = [self.blocks[b].n for b in self.sblk]
-        self.zo = np.array(np.cumsum([0] + sizes[:-1]) if m else [0], dtype=np.int64)
-        self.Z = np.zeros(max(int(sum(sizes)), 1))
-        self.C = np.zeros(max(m * m, 1))
-        self.cpiv = np.zeros(max(m, 1), dtype=np.int32)
-        self.w = np.zeros(max(m, 1))
+        #: capacity of the dynamic couplings (rows, entries): :meth:`set_dynamic`
+        self.m2cap, self.nz2cap = int(dynamic_rows), int(dynamic_entries)
+        mc = m + self.m2cap
+        zcap = int(sum(sizes)) + self.m2cap * max((b.n for b in self.blocks), default=0)
+        self.zo = np.zeros(max(mc, 1), dtype=np.int64)
+        if m:
+            self.zo[:m] = np.cumsum([0] + sizes[:-1])
+        self.Z = np.zeros(max(zcap, 1))
+        self.C = np.zeros(max(mc * mc, 1))
+        self.cpiv = np.zeros(max(mc, 1), dtype=np.int32)
+        self.w = np.zeros(max(mc, 1))
+        self.srow2 = np.zeros(max(self.m2cap, 1), dtype=np.int32)
+        self.er2 = np.zeros(self.m2cap + 1, dtype=np.int32)
+        self.ec2 = np.zeros(max(self.nz2cap, 1), dtype=np.int32)
+        self.ev2 = np.zeros(max(self.nz2cap, 1))
+        self.sblk2 = np.zeros(max(self.m2cap, 1), dtype=np.int32)
+        self.ecb2 = np.zeros(max(self.nz2cap, 1), dtype=np.int32)
         P = ctypes.c_void_p
         self._abp = (P * nb)(*[a.ctypes.data for a in self.ab])
         self._condp = (P * nb)(*[(b.cond.ptr if b.cond is not None else None)
@@ -129,8 +148,36 @@ class CoupledBlocks:
                                                    d(self.ev))
         s.bs0, s.bsl, s.Z, s.zo = d(self.bs0), d(self.bsl), d(self.Z), d(self.zo)
         s.C, s.cpiv, s.w = d(self.C), d(self.cpiv), d(self.w)
+        s.m2, s.m2cap, s.nz2cap = 0, self.m2cap, self.nz2cap
+        s.srow2, s.er2, s.ec2 = d(self.srow2), d(self.er2), d(self.ec2)
+        s.sblk2, s.ecb2, s.ev2 = d(self.sblk2), d(self.ecb2), d(self.ev2)
+        s.zcap, s.mtot = self.Z.size, m
         #: address of the kv_blocks struct (for the compiled step loop)
         self.ptr = ctypes.addressof(s)
+
+    @property
+    def m2_address(self) -> int:
+        """Address of the count of dynamic coupling rows (``kv_blocks.m2``): the compiled
+        Jacobian of a system writes it with the rows."""
+        return ctypes.addressof(self._s) + type(self._s).m2.offset
+
+    def set_dynamic(self, rows: Sequence[int],
+                    entries: Sequence[Sequence[tuple[int, float]]]) -> None:
+        """The dynamic couplings until the next call: ``rows`` (global) with their
+        entries ``(column, value)`` (a row may repeat a fixed coupling row)."""
+        if len(rows) > self.m2cap:
+            raise ValueError(f"{len(rows)} dynamic coupling rows, capacity {self.m2cap}")
+        k = 0
+        for t, (r, row) in enumerate(zip(rows, entries, strict=True)):
+            self.srow2[t] = r
+            self.er2[t] = k
+            for c, v in row:
+                if k >= self.nz2cap:
+                    raise ValueError(f"more than {self.nz2cap} dynamic coupling entries")
+                self.ec2[k], self.ev2[k] = c, v
+                k += 1
+        self.er2[len(rows)] = k
+        self._s.m2 = len(rows)
 
     def zero(self) -> None:
         """Clear every block's band and E's values (before a Jacobian is written)."""
@@ -175,4 +222,7 @@ class CoupledBlocks:
             J[b.offset:b.offset + b.n, b.offset:b.offset + b.n] = band_to_dense(a, b.kl, b.ku)
         for (r, c), v in zip(self.entries, self.ev, strict=False):
             J[r, c] += v
+        for t in range(self._s.m2):
+            for q in range(self.er2[t], self.er2[t + 1]):
+                J[self.srow2[t], self.ec2[q]] += self.ev2[q]
         return J
