@@ -139,7 +139,8 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
              rtol: float, atol: float | np.ndarray, observers: Sequence[Any] = (),
              min_step: float = 0.0, max_order: int = 5, max_steps: int = 2_000_000,
              checkpoint: Callable[[dict[str, Any]], object] | None = None,
-             checkpoint_every: float = 1.0, counters0: dict[str, int] | None = None,
+             checkpoint_every: float = 1.0, checkpoint_wall: float = 0.0,
+             counters0: dict[str, int] | None = None,
              describe_dof: Callable[[int], str] = lambda i: f"state index {i}",
              restored: bool = False, solver_options: dict[str, Any] | None = None
              ) -> LoopResult:
@@ -149,6 +150,10 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
     (``runtime.solvers.schedule``): the solver lands on each and restarts where an input
     jumps; observers with a ``restart(run, restart)`` hook are told.
 
+    ``checkpoint_wall``: after the first checkpoint, one is taken at a point of the
+    ``checkpoint_every`` cadence only when at least this many seconds of wall time have
+    passed since the previous one (0: at every point), so that checkpoints cost a bounded
+    share of a run however fast it goes.
     ``restored``: the observers were restored from a checkpoint at ``t0`` (their ``begin``
     must not record the start again; they are called with it anyway so that they can pick
     up the state). ``counters0``: counters of the run before the resume.
@@ -171,6 +176,7 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
     for f in hooks["begin"]:
         f(run)
     next_ckpt = t0 + checkpoint_every * (1.0 if t_end >= t0 else -1.0)
+    last_ckpt = -math.inf          # wall time (perf_counter) of the previous checkpoint
     every_step = _needs_every_step(solver, observers)
     watches = [w for o in observers if hasattr(o, "watches") for w in o.watches()]
     if not every_step:
@@ -231,13 +237,15 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
                 return result("stopped", "A termination event occurred.")
             if checkpoint is not None and direction * (t1 - next_ckpt) >= 0 \
                     and direction * (t_end - t1) > 0:
-                state: dict[str, Any] = {"t": float(t1), "y": solver.y.copy(),
-                                         "yp": solver.yp.copy(),
-                                         "counters": total_counters()}
-                for o in observers:
-                    if hasattr(o, "state"):
-                        state.update(o.state())
-                checkpoint(state)
+                if time.perf_counter() - last_ckpt >= checkpoint_wall:
+                    state: dict[str, Any] = {"t": float(t1), "y": solver.y.copy(),
+                                             "yp": solver.yp.copy(),
+                                             "counters": total_counters()}
+                    for o in observers:
+                        if hasattr(o, "state"):
+                            state.update(o.state())
+                    checkpoint(state)
+                    last_ckpt = time.perf_counter()
                 next_ckpt = t1 + direction * checkpoint_every
     except IntegrationError as exc:
         run.t, run.y, run.yp = float(exc.t), np.array(exc.y), np.array(exc.yp)

@@ -240,6 +240,22 @@ def test_the_compiled_loop_calls_python_rarely_unless_an_observer_needs_every_st
     assert res.status == "finished" and len(seen) == res.counters["nstep"] > 10
 
 
+def test_checkpoints_after_the_first_wait_for_their_wall_time():
+    """run_loop's checkpoint_wall: the first checkpoint at the first checkpoint_every, the
+    next only once that much wall time has passed (none more in a run shorter than it); 0:
+    one at every point of the cadence. The run is the same either way."""
+    p = load_problem("cantilever", {"rod.elements": 6, "simulation.t_end": 2.0})
+    every: list[dict] = []
+    once: list[dict] = []
+    a = simulate(p, checkpoint=every.append, checkpoint_every=0.25)
+    b = simulate(p, checkpoint=once.append, checkpoint_every=0.25, checkpoint_wall=1e9)
+    ts = [s["t"] for s in every]
+    assert len(ts) == 7 and all(t >= 0.25 * (k + 1) for k, t in enumerate(ts))
+    assert [s["t"] for s in once] == ts[:1]
+    assert a.counters == b.counters and np.array_equal(a.tip, b.tip)
+    assert np.array_equal(a.dissipated, b.dissipated)
+
+
 def test_samples_pass_through_a_small_buffer_unchanged(monkeypatch):
     """The compiled loop hands its output rows to Python whenever its buffer is full (the
     memory of a long run stays bounded): a 5-row buffer gives the same series."""
