@@ -218,7 +218,7 @@ def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
 @lru_cache(maxsize=1)
 def _load_cached() -> ctypes.CDLL | None:
     global _warned
-    verify_manifest()
+    require_generated()
     compiler = find_compiler()
     reason = None
     if compiler is None:
