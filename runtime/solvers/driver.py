@@ -68,7 +68,13 @@ class Observer(Protocol):
     * ``next_time() -> float``: the driver stops at the step that reaches this time;
     * ``watches() -> [(index, direction)]``: it stops at a step in which ``y[index]``
       changes sign in ``direction`` (< 0: downwards);
-    * ``ticks``: stop at least this many times in the run (a progress bar).
+    * ``ticks``: stop at least this many times in the run (a progress bar);
+    * ``replay_times(t_end) -> array``: with the compiled loop, instead of stopping at
+      each of these times (sorted in the direction of integration) the steps reaching
+      them are kept and ``step`` is called for them later, in order (when the compiled
+      loop's buffer is full and at every stop, before the stop's own calls), on a copy
+      of their interpolant: its ``step`` must then use ``dense``, ``t0``, ``t1`` only
+      (``run`` is the state of the stop).
 
     Observers are called in the order given, so one may use the results of earlier
     ones.
@@ -128,6 +134,26 @@ def _needs_every_step(solver: BDF, observers: Sequence[Any]) -> bool:
     return False
 
 
+def _replay(solver: BDF, run: RunState, observers: Sequence[Any], t_end: float
+            ) -> Callable[[], None]:
+    """Let the compiled loop keep the steps that the ``observers`` need at their
+    ``replay_times`` (merged) and call their ``step`` on them; returns the flush to call
+    at every stop."""
+    times = np.concatenate([np.asarray(o.replay_times(t_end), dtype=float)
+                            for o in observers])
+    times = np.sort(times) if solver.direction > 0 else -np.sort(-times)
+    hooks = [o.step for o in observers]
+
+    def replay(t0: float, t1: float, k: int, psi: np.ndarray, phi: np.ndarray) -> None:
+        dense = BDFDenseOutput(t0, t1, phi, psi, solver._c)
+        for f in hooks:
+            f(run, dense, t0, t1)
+
+    core = solver.core
+    core.enable_replay(times, replay)
+    return core.flush_replay
+
+
 def describe_failure(exc: IntegrationError, describe_dof: Callable[[int], str]) -> str:
     """One message naming time, step size, residual norm and the worst component."""
     return (f"integration failed at t = {exc.t:.6g} s (last accepted step), step size "
@@ -182,6 +208,12 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
     if not every_step:
         solver.watch(watches)
     timed = [o for o in observers if hasattr(o, "next_time")]
+    flush_replay = None
+    if not every_step:
+        replayed = [o for o in observers if hasattr(o, "replay_times")]
+        if replayed:
+            flush_replay = _replay(solver, run, replayed, t_end)
+            timed = [o for o in timed if o not in replayed]
     tick = abs(t_end - t0) / max([getattr(o, "ticks", 1) for o in observers], default=1)
     direction = 1.0 if t_end >= t0 else -1.0
 
@@ -190,6 +222,8 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
 
     def result(status: str, message: str, interrupt: BaseException | None = None,
                error: IntegrationError | None = None) -> LoopResult:
+        if flush_replay is not None:
+            flush_replay()
         for f in hooks["end"]:
             f(run)
         return LoopResult(status=status, message=message, t_last=float(run.t),
@@ -229,6 +263,8 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
                                        worst_index=int(np.argmin(np.isfinite(solver.y))))
             dense = solver.dense_output(copy=False)   # used by the observers right away
             run.t, run.y, run.yp = t1, solver.y, solver.yp
+            if flush_replay is not None:
+                flush_replay()
             for f in hooks["step"]:
                 f(run, dense, t_old, t1)
             if run.stop_at is not None:         # an observer ended the run (an event)

@@ -201,7 +201,7 @@ def test_observers_in_the_compiled_loop_give_the_python_series(name, overrides, 
             for py in (True, False)}
     a, b = runs[True], runs[False]
     assert a.status == b.status == "finished" and a.counters == b.counters
-    for key in ("t", "tip", "start", "peaks_t", "peaks_x"):
+    for key in ("t", "tip", "start", "peaks_t", "peaks_x", "centreline_t", "centreline"):
         assert np.array_equal(getattr(a, key), getattr(b, key)), key
     for key in ("kinetic", "elastic", "dissipated", "external_work"):
         x, y = getattr(a, key), getattr(b, key)
@@ -238,6 +238,37 @@ def test_the_compiled_loop_calls_python_rarely_unless_an_observer_needs_every_st
     y0, yp0 = _released(m)
     res = driver.run_loop(m, 0.0, y0, yp0, 0.5, rtol=1e-6, atol=1e-8, observers=[EveryStep()])
     assert res.status == "finished" and len(seen) == res.counters["nstep"] > 10
+
+
+def test_frames_and_snapshots_come_from_kept_steps_not_stops(monkeypatch):
+    """The centreline frames and the snapshots are taken on copies of the steps that
+    reach their times, handed to Python in batches (a 2-row buffer here): the compiled
+    loop stops only for the maxima and the end, and the frames are those of a run that
+    stops at each of them (observers called at every step)."""
+    from runtime.solvers.native.step_loop import CoreLink
+
+    p = load_problem("cantilever", {"rod.elements": 6, "simulation.t_end": 2.0,
+                                    "simulation.centreline_frames": 41})
+    calls = {"advance": 0}
+    advance = CoreLink.advance
+
+    def counted(self, *args):
+        calls["advance"] += 1
+        return advance(self, *args)
+
+    monkeypatch.setattr(CoreLink, "REPLAY_ROWS", 2, raising=False)
+    monkeypatch.setattr(CoreLink, "advance", counted)
+    snaps: dict[bool, list] = {False: [], True: []}
+    runs = {py: _simulate(p, py, monkeypatch, snapshot_every=0.05,
+                          snapshot_sink=lambda t, y, yp, py=py: snaps[py].append((t, y, yp)))
+            for py in (False, True)}
+    a, b = runs[True], runs[False]
+    assert calls["advance"] <= 2 * (b.peaks_t.size + 2) < 41
+    assert b.centreline.shape == (41, 3, 7) and np.array_equal(a.centreline, b.centreline)
+    assert np.array_equal(a.centreline_t, b.centreline_t)
+    assert len(snaps[False]) == len(snaps[True]) >= 40
+    for (t1, y1, yp1), (t2, y2, yp2) in zip(snaps[True], snaps[False], strict=True):
+        assert t1 == t2 and np.array_equal(y1, y2) and np.array_equal(yp1, yp2)
 
 
 def test_checkpoints_after_the_first_wait_for_their_wall_time():
