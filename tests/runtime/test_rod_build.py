@@ -76,6 +76,21 @@ def test_manifest_mismatch_tells_the_user_to_regenerate(tmp_path):
         build.verify_manifest(tmp_path, names)
 
 
+def test_a_crlf_checkout_of_the_generated_files_still_verifies(tmp_path):
+    """The manifest hashes the text: files checked out with CRLF line ends verify (their
+    bytes differ), an edit in them does not."""
+    gdir = build.generated_dir()
+    names = build.SOURCES + build.HEADERS
+    for name in names:
+        (tmp_path / name).write_bytes((gdir / name).read_bytes().replace(b"\n", b"\r\n"))
+    shutil.copy(gdir / "MANIFEST.json", tmp_path / "MANIFEST.json")
+    build.verify_manifest(tmp_path, names)
+    with open(tmp_path / "rod_kernels.h", "ab") as fh:
+        fh.write(b"/* hand edit */\r\n")
+    with pytest.raises(GeneratedCodeError, match="rod_kernels.h"):
+        build.verify_manifest(tmp_path, names)
+
+
 @pytest.mark.parametrize("damage", ["missing", "truncated", "not_json", "no_entry",
                                     "source_missing"])
 def test_manifest_problems_are_errors_naming_the_file(tmp_path, damage):
