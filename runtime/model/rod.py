@@ -491,7 +491,13 @@ class RodModel:
                 self.at(t)
                 if not self.drive.time_dependent:
                     return -math.inf, math.inf
-                return self._steady
+                lo, hi = self._steady
+                if hi == self._piece_end > lo:
+                    # the piece's end, evaluated from the left, has the arrays of the
+                    # constant stretch before it: the interval covers it (so the
+                    # compiled loop never calls back for a release, nor holds signals)
+                    hi = math.nextafter(hi, math.inf)
+                return lo, hi
 
         lib = self._lib
         return CKernels(address(lib.kvrod_residual), address(lib.kvrod_jacobian_band),

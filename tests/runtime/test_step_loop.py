@@ -287,6 +287,37 @@ def test_checkpoints_after_the_first_wait_for_their_wall_time():
     assert np.array_equal(a.dissipated, b.dissipated)
 
 
+def test_a_release_holds_no_signals_and_calls_no_drive_back(monkeypatch):
+    """After a release the loads stay as they are to the end of the run (its end is taken
+    from the left): the compiled loop calls no drive back and solve's output stops hold no
+    signals (each hold cost ~30 us of Python, a fifth of the N = 50 integration)."""
+    from runtime.solvers.integrator import solve
+    from runtime.solvers.native import step_loop
+
+    p = load_problem("cantilever", {"rod.elements": 6, "simulation.t_end": 1.0})
+    model = simulate(p).model
+    y0, yp0 = _released(model)
+    ref = solve(model, (0.0, 1.0), y0, yp0, rtol=1e-6, atol=1e-8,
+                t_eval=np.linspace(0.0, 1.0, 51), compiled_loop=False)
+    held, calls, runs = [], [], []
+    hold = step_loop._call_holding_signals
+    monkeypatch.setattr(step_loop, "_call_holding_signals",
+                        lambda *a: held.append(1) or hold(*a))
+    go, advance = step_loop.CoreLink._set_drive, step_loop.CoreLink.advance
+
+    def counted(self, fn):
+        go(self, lambda t: calls.append(t) or fn(t))
+
+    monkeypatch.setattr(step_loop.CoreLink, "_set_drive", counted)
+    monkeypatch.setattr(step_loop.CoreLink, "advance",
+                        lambda self, *a: runs.append(1) or advance(self, *a))
+    res = solve(model, (0.0, 1.0), y0, yp0, rtol=1e-6, atol=1e-8,
+                t_eval=np.linspace(0.0, 1.0, 51))
+    assert model.c_kernels().drive is not None and res.counters == ref.counters
+    assert np.array_equal(res.y, ref.y) and np.array_equal(res.yp, ref.yp)
+    assert held == [] and len(calls) == len(runs) > 0     # Python's own, one per run
+
+
 def test_samples_pass_through_a_small_buffer_unchanged(monkeypatch):
     """The compiled loop hands its output rows to Python whenever its buffer is full (the
     memory of a long run stays bounded): a 5-row buffer gives the same series."""

@@ -310,8 +310,9 @@ class CoreLink:
         elif self._drive_now is not None:
             self._drive_now(s.t)             # a no-op unless the model was moved meanwhile
         s.stop = 0
-        # the drive is called back only when t leaves [lo, hi) (a release: never again)
-        drive_calls = bool(s.drive) and not (math.isinf(s.drive_hi) if s.direction > 0
+        # the drive is called back only when t leaves [lo, hi) (a release: never again
+        # before the end of the run, t_bound)
+        drive_calls = bool(s.drive) and not (s.t_bound < s.drive_hi if s.direction > 0
                                               else math.isinf(s.drive_lo))
         if self._callbacks or drive_calls:
             code, held = _call_holding_signals(s, self._lib.kv_ida_advance, self.ptr, t_stop,
