@@ -31,7 +31,8 @@ def already_finished(problem, out: Path) -> bool:
 #: second was a third of the CPU time of a 10 s cantilever run
 CHECKPOINT_WALL = 1.0
 
-#: a progress display of a run: ``progress(t_end, label) -> (callback(t), close())``
+#: a progress display of a run: ``progress(t_end, label) -> (callback(t), close())`` (the
+#: callback None: nothing to show, e.g. not on a terminal)
 ProgressDisplay = Callable[[float, str], tuple[Callable[[float], object], Callable[[], object]]]
 
 
