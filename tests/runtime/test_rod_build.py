@@ -162,3 +162,17 @@ def test_tampered_library_is_rebuilt_not_loaded(tmp_path):
     mtime = lib.stat().st_mtime_ns
     build.compile_library(compiler, outdir=tmp_path)
     assert lib.stat().st_mtime_ns != mtime
+
+
+def test_edited_casadi_kernels_are_refused_when_loaded(tmp_path):
+    """The compiled path checks the C sources, headers and formula modules; the serialised
+    CasADi kernels (three quarters of the bytes) are checked when they are loaded."""
+    from runtime.model.casadi_oracle import load_kernels
+
+    gdir = tmp_path / "generated"
+    shutil.copytree(build.generated_dir(), gdir, ignore=shutil.ignore_patterns("__pycache__"))
+    path = gdir / "rod_segment_forces.casadi"
+    path.write_text(path.read_text() + "\n")
+    build.verify_manifest(gdir, exclude=(".casadi",))
+    with pytest.raises(GeneratedCodeError, match="rod_segment_forces.casadi"):
+        load_kernels(gdir)
