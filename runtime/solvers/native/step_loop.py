@@ -392,8 +392,9 @@ class CoreLink:
     def enable_replay(self, times: np.ndarray, sink) -> None:
         """Keep the first step reaching each of ``times`` (sorted in the direction of
         integration) for ``sink(t_old, t, k, psi, phi)`` (psi (k+1,), phi (k+1, n): the
-        step's interpolant, :meth:`BDF.dense_output`; views, valid during the call), called
-        in step order when the buffer is full and at :meth:`flush_replay`."""
+        step's interpolant, :meth:`~runtime.solvers.bdf.BDF.dense_output`; views, valid
+        during the call), called in step order when the buffer is full and at
+        :meth:`flush_replay`."""
         s, n = self.s, self._solver.n
         self._t_rep = np.ascontiguousarray(times, dtype=float)
         w = 3 + NH + NH * n
