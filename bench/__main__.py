@@ -2,15 +2,15 @@
 
 Writes ``DIR/integrators.json``, ``scaling.json``, ``codegen.json``, ``peers.json``,
 ``kernels.json`` (+ ``kernels.md``), ``energy_audit.json``, ``modes.json``, ``maxwell.json``,
-``sections.json`` and ``README.md`` (all tables).
+``sections.json``, ``overhead.json`` and ``README.md`` (all tables).
 Every JSON document records its date, platform, versions and command line (``meta``) and
 its targets with a verdict (``targets``: met / missed / not measured).
 ``--only SECTION`` (repeatable) reruns just those sections and rebuilds the README from
 the JSON of the others. ``--quick``: N = 25 only for the SUNDIALS comparison (IDAS and
 CVODES on kvrod's compiled kernels: no flat SX compile) and N = 25, 50 for scaling, 2 s
 simulated, SciPy BDF only; modes at N = 50 beside a 2 s simulation; the Maxwell rod at
-N = 20, 2 s; the section analysis on a 4-ply strip; no codegen / PyElastica / kernel table /
-energy audit (a few minutes).
+N = 20, 2 s; the section analysis on a 4-ply strip; the overhead section at 2 s, two rounds;
+no codegen / PyElastica / kernel table / energy audit (a few minutes).
 
 Timings are medians over repeats (the machine has 2 cores shared with other jobs).
 """
@@ -26,6 +26,7 @@ from pathlib import Path
 from bench import codegen_timing, energy_audit, integrators, peers, report, scaling
 from bench import maxwell as maxwell_bench
 from bench import modes as modes_bench
+from bench import overhead as overhead_bench
 from bench import sections as sections_bench
 from bench.meta import metadata, target
 from runtime.io.results import jsonable
@@ -151,6 +152,9 @@ def run_all(quick: bool = False, out_dir: Path = Path("bench/results"),
     if "sections" in chosen:
         _log("== cross-section analysis: kvrod section beside sectionproperties")
         keep("sections", sections_bench.run(quick, log=_log))
+    if "overhead" in chosen:
+        _log("== kvrod simulate's own cost beside its integrator and beside IDAS")
+        keep("overhead", overhead_bench.run(quick, log=_log))
     if not quick:
         if "codegen" in chosen:
             _log("== derivation / generate / compile")

@@ -86,7 +86,8 @@ CFLAGS = ("-O2", "-march=native", "-fPIC", "-shared")
 #: the kernels build gets the flags kvrod compiles the same kernels with (runtime/model/
 #: build.py): equal functions on both sides (the flat build keeps -O2: straight-line C of
 #: megabytes gains nothing from -O3 and compiles for minutes)
-KERNEL_CFLAGS = ("-O3", "-march=native", "-ffp-contract=off", "-fPIC", "-shared")
+KERNEL_CFLAGS = ("-O3", "-march=native", "-fno-semantic-interposition", "-ffp-contract=off",
+                 "-fPIC", "-shared")
 FORMS = ("ode", "dae")
 BUILDS = ("flat", "kernels", "map", "sx", "mx")
 ERROR_CONTROLS = ("state", "configuration")

@@ -34,9 +34,10 @@ TEMPLATES = Path(__file__).resolve().parent / "templates"
 #: CasADi CodeGenerator options (part of every inputs hash)
 CODEGEN_OPTIONS = {"with_header": True, "indent": 2, "casadi_int": "long long int"}
 #: kernels that also get a four-lane variant (``<name>_x4``): the costliest of the
-#: residual and of the Jacobian
+#: residual, of the Jacobian and of the energies (evaluated three times a step by the
+#: energy audit)
 X4_KERNELS = ("rod_segment_forces", "rod_joint_torques", "rod_segment_forces_jac",
-              "rod_joint_torques_jac")
+              "rod_joint_torques_jac", "rod_segment_diagnostics", "rod_joint_diagnostics")
 
 
 def _signature(f: ca.Function) -> dict:

@@ -7,9 +7,11 @@ import sys
 
 def progress_bar(t_end: float, desc: str):
     """A tqdm bar over simulated time, redrawn at most every 0.2 s; returns (callback,
-    close). Not shown (and tqdm not even imported) when stderr is not a terminal."""
+    close). Not shown (and tqdm not even imported) when stderr is not a terminal: the
+    callback is then None, so that the run does not stop for progress ticks at all (100
+    returns from the compiled loop, ~7 % of a 10 s cantilever run)."""
     if not sys.stderr.isatty():
-        return (lambda t: None), (lambda: None)
+        return None, (lambda: None)
     from tqdm import tqdm
 
     bar = tqdm(total=round(t_end, 6), desc=desc, unit="s sim", leave=False, mininterval=0.2,

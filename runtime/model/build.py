@@ -33,6 +33,7 @@ from functools import lru_cache
 from pathlib import Path
 
 import generated
+from generated import rod_layout as L
 from runtime.errors import GeneratedCodeError
 from runtime.native import (
     LIBS,
@@ -110,16 +111,18 @@ def _manifest_hash(text: str) -> str:
     return hashlib.sha256(text.encode() + b"\0").hexdigest()
 
 
-def verify_manifest(gdir: Path | None = None, names: tuple[str, ...] | None = None) -> None:
+def verify_manifest(gdir: Path | None = None, names: tuple[str, ...] | None = None, *,
+                    exclude: tuple[str, ...] = ()) -> None:
     """Check generated files against generated/MANIFEST.json before anything uses them.
 
     ``names``: the files to check (default: every file the manifest lists, the Python
     formula modules ``constitutive.py`` and ``rod_layout.py`` as well as the C sources,
     headers and serialised CasADi kernels, and the C sources and headers even if the
-    manifest lost their entries). Raises :class:`GeneratedCodeError` naming the file when
-    the manifest is missing, unreadable or truncated, lacks an entry, or a file is missing
-    or does not match its recorded hash (an edited ``constitutive.py`` would otherwise
-    change every material silently).
+    manifest lost their entries; less those whose names end in one of ``exclude``).
+    Raises :class:`GeneratedCodeError` naming the file when the manifest is missing,
+    unreadable or truncated, lacks an entry, or a file is missing or does not match its
+    recorded hash (an edited ``constitutive.py`` would otherwise change every material
+    silently).
     """
     gdir = gdir or generated_dir()
     mpath = gdir / "MANIFEST.json"
@@ -137,12 +140,19 @@ def verify_manifest(gdir: Path | None = None, names: tuple[str, ...] | None = No
                                  f"{regen}") from None
     if names is None:
         names = SOURCES + HEADERS + tuple(sorted(n for n in files
-                                                 if n not in SOURCES + HEADERS))
+                                                 if n not in SOURCES + HEADERS
+                                                 and not n.endswith(exclude)))
     for name in names:
         entry = files.get(name)
         if not isinstance(entry, dict) or "sha256" not in entry:
             raise GeneratedCodeError(f"generated/{name} has no entry in {mpath.name}; {regen}")
         try:
+            data = (gdir / name).read_bytes()
+            # the bytes as written (LF, UTF-8) match without decoding (half the time of
+            # this check, which every command runs); else the text as read (CRLF
+            # checkouts) decides
+            if hashlib.sha256(data + b"\0").hexdigest() == entry.get("sha256"):
+                continue
             text = (gdir / name).read_text()
         except OSError:
             raise GeneratedCodeError(f"generated/{name} is missing or unreadable; "
@@ -155,8 +165,16 @@ def verify_manifest(gdir: Path | None = None, names: tuple[str, ...] | None = No
 
 @lru_cache(maxsize=1)
 def require_generated() -> None:
-    """Verify the generated tree once per process (see :func:`verify_manifest`)."""
-    verify_manifest()
+    """Verify the generated tree once per process (see :func:`verify_manifest`), but for
+    the serialised CasADi kernels (three quarters of its bytes), which
+    :func:`require_casadi_kernels` checks when they are loaded."""
+    verify_manifest(exclude=(".casadi",))
+
+
+@lru_cache(maxsize=1)
+def require_casadi_kernels() -> None:
+    """Verify the serialised CasADi kernels (generated/rod_*.casadi) once per process."""
+    verify_manifest(names=tuple(f"{name}.casadi" for name in L.KERNELS))
 
 
 def library_key(compiler: str, gdir: Path | None = None) -> str:
@@ -226,7 +244,7 @@ def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
 @lru_cache(maxsize=1)
 def _load_cached() -> ctypes.CDLL | None:
     global _warned
-    verify_manifest()
+    require_generated()
     compiler = find_compiler()
     reason = None
     if compiler is None:
@@ -261,4 +279,5 @@ def clear_cache() -> None:
     global _warned
     _load_cached.cache_clear()
     require_generated.cache_clear()
+    require_casadi_kernels.cache_clear()
     _warned = False

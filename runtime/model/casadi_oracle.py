@@ -29,7 +29,12 @@ from runtime.model.arrays import RodArrays
 
 
 def load_kernels(gdir: Path | None = None) -> dict[str, ca.Function]:
-    """The serialised per-element kernels generated/rod_*.casadi, by name."""
+    """The serialised per-element kernels generated/rod_*.casadi, by name (checked
+    against generated/MANIFEST.json first)."""
+    if gdir is None:
+        build.require_casadi_kernels()
+    else:
+        build.verify_manifest(gdir, tuple(f"{name}.casadi" for name in L.KERNELS))
     gdir = gdir or build.generated_dir()
     return {name: ca.Function.deserialize((gdir / f"{name}.casadi").read_text())
             for name in L.KERNELS}

@@ -10,7 +10,12 @@ def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     a0, av, b0, bv = a[..., 0], a[..., 1:], b[..., 0], b[..., 1:]
     out = np.empty(np.broadcast_shapes(a.shape, b.shape))
     out[..., 0] = a0 * b0 - np.sum(av * bv, axis=-1)
-    out[..., 1:] = a0[..., None] * bv + b0[..., None] * av + np.cross(av, bv)
+    # av x bv written out as np.cross computes it (a1 b2 - a2 b1, ...: the same
+    # roundings), without its axis handling, which cost more than the arithmetic here
+    x1, x2, x3, y1, y2, y3 = av[..., 0], av[..., 1], av[..., 2], bv[..., 0], bv[..., 1], bv[..., 2]
+    out[..., 1] = a0 * y1 + b0 * x1 + (x2 * y3 - x3 * y2)
+    out[..., 2] = a0 * y2 + b0 * x2 + (x3 * y1 - x1 * y3)
+    out[..., 3] = a0 * y3 + b0 * x3 + (x1 * y2 - x2 * y1)
     return out
 
 

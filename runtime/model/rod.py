@@ -37,7 +37,9 @@ class Drive(Protocol):
     from the left, for statics at ``t = 0-``) into ``arrays``; ``scale`` is the load
     factor, which also scales prescribed end displacements and rotations in statics;
     ``static``: velocities of the ends are zero (statics). ``time_dependent``: False when
-    the values never change with t (then ``apply`` runs once).
+    the values never change with t (then ``apply`` runs once). Optional:
+    ``rotates(end) -> bool``, whether the frame of a held end (``"start"``, ``"end"``)
+    turns with time (without it, any end may).
     """
 
     time_dependent: bool
@@ -388,13 +390,17 @@ class RodModel:
                 ("start", first, h[0], hj[1] if self.N > 1 else h[0], 1, 0),
                 ("end", last, h[-1], hj[-2] if self.N > 1 else h[-1], 0, k - 1)):
             if self.arrays.clamped(end):
-                timed = self.drive is not None and self.drive.time_dependent
+                varies = self.drive is not None and self.drive.time_dependent
+                rotates = getattr(self.drive, "rotates", None)
+                timed = varies and (rotates is None or rotates(end))
                 q = np.empty((m, 4))
                 for j in range(m):
                     if timed or j == 0:
                         self.at(float(ts[j]))
                         pc = self.arrays.param("p_" + end).copy()
                     q[j] = pc
+                if varies and not timed:     # the arrays where the loop over ts leaves them
+                    self.at(float(ts[-1]))
             elif k == 1:
                 q = segs[:, 0]
             else:
@@ -485,7 +491,13 @@ class RodModel:
                 self.at(t)
                 if not self.drive.time_dependent:
                     return -math.inf, math.inf
-                return self._steady
+                lo, hi = self._steady
+                if hi == self._piece_end > lo:
+                    # the piece's end, evaluated from the left, has the arrays of the
+                    # constant stretch before it: the interval covers it (so the
+                    # compiled loop never calls back for a release, nor holds signals)
+                    hi = math.nextafter(hi, math.inf)
+                return lo, hi
 
         lib = self._lib
         return CKernels(address(lib.kvrod_residual), address(lib.kvrod_jacobian_band),

@@ -47,10 +47,10 @@ def _half_L(p: np.ndarray) -> np.ndarray:
     """dp/dtheta = 1/2 L(p) [0; I] per segment, (N, 4, 3), for quaternions p (N, 4)
     (``p <- p*exp(dtheta/2)``): the rotation block of :meth:`RodStatics.tangent`."""
     p0, q = p[:, 0], p[:, 1:]
-    z = np.zeros(p.shape[0])
-    qx = np.stack([np.stack([z, -q[:, 2], q[:, 1]], -1),
-                   np.stack([q[:, 2], z, -q[:, 0]], -1),
-                   np.stack([-q[:, 1], q[:, 0], z], -1)], 1)  # [q]x, (N, 3, 3)
+    qx = np.zeros((p.shape[0], 3, 3))                          # [q]x, (N, 3, 3)
+    qx[:, 0, 1], qx[:, 0, 2] = -q[:, 2], q[:, 1]
+    qx[:, 1, 0], qx[:, 1, 2] = q[:, 2], -q[:, 0]
+    qx[:, 2, 0], qx[:, 2, 1] = -q[:, 1], q[:, 0]
     Lm = np.empty((p.shape[0], 4, 3))
     Lm[:, 0, :] = -q
     Lm[:, 1:, :] = p0[:, None, None] * np.eye(3) + qx

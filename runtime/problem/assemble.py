@@ -115,6 +115,12 @@ class ProblemDrive:
                 r[:, j] = self.r_ends[k] + 1.0 * tr * f.value_at(float(t))
         return r
 
+    def rotates(self, end: str) -> bool:
+        """Whether the frame of held end ``end`` (``"start"``, ``"end"``) turns with time
+        (a prescribed rotation; :meth:`apply` writes the same frame at every t otherwise)."""
+        mo = self.ends[0 if end == "start" else 1].motion
+        return mo is not None and mo.rotation_angle != 0.0
+
     def steady_interval(self, t: float) -> tuple[float, float]:
         """``(a, b)``, ``a <= t < b``: an interval on which every load and end motion is
         constant (the arrays written at ``t`` hold on all of it); empty when something

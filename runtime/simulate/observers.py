@@ -7,9 +7,11 @@ ends, energies and reactions (:class:`Sampler`), maxima of one coordinate
 They are called in the order given, so an observer may use the results of earlier ones
 (:class:`Sampler` reads the running integrals of :class:`EnergyIntegrator`). All of them
 are ``sparse``: with the compiled step loop (``runtime/solvers/native/step_loop.c``) the
-energy quadrature and the output samples run inside it (``attach``) and the others say
-when the driver must stop (``next_time``, ``watches``); ``step`` of a sparse observer may
-be called for any step, not only those it asked for.
+energy quadrature and the output samples run inside it (``attach``), the snapshots and the
+centreline frames are taken on copies of the steps that reach their times, handed over in
+batches (``replay_times``), and maxima stop the loop where the velocity changes sign
+(``watches``); ``step`` of a sparse observer may be called for any step, not only those it
+asked for.
 """
 
 from __future__ import annotations
@@ -369,8 +371,13 @@ class Snapshots:
             self.sink(run.t, run.y.copy(), run.yp.copy())
             self.next = run.t + self.every
 
-    def next_time(self) -> float:
-        return self.next if math.isfinite(self.next) else math.inf
+    def replay_times(self, t_end: float) -> np.ndarray:
+        """The snapshot times still to come (as :meth:`step` steps through them)."""
+        out, t = [], self.next
+        while t <= t_end:
+            out.append(t)
+            t += self.every
+        return np.array(out)
 
     def step(self, run: RunState, dense, t0: float, t1: float) -> None:
         while self.next <= t1:
@@ -408,8 +415,9 @@ class Centreline:
             self.rec.append(np.array(run.y[self.idx].T))
             self.k = 1
 
-    def next_time(self) -> float:
-        return float(self.t_frames[self.k]) if self.k < self.t_frames.size else math.inf
+    def replay_times(self, t_end: float) -> np.ndarray:
+        """The frame times still to come."""
+        return self.t_frames[self.k:]
 
     def step(self, run: RunState, dense, t0: float, t1: float) -> None:
         k = int(np.searchsorted(self.t_frames, t1 + 1e-12 * max(1.0, abs(t1)), side="right"))

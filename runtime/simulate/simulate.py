@@ -572,7 +572,8 @@ def static_equilibrium(problem: Problem, model: RodModel | None = None) -> Stati
 
 def simulate(problem: Problem, *, progress: Callable[[float], object] | None = None,
              checkpoint: Callable[[dict], object] | None = None,
-             checkpoint_every: float = 1.0, resume: dict | None = None,
+             checkpoint_every: float = 1.0, checkpoint_wall: float = 0.0,
+             resume: dict | None = None,
              snapshot_every: float | None = None,
              snapshot_sink: Callable[[float, np.ndarray, np.ndarray], object] | None = None,
              max_steps: int = 2_000_000, backend: str = "auto",
@@ -593,6 +594,10 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
         one to the integrator tolerance, not bit for bit.
     checkpoint_every : float
         Simulated seconds between checkpoints.
+    checkpoint_wall : float
+        After the first checkpoint, the next only once this many seconds of wall time
+        have passed (0: at every ``checkpoint_every``); see
+        :func:`~runtime.solvers.driver.run_loop`.
     resume : dict, optional
         A checkpoint's state to continue from.
     snapshot_every : float, optional
@@ -699,7 +704,8 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
     out = run_loop(model, t_start, y0, yp0, sim.t_end, rtol=sim.rtol, atol=atol,
                    observers=observers, min_step=sim.min_step, max_order=problem.bdf_max_order(),
                    max_steps=max_steps, checkpoint=on_checkpoint if checkpoint else None,
-                   checkpoint_every=checkpoint_every, counters0=counters0,
+                   checkpoint_every=checkpoint_every, checkpoint_wall=checkpoint_wall,
+                   counters0=counters0,
                    describe_dof=model.describe_dof,
                    solver_options={"error_mask": control.error_mask,
                                    "stiff_decay_rate": control.stiff_decay_rate})

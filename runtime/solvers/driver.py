@@ -68,7 +68,13 @@ class Observer(Protocol):
     * ``next_time() -> float``: the driver stops at the step that reaches this time;
     * ``watches() -> [(index, direction)]``: it stops at a step in which ``y[index]``
       changes sign in ``direction`` (< 0: downwards);
-    * ``ticks``: stop at least this many times in the run (a progress bar).
+    * ``ticks``: stop at least this many times in the run (a progress bar);
+    * ``replay_times(t_end) -> array``: with the compiled loop, instead of stopping at
+      each of these times (sorted in the direction of integration) the steps reaching
+      them are kept and ``step`` is called for them later, in order (when the compiled
+      loop's buffer is full and at every stop, before the stop's own calls), on a copy
+      of their interpolant: its ``step`` must then use ``dense``, ``t0``, ``t1`` only
+      (``run`` is the state of the stop).
 
     Observers are called in the order given, so one may use the results of earlier
     ones.
@@ -128,6 +134,26 @@ def _needs_every_step(solver: BDF, observers: Sequence[Any]) -> bool:
     return False
 
 
+def _replay(solver: BDF, run: RunState, observers: Sequence[Any], t_end: float
+            ) -> Callable[[], None]:
+    """Let the compiled loop keep the steps that the ``observers`` need at their
+    ``replay_times`` (merged) and call their ``step`` on them; returns the flush to call
+    at every stop."""
+    times = np.concatenate([np.asarray(o.replay_times(t_end), dtype=float)
+                            for o in observers])
+    times = np.sort(times) if solver.direction > 0 else -np.sort(-times)
+    hooks = [o.step for o in observers]
+
+    def replay(t0: float, t1: float, k: int, psi: np.ndarray, phi: np.ndarray) -> None:
+        dense = BDFDenseOutput(t0, t1, phi, psi, solver._c)
+        for f in hooks:
+            f(run, dense, t0, t1)
+
+    core = solver.core
+    core.enable_replay(times, replay)
+    return core.flush_replay
+
+
 def describe_failure(exc: IntegrationError, describe_dof: Callable[[int], str]) -> str:
     """One message naming time, step size, residual norm and the worst component."""
     return (f"integration failed at t = {exc.t:.6g} s (last accepted step), step size "
@@ -139,7 +165,8 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
              rtol: float, atol: float | np.ndarray, observers: Sequence[Any] = (),
              min_step: float = 0.0, max_order: int = 5, max_steps: int = 2_000_000,
              checkpoint: Callable[[dict[str, Any]], object] | None = None,
-             checkpoint_every: float = 1.0, counters0: dict[str, int] | None = None,
+             checkpoint_every: float = 1.0, checkpoint_wall: float = 0.0,
+             counters0: dict[str, int] | None = None,
              describe_dof: Callable[[int], str] = lambda i: f"state index {i}",
              restored: bool = False, solver_options: dict[str, Any] | None = None
              ) -> LoopResult:
@@ -149,6 +176,10 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
     (``runtime.solvers.schedule``): the solver lands on each and restarts where an input
     jumps; observers with a ``restart(run, restart)`` hook are told.
 
+    ``checkpoint_wall``: after the first checkpoint, one is taken at a point of the
+    ``checkpoint_every`` cadence only when at least this many seconds of wall time have
+    passed since the previous one (0: at every point), so that checkpoints cost a bounded
+    share of a run however fast it goes.
     ``restored``: the observers were restored from a checkpoint at ``t0`` (their ``begin``
     must not record the start again; they are called with it anyway so that they can pick
     up the state). ``counters0``: counters of the run before the resume.
@@ -171,11 +202,18 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
     for f in hooks["begin"]:
         f(run)
     next_ckpt = t0 + checkpoint_every * (1.0 if t_end >= t0 else -1.0)
+    last_ckpt = -math.inf          # wall time (perf_counter) of the previous checkpoint
     every_step = _needs_every_step(solver, observers)
     watches = [w for o in observers if hasattr(o, "watches") for w in o.watches()]
     if not every_step:
         solver.watch(watches)
     timed = [o for o in observers if hasattr(o, "next_time")]
+    flush_replay = None
+    if not every_step:
+        replayed = [o for o in observers if hasattr(o, "replay_times")]
+        if replayed:
+            flush_replay = _replay(solver, run, replayed, t_end)
+            timed = [o for o in timed if o not in replayed]
     tick = abs(t_end - t0) / max([getattr(o, "ticks", 1) for o in observers], default=1)
     direction = 1.0 if t_end >= t0 else -1.0
 
@@ -184,6 +222,8 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
 
     def result(status: str, message: str, interrupt: BaseException | None = None,
                error: IntegrationError | None = None) -> LoopResult:
+        if flush_replay is not None:
+            flush_replay()
         for f in hooks["end"]:
             f(run)
         return LoopResult(status=status, message=message, t_last=float(run.t),
@@ -223,6 +263,8 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
                                        worst_index=int(np.argmin(np.isfinite(solver.y))))
             dense = solver.dense_output(copy=False)   # used by the observers right away
             run.t, run.y, run.yp = t1, solver.y, solver.yp
+            if flush_replay is not None:
+                flush_replay()
             for f in hooks["step"]:
                 f(run, dense, t_old, t1)
             if run.stop_at is not None:         # an observer ended the run (an event)
@@ -231,13 +273,15 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
                 return result("stopped", "A termination event occurred.")
             if checkpoint is not None and direction * (t1 - next_ckpt) >= 0 \
                     and direction * (t_end - t1) > 0:
-                state: dict[str, Any] = {"t": float(t1), "y": solver.y.copy(),
-                                         "yp": solver.yp.copy(),
-                                         "counters": total_counters()}
-                for o in observers:
-                    if hasattr(o, "state"):
-                        state.update(o.state())
-                checkpoint(state)
+                if time.perf_counter() - last_ckpt >= checkpoint_wall:
+                    state: dict[str, Any] = {"t": float(t1), "y": solver.y.copy(),
+                                             "yp": solver.yp.copy(),
+                                             "counters": total_counters()}
+                    for o in observers:
+                        if hasattr(o, "state"):
+                            state.update(o.state())
+                    checkpoint(state)
+                    last_ckpt = time.perf_counter()
                 next_ckpt = t1 + direction * checkpoint_every
     except IntegrationError as exc:
         run.t, run.y, run.yp = float(exc.t), np.array(exc.y), np.array(exc.yp)

@@ -197,3 +197,20 @@ def test_documented_sag_of_clamped_both_is_the_reference():
     assert float(m.group(1)) == pytest.approx((ref["midspan"] - ref["shear_part"]) * 1e6,
                                               abs=0.006)
     assert float(m.group(2)) == pytest.approx(ref["shear_part"] * 1e6, abs=0.0006)
+
+
+def test_simulate_off_a_terminal_does_not_stop_for_progress(tmp_path, monkeypatch):
+    """Without a terminal there is no progress bar, and the run does not return from the
+    compiled loop for its ticks (100 stops on the way otherwise)."""
+    from kvrod.cli import main
+    from kvrod.progress import progress_bar
+    from runtime.solvers.native.step_loop import CoreLink
+
+    assert not sys.stderr.isatty() and progress_bar(1.0, "x")[0] is None
+    runs: list[int] = []
+    advance = CoreLink.advance
+    monkeypatch.setattr(CoreLink, "advance",
+                        lambda self, *a: runs.append(1) or advance(self, *a))
+    assert main(["simulate", "cantilever", "--n-elements", "6", "--t-end", "2",
+                 "--out", str(tmp_path / "run")]) == 0
+    assert 0 < len(runs) < 20

@@ -76,6 +76,21 @@ def test_manifest_mismatch_tells_the_user_to_regenerate(tmp_path):
         build.verify_manifest(tmp_path, names)
 
 
+def test_a_crlf_checkout_of_the_generated_files_still_verifies(tmp_path):
+    """The manifest hashes the text: files checked out with CRLF line ends verify (their
+    bytes differ), an edit in them does not."""
+    gdir = build.generated_dir()
+    names = build.SOURCES + build.HEADERS
+    for name in names:
+        (tmp_path / name).write_bytes((gdir / name).read_bytes().replace(b"\n", b"\r\n"))
+    shutil.copy(gdir / "MANIFEST.json", tmp_path / "MANIFEST.json")
+    build.verify_manifest(tmp_path, names)
+    with open(tmp_path / "rod_kernels.h", "ab") as fh:
+        fh.write(b"/* hand edit */\r\n")
+    with pytest.raises(GeneratedCodeError, match="rod_kernels.h"):
+        build.verify_manifest(tmp_path, names)
+
+
 @pytest.mark.parametrize("damage", ["missing", "truncated", "not_json", "no_entry",
                                     "source_missing"])
 def test_manifest_problems_are_errors_naming_the_file(tmp_path, damage):
@@ -147,3 +162,17 @@ def test_tampered_library_is_rebuilt_not_loaded(tmp_path):
     mtime = lib.stat().st_mtime_ns
     build.compile_library(compiler, outdir=tmp_path)
     assert lib.stat().st_mtime_ns != mtime
+
+
+def test_edited_casadi_kernels_are_refused_when_loaded(tmp_path):
+    """The compiled path checks the C sources, headers and formula modules; the serialised
+    CasADi kernels (three quarters of the bytes) are checked when they are loaded."""
+    from runtime.model.casadi_oracle import load_kernels
+
+    gdir = tmp_path / "generated"
+    shutil.copytree(build.generated_dir(), gdir, ignore=shutil.ignore_patterns("__pycache__"))
+    path = gdir / "rod_segment_forces.casadi"
+    path.write_text(path.read_text() + "\n")
+    build.verify_manifest(gdir, exclude=(".casadi",))
+    with pytest.raises(GeneratedCodeError, match="rod_segment_forces.casadi"):
+        load_kernels(gdir)

@@ -201,7 +201,7 @@ def test_observers_in_the_compiled_loop_give_the_python_series(name, overrides, 
             for py in (True, False)}
     a, b = runs[True], runs[False]
     assert a.status == b.status == "finished" and a.counters == b.counters
-    for key in ("t", "tip", "start", "peaks_t", "peaks_x"):
+    for key in ("t", "tip", "start", "peaks_t", "peaks_x", "centreline_t", "centreline"):
         assert np.array_equal(getattr(a, key), getattr(b, key)), key
     for key in ("kinetic", "elastic", "dissipated", "external_work"):
         x, y = getattr(a, key), getattr(b, key)
@@ -238,6 +238,84 @@ def test_the_compiled_loop_calls_python_rarely_unless_an_observer_needs_every_st
     y0, yp0 = _released(m)
     res = driver.run_loop(m, 0.0, y0, yp0, 0.5, rtol=1e-6, atol=1e-8, observers=[EveryStep()])
     assert res.status == "finished" and len(seen) == res.counters["nstep"] > 10
+
+
+def test_frames_and_snapshots_come_from_kept_steps_not_stops(monkeypatch):
+    """The centreline frames and the snapshots are taken on copies of the steps that
+    reach their times, handed to Python in batches (a 2-row buffer here): the compiled
+    loop stops only for the maxima and the end, and the frames are those of a run that
+    stops at each of them (observers called at every step)."""
+    from runtime.solvers.native.step_loop import CoreLink
+
+    p = load_problem("cantilever", {"rod.elements": 6, "simulation.t_end": 2.0,
+                                    "simulation.centreline_frames": 41})
+    calls = {"advance": 0}
+    advance = CoreLink.advance
+
+    def counted(self, *args):
+        calls["advance"] += 1
+        return advance(self, *args)
+
+    monkeypatch.setattr(CoreLink, "REPLAY_ROWS", 2, raising=False)
+    monkeypatch.setattr(CoreLink, "advance", counted)
+    snaps: dict[bool, list] = {False: [], True: []}
+    runs = {py: _simulate(p, py, monkeypatch, snapshot_every=0.05,
+                          snapshot_sink=lambda t, y, yp, py=py: snaps[py].append((t, y, yp)))
+            for py in (False, True)}
+    a, b = runs[True], runs[False]
+    assert calls["advance"] <= 2 * (b.peaks_t.size + 2) < 41
+    assert b.centreline.shape == (41, 3, 7) and np.array_equal(a.centreline, b.centreline)
+    assert np.array_equal(a.centreline_t, b.centreline_t)
+    assert len(snaps[False]) == len(snaps[True]) >= 40
+    for (t1, y1, yp1), (t2, y2, yp2) in zip(snaps[True], snaps[False], strict=True):
+        assert t1 == t2 and np.array_equal(y1, y2) and np.array_equal(yp1, yp2)
+
+
+def test_checkpoints_after_the_first_wait_for_their_wall_time():
+    """run_loop's checkpoint_wall: the first checkpoint at the first checkpoint_every, the
+    next only once that much wall time has passed (none more in a run shorter than it); 0:
+    one at every point of the cadence. The run is the same either way."""
+    p = load_problem("cantilever", {"rod.elements": 6, "simulation.t_end": 2.0})
+    every: list[dict] = []
+    once: list[dict] = []
+    a = simulate(p, checkpoint=every.append, checkpoint_every=0.25)
+    b = simulate(p, checkpoint=once.append, checkpoint_every=0.25, checkpoint_wall=1e9)
+    ts = [s["t"] for s in every]
+    assert len(ts) == 7 and all(t >= 0.25 * (k + 1) for k, t in enumerate(ts))
+    assert [s["t"] for s in once] == ts[:1]
+    assert a.counters == b.counters and np.array_equal(a.tip, b.tip)
+    assert np.array_equal(a.dissipated, b.dissipated)
+
+
+def test_a_release_holds_no_signals_and_calls_no_drive_back(monkeypatch):
+    """After a release the loads stay as they are to the end of the run (its end is taken
+    from the left): the compiled loop calls no drive back and solve's output stops hold no
+    signals (each hold cost ~30 us of Python, a fifth of the N = 50 integration)."""
+    from runtime.solvers.integrator import solve
+    from runtime.solvers.native import step_loop
+
+    p = load_problem("cantilever", {"rod.elements": 6, "simulation.t_end": 1.0})
+    model = simulate(p).model
+    y0, yp0 = _released(model)
+    ref = solve(model, (0.0, 1.0), y0, yp0, rtol=1e-6, atol=1e-8,
+                t_eval=np.linspace(0.0, 1.0, 51), compiled_loop=False)
+    held, calls, runs = [], [], []
+    hold = step_loop._call_holding_signals
+    monkeypatch.setattr(step_loop, "_call_holding_signals",
+                        lambda *a: held.append(1) or hold(*a))
+    go, advance = step_loop.CoreLink._set_drive, step_loop.CoreLink.advance
+
+    def counted(self, fn):
+        go(self, lambda t: calls.append(t) or fn(t))
+
+    monkeypatch.setattr(step_loop.CoreLink, "_set_drive", counted)
+    monkeypatch.setattr(step_loop.CoreLink, "advance",
+                        lambda self, *a: runs.append(1) or advance(self, *a))
+    res = solve(model, (0.0, 1.0), y0, yp0, rtol=1e-6, atol=1e-8,
+                t_eval=np.linspace(0.0, 1.0, 51))
+    assert model.c_kernels().drive is not None and res.counters == ref.counters
+    assert np.array_equal(res.y, ref.y) and np.array_equal(res.yp, ref.yp)
+    assert held == [] and len(calls) == len(runs) > 0     # Python's own, one per run
 
 
 def test_samples_pass_through_a_small_buffer_unchanged(monkeypatch):

@@ -856,7 +856,7 @@ static int energies_one(const kvrod_rod* rod, const double* y, const double* yp,
                         double* e, double* out_el, work_t* W) {
   if (rod->coupled) return energies_coupled(rod, y, yp, e, out_el, W);
   const int N = rod->N;
-  double Tk, Wel, Dd, S3[3], R3[3], Q[9], T6[6], f[3], m, nq[3], dX[3];
+  double Tk, Q[9], T6[6], f[3], m, nq[3], dX[3];
   double Fint[2][3] = {{0, 0, 0}, {0, 0, 0}};
   double* oV = out_el;
   double* oF = out_el ? oV + 3 * N : 0;
@@ -873,55 +873,92 @@ static int energies_one(const kvrod_rod* rod, const double* y, const double* yp,
     if (node_force(rod, i, y, W, f)) return -3;
     for (k = 0; k < 3; ++k) e[3] += f[k] * y[i_v(rod, i) + k];
   }
-  for (i = 1; i <= N; ++i) {
-    W->arg[0] = y + i_om(rod, i); W->arg[1] = segp(rod, i);
-    W->res[0] = &Tk;
-    if (rod_segment_kinetic(W->arg, W->res, W->iw, W->w, 0)) return -3;
-    e[0] += Tk;
-    if (segment_torque(rod, i, y, W, S3)) return -3;
-    for (k = 0; k < 3; ++k) e[3] += S3[k] * y[i_om(rod, i) + k];
-    seg_args(rod, i, y, W->arg, 1, nq);
-    W->res[0] = &Wel; W->res[1] = &Dd; W->res[2] = S3; W->res[3] = R3;
-    if (rod_segment_diagnostics(W->arg, W->res, W->iw, W->w, 0)) return -3;
-    e[1] += Wel; e[2] += 2.0 * Dd;
-    if (rod->nb) {
-      for (k = 0; k < 3; ++k) dX[k] = S3[k] - segp(rod, i)[SEG_V0 + k];
-      relax_energy(rod, segb(rod, i, 0), 3, segp(rod, i)[SEG_H], dX, y + i_qs(rod, i), e);
+  /* segments: four per diagnostics call where they come in fours
+   * (rod_segment_diagnostics_x4: bit for bit the scalar kernel), then added segment by
+   * segment in order, as the energy audit evaluates this three times a step */
+  double W4[4], D4[4], S4[4][3], R4[4][3], nq4[4][3], T3[3];
+  const double* a4[4 * 8];
+  double* r4[4 * 4];
+  int l, nl;
+  for (i = 1; i <= N; i += nl) {
+    nl = N - i + 1 >= 4 ? 4 : 1;
+    if (nl == 4) {
+      for (l = 0; l < 4; ++l) {
+        seg_args(rod, i + l, y, a4 + l, 4, nq4[l]);
+        r4[l] = W4 + l; r4[4 + l] = D4 + l; r4[8 + l] = S4[l]; r4[12 + l] = R4[l];
+      }
+      if (rod_segment_diagnostics_x4(a4, r4)) return -3;
     }
-    if (out_el)
-      for (k = 0; k < 3; ++k) { oV[3 * (i - 1) + k] = S3[k]; oF[3 * (i - 1) + k] = R3[k]; }
-    if (i == 1 || i == N) {             /* internal forces on the end nodes (reactions) */
-      W->res[0] = Q;
-      if (rod_segment_forces(W->arg, W->res, W->iw, W->w, 0)) return -3;
-      for (k = 0; k < 3; ++k) {
-        if (i == 1) Fint[0][k] += Q[k];
-        if (i == N) Fint[1][k] += Q[3 + k];
+    for (l = 0; l < nl; ++l) {
+      const int s = i + l;
+      W->arg[0] = y + i_om(rod, s); W->arg[1] = segp(rod, s);
+      W->res[0] = &Tk;
+      if (rod_segment_kinetic(W->arg, W->res, W->iw, W->w, 0)) return -3;
+      e[0] += Tk;
+      if (segment_torque(rod, s, y, W, T3)) return -3;
+      for (k = 0; k < 3; ++k) e[3] += T3[k] * y[i_om(rod, s) + k];
+      const int ends = s == 1 || s == N;
+      if (nl == 1 || ends) seg_args(rod, s, y, W->arg, 1, nq);
+      if (nl == 1) {
+        W->res[0] = W4; W->res[1] = D4; W->res[2] = S4[0]; W->res[3] = R4[0];
+        if (rod_segment_diagnostics(W->arg, W->res, W->iw, W->w, 0)) return -3;
+      }
+      const double *S3 = S4[l], *R3 = R4[l];
+      e[1] += W4[l]; e[2] += 2.0 * D4[l];
+      if (rod->nb) {
+        for (k = 0; k < 3; ++k) dX[k] = S3[k] - segp(rod, s)[SEG_V0 + k];
+        relax_energy(rod, segb(rod, s, 0), 3, segp(rod, s)[SEG_H], dX, y + i_qs(rod, s), e);
+      }
+      if (out_el)
+        for (k = 0; k < 3; ++k) { oV[3 * (s - 1) + k] = S3[k]; oF[3 * (s - 1) + k] = R3[k]; }
+      if (ends) {                       /* internal forces on the end nodes (reactions) */
+        W->res[0] = Q;
+        if (rod_segment_forces(W->arg, W->res, W->iw, W->w, 0)) return -3;
+        for (k = 0; k < 3; ++k) {
+          if (s == 1) Fint[0][k] += Q[k];
+          if (s == N) Fint[1][k] += Q[3 + k];
+        }
       }
     }
   }
-  for (j = 0; j <= N; ++j) {
-    if (!joint_args(rod, j, y, W)) continue;
-    jnt_mq(rod, j, y, nq);
-    W->arg[5] = nq;
-    W->res[0] = &Wel; W->res[1] = &Dd; W->res[2] = S3; W->res[3] = R3;
-    if (rod_joint_diagnostics(W->arg, W->res, W->iw, W->w, 0)) return -3;
-    e[1] += Wel; e[2] += 2.0 * Dd;
-    if (rod->nb) {
-      for (k = 0; k < 3; ++k) dX[k] = S3[k] - jntp(rod, j)[JNT_U0 + k];
-      relax_energy(rod, jntb(rod, j, 0), 3, jntp(rod, j)[JNT_H], dX, y + i_qj(rod, j), e);
+  /* joints: four interior joints per diagnostics call where they come in fours
+   * (rod_joint_diagnostics_x4), then added joint by joint in order */
+  for (j = 0; j <= N; j += nl) {
+    nl = j >= 1 && j + 3 <= N - 1 ? 4 : 1;
+    if (nl == 4) {
+      for (l = 0; l < 4; ++l) {
+        jnt_lane(rod, j + l, y, a4, l, nq4[l]);
+        r4[l] = W4 + l; r4[4 + l] = D4 + l; r4[8 + l] = S4[l]; r4[12 + l] = R4[l];
+      }
+      if (rod_joint_diagnostics_x4(a4, r4)) return -3;
+    } else {
+      if (!joint_args(rod, j, y, W)) continue;
+      jnt_mq(rod, j, y, nq);
+      W->arg[5] = nq;
+      W->res[0] = W4; W->res[1] = D4; W->res[2] = S4[0]; W->res[3] = R4[0];
+      if (rod_joint_diagnostics(W->arg, W->res, W->iw, W->w, 0)) return -3;
     }
-    if (out_el) for (k = 0; k < 3; ++k) { oU[3 * j + k] = S3[k]; oM[3 * j + k] = R3[k]; }
-    if (j == 0 || j == N) {             /* the clamp's moment and its power */
-      W->res[0] = T6;
-      if (rod_joint_torques(W->arg, W->res, W->iw, W->w, 0)) return -3;
-      const double* om = rod->par + (j == 0 ? PAR_OMEGA_START : PAR_OMEGA_END);
-      const double* pc = rod->par + (j == 0 ? PAR_P_START : PAR_P_END);
-      double mTc[3];
-      const double* Tc = j == 0 ? T6 : T6 + 3;  /* the joint's torque on the clamp frame */
-      for (k = 0; k < 3; ++k) { e[4] -= Tc[k] * om[k]; mTc[k] = -Tc[k]; }
-      W->arg[0] = pc; W->arg[1] = mTc;    /* the support's moment, spatial */
-      W->res[0] = e + NDIAG_E + (j == 0 ? 3 : 9);
-      if (rod_rotate(W->arg, W->res, W->iw, W->w, 0)) return -3;
+    for (l = 0; l < nl; ++l) {
+      const int jj = j + l;
+      const double *S3 = S4[l], *R3 = R4[l];
+      e[1] += W4[l]; e[2] += 2.0 * D4[l];
+      if (rod->nb) {
+        for (k = 0; k < 3; ++k) dX[k] = S3[k] - jntp(rod, jj)[JNT_U0 + k];
+        relax_energy(rod, jntb(rod, jj, 0), 3, jntp(rod, jj)[JNT_H], dX, y + i_qj(rod, jj), e);
+      }
+      if (out_el) for (k = 0; k < 3; ++k) { oU[3 * jj + k] = S3[k]; oM[3 * jj + k] = R3[k]; }
+      if (jj == 0 || jj == N) {         /* the clamp's moment and its power (nl = 1) */
+        W->res[0] = T6;
+        if (rod_joint_torques(W->arg, W->res, W->iw, W->w, 0)) return -3;
+        const double* om = rod->par + (jj == 0 ? PAR_OMEGA_START : PAR_OMEGA_END);
+        const double* pc = rod->par + (jj == 0 ? PAR_P_START : PAR_P_END);
+        double mTc[3];
+        const double* Tc = jj == 0 ? T6 : T6 + 3;  /* the joint's torque on the clamp frame */
+        for (k = 0; k < 3; ++k) { e[4] -= Tc[k] * om[k]; mTc[k] = -Tc[k]; }
+        W->arg[0] = pc; W->arg[1] = mTc;    /* the support's moment, spatial */
+        W->res[0] = e + NDIAG_E + (jj == 0 ? 3 : 9);
+        if (rod_rotate(W->arg, W->res, W->iw, W->w, 0)) return -3;
+      }
     }
   }
   for (j = 0; j < 2; ++j) {             /* the supports' forces and their power */

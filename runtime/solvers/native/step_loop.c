@@ -14,7 +14,9 @@
    kvrod_jacobian_band or, on the condensed block path, kvrod_jacobian_band_cells,
    kvrod_energies on a kvrod_rod struct), or ctypes callbacks into Python for any other
    problem. Loads that change with time are re-applied by a
-   callback ("drive") only when t leaves the interval on which they are constant. */
+   callback ("drive") only when t leaves the interval on which they are constant. Steps
+   whose interpolant Python observers need at given times (the deformed centreline,
+   snapshots) are copied and handed over in batches (replay_step) instead of stopping. */
 #define _POSIX_C_SOURCE 199309L     /* clock_gettime under -std=c99 */
 #include <time.h>
 #include "band.c"
@@ -141,6 +143,16 @@ typedef struct {
        the blocks and the couplings, kv_blocks factors and solves (blocks.c) */
     kv_blocks *blocks;
     kv_sysjac_fn sysjac;
+    /* steps kept for Python observers that need a step's interpolant at given times (the
+       deformed centreline, snapshots), instead of a stop at each: the first step reaching
+       t_rep[k_rep] (direction * (t - t_rep) >= 0, the stop condition) is copied into rep
+       as a row [t_old, t, k, psi[0..KV_NH), phi_0 .. phi_k (n each)] (rep_w doubles);
+       rep_flush() hands the rows to Python when rep_cap are filled (Python flushes them
+       itself at every stop, so they are replayed in step order) */
+    int m_rep, k_rep, rep_w, rep_cap, rep_n;
+    const double *t_rep;
+    double *rep;
+    kv_drive_fn rep_flush;      /* called with t (unused) */
 } kv_ida;
 
 enum { SEC_RES, SEC_JAC, SEC_LU, SEC_NEWTON, SEC_EN, SEC_DRIVE };
@@ -820,9 +832,32 @@ static int sample_step(kv_run *R)
     return 0;
 }
 
+static int replay_step(kv_run *R)
+{
+    kv_ida *S = R->S;
+    if (S->direction * (S->t - S->t_rep[S->k_rep]) < 0.0) return 0;
+    while (S->k_rep < S->m_rep && S->direction * (S->t - S->t_rep[S->k_rep]) >= 0.0)
+        S->k_rep++;
+    if (S->rep_n == S->rep_cap) {
+        USER_MODE(R);
+        int rc = S->rep_flush(S->t);
+        CORE_MODE(R);
+        if (rc || S->rep_n == S->rep_cap) return 1;
+    }
+    double *row = S->rep + (size_t)S->rep_n++ * (size_t)S->rep_w;
+    const int k = S->kused > 1 ? S->kused : 1;      /* the interpolant's order (interp) */
+    row[0] = S->t_old;
+    row[1] = S->t;
+    row[2] = k;
+    for (int j = 0; j < KV_NH; ++j) row[3 + j] = S->psi[j];
+    memcpy(row + 3 + KV_NH, S->phi, sizeof(double) * (size_t)(k + 1) * (size_t)S->n);
+    return 0;
+}
+
 static int after_step(kv_run *R)
 {
     kv_ida *S = R->S;
+    if (S->k_rep < S->m_rep && replay_step(R)) return 1;
     if (S->audit) {
         if (audit_step(R)) return 1;
         if (S->m_out > S->k_out && sample_step(R)) return 1;

@@ -123,6 +123,8 @@ class CoreStruct(ctypes.Structure):
         + _fields(_I, "nexact")
         + _fields(_P, "exact", "exact_res")
         + _fields(_P, "blocks", "sysjac")
+        + _fields(_I, "m_rep", "k_rep", "rep_w", "rep_cap", "rep_n")
+        + _fields(_P, "t_rep", "rep", "rep_flush")
     )
     #: names of the entries of ``sec`` (seconds per part when ``timing`` is set)
     SECTIONS = ("residual", "jacobian", "lu", "newton_solve_update", "energies", "drive")
@@ -316,8 +318,9 @@ class CoreLink:
         elif self._drive_now is not None:
             self._drive_now(s.t)             # a no-op unless the model was moved meanwhile
         s.stop = 0
-        # the drive is called back only when t leaves [lo, hi) (a release: never again)
-        drive_calls = bool(s.drive) and not (math.isinf(s.drive_hi) if s.direction > 0
+        # the drive is called back only when t leaves [lo, hi) (a release: never again
+        # before the end of the run, t_bound)
+        drive_calls = bool(s.drive) and not (s.t_bound < s.drive_hi if s.direction > 0
                                               else math.isinf(s.drive_lo))
         if self._callbacks or drive_calls:
             code, held = _call_holding_signals(s, self._lib.kv_ida_advance, self.ptr, t_stop,
@@ -387,6 +390,43 @@ class CoreLink:
         if s.rec_n:
             self._sink(self._rec[:s.rec_n])
             s.rec_n = 0
+
+    #: bytes of the replay buffer (at least one step's row): at N = 4000 a row (the
+    #: history up to order 5) is 2.5 MB
+    REPLAY_BYTES = 8 << 20
+    #: most rows of the replay buffer
+    REPLAY_ROWS = 32
+
+    def enable_replay(self, times: np.ndarray, sink) -> None:
+        """Keep the first step reaching each of ``times`` (sorted in the direction of
+        integration) for ``sink(t_old, t, k, psi, phi)`` (psi (k+1,), phi (k+1, n): the
+        step's interpolant, :meth:`~runtime.solvers.bdf.BDF.dense_output`; views, valid
+        during the call), called in step order when the buffer is full and at
+        :meth:`flush_replay`."""
+        s, n = self.s, self._solver.n
+        self._t_rep = np.ascontiguousarray(times, dtype=float)
+        w = 3 + NH + NH * n
+        cap = int(max(1, min(self.REPLAY_ROWS, self.REPLAY_BYTES // (8 * w))))
+        self._rep = np.zeros((cap, w))
+        self._rep_sink = sink
+        s.t_rep, s.rep = self._t_rep.ctypes.data, self._rep.ctypes.data
+        s.m_rep, s.k_rep, s.rep_w, s.rep_cap, s.rep_n = self._t_rep.size, 0, w, cap, 0
+        cb = DRIVE_FN(self._guard(lambda t: self.flush_replay()))
+        self._keep.append(cb)
+        self._callbacks = True
+        s.rep_flush = ctypes.cast(cb, ctypes.c_void_p).value
+
+    def flush_replay(self) -> None:
+        """Hand the kept steps to the sink, in order, and empty the buffer."""
+        s = self.s
+        if not s.rep_n:
+            return
+        n, rows = self._solver.n, self._rep[:s.rep_n]
+        s.rep_n = 0
+        for row in rows:
+            k = int(row[2])
+            self._rep_sink(float(row[0]), float(row[1]), k, row[3:4 + k],
+                           row[3 + NH:3 + NH + (k + 1) * n].reshape(k + 1, n))
 
     def set_watches(self, watches: list[tuple[int, float]]) -> None:
         """Stop after any step in which ``y[index]`` changes sign in ``direction`` (< 0:
