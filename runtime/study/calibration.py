@@ -382,8 +382,7 @@ def _simulate_tip(problem, tau: float, t_end: float) -> tuple[np.ndarray, np.nda
     from runtime.simulate.simulate import simulate
 
     run = simulate(problem.with_overrides({"tau": float(tau), "t_end": float(t_end)}))
-    if run.status != "finished":
-        raise RuntimeError(f"simulation at tau = {tau!r} s failed: {run.message}")
+    run.finished(f"simulation at tau = {tau!r} s")
     c, ref = _component(problem)
     return run.t, run.tip[c] - ref
 
