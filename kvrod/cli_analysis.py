@@ -65,7 +65,7 @@ def _modes_into(args, problem, out: Path) -> int:
         if m.doubt:
             print(f"kvrod modes: warning: mode {m.index} ({m.family}): {m.doubt}",
                   file=sys.stderr)
-    paths = write_modes(res, out)
+    paths = write_modes(res, out, figures=args.plots)
     print(f"wrote {out}/{', '.join(p.name for p in paths)}")
     return 0
 
@@ -240,6 +240,9 @@ def add_commands(sub, parser_class) -> None:
                         "column)")
     m.add_argument("--deformed", action="store_true",
                    help="linearise about the static state under the problem's loads")
+    m.add_argument("--plots", action="store_true",
+                   help="also draw mode_shapes.png and mode_shapes_3d.png (or later: kvrod "
+                        "plot DIR)")
     m.add_argument("--out", help="results folder (default results/modes-SCENARIO[-deformed])")
     m.add_argument("--overwrite", action="store_true",
                    help="replace a result already in --out (default: refuse)")
