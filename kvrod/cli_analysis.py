@@ -157,6 +157,13 @@ def _cmd_calibrate(args) -> int:
 
         if isinstance(exc, ParameterError):
             raise
+        if (isinstance(exc, cal.RecordSignError) and args.tip_force is not None
+                and args.tip_force < 0):
+            raise _cli_error(f"kvrod calibrate: --tip-force = {args.tip_force:g} N is "
+                             f"negative: it releases the model from x = {exc.release_x:.4g} "
+                             f"m, the other side of the record's first maximum "
+                             f"{exc.first:.4g} m; give the magnitude of the static tip force "
+                             "(> 0; its direction is the problem's end load)") from None
         raise _cli_error(f"kvrod calibrate: {args.data}: {exc}") from None
     with results_folder(Path(args.out), "calibrate", markers=("calibration.json",),
                         overwrite=args.overwrite,
