@@ -103,7 +103,7 @@ def run_interruptibly(fn: Callable[..., T], *args: Any, **kwargs: Any) -> T:
     """``fn(*args, **kwargs)``, with the main thread free for signals meanwhile.
 
     In the main thread ``fn`` runs in a daemon worker thread and the main thread waits for
-    it in slices of :data:`POLL_S` s: Ctrl-C or SIGTERM raise their exception here within
+    it in slices of ``POLL_S`` s: Ctrl-C or SIGTERM raise their exception here within
     about that time whenever the worker's compiled code releases the GIL (code that holds
     it, such as the mesher, must keep each call short). The worker's exception or result
     is the call's. Outside the main thread ``fn`` is simply called.

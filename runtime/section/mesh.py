@@ -152,7 +152,7 @@ def steiner_budget(polys: Sequence[Polygon], sizes: Sequence[float], n_input: in
     """The most points Triangle may add to a mesh of ``polys`` with elements of edge
     ``sizes[i]`` [m] in region i from ``n_input`` given points: four times the number of
     elements their areas take, 20 per given point (the grading at corners takes about
-    100 per corner, 32 of them given) and 1000, at most :data:`MAX_STEINER`. Measured: the
+    100 per corner, 32 of them given) and 1000, at most ``MAX_STEINER``. Measured: the
     meshes of the examples add 0.3 ... 3 times the elements' number."""
     elements = sum(p.area / (hi * hi * math.sqrt(3.0) / 4.0)
                    for p, hi in zip(polys, sizes, strict=True))
@@ -193,7 +193,7 @@ def mesh_regions(regions: Sequence[Region], h: float,
     the whole section).
 
     Raises :class:`MeshBudgetError` when the mesh needs more than
-    :func:`steiner_budget` points or its outlines more than :data:`MAX_INPUT_POINTS`."""
+    :func:`steiner_budget` points or its outlines more than ``MAX_INPUT_POINTS``."""
     polys, vertices, segments, holes = _pslg(regions, h)
     curves = [c for r in regions for c in r.shape.curves(h)]
     extra = _grading_points(vertices, segments, polys, h, curves)

@@ -126,7 +126,7 @@ def bonded(polys: Sequence[Polygon], tol: float, names: Sequence[str] | None = N
 def region_polygons(regions: Sequence[Region], h: float,
                     path: str = "section.regions") -> list[Polygon]:
     """The regions' polygons at mesh size ``h`` [m] (curves with about one vertex per h),
-    bonded along the edges they share up to round-off (:func:`bonded`)."""
+    bonded along the edges they share up to round-off (``bonded``)."""
     polys = [r.shape.polygon(h) for r in regions]
     return bonded(polys, snap_tolerance(polys), region_names(regions, path), path)
 
