@@ -77,18 +77,20 @@ class Cancelled(BaseException):  # noqa: N818 - a request, not an error
 
 
 _local = threading.local()
-#: workers of :func:`run_interruptibly` (those still alive after their caller was
-#: interrupted keep running until their compiled code returns)
-_workers: list[threading.Thread] = []
+#: the "finished" events of the workers of :func:`run_interruptibly` (one still unset
+#: after its caller was interrupted: that worker runs on until its compiled code returns).
+#: Not Thread.is_alive: a Thread.join interrupted by a signal can leave a running thread
+#: marked as stopped (Python 3.11: measured, the worker inside SuperLU "stopped").
+_running: list[threading.Event] = []
 
 
 def workers_alive() -> bool:
-    """Whether a worker of :func:`run_interruptibly` is still running (its caller was
-    interrupted). A process should then end with ``os._exit``: at the interpreter's
-    normal exit such a thread, still inside compiled code, may crash it (measured: SciPy's
-    SuperLU under a finalizing interpreter, a segmentation fault)."""
-    _workers[:] = [w for w in _workers if w.is_alive()]
-    return bool(_workers)
+    """Whether a worker of :func:`run_interruptibly` is still running (after an interrupt:
+    its caller was interrupted). A process should then end with ``os._exit``: at the
+    interpreter's normal exit such a thread, still inside compiled code, may crash it
+    (measured: SciPy's SuperLU under a finalizing interpreter, a segmentation fault)."""
+    _running[:] = [e for e in _running if not e.is_set()]
+    return bool(_running)
 
 
 def check_cancelled() -> None:
@@ -110,7 +112,7 @@ def run_interruptibly(fn: Callable[..., T], *args: Any, **kwargs: Any) -> T:
     """
     if not _in_main_thread():
         return fn(*args, **kwargs)
-    cancel = threading.Event()
+    cancel, done = threading.Event(), threading.Event()
     box: dict[str, Any] = {}
 
     def work() -> None:
@@ -121,16 +123,19 @@ def run_interruptibly(fn: Callable[..., T], *args: Any, **kwargs: Any) -> T:
             pass
         except BaseException as exc:  # noqa: BLE001 - handed to the caller
             box["error"] = exc
+        finally:
+            done.set()
 
     worker = threading.Thread(target=work, name=f"kvrod-{getattr(fn, '__name__', 'work')}",
                               daemon=True)
-    worker.start()
+    _running[:] = [e for e in _running if not e.is_set()]
+    _running.append(done)              # before start: a signal may come during it
     try:
-        while worker.is_alive():
-            worker.join(POLL_S)
+        worker.start()
+        while not done.wait(POLL_S):
+            pass
     except BaseException:
         cancel.set()
-        _workers.append(worker)
         raise
     if "error" in box:
         raise box.pop("error")

@@ -100,6 +100,15 @@ def bonded(polys: Sequence[Polygon], tol: float, names: Sequence[str] | None = N
     coincide exactly and are noded as one."""
     out = list(polys)
     n = len(out)
+    names = list(names) if names is not None else [f"{path}[{i}]" for i in range(n)]
+    for i, p in enumerate(out):
+        thick = 2.0 * p.area / p.length if p.length > 0 else 0.0
+        if n > 1 and thick < 4.0 * tol:
+            raise ParameterError(f"{path}[{i}].shape", names[i], f"a region thicker than "
+                                 f"the section's round-off, {tol:.3g} m ({SNAP_RELATIVE:g} "
+                                 f"of its size; here about {thick:.3g} m thick, 2 area / "
+                                 "perimeter): thinner, its edges are one with its "
+                                 "neighbours'")
     if n < 2:
         return out
 
@@ -111,7 +120,6 @@ def bonded(polys: Sequence[Polygon], tol: float, names: Sequence[str] | None = N
         out[i] = shapely.snap(out[i], vertices(range(i)), tol)
     for i in range(n):
         out[i] = shapely.snap(out[i], vertices([j for j in range(n) if j != i]), tol)
-    names = list(names) if names is not None else [f"{path}[{i}]" for i in range(n)]
     for i, p in enumerate(out):
         if not isinstance(p, Polygon) or not p.is_valid or not p.area > 0.0:
             raise ParameterError(f"{path}[{i}].shape", names[i],

@@ -19,8 +19,8 @@ a grid (Cartesian product, in the order the keys are written) or as an explicit 
     poisson_ratio = 0.45
 
 ``problem`` names a problem file (its path relative to the study file) or built-in problem
-(``scenario``, its earlier name, is accepted too). Parameter names are the short aliases of the command line
-(:data:`runtime.problem.schema.ALIASES`: ``tau``, ``tau_S``, ``n_elements``,
+(``scenario``, its earlier name, is accepted too). Parameter names are the short aliases
+of the command line (:data:`runtime.problem.schema.ALIASES`: ``tau``, ``tau_S``, ``n_elements``,
 ``youngs_modulus``, ``tip_force``, ...) or any dotted path of the problem file (e.g.
 ``loads.0.time.start``); ``tau`` sets tau_S = tau_B = tau (the paper's convention). Every
 point is built through the problem schema when the study is loaded, so a bad name, type or
