@@ -100,7 +100,12 @@ def _cmd_calibrate_dma(args) -> int:
         raise _cli_error(f"kvrod calibrate: {exc}") from None
     fit = dma.fit_prony(*data, poisson_ratio=args.nu, per_decade=args.per_decade)
     table = fit.material(args.density)
-    material_from_mapping(table)          # a material kvrod accepts, before writing it
+    try:
+        material_from_mapping(table)      # a material kvrod accepts, before writing it
+    except ValueError as exc:             # the data's moduli, with --density
+        raise _cli_error(f"kvrod calibrate: {args.dma}: the fitted material is not one "
+                         f"kvrod accepts (with --density {args.density:g} kg/m^3): "
+                         f"{exc}") from None
     out = Path(args.out)
     with results_folder(out, "calibrate", markers=("dma.json",), overwrite=args.overwrite,
                         names=("dma.json", "dma.png", "material.toml")):
