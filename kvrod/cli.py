@@ -8,6 +8,7 @@ exit code; library code never prints, this module does.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 from collections.abc import Sequence
@@ -315,6 +316,24 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
     print(str(message), file=sys.stderr, flush=True)
 
 
+def _stopped(code: int, argv: Sequence[str] | None) -> int:
+    """The exit code of an interrupted command. As the program itself (``argv`` None: the
+    console script, ``python -m kvrod``) with a computation still running in a worker
+    thread (a section analysis inside a factorization), the process ends here with
+    ``os._exit``: the interpreter's normal exit under such a thread may crash
+    (:func:`runtime.signals.workers_alive`). Called in-process (tests), it returns."""
+    import os
+
+    from runtime.signals import workers_alive
+
+    if argv is None and workers_alive():
+        for stream in (sys.stdout, sys.stderr):
+            with contextlib.suppress(Exception):
+                stream.flush()
+        os._exit(code)
+    return code
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the `kvrod` console script: the one error boundary of the CLI.
 
@@ -359,7 +378,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
     except KeyboardInterrupt:
         print("kvrod: interrupted", file=sys.stderr)
-        return 130
+        return _stopped(130, argv)
     except SystemExit:
         raise
     except BaseException as exc:
@@ -367,7 +386,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         if isinstance(exc, Terminated):
             print("kvrod: terminated", file=sys.stderr)
-            return 143
+            return _stopped(143, argv)
         if not isinstance(exc, Exception):
             raise
         if os.environ.get("KVROD_DEBUG", "") not in ("", "0"):

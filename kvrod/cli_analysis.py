@@ -65,7 +65,7 @@ def _modes_into(args, problem, out: Path) -> int:
         if m.doubt:
             print(f"kvrod modes: warning: mode {m.index} ({m.family}): {m.doubt}",
                   file=sys.stderr)
-    paths = write_modes(res, out)
+    paths = write_modes(res, out, figures=args.plots)
     print(f"wrote {out}/{', '.join(p.name for p in paths)}")
     return 0
 
@@ -100,7 +100,12 @@ def _cmd_calibrate_dma(args) -> int:
         raise _cli_error(f"kvrod calibrate: {exc}") from None
     fit = dma.fit_prony(*data, poisson_ratio=args.nu, per_decade=args.per_decade)
     table = fit.material(args.density)
-    material_from_mapping(table)          # a material kvrod accepts, before writing it
+    try:
+        material_from_mapping(table)      # a material kvrod accepts, before writing it
+    except ValueError as exc:             # the data's moduli, with --density
+        raise _cli_error(f"kvrod calibrate: {args.dma}: the fitted material is not one "
+                         f"kvrod accepts (with --density {args.density:g} kg/m^3): "
+                         f"{exc}") from None
     out = Path(args.out)
     with results_folder(out, "calibrate", markers=("dma.json",), overwrite=args.overwrite,
                         names=("dma.json", "dma.png", "material.toml")):
@@ -157,6 +162,13 @@ def _cmd_calibrate(args) -> int:
 
         if isinstance(exc, ParameterError):
             raise
+        if (isinstance(exc, cal.RecordSignError) and args.tip_force is not None
+                and args.tip_force < 0):
+            raise _cli_error(f"kvrod calibrate: --tip-force = {args.tip_force:g} N is "
+                             f"negative: it releases the model from x = {exc.release_x:.4g} "
+                             f"m, the other side of the record's first maximum "
+                             f"{exc.first:.4g} m; give the magnitude of the static tip force "
+                             "(> 0; its direction is the problem's end load)") from None
         raise _cli_error(f"kvrod calibrate: {args.data}: {exc}") from None
     with results_folder(Path(args.out), "calibrate", markers=("calibration.json",),
                         overwrite=args.overwrite,
@@ -240,6 +252,9 @@ def add_commands(sub, parser_class) -> None:
                         "column)")
     m.add_argument("--deformed", action="store_true",
                    help="linearise about the static state under the problem's loads")
+    m.add_argument("--plots", action="store_true",
+                   help="also draw mode_shapes.png and mode_shapes_3d.png (or later: kvrod "
+                        "plot DIR)")
     m.add_argument("--out", help="results folder (default results/modes-SCENARIO[-deformed])")
     m.add_argument("--overwrite", action="store_true",
                    help="replace a result already in --out (default: refuse)")

@@ -169,9 +169,7 @@ def _calibration(out: Path) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     sc = load_problem("cantilever", {"tau": CAL_TAU, "n_elements": CAL_DATA_N,
                                      "t_end": CAL_T_END, "output_step": CAL_DT})
-    run = simulate(sc)
-    if run.status != "finished":
-        raise RuntimeError(f"synthetic data run failed: {run.message}")
+    run = simulate(sc).finished("synthetic data run")
     rng = np.random.default_rng(CAL_SEED)
     t, x = run.t, run.tip[0] + CAL_NOISE * rng.standard_normal(run.t.size)
     data = out / "synthetic.csv"

@@ -25,11 +25,11 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
-
 from runtime.io.folder import FolderError
 
 PREFIX = "kvrod plot"
+#: what to do about a damaged file of a run or a static result
+_AGAIN = "run the problem again (DIR/problem.toml) to rewrite it"
 #: folders whose figures come with the command that wrote them: marker -> (command,
 #: figures, why they cannot be redrawn)
 FIGURES_ONLY = {
@@ -134,8 +134,10 @@ def _check(folder: Path, animate: str | None) -> str:
         why = animation_unavailable(animate)
         if why is not None:
             raise FolderError(f"{PREFIX}: --animate {animate}: {why}")
-        with np.load(folder / "series.npz", allow_pickle=False) as f:
-            frames = f["centreline"].shape[0] if "centreline" in f.files else 0
+        from runtime.io.results import read_npz
+
+        series = read_npz(folder / "series.npz", ("centreline",), hint=_AGAIN)
+        frames = series["centreline"].shape[0] if "centreline" in series else 0
         if frames < 2:
             raise FolderError(f"{PREFIX}: --animate: the run in {where} kept no centreline "
                            "frames (simulation.centreline_frames = 0, or written before kvrod "
@@ -164,11 +166,20 @@ def _plot_run(folder: Path, animate: str | None) -> Plotted:
 
 
 def _plot_static(folder: Path) -> Plotted:
+    from runtime.io.results import DamagedFileError, read_npz
     from runtime.io.shapes import plot_static
 
     s = _summary(folder)
-    with np.load(folder / "static.npz", allow_pickle=False) as f:
-        pos, ref = f["positions"], f["reference"]
+    path = folder / "static.npz"
+    arrays = read_npz(path, ("positions", "reference"), hint=_AGAIN)
+    pos, ref = arrays.get("positions"), arrays.get("reference")
+    if (pos is None or ref is None or pos.ndim != 2 or pos.shape[0] != 3
+            or pos.shape != ref.shape or pos.shape[1] < 2 or pos.dtype.kind not in "fiu"
+            or ref.dtype.kind not in "fiu"):
+        raise DamagedFileError(f"{path} is damaged (positions and reference must be two "
+                               f"(3, n) arrays of numbers; here "
+                               f"{None if pos is None else pos.shape} and "
+                               f"{None if ref is None else ref.shape}); {_AGAIN}")
     status = s.get("status", "")
     title = f"{s.get('problem', folder.name)}: static equilibrium" + (
         f" ({status}: last converged load step)" if status and status != "finished" else "")

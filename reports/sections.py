@@ -12,7 +12,8 @@ the results folder, under the name in :data:`RESULTS`):
 3. the same strip with a viscoelastic damping film bonded below it (``--set``): the
    viscous centroid far from the elastic centroid.
 
-What the couplings do, without a rod simulation (the rod kernels take diagonal matrices):
+What the couplings do, from the section's matrices alone (independently of the rod
+kernels, which simulate composite sections with their 6x6 matrices):
 the damping ratio of the first bending mode of a cantilever of each section, from the
 complex-modulus Euler-Bernoulli beam (:func:`references.viscoelastic_beam.
 euler_bernoulli_eigenvalues`) whose bending modulus EI*(s) is the section's K + s V

@@ -27,7 +27,8 @@ FORBIDDEN = {
 
 #: the floors of runtime/, bottom up: a module may import its own floor and those below
 RUNTIME_FLOORS: tuple[tuple[str, ...], ...] = (
-    ("errors", "native", "version"),   # errors; compiling native code; the version
+    ("errors", "native", "signals", "version"),   # errors; compiling native code; Ctrl-C
+                                                  # and SIGTERM around C code; the version
     ("section",),                      # cross-section analysis (NumPy/SciPy/shapely)
     ("solvers",),                      # integrator, statics, run driver: no problem known
     ("model",),                        # the rod over the generated kernels
@@ -96,8 +97,8 @@ def test_every_runtime_package_has_a_floor():
     assert names == floors, (names - floors, floors - names)
 
 
-#: runtime/section is a floor below runtime/problem: NumPy, SciPy, shapely, cytriangle and
-#: runtime.errors only (no SymPy, nothing else of runtime)
+#: runtime/section is a floor below runtime/problem: NumPy, SciPy, shapely, cytriangle,
+#: runtime.errors and runtime.signals only (no SymPy, nothing else of runtime)
 SECTION_ALLOWED = {"numpy", "scipy", "shapely", "cytriangle", "runtime", "__future__",
                    "math", "dataclasses", "collections", "typing"}
 
@@ -118,7 +119,7 @@ def test_section_layer():
     for f in sorted((ROOT / "runtime" / "section").rglob("*.py")):
         mods = imported_modules(f)
         wrong = {m for m in mods if m.split(".")[0] not in SECTION_ALLOWED
-                 or (m.startswith("runtime") and not (m == "runtime.errors"
+                 or (m.startswith("runtime") and not (m in ("runtime.errors", "runtime.signals")
                                                       or m.startswith("runtime.section")))}
         if wrong:
             bad[str(f.relative_to(ROOT))] = sorted(wrong)

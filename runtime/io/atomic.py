@@ -3,8 +3,12 @@
 ``with atomic_path(path) as tmp: write(tmp)`` writes under a temporary name in the same
 folder (``.NAME.PID.tmp[SUFFIX]``) and renames it onto ``path`` at the end, so a reader
 never sees half a file and a run that dies leaves the previous complete file. If writing
-fails (disk full, Ctrl-C, a bug) the temporary file is removed, and an OSError without a
-file name gets the destination's name, so the one-line error says which file.
+fails (disk full, a bug) the temporary file is removed, and an OSError without a file
+name gets the destination's name, so the one-line error says which file. Ctrl-C or
+SIGTERM during a write is delivered once the file is complete
+(:func:`runtime.signals.held_signals`: an interrupt inside ``zipfile`` left the
+archive's writer open, and ``np.savez`` then raised a ValueError instead; a second signal
+stops the write at once).
 """
 
 from __future__ import annotations
@@ -15,6 +19,8 @@ import os
 from collections.abc import Iterator
 from pathlib import Path
 
+from runtime.signals import held_signals
+
 
 @contextlib.contextmanager
 def atomic_path(path: Path, suffix: str = "") -> Iterator[Path]:
@@ -22,15 +28,17 @@ def atomic_path(path: Path, suffix: str = "") -> Iterator[Path]:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp{suffix}")
-    try:
-        yield tmp
-        tmp.replace(path)
-    except BaseException as exc:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
-        if isinstance(exc, OSError) and exc.filename is None:
-            raise OSError(exc.errno or errno.EIO, exc.strerror or str(exc), str(path)) from exc
-        raise
+    with held_signals():
+        try:
+            yield tmp
+            tmp.replace(path)
+        except BaseException as exc:
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+            if isinstance(exc, OSError) and exc.filename is None:
+                raise OSError(exc.errno or errno.EIO, exc.strerror or str(exc),
+                              str(path)) from exc
+            raise
 
 
 def write_text(path: Path, text: str) -> Path:

@@ -107,9 +107,35 @@ def existing_result(path: Path, markers: Iterable[str] = ("summary.json",)) -> s
     return None
 
 
+#: the marker file of each command's result in a folder, and the command that writes it
+RESULT_MARKERS = {"summary.json": "kvrod simulate or kvrod static",
+                  "modes.json": "kvrod modes", "section.json": "kvrod section",
+                  "calibration.json": "kvrod calibrate", "dma.json": "kvrod calibrate --dma",
+                  "compare_damping.json": "kvrod compare-damping",
+                  "study.toml": "kvrod sweep"}
+
+
+def refuse_other_result(path: Path, command: str, markers: Iterable[str],
+                        overwrite: bool = False) -> None:
+    """Raise :class:`FolderError` when ``path`` holds another command's result (a marker
+    of :data:`RESULT_MARKERS` not among ``markers``) and ``overwrite`` is off: a section
+    result and a run are not mixed in one folder by accident. With ``overwrite`` the
+    command writes beside it (and replaces only its own files)."""
+    if overwrite:
+        return
+    own = set(markers)
+    for name, writer in RESULT_MARKERS.items():
+        if name not in own and (Path(path) / name).is_file():
+            raise FolderError(f"kvrod {command}: results folder {str(path)!r} holds a "
+                              f"`{writer}` result ({name}); choose another --out, or use "
+                              "--overwrite to write beside it (its files are kept)")
+
+
 def refuse_existing(path: Path, command: str, markers: Iterable[str] = ("summary.json",),
                     overwrite: bool = False, resumable: bool = False) -> str | None:
-    """Raise :class:`FolderError` when ``path`` holds a result and ``overwrite`` is off.
+    """Raise :class:`FolderError` when ``path`` holds a result and ``overwrite`` is off:
+    one of the command's own (``markers``) or another command's
+    (:func:`refuse_other_result`).
 
     A result still marked ``running`` without a live lock is an interrupted run (SIGKILL):
     it is refused too, and the message points at ``--resume`` where the command has it.
@@ -120,7 +146,10 @@ def refuse_existing(path: Path, command: str, markers: Iterable[str] = ("summary
         raise FolderError(f"kvrod {command}: results folder {str(path)!r} is in use by process "
                           f"{holder} (lock file {LOCK_NAME}); wait for it or choose another "
                           "--out")
+    markers = tuple(markers)
     status = existing_result(path, markers)
+    if status is None:
+        refuse_other_result(path, command, markers, overwrite)
     if status is None or overwrite:
         return status
     hint = "use --overwrite to replace it" + (" or --resume to continue it" if resumable

@@ -41,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from runtime.io.results import write_json, write_npz
+from runtime.io.results import read_npz, write_json, write_npz
 
 FORMAT = 2
 JSON_NAME = "modes.json"
@@ -126,11 +126,13 @@ def read_modes(out: Path) -> ModesFile:
             raise ModesFileError(f"{str(path)!r} holds no mode shapes") from None
         return ModesFile(data, modes, disp, rot, None, None, None)
     npz = out / str(data.get("shapes", NPZ_NAME))
+    keys = ("displacement", "rotation", "equilibrium", "equilibrium_frames", "reference")
     try:
-        with np.load(npz, allow_pickle=False) as f:
-            arrays = {k: f[k] for k in ("displacement", "rotation", "equilibrium",
-                                        "equilibrium_frames", "reference")}
-    except (OSError, ValueError, KeyError, EOFError) as exc:
+        arrays = read_npz(npz, keys)
+        missing = [k for k in keys if k not in arrays]
+        if missing:
+            raise KeyError(", ".join(missing))
+    except (OSError, ValueError, KeyError) as exc:
         raise ModesFileError(f"the mode shapes {str(npz)!r} are missing or unreadable "
                              f"({type(exc).__name__}); run kvrod modes again") from None
     if arrays["displacement"].shape[0] != len(modes):

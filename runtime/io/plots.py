@@ -212,18 +212,18 @@ class LoadedRun:
     EMPTY = {"tip": (3, 0), "start": (3, 0), "centreline": (0, 3, 0), "reference": (3, 0)}
 
     def __init__(self, out: Path) -> None:
-        import zipfile
+        from runtime.io.results import DamagedFileError, read_npz
 
         path = Path(out) / "series.npz"
+        hint = "run the problem again (DIR/problem.toml) to rewrite it"
+        arrays = read_npz(path, self.KEYS, hint=hint)
         try:
-            with np.load(path, allow_pickle=False) as f:
-                for k in self.KEYS:
-                    setattr(self, k, np.asarray(f[k], dtype=float) if k in f.files else
-                            np.zeros(self.EMPTY.get(k, 0)))
-        except (OSError, ValueError, TypeError, EOFError, zipfile.BadZipFile) as exc:
-            raise ValueError(f"{path} is damaged ({type(exc).__name__}: "
-                             f"{' '.join(str(exc).split())[:120]}); run the problem again "
-                             "(DIR/problem.toml) to rewrite it") from None
+            for k in self.KEYS:
+                setattr(self, k, np.asarray(arrays[k], dtype=float) if k in arrays else
+                        np.zeros(self.EMPTY.get(k, 0)))
+        except (TypeError, ValueError) as exc:
+            raise DamagedFileError(f"{path} is damaged ({type(exc).__name__}: "
+                                   f"{' '.join(str(exc).split())[:120]}); {hint}") from None
         nt = self.t.shape
         bad = [k for k in ("tip", "start") if getattr(self, k).shape[1:] != nt] + [
             k for k in ("kinetic", "elastic", "dissipated", "external_work")

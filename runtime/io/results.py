@@ -52,6 +52,33 @@ def write_npz(path: Path, **arrays: np.ndarray) -> Path:
     return path
 
 
+class DamagedFileError(ValueError):
+    """A results file that cannot be read back (truncated, not what it should hold); the
+    message names the file."""
+
+
+def read_npz(path: Path, keys: tuple[str, ...] | None = None, *,
+             hint: str = "") -> dict[str, np.ndarray]:
+    """The arrays of an NPZ file (all, or those of ``keys`` it holds), read at once.
+
+    Anything that goes wrong reading the bytes of an existing file (a truncated archive,
+    a damaged member, a header claiming an impossible shape) is the file's damage:
+    :class:`DamagedFileError` naming it, ``hint`` (what to do) appended. A missing file
+    is a FileNotFoundError.
+    """
+    path = Path(path)
+    try:
+        with np.load(path, allow_pickle=False) as f:
+            names = f.files if keys is None else [k for k in keys if k in f.files]
+            return {k: np.asarray(f[k]) for k in names}
+    except FileNotFoundError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - any failure to decode the bytes
+        what = " ".join(str(exc).split())[:120]
+        raise DamagedFileError(f"{path} is damaged ({type(exc).__name__}: {what})"
+                               + (f"; {hint}" if hint else "")) from None
+
+
 def write_run(out_dir: Path, run, extra: dict | None = None) -> dict:
     """summary.json, series.npz and problem.toml of a
     :class:`runtime.simulate.simulate.SimulationResult`.
@@ -180,8 +207,7 @@ def load_checkpoint(out_dir: Path, parameters: dict,
         raise CheckpointError(f"--resume: no checkpoint in {str(out_dir)!r} (nothing to "
                               "resume)")
     try:
-        with np.load(path, allow_pickle=False) as f:
-            data = {k: f[k] for k in f.files}
+        data = read_npz(path)
         saved = json.loads(str(data.pop("parameters_json")))
         counters = json.loads(str(data.pop("counters_json")))
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:

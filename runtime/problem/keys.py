@@ -111,6 +111,12 @@ KEYS: tuple[Key, ...] = (
        "section of named materials ([[section.regions]], [materials.NAME]; its 6x6 "
        "matrices from the finite-element section analysis, as kvrod section reports them)",
        invalid="hexagon"),
+    _k("section", "file", "-", "-", "a section file (the TOML kvrod section reads: "
+       "[section] with [materials.NAME], or a shape with [material]), relative to the "
+       "problem file", "the section (and its materials) from a section file; beside it "
+       "[section] gives only damping and shear_correction, and the problem no [materials] "
+       "(nor [material] where the file has one); a problem written back holds the section "
+       "itself", invalid="missing_section.toml"),
     _k("section", "damping", "-", '"consistent"', "consistent, naive; with "
        "material.damping (its earlier place, still read) the same route",
        "the rod viscosity: from the dissipation on the section's elastic deformation "

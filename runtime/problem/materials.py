@@ -44,6 +44,7 @@ from runtime.problem.sections import (
     Section,
     Shape,
 )
+from runtime.section.materials import check_wave_speed
 
 #: DAMPING_ROUTES lives in runtime.problem.sections (the key is section.damping); imported
 #: here for the material's own checks and the older imports
@@ -86,6 +87,15 @@ class KelvinVoigt:
             C.positive("material.density_end", self.density_end)
         if self.youngs_modulus_end is not None:
             C.positive("material.youngs_modulus_end", self.youngs_modulus_end)
+        check_wave_speed(self.youngs_modulus, self.density, "material.youngs_modulus",
+                         "material.density")
+        if self.youngs_modulus_end is not None or self.density_end is not None:
+            E_end = self.youngs_modulus_end
+            rho_end = self.density_end
+            check_wave_speed(self.youngs_modulus if E_end is None else E_end,
+                             self.density if rho_end is None else rho_end,
+                             "material.youngs_modulus" + ("" if E_end is None else "_end"),
+                             "material.density" + ("" if rho_end is None else "_end"))
 
     @property
     def tau_E(self) -> float:
@@ -216,6 +226,9 @@ class GeneralizedMaxwell:
         if not self.branches:
             raise ParameterError("material.branches", [], "at least one branch "
                                  "[[material.branches]] (without: model = \"kelvin_voigt\")")
+        if self.youngs_modulus > 0.0:        # the branches: the glassy modulus's bound
+            check_wave_speed(self.youngs_modulus, self.density, "material.youngs_modulus",
+                             "material.density")
         if self.youngs_modulus == 0.0 and not any(b.shear_modulus > 0 for b in self.branches):
             raise ParameterError("material.youngs_modulus", 0.0, "> 0, or a branch with "
                                  "shear stiffness (the rod would have no stiffness)")

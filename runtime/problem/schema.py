@@ -854,6 +854,9 @@ class Problem:
             raise ParameterError("loads", loads_m, "an array of tables [[loads]]")
         loads = tuple(load_from_mapping(f"loads[{i}]", ld, base)
                       for i, ld in enumerate(loads_m))
+        from runtime.problem.section_file import with_section_file
+
+        m = with_section_file(m, base)
         zones_m = m.get("zones")
         zone_composite = isinstance(zones_m, list) and any(
             isinstance(z, Mapping) and isinstance(z.get("section"), Mapping)

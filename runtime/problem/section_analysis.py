@@ -31,10 +31,8 @@ from runtime.problem import coerce as C
 from runtime.problem.materials import GeneralizedMaxwell, KelvinVoigt
 from runtime.problem.registry import EXAMPLES_DIR, ProblemFileError, read_toml
 from runtime.problem.schema import Problem, apply_override, section_and_material
+from runtime.problem.section_file import SECTION_FILE_KEYS, with_section_file
 from runtime.problem.sections import Composite, GivenStiffness, Shape
-
-#: the keys of a section file
-SECTION_FILE_KEYS = ("name", "description", "section", "materials", "material")
 
 
 class SectionSpec:
@@ -161,7 +159,8 @@ def load_section(spec: str | Path | Problem | Mapping[str, Any],
             return SectionSpec(p.name, p.description, p.section, p.material, where)
         for key, value in (overrides or {}).items():
             apply_override(doc, key, value)
-        return _section_file(doc, where, name)
+        base = None if where == "table" else Path(where).parent
+        return _section_file(dict(with_section_file(doc, base)), where, name)
     except ParameterError as exc:
         if exc.where or where == "table":
             raise

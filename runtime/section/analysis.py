@@ -28,6 +28,7 @@ from runtime.section import fe
 from runtime.section.materials import SectionMaterial, as_material_map
 from runtime.section.mesh import Mesh, mesh_regions
 from runtime.section.regions import Region, check_regions, regions_from_mapping
+from runtime.signals import check_cancelled, run_interruptibly
 
 #: strain and resultant names, in the order of the 6x6 matrices
 STRAINS = ("Gamma1", "Gamma2", "Gamma3", "K1", "K2", "K3")
@@ -296,8 +297,23 @@ def analyse_section(regions: Sequence[Region] | Any,
     Raises
     ------
     ParameterError
-        Bad regions or materials (overlaps, unknown material names, bad values).
+        Bad regions or materials (overlaps, unknown material names, bad values), or a
+        mesh the mesher cannot make within its budget
+        (:class:`~runtime.section.mesh.MeshBudgetError`).
+
+    Notes
+    -----
+    Called from the main thread, the analysis runs in a worker thread
+    (:func:`runtime.signals.run_interruptibly`): Ctrl-C and SIGTERM stop it within a
+    fraction of a second, also during a factorization of many seconds.
     """
+    return run_interruptibly(_analyse, regions, materials, tol=tol, h=h,
+                             max_levels=max_levels)
+
+
+def _analyse(regions: Sequence[Region] | Any, materials: Mapping[str, SectionMaterial] | Any,
+             *, tol: float, h: float | None, max_levels: int) -> SectionResult:
+    """:func:`analyse_section` in the calling thread."""
     if not (isinstance(tol, (int, float)) and 1e-9 <= tol <= 0.1):
         raise ParameterError("tol", tol, "a relative tolerance, 1e-9 ... 0.1")
     mats_map = as_material_map(materials)
@@ -326,6 +342,7 @@ def analyse_section(regions: Sequence[Region] | Any,
     change = math.inf
     hk = float(h)
     for _ in range(max_levels):
+        check_cancelled()                  # the caller was interrupted: stop here
         lev = _solve_level(regions, used, hk, factors, origin, L, c0, v0)
         if levels:
             change = _change(lev, levels[-1])

@@ -46,6 +46,34 @@ M_VOL = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
 BULK_RATIO_SPLIT = 10.0
 
 
+#: the speed of light [m/s]: no solid carries elastic waves faster (real solids: below
+#: 2e4 m/s); a modulus and density whose wave speed sqrt(E / density) exceeds it are off
+#: by orders of magnitude (E = 1e300 Pa was blamed on the run's t_end, after the periods
+#: it gave)
+WAVE_SPEED_MAX = 299_792_458.0
+#: a solid's typical modulus [Pa] and density [kg/m^3]: of the two, the one further from
+#: its typical value (in decades) is named when the wave speed is impossible
+TYPICAL_MODULUS, TYPICAL_DENSITY = 1e9, 1e3
+
+
+def check_wave_speed(modulus: float, density: float, modulus_path: str,
+                     density_path: str) -> None:
+    """ParameterError unless sqrt(modulus / density) <= :data:`WAVE_SPEED_MAX`, naming the
+    modulus [Pa] or the density [kg/m^3], whichever is further in decades from a typical
+    solid's (:data:`TYPICAL_MODULUS`, :data:`TYPICAL_DENSITY`); both > 0."""
+    c2 = WAVE_SPEED_MAX * WAVE_SPEED_MAX
+    if modulus <= c2 * density:
+        return
+    why = "a wave speed sqrt(E / density) below the speed of light, 3e8 m/s"
+    if abs(math.log10(modulus / TYPICAL_MODULUS)) >= abs(math.log10(density /
+                                                                    TYPICAL_DENSITY)):
+        raise ParameterError(modulus_path, modulus, f"at most density x c^2 = "
+                             f"{c2 * density:.3g} Pa for {density_path} = {density:g} "
+                             f"kg/m^3 ({why})")
+    raise ParameterError(density_path, density, f"at least E / c^2 = {modulus / c2:.3g} "
+                         f"kg/m^3 for {modulus_path} = {modulus:g} Pa ({why})")
+
+
 def shear_modulus(E: float, nu: float) -> float:
     """G = E / (2 (1 + nu)) [Pa]."""
     return E / (2.0 * (1.0 + nu))
@@ -200,6 +228,7 @@ def isotropic(name: str, E: float, nu: float, density: float, tau_S: float = 0.0
               "e.g. rubber, may take nu = 0.4999)", low=-1.0, high=0.5, low_incl=False,
               high_incl=False)
     ck.positive(f"{p}.density", density, "kg/m^3")
+    check_wave_speed(float(E), float(density), f"{p}.youngs_modulus", f"{p}.density")
     ck.nonnegative(f"{p}.tau_S", tau_S, "s")
     ck.nonnegative(f"{p}.tau_B", tau_B, "s")
     eta, zeta = viscosities_from_times(E, nu, tau_S, tau_B)
@@ -223,6 +252,8 @@ def anisotropic(name: str, stiffness: np.ndarray, viscosity: np.ndarray | None,
     V = np.zeros((6, 6)) if viscosity is None else np.asarray(viscosity, dtype=float)
     _check_matrices(p, C, V, ("stiffness_matrix", "viscosity_matrix"))
     ck.positive(f"{p}.density", density, "kg/m^3")
+    check_wave_speed(float(np.max(np.diag(C))), float(density), f"{p}.stiffness_matrix",
+                     f"{p}.density")
     C, V = 0.5 * (C + C.T), 0.5 * (V + V.T)
     T = stress_transform(rotation(*orientation))
     Cs, Vs = T @ C @ T.T, T @ V @ T.T

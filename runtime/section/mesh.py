@@ -20,8 +20,9 @@ import shapely
 from shapely.geometry import LineString, Polygon
 from shapely.ops import unary_union
 
+from runtime.errors import ParameterError
 from runtime.section.element import shape_functions
-from runtime.section.regions import Region
+from runtime.section.regions import Region, region_names, region_polygons
 
 #: minimum angle of the triangles (degrees; Triangle guarantees termination below 20.7)
 MIN_ANGLE = 30.0
@@ -29,6 +30,17 @@ MIN_ANGLE = 30.0
 #: circles of radius h q^k, k = 1..GRADING_LEVELS, around every such vertex
 GRADING_RATIO = 0.3
 GRADING_LEVELS = 4
+#: most points Triangle may add to one mesh (a mesh of the analysis' largest size,
+#: MAX_NODES = 120 000 six-node nodes, has about 30 000 corners); about a second of
+#: meshing at worst (measured on a sliver between two plies)
+MAX_STEINER = 60_000
+#: most points of the regions' outlines (with the grading rings) given to the mesher
+MAX_INPUT_POINTS = 50_000
+
+
+class MeshBudgetError(ParameterError):
+    """A mesh of the regions that Triangle could not make within the point budget; names
+    ``section.regions`` and the regions where it got stuck."""
 
 
 @dataclass(frozen=True)
@@ -44,7 +56,7 @@ class Mesh:
 
 
 def _pslg(regions: Sequence[Region], h: float):
-    polys = [r.shape.polygon(h) for r in regions]
+    polys = region_polygons(regions, h)
     boundaries = unary_union([p.boundary for p in polys])       # noded: shared edges once
     lines = list(getattr(boundaries, "geoms", [boundaries]))
     index: dict[tuple[float, float], int] = {}
@@ -136,27 +148,79 @@ def _inverted(nodes: np.ndarray, elements: np.ndarray) -> np.ndarray:
     return np.any(det <= 0, axis=1)
 
 
+def steiner_budget(polys: Sequence[Polygon], sizes: Sequence[float], n_input: int) -> int:
+    """The most points Triangle may add to a mesh of ``polys`` with elements of edge
+    ``sizes[i]`` [m] in region i from ``n_input`` given points: four times the number of
+    elements their areas take, 20 per given point (the grading at corners takes about
+    100 per corner, 32 of them given) and 1000, at most ``MAX_STEINER``. Measured: the
+    meshes of the examples add 0.3 ... 3 times the elements' number."""
+    elements = sum(p.area / (hi * hi * math.sqrt(3.0) / 4.0)
+                   for p, hi in zip(polys, sizes, strict=True))
+    return int(min(MAX_STEINER, 4.0 * elements + 20.0 * n_input + 1000.0))
+
+
+def _stuck(regions: Sequence[Region], polys: Sequence[Polygon], corners: np.ndarray,
+           triangles: np.ndarray, budget: int, h: float) -> MeshBudgetError:
+    """The error of a mesh that ran out of points: where its smallest triangles are, and
+    the regions whose edges pass there."""
+    p = corners[triangles[:, :3]]
+    area = 0.5 * np.abs((p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1])
+                        - (p[:, 2, 0] - p[:, 0, 0]) * (p[:, 1, 1] - p[:, 0, 1]))
+    longest = np.max(np.linalg.norm(p - np.roll(p, 1, axis=1), axis=2), axis=1)
+    height = 2.0 * area / np.maximum(longest, 1e-300)     # across the thinnest direction
+    small = np.argsort(height)[:20]
+    where = p[small].mean(axis=1)
+    size = float(height[small].max())
+    edges = shapely.boundary(np.array(polys, dtype=object))
+    dist = np.array([[shapely.distance(e, shapely.points(w)) for w in where] for e in edges])
+    near = [i for i in range(len(polys))
+            if np.any(dist[i] <= 10.0 * size + 1e-9 * h)] or [int(np.argmin(dist.min(1)))]
+    names = region_names(regions)
+    x = where[0]
+    return MeshBudgetError(
+        "section.regions", ", ".join(names[i] for i in near),
+        f"regions the mesher can fill with at most {budget} points; near ({x[0]:.6g}, "
+        f"{x[1]:.6g}) m the edges of {' and '.join(repr(names[i]) for i in near)} nearly "
+        f"meet along a length and need elements {size:.2g} m thin against the section's "
+        f"{h:.3g} m (a sliver of gap or overlap): make such edges coincide (points closer "
+        f"than 1e-12 of the section's size are joined) or keep them further apart")
+
+
 def mesh_regions(regions: Sequence[Region], h: float,
                  factors: Sequence[float] | None = None) -> Mesh:
     """Mesh the regions with six-node triangles of edge length about ``h`` [m] (times
     ``factors[i]`` <= 1 in region i: thin regions take smaller elements without refining
-    the whole section)."""
+    the whole section).
+
+    Raises :class:`MeshBudgetError` when the mesh needs more than
+    :func:`steiner_budget` points or its outlines more than ``MAX_INPUT_POINTS``."""
     polys, vertices, segments, holes = _pslg(regions, h)
     curves = [c for r in regions for c in r.shape.curves(h)]
     extra = _grading_points(vertices, segments, polys, h, curves)
     if extra.size:
         vertices = np.vstack([vertices, extra])
+    sizes = [h * (1.0 if factors is None else factors[i]) for i in range(len(polys))]
+    if vertices.shape[0] > MAX_INPUT_POINTS:
+        counts = [len(shapely.get_coordinates(p)) for p in polys]
+        i = int(np.argmax(counts))
+        raise MeshBudgetError(f"section.regions[{i}].shape", region_names(regions)[i],
+                              f"outlines of at most {MAX_INPUT_POINTS} points in all (with "
+                              f"the mesh grading at corners; here {vertices.shape[0]}, "
+                              f"{counts[i]} of them this region's)")
+    budget = steiner_budget(polys, sizes, vertices.shape[0])
     control = []
     for i, p in enumerate(polys):
-        hi = h * (1.0 if factors is None else factors[i])
         q = shapely.get_coordinates(p.representative_point())[0]
-        control.append([q[0], q[1], float(i), hi * hi * math.sqrt(3.0) / 4.0])
+        control.append([q[0], q[1], float(i), sizes[i] * sizes[i] * math.sqrt(3.0) / 4.0])
     tri = {"vertices": vertices, "segments": segments, "regions": control}
     if holes:
         tri["holes"] = holes
-    out = cytriangle.triangulate(tri, f"pq{MIN_ANGLE:.1f}Aao2Q")
+    out = cytriangle.triangulate(tri, f"pq{MIN_ANGLE:.1f}Aao2QS{budget}")
     nodes = np.asarray(out["vertices"], dtype=float)
     elements = np.asarray(out["triangles"], dtype=np.int64)
+    added = np.unique(elements[:, :3])
+    if np.count_nonzero(added >= vertices.shape[0]) >= budget:
+        raise _stuck(regions, polys, nodes, elements, budget, h)
     # Triangle's midside order is (1-2, 2-0, 0-1); ours is (0-1, 1-2, 2-0)
     elements = elements[:, [0, 1, 2, 5, 3, 4]]
     region = np.asarray(out["triangle_attributes"], dtype=float)[:, 0].round().astype(int)

@@ -132,6 +132,17 @@ class SimulationResult:
     centreline_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
     centreline: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 0)))
 
+    def finished(self, what: str) -> SimulationResult:
+        """This result if the run finished; the interrupt (Ctrl-C, SIGTERM) that stopped it
+        raised again; otherwise RuntimeError("``what`` failed: ``message``"). For callers
+        that need a whole run (a fit, a study of one case): an interrupted run is no failed
+        one."""
+        if self.interrupt is not None:
+            raise self.interrupt
+        if self.status != "finished":
+            raise RuntimeError(f"{what} failed: {self.message}")
+        return self
+
     @property
     def y_static(self) -> np.ndarray | None:
         return None if self.static is None else self.static.y

@@ -134,7 +134,8 @@ def validate_signal(t: Sequence[float], x: Sequence[float],
         raise ValueError(f"time is not strictly increasing (non-monotone): t[{i}] = {t[i]!r} "
                          f">= t[{i + 1}] = {t[i + 1]!r}")
     if t[0] < 0:
-        raise ValueError(f"t must start at the release, t >= 0; got t[0] = {t[0]!r}")
+        raise ValueError(f"t must start at the release, t >= 0; got t[0] = {float(t[0]):g} s "
+                         "(is t offset? subtract the release time from it)")
     tk, _ = signal_maxima(t, x)
     if tk.size == 0:
         raise ValueError("no maxima in the signal: it must contain oscillation peaks x > 0")
@@ -224,7 +225,8 @@ def record_centre(t: np.ndarray, x: np.ndarray) -> float:
     return float(trapezoid(x[sel], t[sel]) / (t[sel][-1] - t[sel][0]))
 
 
-def smoothed_maxima(t: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def smoothed_maxima(t: np.ndarray, x: np.ndarray, start_at_rest: bool = True
+                    ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`signal_maxima` of the record smoothed over a tenth of its
     :func:`dominant_period` (a moving average on a uniform grid): the maxima of the
     oscillation, not of the noise on it."""
@@ -239,7 +241,35 @@ def smoothed_maxima(t: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarra
         lo = np.clip(np.arange(n) - w // 2, 0, n)
         hi = np.clip(np.arange(n) + w // 2 + 1, 0, n)
         xu = (c[hi] - c[lo]) / (hi - lo)
-    return signal_maxima(tu, xu)
+    return signal_maxima(tu, xu, start_at_rest=start_at_rest)
+
+
+def release_offset(t: np.ndarray, x: np.ndarray) -> tuple[float, float]:
+    """(delta, T) [s]: how far the record's maxima lie from the multiples of their period
+    T. A linear oscillator released from rest at t = 0 has its maxima at exactly k T_d
+    (x = x0 e^(-zeta w t) (cos w_d t + zeta w / w_d sin w_d t), whose velocity is
+    proportional to sin w_d t), with damping too, so delta ~ 0; a record whose time does
+    not count from the release (a logger's clock, a still start before the release) has
+    delta = its offset modulo T. The interior maxima t_k of :func:`smoothed_maxima` are
+    numbered by whole periods n_k of the :func:`dominant_period` and fitted by
+    t_k = a + T n_k (once more without those off the fit by over a quarter period: maxima
+    of noise); delta = a - T round(a / T), in (-T/2, T/2]; (nan, nan) with fewer than two
+    maxima."""
+    tk, _ = smoothed_maxima(t, x, start_at_rest=False)
+    T = dominant_period(t, x)
+    if tk.size < 2 or not math.isfinite(T):
+        return math.nan, math.nan
+    n = np.round((tk - tk[0]) / T)
+    a = float(tk[0])
+    for _ in range(2):
+        if np.ptp(n) == 0:
+            break
+        T, a = (float(v) for v in np.polyfit(n, tk, 1))
+        keep = np.abs(tk - (a + T * n)) <= 0.25 * T
+        if keep.all() or keep.sum() < 2:
+            break
+        tk, n = tk[keep], n[keep]
+    return a - T * round(a / T), T
 
 
 #: a record whose scale differs from the model's by more than this factor is rejected
@@ -250,8 +280,20 @@ MAX_RECORD_PERIODS = 200.0
 #: the residual is the record's own noise (at most NOISE_FACTOR times its estimate)
 MAX_RESIDUAL_FRACTION = 0.3
 NOISE_FACTOR = 1.5
+#: the record must start within this many periods of the release (t = 0), and its
+#: maxima lie within RELEASE_PHASE periods of whole periods after it (a time offset)
+RELEASE_START = 0.25
+RELEASE_PHASE = 0.1
 #: a record whose noise is this fraction of its RMS or more holds no measurable decay
 MAX_NOISE_FRACTION = 0.7
+
+
+class RecordSignError(ValueError):
+    """The record's first maximum and the model's release lie on opposite sides (x m)."""
+
+    def __init__(self, message: str, first: float, release_x: float) -> None:
+        super().__init__(message)
+        self.first, self.release_x = first, release_x
 
 
 def check_signal_against_model(t: np.ndarray, x: np.ndarray, release_x: float,
@@ -267,8 +309,9 @@ def check_signal_against_model(t: np.ndarray, x: np.ndarray, release_x: float,
     i0 = int(np.argmax(np.abs(x[: max(3, x.size // 10)])))
     first = float(x[i0])
     if first < 0 < release_x or first > 0 > release_x:
-        raise ValueError(f"the record starts at x = {first:.4g} m but the model is released "
-                         f"from x = {release_x:.4g} m: is the sign of the record flipped?")
+        raise RecordSignError(f"the record starts at x = {first:.4g} m but the model is "
+                              f"released from x = {release_x:.4g} m: is the sign of the "
+                              "record flipped?", first, release_x)
     if release_x == 0.0:
         raise ValueError("the model is not deflected before the release (its tip force is "
                          "zero): give the static tip force of the experiment (--tip-force)")
@@ -287,10 +330,31 @@ def check_signal_against_model(t: np.ndarray, x: np.ndarray, release_x: float,
                     " (check the units of t and the problem's geometry and material)")
             raise ValueError(f"the signal's period {T:.4g} s is {r:.3g} times the model's "
                              f"first period {period:.4g} s{unit}")
+    _check_release_time(t, x, T if math.isfinite(T) else period)
     span = float(t[-1] - t[0])
     if span > MAX_RECORD_PERIODS * period:
         raise ValueError(f"the record spans {span:.4g} s = {span / period:.3g} periods of the "
                          f"model (at most {MAX_RECORD_PERIODS:g}); cut it to the decay")
+
+
+def _check_release_time(t: np.ndarray, x: np.ndarray, period: float) -> None:
+    """t must count from the release: the record starts within RELEASE_START periods of
+    t = 0 and its maxima lie within RELEASE_PHASE periods (or two samples) of the
+    multiples of their period (:func:`release_offset`); ValueError naming the offset."""
+    if t[0] > RELEASE_START * period:
+        raise ValueError(f"the record starts at t = {float(t[0]):.6g} s, "
+                         f"{float(t[0]) / period:.3g} periods of {period:.4g} s after t = 0: t "
+                         "must be the time since the release (is t offset? subtract the "
+                         "release time from it)")
+    delta, T = release_offset(t, x)
+    if not math.isfinite(delta):
+        return
+    dt = float(np.median(np.diff(t)))
+    if abs(delta) > max(RELEASE_PHASE * T, 2.0 * dt):
+        raise ValueError(f"the record's maxima lie {delta:+.4g} s ({delta / T:+.2f} periods) "
+                         f"off the multiples of its period {T:.4g} s: t = 0 must be the "
+                         "release from rest, whose maxima fall at whole periods (is t offset "
+                         f"by {delta:.4g} s, or does the record begin before the release?)")
 
 
 def noise_rms(x: np.ndarray) -> float:
@@ -395,8 +459,7 @@ def _simulate_tip(problem, tau: float, t_end: float) -> tuple[np.ndarray, np.nda
     from runtime.simulate.simulate import simulate
 
     run = simulate(problem.with_overrides({"tau": float(tau), "t_end": float(t_end)}))
-    if run.status != "finished":
-        raise RuntimeError(f"simulation at tau = {tau!r} s failed: {run.message}")
+    run.finished(f"simulation at tau = {tau!r} s")
     c, ref = _component(problem)
     return run.t, run.tip[c] - ref
 

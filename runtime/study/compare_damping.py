@@ -177,9 +177,7 @@ def axial_release(problem: Problem, force: float, t_end: float,
                                 "statics.load_steps": 1, "analysis.maxima": "end.z",
                                 "simulation.t_end": t_end,
                                 "simulation.output_step": t_end / (samples - 1)})
-    run = simulate(p)
-    if run.status != "finished":
-        raise RuntimeError(f"axial release failed: {run.message}")
+    run = simulate(p).finished("axial release")
     u = run.tip[2] - problem.rod.length
     return DecaySignal(t=run.t, x=u, peaks_t=run.peaks_t, peaks_x=run.peaks_x)
 
@@ -328,9 +326,8 @@ def compare_damping(n_elements: int = 20, tau_S: float = 0.04, tau_B: float = 0.
             modes = modal_analysis(build_model(unloaded(sc)), count=12)
             mode = next(m for m in modes if m.family == _FAMILY[case])
             if case == "bending":
-                run = simulate(sc.with_overrides({"t_end": t_bend}))
-                if run.status != "finished":
-                    raise RuntimeError(f"cantilever ({route}) failed: {run.message}")
+                run = simulate(sc.with_overrides({"t_end": t_bend})).finished(
+                    f"cantilever ({route})")
                 sig = DecaySignal(t=run.t, x=run.tip[0], peaks_t=run.peaks_t,
                                   peaks_x=run.peaks_x)
             else:

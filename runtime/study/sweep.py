@@ -18,9 +18,9 @@ a grid (Cartesian product, in the order the keys are written) or as an explicit 
     tau = 0.04
     poisson_ratio = 0.45
 
-``problem`` names a problem file or built-in problem (``scenario``, its earlier name, is
-accepted too). Parameter names are the short aliases of the command line
-(:data:`runtime.problem.schema.ALIASES`: ``tau``, ``tau_S``, ``n_elements``,
+``problem`` names a problem file (its path relative to the study file) or built-in problem
+(``scenario``, its earlier name, is accepted too). Parameter names are the short aliases
+of the command line (:data:`runtime.problem.schema.ALIASES`: ``tau``, ``tau_S``, ``n_elements``,
 ``youngs_modulus``, ``tip_force``, ...) or any dotted path of the problem file (e.g.
 ``loads.0.time.start``); ``tau`` sets tau_S = tau_B = tau (the paper's convention). Every
 point is built through the problem schema when the study is loaded, so a bad name, type or
@@ -299,6 +299,11 @@ def load_study(path: str | os.PathLike, max_points: int | float | None = None) -
 
     path = Path(path)
     data, text = read_toml(path, StudyError, "study file")
+    key = "problem" if "problem" in data else "scenario"
+    spec = data.get(key)      # a problem file's path is relative to the study file
+    if isinstance(spec, str) and (spec.endswith(".toml") or "/" in spec) \
+            and not Path(spec).is_absolute():
+        data = {**data, key: str((path.parent / spec).resolve())}
     return study_from_dict(data, name=path.stem, source=text, max_points=max_points)
 
 

@@ -431,6 +431,10 @@ class Templates:
         self._cli(["section", str(f), "--out", str(path)])
         assert (path / "section.json").exists() and (path / "section.png").exists()
 
+    def _make_static(self, path: Path) -> None:
+        self._cli(["static", "cantilever", "--n-elements", "4", "--out", str(path)])
+        assert (path / "static.npz").exists()
+
     def _make_sweep(self, path: Path) -> None:
         st = self.root / "study_ok.toml"
         st.write_text(STUDY_OK)
@@ -1036,6 +1040,98 @@ def run_modes_repeatedly(ctx: Ctx, times: int = 12, budget: float = 30.0) -> Res
 
 
 # --------------------------------------------------------------------------------------
+# issue 30: round-off plies, signals during a section analysis and a fit, damaged files
+# --------------------------------------------------------------------------------------
+
+#: two plies written with decimal centres: after round-off they overlap by 8.7e-19 m, and
+#: the mesher refined the sliver between their edges without end (60 MB/s, deaf to Ctrl-C)
+PLIES = """name = "plies"
+[section]
+kind = "composite"
+[[section.regions]]
+name = "bottom"
+material = "a"
+shape = { kind = "rectangle", width = 0.02, height = 0.005, centre = [0, 0.0025] }
+[[section.regions]]
+name = "top"
+material = "b"
+shape = { kind = "rectangle", width = 0.02, height = 0.005, centre = [0, 0.0075] }
+[materials.a]
+youngs_modulus = 1e9
+poisson_ratio = 0.3
+density = 1000.0
+[materials.b]
+youngs_modulus = 2e9
+poisson_ratio = 0.35
+density = 1200.0
+tau_S = 0.01
+"""
+#: the plies as the section of a cantilever
+PLIES_ROD = ("[rod]\nlength = 0.3\nelements = 4\n" + PLIES.replace('name = "plies"\n', "")
+             + '[[loads]]\nkind = "force"\nat = "end"\nvector = [0.01, 0.0, 0.0]\n')
+
+
+def run_signal_section(sig: int, argv: Sequence[str]) -> Callable[[Ctx], Result]:
+    """``kvrod section ...`` (a long analysis: --tol 1e-9) sent ``sig`` (to its group, as
+    Ctrl-C) two seconds after it locked its folder, i.e. inside the analysis (past the
+    imports: a KeyboardInterrupt inside some extension's import makes Python end by
+    SIGINT, returncode -2, even when kvrod caught it); ``elapsed`` is the time from the
+    signal to the exit."""
+    def run(ctx: Ctx) -> Result:
+        p = popen(ctx, [ctx.fmt(a) for a in argv])
+        if not wait_for(lambda: (ctx.out / LOCK_NAME).exists(), 90, p):
+            return finish(p, time.monotonic(), 1)
+        time.sleep(2.0)
+        t_signal = time.monotonic()
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(p.pid, sig)
+        return finish(p, t_signal, 60)
+    return run
+
+
+def _long_decay_text(T: float = 1.8176, zeta: float = 0.002, x0: float = 0.2217,
+                     span: float = 300.0, dt: float = 0.05) -> str:
+    """A lightly damped release record, 165 periods long (t in s since the release, x in
+    m; the model cantilever's period and release deflection at N = 4): each model
+    evaluation of a fit simulates 300 s, so a Ctrl-C lands in the compiled step loop."""
+    wd = 2 * math.pi / T
+    w = wd / math.sqrt(1 - zeta * zeta)
+    t = np.arange(int(round(span / dt)) + 1) * dt
+    x = x0 * np.exp(-zeta * w * t) * (np.cos(wd * t) + zeta * w / wd * np.sin(wd * t))
+    return "t,x\n" + "".join(f"{a:.6g},{b:.6e}\n" for a, b in zip(t, x, strict=True))
+
+
+def run_signal_calibrate(sig: int, delay: float = 8.0) -> Callable[[Ctx], Result]:
+    """``kvrod calibrate`` on the long record, sent ``sig`` (its group) after ``delay`` s,
+    inside a model simulation."""
+    def run(ctx: Ctx) -> Result:
+        (ctx.tmp / "long.csv").write_text(_long_decay_text())
+        t0 = time.monotonic()
+        p = popen(ctx, ["calibrate", "--data", str(ctx.tmp / "long.csv"), "--n-elements",
+                        "16", "--out", str(ctx.out)])
+        time.sleep(delay)
+        if p.poll() is not None:
+            return finish(p, t0, 1)
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(p.pid, sig)
+        return finish(p, t0, 90)
+    return run
+
+
+def npz_bytes(name: str, fn: Callable[[bytes], bytes]) -> Callable:
+    def setup(ctx: Ctx) -> None:
+        p = ctx.out / name
+        p.write_bytes(fn(p.read_bytes()))
+    return setup
+
+
+def _still_start(t: np.ndarray, x: np.ndarray) -> tuple:
+    """The record preceded by half a second at rest: the release is at t = 0.5 s."""
+    before = np.arange(0.0, 0.5, t[1] - t[0])
+    return np.concatenate([before, t + 0.5]), np.concatenate([np.full(before.size, x[0]), x])
+
+
+# --------------------------------------------------------------------------------------
 # the table
 # --------------------------------------------------------------------------------------
 
@@ -1151,7 +1247,7 @@ CASES: list[Case] = [
          note="the run's series.npz stayed beside the static summary: kvrod plot drew the "
               "old run as the folder's result"),
     Case("modes-overwrite-keeps-a-run-beside-it", "data_loss",
-         (*MODES, *OVR, *OUT), 0, (), (template("finished"),),
+         (*MODES, "--plots", *OVR, *OUT), 0, (), (template("finished"),),
          (has("modes.json", "mode_shapes.png", "damping_ratio.png", "series.npz"),)),
     Case("simulate-overwrite-replaces-killed-run-and-checkpoint", "data_loss",
          (*SIM, *OVR, *OUT), 0, (), (template("killed"),),
@@ -1182,7 +1278,7 @@ CASES: list[Case] = [
          (*MODES[:3], "5", *MODES[4:], *OUT), 2, (*FOLDER, OVERWRITE_FLAG),
          (template("modes"),), (UNCHANGED,)),
     Case("modes-overwrite-replaces-modes-result", "data_loss",
-         (*MODES[:3], "5", *MODES[4:], *OVR, *OUT), 0, (), (template("modes"),),
+         (*MODES[:3], "5", *MODES[4:], "--plots", *OVR, *OUT), 0, (), (template("modes"),),
          (json_is("modes.json", lambda d: d["parameters"]["rod"]["elements"] == 5,
                   "the new analysis (n_elements 5)"), has("mode_shapes.png"))),
     Case("modes-bad-count-keeps-modes-result", "data_loss",
@@ -1916,4 +2012,78 @@ CASES: list[Case] = [
          ("static", "{tmp}/rod.toml", *OUT), 2, ("materials.sheath.model", "kelvin_voigt"),
          (write("rod.toml", '[rod]\nlength = 0.3\nelements = 4\n' + MAXWELL_REGION),),
          (ABSENT,), **GUARDED),
+    # ==================================================================================
+    # issue 30: the hostile run of the new inputs
+    # ==================================================================================
+    Case("section-decimal-plies-in-seconds", "hang", ("section", "{tmp}/plies.toml", *OUT),
+         0, (), (write("plies.toml", PLIES),),
+         (json_is("section.json", lambda d: d["mesh"]["converged"]
+                  and d["mesh"]["nodes"] < 20000, "a converged section of a small mesh"),
+          elapsed_below(HANG_TIMEOUT)), mode="subproc", timeout=HANG_TIMEOUT,
+         as_limit=4 << 30, background=True,
+         note="hung: the mesher refined an 8.7e-19 m sliver, 60 MB/s until killed"),
+    Case("modes-of-decimal-plies-rod", "hang", ("modes", "{tmp}/rod.toml", "--count", "2",
+                                                *OUT), 0, (),
+         (write("rod.toml", PLIES_ROD),), (has("modes.json"), elapsed_below(HANG_TIMEOUT)),
+         mode="subproc", timeout=HANG_TIMEOUT, as_limit=4 << 30, background=True),
+    Case("section-ctrl-c-inside-the-analysis", "hang", (), 130, ("interrupted",),
+         (write("plies.toml", PLIES),), (elapsed_below(10.0), ABSENT), mode="custom",
+         run=run_signal_section(signal.SIGINT, ["section", "{tmp}/plies.toml", "--tol",
+                                                "1e-9", *OUT]),
+         note="Triangle and SuperLU hold the main thread: Ctrl-C waited for them (the "
+              "round-off plies: forever)"),
+    Case("section-sigterm-inside-the-analysis", "hang", (), (143, 130),
+         (("terminated", "interrupted"),), (write("plies.toml", PLIES),),
+         (elapsed_below(10.0), ABSENT), mode="custom", run=run_signal_section(
+             signal.SIGTERM, ["section", "{tmp}/plies.toml", "--tol", "1e-9", *OUT])),
+    Case("calibrate-ctrl-c-in-a-simulation-is-interrupted", "traceback", (), 130,
+         ("interrupted",), (), (ABSENT,), mode="custom",
+         run=run_signal_calibrate(signal.SIGINT), slow=True,
+         note="internal error: RuntimeError (simulation ... failed: interrupted)"),
+    Case("plot-damaged-static-named", "traceback", ("plot", "{out}"), 2,
+         ("static.npz", "damaged"),
+         (template("static"), npz_bytes("static.npz", lambda b: b[: len(b) // 2])),
+         (UNCHANGED,), note="internal error BadZipFile"),
+    Case("plot-damaged-modes-npz-named", "traceback", ("plot", "{out}"), 2, ("modes.npz",),
+         (template("modes"), npz_bytes("modes.npz", lambda b: b[: len(b) // 3])),
+         (UNCHANGED,), note="internal error BadZipFile (a held-out variant of the static)"),
+    Case("simulate-E-1e300-names-E", "message", (*SIM, "--E", "1e300", *OUT), 2,
+         ("youngs_modulus", RANGE), (), (ABSENT,), **GUARDED,
+         note="named simulation.t_end, after the periods E gave"),
+    Case("modes-density-1e-300-names-density", "message",
+         (*MODES, "--set", "material.density=1e-300", *OUT), 2, ("material.density", RANGE),
+         (), (ABSENT,), **GUARDED),
+    Case("section-material-E-1e300-named", "message", (*SEC, *OUT), 2,
+         ("materials.core.youngs_modulus", RANGE),
+         (section_file("youngs_modulus = 1e11", "youngs_modulus = 1e300"),), (ABSENT,),
+         **GUARDED, note="analysed, not converged, exit 0"),
+    Case("calibrate-negative-tip-force-named", "message",
+         (*CAL_S, "--tip-force", "-0.05", *OUT), 2, ("--tip-force", "negative"), (),
+         (ABSENT,), note="blamed the record: 'is the sign of the record flipped?'"),
+    Case("calibrate-record-100-s-late-named", "wrong_answer",
+         ("calibrate", "--data", "{tmp}/late.csv", "--n-elements", "4", *OUT), 2,
+         (DATA_NAMED, ("offset", "since the release")),
+         (data_file("late.csv", lambda t, x: (t + 100.0, x)),), (ABSENT,),
+         note="fitted, exit 0, a wrong tau"),
+    Case("calibrate-record-0.37-s-late-named", "wrong_answer",
+         ("calibrate", "--data", "{tmp}/late.csv", "--n-elements", "4", *OUT), 2,
+         (DATA_NAMED, "offset"), (data_file("late.csv", lambda t, x: (t + 0.37, x)),),
+         (ABSENT,), note="fit rejected for its residual, the offset unnamed"),
+    Case("calibrate-record-with-a-still-start-named", "wrong_answer",
+         ("calibrate", "--data", "{tmp}/still.csv", "--n-elements", "4", *OUT), 2,
+         (DATA_NAMED, "before the release"), (data_file("still.csv", _still_start),),
+         (ABSENT,)),
+    Case("modes-draws-pngs-only-with-plots", "message", (*MODES, *OUT), 0, (), (),
+         (has("modes.json", "modes.npz"), lacks("mode_shapes.png", "mode_shapes_3d.png")),
+         note="drew both PNGs every time (simulate draws only with --plots)"),
+    Case("modes-plots-draws-pngs", "message", (*MODES, "--plots", *OUT), 0, (), (),
+         (has("modes.json", "mode_shapes.png", "mode_shapes_3d.png"),)),
+    Case("simulate-into-section-folder-refused", "data_loss", (*SIM, *OUT), 2,
+         (*FOLDER, "section.json", OVERWRITE_FLAG), (template("section"),), (UNCHANGED,),
+         note="the run was written beside the section result"),
+    Case("section-into-run-folder-refused", "data_loss", (*SEC, *OUT), 2,
+         (*FOLDER, "summary.json", OVERWRITE_FLAG), (section_file(), template("finished")),
+         (UNCHANGED,), **GUARDED),
+    Case("modes-into-section-folder-refused", "data_loss", (*MODES, *OUT), 2,
+         (*FOLDER, "section.json"), (template("section"),), (UNCHANGED,)),
 ]

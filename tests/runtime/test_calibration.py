@@ -156,8 +156,8 @@ def test_cli_calibrate_bad_data(tmp_path):
 
 
 def test_cli_modes(tmp_path, capsys):
-    args = parse(["modes", "cantilever", "--n-elements", "8", "--count", "4", "--out",
-                  str(tmp_path / "m")])
+    args = parse(["modes", "cantilever", "--n-elements", "8", "--count", "4", "--plots",
+                  "--out", str(tmp_path / "m")])
     assert args.func(args) == 0
     out = capsys.readouterr().out
     assert "bending-2" in out and "analytic omega" in out

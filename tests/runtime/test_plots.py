@@ -163,8 +163,8 @@ def test_centreline_frames_key_is_checked():
 @pytest.fixture(scope="module")
 def modes_dir(tmp_path_factory):
     out = tmp_path_factory.mktemp("modes") / "m"
-    assert main(["modes", "cantilever", "--n-elements", "8", "--count", "7", "--out",
-                 str(out)]) == 0
+    assert main(["modes", "cantilever", "--n-elements", "8", "--count", "7", "--plots",
+                 "--out", str(out)]) == 0
     return out
 
 
