@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_layout.h.jinja
 // derivation step: discrete_rod
-// inputs sha256: e97f0722897efd4728240bb2bf9cace8e96e3a5c6abcaf7f8554fc9c1cd75468
+// inputs sha256: e94fb27112bc3b0987b1e762f420b383d959f123274e9f8af7b14d25e5220ad5
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*
@@ -108,8 +108,9 @@
 #define BDYJ_OMEGA 7
 
 /* contact (derive/contact.py, contact_pair.py; kernels in rod_contact_kernels.c):
- * quadrature points per segment; a segment or pair whose rod_contact_*_bound exceeds
- * CONTACT_CUTOFF delta contributes nothing above round-off */
+ * quadrature points per segment; a segment or pair whose bound kernel
+ * (rod_contact_<kind>_bound, rod_contact_pair_bound) exceeds CONTACT_CUTOFF delta
+ * contributes nothing above round-off */
 #define NQ 3
 #define CONTACT_CUTOFF 40.0
 /* parameters per obstacle (its current pose first) and per segment's contact with it */

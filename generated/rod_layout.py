@@ -1,7 +1,7 @@
 # GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 # source: derive/templates/rod_layout.py.jinja
 # derivation step: discrete_rod
-# inputs sha256: f32d194f0b476112c849de52b4b7acc44b0a1bd2c1c869dae2938db6bf095a9b
+# inputs sha256: f0c1a6696dae9cdc91c841c1304673e545a4f33dcca144b06036bf40771d9886
 # tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 """State, parameter and diagnostics layout of the discrete rod (the one place that owns it).
@@ -183,8 +183,8 @@ N_BODY_JAC_COLUMNS = 10
 #: contact (derive/contact.py, derive/contact_pair.py; kernels in rod_contact_kernels.c):
 #: NQ quadrature points per segment at QUADRATURE's nodes xi in [0, 1] with its weights
 #: (times the segment's h); rod_contact_<kind> for each of OBSTACLE_KINDS; a segment (or a
-#: pair) whose rod_contact_*_bound exceeds CONTACT_CUTOFF delta contributes nothing above
-#: round-off
+#: pair) whose bound kernel (rod_contact_<kind>_bound, rod_contact_pair_bound) exceeds
+#: CONTACT_CUTOFF delta contributes nothing above round-off
 NQ = 3
 QUADRATURE = ((0.0, 0.5, 1.0), (0.16666666666666666, 0.6666666666666666, 0.16666666666666666))
 OBSTACLE_KINDS = ('plane', 'sphere', 'cylinder', 'pipe')
