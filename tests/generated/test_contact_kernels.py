@@ -534,7 +534,7 @@ def test_segment_through_a_sphere_centre_is_finite():
 
 
 def test_generated_contact_c_compiles_and_equals_the_serialised_kernels(tmp_path):
-    """rod_contact_kernels.c (its own file: ~1.1 MB, beside rod_kernels.c's 1 MB bound)
+    """rod_contact_kernels.c (its own file: ~1.05 MB, beside rod_kernels.c's 1 MB bound)
     compiles on its own (-O0 here, quick) and every kernel in it equals the serialised
     one; the file stays below 1.5 MB."""
     import ctypes
@@ -565,3 +565,33 @@ def test_generated_contact_c_compiles_and_equals_the_serialised_kernels(tmp_path
         got, want = call_compiled(lib, name, **args), call(name, **args)
         for k in want:
             assert np.allclose(got[k], want[k], rtol=1e-13, atol=1e-13 * np.abs(want[k]).max())
+
+
+def test_jacobian_where_the_smoothings_arguments_vanish():
+    """Exactly zero arguments of the softplus (a node at g = 0 on a plane; a node on a
+    capped cylinder's end plane, z = L, beside the rim): the Jacobian is still the
+    central differences' (the geometry's softplus has exact derivatives of every order
+    there; fmax(x, 0) + ln(1 + e^-|x|) would give a second derivative of 0)."""
+    ident = np.array([1.0, 0, 0, 0])
+    ez = np.array([0.0, 0, 1])
+    rng = np.random.default_rng(37)
+    obs = _set(np.zeros(L.N_OBS), O, q=ident, v=rng.standard_normal(3),
+               w=rng.standard_normal(3), axis=ez, radius=R_OBS, length=LENGTH, edge=0.01)
+    base = {"v_a": rng.standard_normal(3), "v_b": rng.standard_normal(3),
+            "p": _unit(rng.standard_normal(4)), "Omega": rng.standard_normal(3),
+            "obs": obs, "cnt": _cnt()}
+    cases = [("plane", {"phi_a": np.array([0.1, 0.2, RADIUS]),
+                        "phi_b": np.array([0.2, 0.25, RADIUS - 0.5 * DELTA])}),
+             ("cylinder", {"phi_a": np.array([R_OBS + 0.005, 0.0, LENGTH]),
+                           "phi_b": np.array([R_OBS + 0.03, 0.05, LENGTH + 0.01])})]
+    for kind, nodes in cases:
+        x = {**base, **nodes}
+        J = call(f"rod_contact_{kind}_jac", **x)["dQ_dx"]
+        fd = np.zeros((9, 19))
+        for name, size in L.CONTACT_JAC_COLUMNS:
+            k = L.CONTACT_JAC_OFFSETS[name]
+            for c in range(size):
+                e = 1e-7 * np.eye(size)[c]
+                fd[:, k + c] = (_Q(kind, {**x, name: x[name] + e})
+                                - _Q(kind, {**x, name: x[name] - e})) / 2e-7
+        assert np.abs(J - fd).max() < 1e-6 * np.abs(J).max(), kind
