@@ -501,17 +501,17 @@ def contact_gap_bound(phi_a, phi_b, obs, cnt, kind: str) -> ca.SX:
 
 def contact_kernels() -> list[ca.Function]:
     """Per kind of :data:`OBSTACLE_KINDS`: ``rod_contact_<kind>``: Q (9) = (f_a, f_b, T)
-    (:data:`CONTACT_FORCES`); ``rod_contact_<kind>_jac``: dQ/dx (9 x 19, dense,
-    column-major in C) in the columns (phi_a, phi_b, p, v_a, v_b, Omega)
+    (:data:`CONTACT_FORCES`); ``rod_contact_<kind>_jac``: dQ/dx (9 x 19, dense, column-
+    major in C) in the columns (phi_a, phi_b, p, v_a, v_b, Omega)
     (:data:`CONTACT_JAC_COLUMNS`; :func:`contact_jacobian`);
-    ``rod_contact_<kind>_diagnostics``: E (J), P_diss (W, damping and friction), P_fric
-    (W, its friction part), F_obs (3, N: the force on the obstacle, spatial), M_obs (3,
-    N m: its moment about c), P_obs (W: power of the obstacle's motion on the rod), g_min
-    (m: the smallest gap of the quadrature points), points (NQ x 4: each point's position
-    and gap); ``rod_contact_<kind>_bound``: g_lb (m), a lower bound of the segment's gap
-    (:func:`contact_gap_bound`). Inputs, in order: phi_a, phi_b, v_a, v_b (3), p (4),
-    Omega (3), obs (:data:`OBS_PARAMS`), cnt (:data:`CNT_PARAMS`); the bound takes phi_a,
-    phi_b, obs, cnt."""
+    ``rod_contact_<kind>_diagnostics``: E (J), P_diss (W, damping and friction), F_obs
+    (3, N: the force on the obstacle, spatial), M_obs (3, N m: its moment about c),
+    P_obs (W: power of the obstacle's motion on the rod), g_min (m: the smallest gap of
+    the quadrature points), points (NQ x 4: each point's position and gap), P_fric (W:
+    the friction's part of P_diss); ``rod_contact_<kind>_bound``: g_lb (m), a lower
+    bound of the segment's gap (:func:`contact_gap_bound`). Inputs, in order: phi_a,
+    phi_b, v_a, v_b (3), p (4), Omega (3), obs (:data:`OBS_PARAMS`), cnt
+    (:data:`CNT_PARAMS`); the bound takes phi_a, phi_b, obs, cnt."""
     out = []
     for kind in OBSTACLE_KINDS:
         s = contact_symbols()
@@ -522,8 +522,8 @@ def contact_kernels() -> list[ca.Function]:
             _fn(name, ins, {"Q": q["Q"]}),
             _fn(name + "_jac", ins, {"dQ_dx": ca.densify(contact_jacobian(s, kind))}),
             _fn(name + "_diagnostics", ins,
-                {k: q[k] for k in ("E", "P_diss", "P_fric", "F_obs", "M_obs", "P_obs",
-                                   "g_min", "points")}),
+                {k: q[k] for k in ("E", "P_diss", "F_obs", "M_obs", "P_obs", "g_min",
+                                   "points", "P_fric")}),
             _fn(name + "_bound", {"phi_a": s.phi_a, "phi_b": s.phi_b, "obs": s.obs,
                                   "cnt": s.cnt},
                 {"g_lb": contact_gap_bound(s.phi_a, s.phi_b, s.obs, s.cnt, kind)}),

@@ -314,12 +314,12 @@ def pair_kernels() -> list[ca.Function]:
     ``rod_contact_pair_jac``: dQ/dx (18 x 38, dense, column-major in C) in the columns
     (phi_a, phi_b, p_1, phi_c, phi_d, p_2, v_a, v_b, Omega_1, v_c, v_d, Omega_2)
     (:data:`PAIR_JAC_COLUMNS`); ``rod_contact_pair_diagnostics``: E (J), P_diss (W),
-    P_fric (W), g_min (m: the pair's gap), st (2: the contact parameters s, t on the two
-    segments), W (m: the contact length), F_12 (3, N: the force segment 2 exerts on
-    segment 1); ``rod_contact_pair_bound``: g_lb (m, :func:`pair_gap_bound`). Inputs, in
-    order: phi_a, phi_b, v_a, v_b (3), p_1 (4), Omega_1 (3), phi_c, phi_d, v_c, v_d (3),
-    p_2 (4), Omega_2 (3), cnt (:data:`PAIR_PARAMS`); the bound takes phi_a, phi_b,
-    phi_c, phi_d, cnt."""
+    g_min (m: the pair's gap), P_fric (W: the friction's part of P_diss), st (2: the
+    contact parameters s, t on the two segments), W (m: the contact length), F_12 (3, N:
+    the force segment 2 exerts on segment 1); ``rod_contact_pair_bound``: g_lb (m,
+    :func:`pair_gap_bound`). Inputs, in order: phi_a, phi_b, v_a, v_b (3), p_1 (4),
+    Omega_1 (3), phi_c, phi_d, v_c, v_d (3), p_2 (4), Omega_2 (3), cnt
+    (:data:`PAIR_PARAMS`); the bound takes phi_a, phi_b, phi_c, phi_d, cnt."""
     s = pair_symbols()
     q = pair_quantities(s)
     rel, vals = q["rel"].stacked(), Relative.values(s)
@@ -330,8 +330,8 @@ def pair_kernels() -> list[ca.Function]:
         _fn("rod_contact_pair", ins, {"Q": out["Q"]}),
         _fn("rod_contact_pair_jac", ins, {"dQ_dx": ca.densify(J)}),
         _fn("rod_contact_pair_diagnostics", ins,
-            {"E": out["E"], "P_diss": out["P_diss"], "P_fric": out["P_fric"],
-             "g_min": out["g"], "st": out["st"], "W": out["W"], "F_12": out["F_12"]}),
+            {"E": out["E"], "P_diss": out["P_diss"], "g_min": out["g"],
+             "P_fric": out["P_fric"], "st": out["st"], "W": out["W"], "F_12": out["F_12"]}),
         _fn("rod_contact_pair_bound", {"phi_a": s.phi_a, "phi_b": s.phi_b, "phi_c": s.phi_c,
                                        "phi_d": s.phi_d, "cnt": s.par},
             {"g_lb": pair_gap_bound(s.phi_a, s.phi_b, s.phi_c, s.phi_d, s.par)}),
