@@ -117,7 +117,7 @@ OBS_PARAMS: tuple[tuple[str, int, str, str], ...] = (
     ("length", 1, "m", "cylinder, pipe: length from the point along the axis; <= 0: "
                        "infinite"),
     ("edge", 1, "m", "cylinder: rounding of the rims; pipe: length over which an open end "
-                     "switches the contact off (> 0 when length > 0)"),
+                     "switches the contact off (> 0 when length > 0, else unused)"),
 )
 #: parameters of one rod-obstacle contact on one segment
 CNT_PARAMS: tuple[tuple[str, int, str, str], ...] = (
@@ -262,7 +262,8 @@ def _cylinder(xo, obs):
     smoothed by ``e softplus(a_i/e) - max(a_i, 0) <= e ln 2``): ``e <~ sqrt(r delta)``
     keeps the rims' error at the rod's surface below delta."""
     z, rho = _axial(xo, obs)
-    R, L, e = _obs(obs, "radius"), _obs(obs, "length"), _obs(obs, "edge")
+    R, L = _obs(obs, "radius"), _obs(obs, "length")
+    e = ca.if_else(L > 0, _obs(obs, "edge"), 1)      # unused, and finite, when infinite
     dr = rho - R
     a = [dr / e, -z / e, (z - L) / e]
     outer = e * ca.sqrt(sum(softplus(ai) ** 2 for ai in a))
@@ -276,7 +277,8 @@ def _pipe(xo, obs):
     """Inside a cylinder: ``d = R - rho``; open ends (length L > 0): the contact is
     switched off beyond them, ``chi = sigmoid(z/e) sigmoid((L - z)/e)``."""
     z, rho = _axial(xo, obs)
-    R, L, e = _obs(obs, "radius"), _obs(obs, "length"), _obs(obs, "edge")
+    R, L = _obs(obs, "radius"), _obs(obs, "length")
+    e = ca.if_else(L > 0, _obs(obs, "edge"), 1)      # unused, and finite, when infinite
     chi = ca.if_else(L > 0, sigmoid(z / e) * sigmoid((L - z) / e), 1)
     return R - rho, chi
 

@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_layout.h.jinja
 // derivation step: discrete_rod
-// inputs sha256: e94fb27112bc3b0987b1e762f420b383d959f123274e9f8af7b14d25e5220ad5
+// inputs sha256: d818784bd69ba9cf04bbf742c2ef8356a2e5d0f6df0890d5e64aa852ad32b925
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*

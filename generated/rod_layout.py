@@ -1,7 +1,7 @@
 # GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 # source: derive/templates/rod_layout.py.jinja
 # derivation step: discrete_rod
-# inputs sha256: f0c1a6696dae9cdc91c841c1304673e545a4f33dcca144b06036bf40771d9886
+# inputs sha256: 1080da2af328e39ae9afa80f2709edb211c6b1dc660a62c65692e1081871b1bc
 # tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 """State, parameter and diagnostics layout of the discrete rod (the one place that owns it).
@@ -199,7 +199,7 @@ OBS_PARAMS = (
     ("axis", 3, "1", "plane: its outward normal; cylinder, pipe: the axis direction (obstacle frame, any length \u003e 0; unused by a sphere)"),
     ("radius", 1, "m", "sphere, cylinder, pipe: the radius (\u003e 0)"),
     ("length", 1, "m", "cylinder, pipe: length from the point along the axis; \u003c= 0: infinite"),
-    ("edge", 1, "m", "cylinder: rounding of the rims; pipe: length over which an open end switches the contact off (\u003e 0 when length \u003e 0)"),
+    ("edge", 1, "m", "cylinder: rounding of the rims; pipe: length over which an open end switches the contact off (\u003e 0 when length \u003e 0, else unused)"),
 )
 N_OBS = 22
 OBS_OFFSETS = {'c': 0, 'q': 3, 'v': 7, 'w': 10, 'point': 13, 'axis': 16, 'radius': 19, 'length': 20, 'edge': 21}

@@ -595,3 +595,19 @@ def test_jacobian_where_the_smoothings_arguments_vanish():
                 fd[:, k + c] = (_Q(kind, {**x, name: x[name] + e})
                                 - _Q(kind, {**x, name: x[name] - e})) / 2e-7
         assert np.abs(J - fd).max() < 1e-6 * np.abs(J).max(), kind
+
+
+@pytest.mark.parametrize("kind", ["cylinder", "pipe"])
+def test_an_infinite_cylinder_needs_no_edge(kind):
+    """length <= 0 with edge = 0 (the rounding is unused): every kernel is finite and
+    the same as with any edge."""
+    rng = np.random.default_rng(38)
+    x = _case(kind, "infinite", rng)
+    for length in (0.0, -1.0):
+        y = {**x, "obs": _set(x["obs"], O, edge=0.0, length=length)}
+        z = {**x, "obs": _set(x["obs"], O, edge=0.3, length=length)}
+        for suffix in ("", "_jac", "_diagnostics"):
+            got = call(f"rod_contact_{kind}{suffix}", **y)
+            want = call(f"rod_contact_{kind}{suffix}", **z)
+            for k in want:
+                assert np.all(np.isfinite(got[k])) and np.array_equal(got[k], want[k]), k
