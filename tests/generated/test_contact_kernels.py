@@ -611,3 +611,74 @@ def test_an_infinite_cylinder_needs_no_edge(kind):
             want = call(f"rod_contact_{kind}{suffix}", **z)
             for k in want:
                 assert np.all(np.isfinite(got[k])) and np.array_equal(got[k], want[k]), k
+
+
+def test_a_round_rod_across_an_incline_rolls():
+    """A rigid round segment (mass m, length h, radius r, inertia m r^2/2 about its axis)
+    lying across an incline at theta, integrated with the plane kernel's force and torque
+    (scipy BDF): without friction it slides, s = g sin(theta) t^2/2; with mu above
+    tan(theta)/3 it rolls, s = 2/3 g sin(theta) t^2/2 and omega = -v/r; with less it slides
+    and turns, s = g (sin - mu cos) t^2/2, omega = -2 mu g cos(theta) t/r (rigid-body
+    mechanics; the regularised friction creeps by ~v_s)."""
+    from scipy.integrate import solve_ivp
+
+    m, h, r, g, theta, t_end = 1.0, 1.0, 0.05, 9.81, 0.3, 0.5
+    k = 1e5
+    n = np.array([-np.sin(theta), 0, np.cos(theta)])
+    down = np.array([-np.cos(theta), 0, -np.sin(theta)])
+    obs = _set(np.zeros(L.N_OBS), O, q=[1.0, 0, 0, 0], axis=n)
+    e = np.array([0, 0.5 * h, 0])
+
+    def run(mu):
+        cnt = _cnt(k=k, delta=1e-5, c=2 * np.sqrt(k * m / h), mu=mu, v_s=1e-3, r=r, h=h)
+
+        def rhs(t, y):
+            Q = _Q("plane", {"phi_a": y[0:3] - e, "phi_b": y[0:3] + e, "v_a": y[3:6],
+                             "v_b": y[3:6], "p": [1.0, 0, 0, 0], "Omega": [0, y[6], 0],
+                             "obs": obs, "cnt": cnt})
+            return np.r_[y[3:6], (Q[0:3] + Q[3:6]) / m - [0, 0, g], Q[7] / (0.5 * m * r**2)]
+
+        y0 = np.r_[n * (r - m * g * np.cos(theta) / (k * h)), np.zeros(4)]
+        y = solve_ivp(rhs, (0, t_end), y0, method="BDF", rtol=1e-8, atol=1e-10).y[:, -1]
+        return (y[0:3] - y0[0:3]) @ down, y[6], y[3:6] @ down
+
+    s, omega, _ = run(0.0)
+    assert s == pytest.approx(0.5 * g * np.sin(theta) * t_end**2, rel=1e-6) and omega == 0.0
+    s, omega, v = run(0.5)
+    assert s == pytest.approx(0.5 * 2 / 3 * g * np.sin(theta) * t_end**2, rel=1e-3)
+    assert omega == pytest.approx(-v / r, rel=1e-3)
+    mu = 0.05
+    s, omega, _ = run(mu)
+    assert s == pytest.approx(0.5 * g * (np.sin(theta) - mu * np.cos(theta)) * t_end**2,
+                              rel=1e-3)
+    assert omega == pytest.approx(-2 * mu * g * np.cos(theta) * t_end / r, rel=1e-3)
+
+
+@pytest.mark.parametrize("restitution", [0.2, 0.5, 0.8])
+def test_damping_from_a_restitution_coefficient(restitution):
+    """A rigid segment (mass m, length h) hitting a plane flat at v0 rebounds at
+    restitution * v0 when c = 2 zeta sqrt(k m/h), zeta = -ln e/sqrt(pi^2 + ln^2 e) (the
+    linear spring-dashpot's; its penetration 30 delta deep), the rule docs/design.md
+    gives the runtime's default."""
+    from scipy.integrate import solve_ivp
+
+    m, h, k, delta, v0 = 2.0, 0.5, 1e6, 1e-6, 0.3
+    lg = np.log(restitution)
+    c = 2 * (-lg / np.sqrt(np.pi**2 + lg**2)) * np.sqrt(k * m / h)
+    obs = _set(np.zeros(L.N_OBS), O, q=[1.0, 0, 0, 0], axis=[0, 0, 1.0])
+    cnt = _cnt(k=k, delta=delta, c=c, mu=0.0, r=0.01, h=h)
+    e = np.array([0.5 * h, 0, 0])
+
+    def rhs(t, y):
+        x, v = np.r_[0, 0, y[0]], np.r_[0, 0, y[1]]
+        Q = _Q("plane", {"phi_a": x - e, "phi_b": x + e, "v_a": v, "v_b": v,
+                         "p": [1.0, 0, 0, 0], "Omega": np.zeros(3), "obs": obs, "cnt": cnt})
+        return [y[1], (Q[2] + Q[5]) / m]
+
+    def left(t, y):
+        return y[0] - 0.01 - 50 * delta
+    left.terminal, left.direction = True, 1
+    sol = solve_ivp(rhs, (0, 1.0), [0.01 + 20 * delta, -v0], method="BDF", events=left,
+                    rtol=1e-9, atol=1e-12)
+    assert v0 * np.sqrt(m / (k * h)) > 30 * delta
+    assert sol.y[1, -1] == pytest.approx(restitution * v0, rel=2e-3)
