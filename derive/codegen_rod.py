@@ -8,6 +8,10 @@ Files (all in ``generated/``):
   and rigid bodies) through one ``casadi.CodeGenerator`` (size independent of N);
 * ``rod_kernels_x4.c`` / ``rod_kernels_x4.h``: the hottest kernels four elements per
   call (:mod:`derive.codegen_lanes`, from their SX algorithms; bit for bit the scalar ones);
+* ``rod_contact_kernels.c`` / ``rod_contact_kernels.h``: the contact kernels of
+  :func:`derive.contact.contact_kernels` (rod-obstacle) and
+  :func:`derive.contact_pair.pair_kernels` (rod-rod) through a CodeGenerator of their
+  own (their ~0.9 MB would take rod_kernels.c over its 1 MB bound);
 * ``rod_layout.h``: the layout the C assembly (``runtime/model/native/rod_assembly.c``,
   written by hand) is compiled with: cell sizes, field and parameter offsets, band
   widths, kernel work sizes (``templates/rod_layout.h.jinja``);
@@ -24,7 +28,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from derive import cache, codegen_lanes, links
+from derive import cache, codegen_lanes, contact, contact_pair, links
 from derive import discrete_rod as dr
 from derive.artifact import Artifact, sha256_text
 from derive.templating import render
@@ -59,6 +63,20 @@ def _build() -> tuple[list[ca.Function], str, str, tuple, tuple]:
         h_text = (Path(tmp) / "rod_kernels.h").read_text()
     bands = _band_data()
     return fns, c_text, h_text, bands["bands"], bands["static"]
+
+
+@lru_cache(maxsize=1)
+def _build_contact() -> tuple[list[ca.Function], str, str]:
+    """The contact kernels and their C source and header (rod_contact_kernels.c/.h)."""
+    fns = contact.contact_kernels() + contact_pair.pair_kernels()
+    cg = ca.CodeGenerator("rod_contact_kernels.c", CODEGEN_OPTIONS)
+    for f in fns:
+        cg.add(f)
+    with tempfile.TemporaryDirectory() as tmp:
+        cg.generate(tmp + "/")
+        c_text = (Path(tmp) / "rod_contact_kernels.c").read_text()
+        h_text = (Path(tmp) / "rod_contact_kernels.h").read_text()
+    return fns, c_text, h_text
 
 
 def _band_data() -> dict:
@@ -103,6 +121,7 @@ def _n1_delta(formula) -> tuple[int, int]:
 
 def _context() -> dict:
     fns, _, _, bands, sbands = _build()
+    fns = fns + _build_contact()[0]
     kl, ku = bands[-1]
     if bands[1] != bands[-1] or bands[2] != bands[-1]:
         raise RuntimeError(f"band widths not constant for N >= 2: {bands}")
@@ -140,6 +159,27 @@ def _context() -> dict:
         "body_jac_columns": links.BODY_JAC_COLUMNS,
         "body_jac_offsets": links.BODY_JAC_OFFSETS,
         "n_body_jac_columns": links.N_BODY_JAC_COLUMNS,
+        "nq": contact.NQ, "quadrature": contact.QUADRATURE,
+        "obstacle_kinds": contact.OBSTACLE_KINDS, "contact_cutoff": contact.CONTACT_CUTOFF,
+        "obs_params": contact.OBS_PARAMS, "n_obs": contact.N_OBS,
+        "obs_offsets": contact.OBS_OFFSETS,
+        "cnt_params": contact.CNT_PARAMS, "n_cnt": contact.N_CNT,
+        "cnt_offsets": contact.CNT_OFFSETS,
+        "contact_forces": contact.CONTACT_FORCES,
+        "contact_force_offsets": contact.CONTACT_FORCE_OFFSETS,
+        "n_contact_forces": contact.N_CONTACT_FORCES,
+        "contact_jac_columns": contact.CONTACT_JAC_COLUMNS,
+        "contact_jac_offsets": contact.CONTACT_JAC_OFFSETS,
+        "n_contact_jac_columns": contact.N_CONTACT_JAC_COLUMNS,
+        "contact_point_columns": contact.CONTACT_POINT_COLUMNS,
+        "pair_params": contact_pair.PAIR_PARAMS, "n_pair": contact_pair.N_PAIR,
+        "pair_offsets": contact_pair.PAIR_OFFSETS,
+        "pair_forces": contact_pair.PAIR_FORCES,
+        "pair_force_offsets": contact_pair.PAIR_FORCE_OFFSETS,
+        "n_pair_forces": contact_pair.N_PAIR_FORCES,
+        "pair_jac_columns": contact_pair.PAIR_JAC_COLUMNS,
+        "pair_jac_offsets": contact_pair.PAIR_JAC_OFFSETS,
+        "n_pair_jac_columns": contact_pair.N_PAIR_JAC_COLUMNS,
         "cell0_fields_b": dr.CELL0_FIELDS_B, "cell_fields_b": dr.CELL_FIELDS_B,
         "cell0_offsets_b": _offsets_b(dr.CELL0_FIELDS_B),
         "cell_offsets_b": _offsets_b(dr.CELL_FIELDS_B),
@@ -204,6 +244,17 @@ def artifacts() -> list[Artifact]:
                      x4_hash),
             Artifact("rod_kernels_x4.h", codegen_lanes.header(x4),
                      "derive.codegen_lanes.header", STEP, x4_hash)]
+    cfns, cc_text, ch_text = _build_contact()
+    cserial = {f.name(): f.serialize() for f in cfns}
+    contact_hash = sha256_text(opts, *(cserial[k] for k in sorted(cserial)))
+    out += [Artifact("rod_contact_kernels.c", cc_text,
+                     "casadi.CodeGenerator(derive.contact.contact_kernels()"
+                     " + derive.contact_pair.pair_kernels())", STEP, contact_hash,
+                     {"functions": {f.name(): _signature(f) for f in cfns}}),
+            Artifact("rod_contact_kernels.h", ch_text, "casadi.CodeGenerator (header)", STEP,
+                     contact_hash)]
+    serial.update(cserial)
+    sigs.update({f.name(): _signature(f) for f in cfns})
     for tpl, path in (("rod_layout.h.jinja", "rod_layout.h"),
                       ("rod_layout.py.jinja", "rod_layout.py")):
         text = _render(tpl, ctx)

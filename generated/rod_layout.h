@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_layout.h.jinja
 // derivation step: discrete_rod
-// inputs sha256: aff475847aae28fe943e1fda7b15cca646873bad09e5289375641318e28ed2dc
+// inputs sha256: d818784bd69ba9cf04bbf742c2ef8356a2e5d0f6df0890d5e64aa852ad32b925
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*
@@ -107,6 +107,76 @@
 #define BDYJ_P 3
 #define BDYJ_OMEGA 7
 
+/* contact (derive/contact.py, contact_pair.py; kernels in rod_contact_kernels.c):
+ * quadrature points per segment; a segment or pair whose bound kernel
+ * (rod_contact_<kind>_bound, rod_contact_pair_bound) exceeds CONTACT_CUTOFF delta
+ * contributes nothing above round-off */
+#define NQ 3
+#define CONTACT_CUTOFF 40.0
+/* parameters per obstacle (its current pose first) and per segment's contact with it */
+#define NOBS 22
+#define OBS_C 0
+#define OBS_Q 3
+#define OBS_V 7
+#define OBS_W 10
+#define OBS_POINT 13
+#define OBS_AXIS 16
+#define OBS_RADIUS 19
+#define OBS_LENGTH 20
+#define OBS_EDGE 21
+#define NCNT 7
+#define CNT_K 0
+#define CNT_DELTA 1
+#define CNT_C 2
+#define CNT_MU 3
+#define CNT_V_S 4
+#define CNT_R 5
+#define CNT_H 6
+/* the blocks of rod_contact_<kind>'s Q; the columns of its _jac (NCNTQ x NCNTJ, dense,
+ * column-major) */
+#define NCNTQ 9
+#define CNTQ_F_A 0
+#define CNTQ_F_B 3
+#define CNTQ_T 6
+#define NCNTJ 19
+#define CNTJ_PHI_A 0
+#define CNTJ_PHI_B 3
+#define CNTJ_P 6
+#define CNTJ_V_A 10
+#define CNTJ_V_B 13
+#define CNTJ_OMEGA 16
+/* a pair of segments (rod_contact_pair): parameters, blocks of Q, columns of its _jac
+ * (NPAIRQ x NPAIRJ, dense, column-major) */
+#define NPAIR 8
+#define PAIR_K 0
+#define PAIR_DELTA 1
+#define PAIR_C 2
+#define PAIR_MU 3
+#define PAIR_V_S 4
+#define PAIR_R_1 5
+#define PAIR_R_2 6
+#define PAIR_L_X 7
+#define NPAIRQ 18
+#define PAIRQ_F_A 0
+#define PAIRQ_F_B 3
+#define PAIRQ_T_1 6
+#define PAIRQ_F_C 9
+#define PAIRQ_F_D 12
+#define PAIRQ_T_2 15
+#define NPAIRJ 38
+#define PAIRJ_PHI_A 0
+#define PAIRJ_PHI_B 3
+#define PAIRJ_P_1 6
+#define PAIRJ_PHI_C 10
+#define PAIRJ_PHI_D 13
+#define PAIRJ_P_2 16
+#define PAIRJ_V_A 20
+#define PAIRJ_V_B 23
+#define PAIRJ_OMEGA_1 26
+#define PAIRJ_V_C 29
+#define PAIRJ_V_D 32
+#define PAIRJ_OMEGA_2 35
+
 /* most relaxation terms; parameters per rod, segment, joint, node load, segment load */
 #define MAX_NB 24
 #define NPAR 55
@@ -162,7 +232,7 @@
 #define MAXW 694
 #define MAXIW 1
 #define MAXARG 15
-#define MAXRES 7
+#define MAXRES 8
 #define MAXJAC 720
 
 #endif

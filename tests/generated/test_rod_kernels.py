@@ -10,7 +10,7 @@ import pytest
 
 from derive import codegen_rod
 from derive import discrete_rod as dr
-from derive import links
+from derive import contact, contact_pair, links
 from derive.artifacts import generated_dir, render
 from generated import rod_layout as L
 from runtime.model.casadi_oracle import load_kernels
@@ -61,7 +61,8 @@ def test_layout_module_renders_the_derive_constants():
         assert lay.bandwidths(n) == dr.bandwidths(n)
     assert (lay.STATIC_KL, lay.STATIC_KU) == dr.static_bandwidths(4)
     assert set(lay.KERNELS) == {f.name() for f in dr.kernels() + dr.coupled_kernels()
-                                + links.kernels()}
+                                + links.kernels() + contact.contact_kernels()
+                                + contact_pair.pair_kernels()}
     for n in (1, 2, 3, 5):
         assert lay.bandwidths(n, 0, True) == dr.bandwidths(n, 0, True)
     assert (lay.COUPLED_STATIC_KL, lay.COUPLED_STATIC_KU) == dr.static_bandwidths(4, True)
