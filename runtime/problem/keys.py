@@ -7,7 +7,7 @@ file reference is rendered from. It cannot drift from the parsers unnoticed:
 list exactly those, and feeds each key's ``invalid`` value to the parser, which must
 refuse it naming the key. Time-function keys are listed once under ``<time>``: they apply
 to every ``time`` of a load and to ``translation_time``/``rotation_time`` of a motion.
-:data:`ASSEMBLY_KEYS` and :data:`CONTACT_KEYS` (obstacles, the contact law) are checked the
+``ASSEMBLY_KEYS`` and ``CONTACT_KEYS`` (obstacles, the contact law) are checked the
 same way (``tests/runtime/test_assembly_problem.py``, ``test_obstacles.py``).
 """
 

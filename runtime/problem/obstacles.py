@@ -9,8 +9,8 @@ Obstacles are rigid bodies the rods touch (``[[obstacles]]``, each with ``kind``
   (``true``: a pipe the rod runs inside; ``false``, the default: a solid the rod lies on).
 
 Each may carry ``friction`` (Coulomb coefficient, default 0) and ``motion``, a prescribed
-rigid motion with the keys of an end's motion (:func:`runtime.problem.loads.
-motion_from_mapping`): the obstacle's point (a sphere's centre) moves by ``translation``
+rigid motion with the keys of an end's motion (``runtime.problem.loads.
+motion_from_mapping``): the obstacle's point (a sphere's centre) moves by ``translation``
 times ``translation_time``, and the obstacle turns by ``rotation_angle`` (degrees) times
 ``rotation_time`` about ``rotation_axis`` through that moving point. A material point X
 of the obstacle (reference position) is at ``c(t) + R(t) (X - c0)`` at time t, with c0
@@ -126,7 +126,7 @@ class Obstacle:
     only, None: infinite; else the axis runs from ``point`` to ``point + length axis``).
     ``inside`` (cylinder only): the rod runs inside the pipe. ``friction``: the Coulomb
     coefficient, 0 ... FRICTION_MAX. ``motion``: a prescribed rigid motion
-    (:class:`~runtime.problem.loads.Motion`) or None.
+    (``runtime.problem.loads.Motion``) or None.
 
     The free side: above a plane (where the normal points), outside a sphere, outside a
     solid cylinder (flat end caps when finite), inside a pipe (``inside``; a finite pipe
@@ -457,7 +457,7 @@ class Contact:
 
     @property
     def damping_ratio(self) -> float:
-        """zeta of :attr:`restitution` (:func:`damping_ratio`)."""
+        """zeta of ``restitution`` (:func:`damping_ratio`)."""
         return damping_ratio(self.restitution)
 
     def radius_of(self, rod: str | None = None) -> float | None:

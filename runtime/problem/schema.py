@@ -55,6 +55,7 @@ from runtime.problem.materials import (
     material_from_mapping,
 )
 from runtime.problem.obstacles import (
+    PENETRATION_FRACTION,
     RADIUS_REQUIRED,
     Contact,
     ContactLaw,
@@ -677,8 +678,6 @@ class Problem:
     def contact_penetration(self) -> float:
         """The smoothing length delta of the contact law (m): ``contact.penetration``, or
         ``PENETRATION_FRACTION`` of the rod's smallest contact radius."""
-        from runtime.problem.obstacles import PENETRATION_FRACTION
-
         given = self._contact_settings().penetration
         return given if given is not None else PENETRATION_FRACTION * float(
             np.min(self.contact_radii()))
