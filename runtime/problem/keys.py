@@ -606,6 +606,9 @@ CONTACT_KEYS: tuple[Key, ...] = (
     _k("contact", "self", "-", "false", "true, false", "contact of the rods with "
        "each other (in an assembly) and of a rod with itself (a plectoneme)",
        invalid="yes"),
+    _k("contact", "friction", "-", "0", "0 ... 100", "the Coulomb coefficient of the "
+       "rods' contact with each other and themselves (self = true; an obstacle has its "
+       "own friction)", invalid=-0.5),
     _k("contact", "penetration", "m", "1 % of the smallest contact radius", "> 0, at "
        "most the contact radius", "the smoothing length of the law (the normal force "
        "rises from zero to the linear penalty over a gap band this wide) and the "

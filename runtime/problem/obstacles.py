@@ -96,7 +96,8 @@ SLIP_VELOCITY = 1.0e-4
 RESTITUTION = 0.1
 #: k = STIFFNESS_FACTOR EI / h^4: the contact's Winkler length (4 EI / k)^(1/4) is h/2
 STIFFNESS_FACTOR = 64.0
-CONTACT_KEYS = ("radius", "self", "penetration", "slip_velocity", "restitution", "stiffness")
+CONTACT_KEYS = ("radius", "self", "friction", "penetration", "slip_velocity", "restitution",
+                "stiffness")
 
 
 def _vector_array(v: tuple[float, ...]) -> np.ndarray:
@@ -409,7 +410,8 @@ class Contact:
     for other sections. In an assembly ``rod_radii`` holds a radius per rod name (the
     table form ``radius = {NAME = r}``), rods not named taking their section's.
     ``self_contact`` (key ``self``): rod-rod contact (in an assembly) and the contact of
-    a rod with itself. ``penetration`` (m): the smoothing length delta of the law (the
+    a rod with itself; ``friction``: their Coulomb coefficient (an obstacle has its own,
+    ``Obstacle.friction``). ``penetration`` (m): the smoothing length delta of the law (the
     normal force goes from zero to the linear penalty over a gap band of that width) and
     the tolerance of the check that no rod starts inside an obstacle; None: 1 % of the
     rod's smallest contact radius. ``slip_velocity`` (m/s): the friction's
@@ -422,6 +424,7 @@ class Contact:
 
     radius: float | None = None
     self_contact: bool = False
+    friction: float = 0.0
     penetration: float | None = None
     slip_velocity: float = SLIP_VELOCITY
     restitution: float = RESTITUTION
@@ -437,6 +440,9 @@ class Contact:
             raise ParameterError("contact.radius", self.radius, "one radius for every rod "
                                  "or a table of radii per rod, not both")
         object.__setattr__(self, "self_contact", C.boolean("contact.self", self.self_contact))
+        object.__setattr__(self, "friction", C.number(
+            "contact.friction", self.friction, low=0.0, high=FRICTION_MAX,
+            allowed=f"a Coulomb coefficient, finite, 0 ... {FRICTION_MAX:g}"))
         if self.penetration is not None:
             object.__setattr__(self, "penetration", C.number(
                 "contact.penetration", self.penetration, low=0.0, low_incl=False,
@@ -474,6 +480,7 @@ class Contact:
         elif self.rod_radii:
             out["radius"] = dict(self.rod_radii)
         out["self"] = self.self_contact
+        out["friction"] = self.friction
         if self.penetration is not None:
             out["penetration"] = self.penetration
         out["slip_velocity"] = self.slip_velocity
@@ -484,8 +491,9 @@ class Contact:
 
     def for_rod(self, rod: str) -> Contact:
         """The settings of one rod of an assembly (its radius alone)."""
-        return Contact(self.radius_of(rod), self.self_contact, self.penetration,
-                       self.slip_velocity, self.restitution, self.stiffness)
+        return Contact(self.radius_of(rod), self.self_contact, self.friction,
+                       self.penetration, self.slip_velocity, self.restitution,
+                       self.stiffness)
 
 
 def _radius(path: str, v: Any) -> float:
@@ -517,7 +525,7 @@ def contact_from_mapping(m: Any, rods: Sequence[str] | None = None) -> Contact |
             kw["radius"] = r
     if "self" in m:
         kw["self_contact"] = m["self"]
-    for key in ("penetration", "slip_velocity", "restitution", "stiffness"):
+    for key in ("friction", "penetration", "slip_velocity", "restitution", "stiffness"):
         if key in m:
             kw[key] = m[key]
     return Contact(**kw)
@@ -574,7 +582,8 @@ class ContactLaw:
     of the rod's softest segment, N m^2; h_min: its shortest element, m).
     ``damping`` (N,) N s/m^2: the normal damping per length of each segment, ``2 zeta
     sqrt(stiffness rhoA)`` (zeta: ``damping_ratio``, rhoA: the segment's mass per length,
-    kg/m). ``slip_velocity`` (m/s), ``restitution``, ``self_contact`` as given."""
+    kg/m; :func:`normal_damping`). ``slip_velocity`` (m/s), ``restitution``,
+    ``self_contact`` and ``friction`` (its Coulomb coefficient) as given."""
 
     radius: np.ndarray
     penetration: float
@@ -584,6 +593,16 @@ class ContactLaw:
     slip_velocity: float
     restitution: float
     self_contact: bool
+    friction: float
+
+
+def normal_damping(stiffness: Any, damping_ratio: float, mass_per_length: Any) -> Any:
+    """The normal damping per length ``c = 2 zeta sqrt(k m)`` (N s/m^2) that gives a mass
+    ``m`` per length (kg/m) on the contact stiffness ``k`` (N/m^2) the damping ratio zeta:
+    a segment on an obstacle takes its own rhoA; two segments in contact take their
+    reduced mass ``m1 m2 / (m1 + m2)`` (the relative motion's)."""
+    return 2.0 * damping_ratio * np.sqrt(np.asarray(stiffness, dtype=float)
+                                         * np.asarray(mass_per_length, dtype=float))
 
 
 def default_stiffness(EI: float, h: float) -> float:
@@ -608,8 +627,8 @@ def contact_law(radius: np.ndarray, contact: Contact, EI_min: float, h_min: floa
     delta = (contact.penetration if contact.penetration is not None
              else PENETRATION_FRACTION * float(np.min(radius)))
     zeta = contact.damping_ratio
-    c = 2.0 * zeta * np.sqrt(k * np.asarray(rhoA, dtype=float))
+    c = np.asarray(normal_damping(k, zeta, rhoA), dtype=float)
     for a in (radius, c):
         a.setflags(write=False)
     return ContactLaw(radius, delta, float(k), c, zeta, contact.slip_velocity,
-                      contact.restitution, contact.self_contact)
+                      contact.restitution, contact.self_contact, contact.friction)

@@ -89,7 +89,7 @@ def test_obstacles_without_contact_table_take_the_defaults():
     assert p.contact is None and p.has_contact
     law = p.contact_law()
     assert law.restitution == RESTITUTION and law.slip_velocity == SLIP_VELOCITY
-    assert law.self_contact is False
+    assert law.self_contact is False and law.friction == 0.0
 
 
 def test_a_problem_without_contact_has_no_law():
@@ -104,6 +104,7 @@ def test_self_contact_alone_is_contact():
     m["contact"] = {"self": True}
     p = Problem.from_mapping(m)
     assert p.has_contact and p.obstacles == () and p.contact_law().self_contact
+    assert p.with_overrides({"contact.friction": 0.4}).contact_law().friction == 0.4
 
 
 def test_an_obstacle_built_in_python_is_checked_and_renumbered():
@@ -127,14 +128,15 @@ def test_round_trip_and_results_folder(tmp_path):
                                    "rotation_angle": 30.0,
                                    "rotation_time": {"kind": "smooth_ramp",
                                                      "duration": 0.2}}
-    m["contact"] = {"radius": 0.005, "self": True, "penetration": 1e-4,
+    m["contact"] = {"radius": 0.005, "self": True, "friction": 0.2, "penetration": 1e-4,
                     "slip_velocity": 1e-3, "restitution": 0.5, "stiffness": 1e6}
     p = Problem.from_mapping(m)
     out = p.to_mapping()
     assert out["obstacles"][0] == {"kind": "plane", "point": [0.0, 0.0, -0.005],
                                    "normal": [0.0, 0.0, 1.0], "friction": 0.3}
     assert "length" not in out["obstacles"][3] and out["obstacles"][3]["inside"] is True
-    assert out["contact"] == {"radius": 0.005, "self": True, "penetration": 1e-4,
+    assert out["contact"] == {"radius": 0.005, "self": True, "friction": 0.2,
+                              "penetration": 1e-4,
                               "slip_velocity": 1e-3, "restitution": 0.5, "stiffness": 1e6}
     again = Problem.from_mapping(out)
     assert again == p and again.to_mapping() == out
@@ -773,6 +775,8 @@ BAD = [
     ("contact radius table in a single rod", _set("contact.radius", {"a": 0.01}),
      "contact.radius", "only in an assembly"),
     ("self not a boolean", _set("contact.self", 1), "contact.self", "true or false"),
+    ("negative rod-rod friction", _set("contact.friction", -0.2), "contact.friction",
+     "0 ... 100"),
     ("zero slip velocity", _set("contact.slip_velocity", 0.0), "contact.slip_velocity",
      "> 0"),
     ("negative stiffness", _set("contact.stiffness", -1.0), "contact.stiffness", "> 0"),
