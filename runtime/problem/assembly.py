@@ -26,6 +26,10 @@ start). Every named point gets a node of its rod (``Problem.points``).
   feels every gravity load (:meth:`Assembly.gravity_loads`).
 * ``[[loads]]``: gravity and distributed loads act on every rod, or on those named in
   ``rods = [...]``; a point force or moment acts at ``at = POINT``.
+* ``[[obstacles]]`` and ``[contact]`` (:mod:`runtime.problem.obstacles`) stay at the top
+  and act on every rod; ``contact.self`` switches on the contact of the rods with each
+  other and with themselves; ``contact.radius`` may be a table ``{NAME = r}`` of radii
+  per rod (rods not named: their section's outer radius).
 
 The lead's system model (``runtime.model``) consumes these objects; nothing here knows
 of it. ``kvrod problem-keys`` lists every key (``runtime.problem.keys.ASSEMBLY_KEYS``).
@@ -48,6 +52,12 @@ from runtime.errors import ParameterError
 from runtime.problem import coerce as C
 from runtime.problem.geometry import NODE_SNAP_RTOL, Geometry, geometry_from_mapping
 from runtime.problem.loads import LOAD_KINDS, Load, load_from_mapping
+from runtime.problem.obstacles import (
+    Contact,
+    Obstacle,
+    contact_from_mapping,
+    obstacles_from_mapping,
+)
 from runtime.problem.schema import (
     ALIASES,
     MAX_ELEMENTS,
@@ -60,7 +70,7 @@ from runtime.problem.schema import (
 
 #: keys at the top of an assembly file
 ASSEMBLY_TOP_KEYS = ("name", "description", "rods", "materials", "joints", "bodies", "loads",
-                     "simulation", "statics", "analysis")
+                     "simulation", "statics", "analysis", "obstacles", "contact")
 #: keys of a rod's table ``[rods.NAME]``
 ROD_KEYS = ("rod", "section", "material", "materials", "zones", "start", "end")
 #: the single-rod tables that go into each rod's table in an assembly
@@ -528,7 +538,7 @@ def _rod_error(exc: ParameterError, rod: str, loads: tuple[int, ...] = (),
         new = (f"loads[{k}]" if m.group(1) is not None else f"loads.{k}") + m.group(3)
         return ParameterError(new, exc.value, exc.allowed + note, exc.where)
     top = name.split(".")[0].split("[")[0]
-    if top in ("loads", "simulation", "statics", "analysis"):
+    if top in ("loads", "simulation", "statics", "analysis", "obstacles", "contact"):
         return ParameterError(name, exc.value, exc.allowed + note, exc.where)
     if top == "materials" and len(name.split(".")) > 1 and name.split(".")[1] in shared:
         return ParameterError(name, exc.value, exc.allowed + note, exc.where)
@@ -585,6 +595,10 @@ class Assembly:
     (``Problem.points``). ``joints``, ``bodies``, ``loads``: tuples of :class:`Joint`,
     :class:`Body`, :class:`AssemblyLoad` in file order; ``materials``: the shared
     ``[materials.NAME]`` tables (resolved), ``analysis``: :class:`AssemblyAnalysis`.
+    ``obstacles``: the :class:`~runtime.problem.obstacles.Obstacle` tuple, ``contact``:
+    the :class:`~runtime.problem.obstacles.Contact` as given (None: not given); each
+    rod's problem holds the same obstacles and its own contact settings
+    (``Contact.for_rod``: its radius), so ``rods[NAME].contact_law()`` gives its numbers.
     """
 
     name: str
@@ -598,6 +612,8 @@ class Assembly:
     analysis: AssemblyAnalysis = field(default_factory=AssemblyAnalysis)
     materials: dict[str, Any] = field(default_factory=dict)
     base: Path | None = field(default=None, compare=False, repr=False)
+    obstacles: tuple[Obstacle, ...] = ()
+    contact: Contact | None = None
 
     def __post_init__(self) -> None:
         if not self.rods:
@@ -673,7 +689,8 @@ class Assembly:
         rods: dict[str, Any] = {}
         for name, p in self.rods.items():
             t = p.to_mapping()
-            for key in ("name", "description", "loads", "simulation", "statics", "analysis"):
+            for key in ("name", "description", "loads", "simulation", "statics", "analysis",
+                        "obstacles", "contact"):
                 t.pop(key, None)
             own = {k: v for k, v in t.pop("materials", {}).items()
                    if self.materials.get(k) != v}
@@ -692,6 +709,10 @@ class Assembly:
                           **({"report": list(self.statics.report)}
                              if self.statics.report else {})}
         out["analysis"] = self.analysis.to_mapping()
+        if self.obstacles:              # an assembly without contact writes what it did
+            out["obstacles"] = [o.to_mapping() for o in self.obstacles]
+        if self.contact is not None:
+            out["contact"] = self.contact.to_mapping()
         return out
 
     @classmethod
@@ -720,6 +741,12 @@ class Assembly:
                 raise ParameterError(f"rods.{rod}", rod, "a rod name of letters, digits, _ "
                                      "and - starting with a letter or _, not 'ground'")
             t = C.table(f"rods.{rod}", t)
+            for key in ("obstacles", "contact"):
+                if key in t:
+                    raise ParameterError(f"rods.{rod}.{key}", t[key], f"no {key} in a rod's "
+                                         f"table: [{key}] stays at the top of an assembly file "
+                                         "and acts on every rod (contact.radius = {"
+                                         f"{rod} = ...}} sets one rod's contact radius)")
             for key in ("loads", "simulation", "statics", "analysis", "joints", "bodies"):
                 if key in t:
                     raise ParameterError(f"rods.{rod}.{key}", t[key], f"no {key} in a rod's "
@@ -744,6 +771,14 @@ class Assembly:
             seen[b.name] = b.index
         loads = _list_of(m, "loads", "loads", lambda k, ld: _load(k, ld, lengths, base))
         analysis = _analysis(m.get("analysis"), lengths)
+        obstacles = obstacles_from_mapping(m.get("obstacles"), base)
+        contact = contact_from_mapping(m.get("contact"), rods=tuple(tables))
+        if contact is not None and not obstacles and not contact.self_contact:
+            raise ParameterError("contact", contact.to_mapping(), "[contact] only beside "
+                                 "[[obstacles]] or with self = true (the rods' contact with "
+                                 "each other and themselves): without either it changes "
+                                 "nothing (add an obstacle, set contact.self = true, or "
+                                 "remove [contact])")
 
         shared_m = m.get("materials")
         shared: dict[str, Any] = {}
@@ -767,6 +802,10 @@ class Assembly:
             for key in ("simulation", "statics"):
                 if m.get(key) is not None:
                     doc[key] = m[key]
+            if obstacles:
+                doc["obstacles"] = [o.to_mapping() for o in obstacles]
+            if contact is not None:
+                doc["contact"] = contact.for_rod(rod).to_mapping()
             own = t.get("materials")
             if _uses_composite(t):
                 pool = copy.deepcopy(dict(shared_m or {}))
@@ -789,7 +828,8 @@ class Assembly:
         return cls(name=C.string("name", m.get("name", name)),
                    description=str(m.get("description", "")), rods=rods, joints=joints,
                    bodies=bodies, loads=loads, simulation=simulation, statics=statics,
-                   analysis=analysis, materials=shared, base=base)
+                   analysis=analysis, materials=shared, base=base, obstacles=obstacles,
+                   contact=contact)
 
     def with_overrides(self, overrides: Mapping[str, Any]) -> Assembly:
         """A new assembly with values replaced, all checked as in a file.

@@ -7,6 +7,8 @@ file reference is rendered from. It cannot drift from the parsers unnoticed:
 list exactly those, and feeds each key's ``invalid`` value to the parser, which must
 refuse it naming the key. Time-function keys are listed once under ``<time>``: they apply
 to every ``time`` of a load and to ``translation_time``/``rotation_time`` of a motion.
+``ASSEMBLY_KEYS`` and ``CONTACT_KEYS`` (obstacles, the contact law) are checked the
+same way (``tests/runtime/test_assembly_problem.py``, ``test_obstacles.py``).
 """
 
 from __future__ import annotations
@@ -460,6 +462,12 @@ ASSEMBLY_KEYS: tuple[Key, ...] = (
        "the static solve's settings, for the whole assembly", invalid={"load_steps": 0}),
     _k("", "analysis", "-", "none", "a table with maxima (below)", "what to analyse",
        invalid={"maxima": "end.x"}),
+    _k("", "obstacles", "-", "[]", "an array of tables [[obstacles]] as in a single-rod "
+       "file", "the obstacles every rod touches (contact: below)",
+       invalid={"kind": "plane"}),
+    _k("", "contact", "-", "defaults", "the [contact] table of a single rod; its radius "
+       "may be a table {NAME = r} of radii per rod", "the contact law of every rod; self = "
+       "true: the rods' contact with each other and themselves", invalid={"self": "yes"}),
     # -- [rods.NAME] --------------------------------------------------------------------
     _k("rods.NAME", "rod", "-", "required", "the [rod] table of a single rod (length, "
        "elements, geometry)", "the rod's length, elements and reference geometry; "
@@ -529,6 +537,99 @@ ASSEMBLY_KEYS: tuple[Key, ...] = (
        "damping ratios (as for a single rod)", invalid="end.x"),
 )
 
+#: what obstacles and the contact law are (shown by both renderings)
+CONTACT_INTRO = (
+    "Rods touch rigid obstacles, `[[obstacles]]` (a plane, a sphere, a cylinder or a "
+    "pipe, fixed or moving with a prescribed rigid motion), and, with `[contact] self = "
+    "true`, each other and themselves. The contact is a smoothed penalty with normal "
+    "damping and regularized Coulomb friction, on the rod's contact radius (a circle's "
+    "radius, a tube's outer radius, or `contact.radius`) about the centreline. Defaults: "
+    "the stiffness 64 EI/h^4 per rod (EI its softer bending stiffness, h its shortest "
+    "element: the contact's Winkler length is h/2, stiff enough that a heavy rod lifted "
+    "off a table changes by about 2 (h/2a)^3 of its lift height, a its lifted length), "
+    "a restitution of 0.1 (a rod dropped flat rebounds to 1 % of its drop height and rests "
+    "within about half a second), a smoothing length "
+    "`penetration` of 1 % of the contact radius, a slip velocity of 1e-4 m/s (a rod held "
+    "by static friction creeps below 0.1 mm/s). A rod may not start inside an obstacle "
+    "by more than the penetration. `[contact]` without obstacles and without self = true "
+    "is refused (it would change nothing). In an assembly both stay at the top and act "
+    "on every rod. Paths for --set: `obstacles.0.friction`, `contact.restitution`; "
+    "`--set 'obstacles.1={kind=\"sphere\", centre=[0,0,0.5], radius=0.1}'` appends an "
+    "obstacle. Examples: `examples/contact_*.toml`.")
+
+_MOTION = "3 numbers, |translation| x its function's peak at most 1e-8 (L/N)/eps"
+
+#: the keys of obstacles and the contact law (:mod:`runtime.problem.obstacles`), in a
+#: single-rod file and at the top of an assembly file
+CONTACT_KEYS: tuple[Key, ...] = (
+    # -- [[obstacles]] ------------------------------------------------------------------
+    _k("obstacles", "kind", "-", "required", "plane, sphere, cylinder", "the obstacle's "
+       "shape: a plane (a half space), a solid ball, a solid cylinder or, with inside = "
+       "true, a pipe", invalid="cube"),
+    _k("obstacles", "point", "m", "required", _VEC + ", at most 1e-8 (L/N)/eps from the "
+       "origin", "plane: a point on it; cylinder: a point on its axis (where a finite one "
+       "starts); a motion's rotation turns about it", invalid=[0, 0],
+       kinds=("plane", "cylinder")),
+    _k("obstacles", "normal", "-", "required", _UNIT_VEC, "the plane's normal, toward the "
+       "free side (where the rod may be)", invalid=[0, 0, 0], kinds=("plane",)),
+    _k("obstacles", "centre", "m", "required", _VEC + ", as point", "the sphere's centre "
+       "(a motion's rotation turns about it)", invalid=[0, 0], kinds=("sphere",)),
+    _k("obstacles", "radius", "m", "required", "> 0", "the radius of the sphere or "
+       "cylinder (the pipe's bore)", invalid=-0.1, kinds=("sphere", "cylinder")),
+    _k("obstacles", "axis", "-", "required", _UNIT_VEC, "the cylinder's axis",
+       invalid=[0, 0, 0], kinds=("cylinder",)),
+    _k("obstacles", "length", "m", "infinite", "> 0", "the cylinder's length from point "
+       "along axis: a solid with flat end caps, or a pipe acting between its ends only "
+       "(its rim is not modelled)", invalid=0.0, kinds=("cylinder",)),
+    _k("obstacles", "inside", "-", "false", "true, false (cylinders only; refused on a "
+       "plane or sphere)", "true: a pipe the rod runs inside (the free side is the bore); "
+       "false: a solid the rod touches from outside", invalid="yes",
+       kinds=("cylinder",)),
+    _k("obstacles", "friction", "-", "0", "0 ... 100", "the Coulomb coefficient of "
+       "friction between the rod and the obstacle (static = kinetic)", invalid=-0.1),
+    _k("obstacles", "motion", "-", "none", "a table (below)", "a prescribed rigid motion "
+       "of the obstacle, keys as an end's motion; it turns about the obstacle's point "
+       "(centre) as that point moves", invalid=3),
+    # -- motion = {...} of an obstacle --------------------------------------------------
+    _k("obstacles.motion", "translation", "m", "[0, 0, 0]", _MOTION, "displacement of "
+       "the obstacle's point (centre), times translation_time", invalid=[1, 2]),
+    _k("obstacles.motion", "translation_time", "-", "constant 1", "a time function "
+       "(<time>), continuous", "scales translation", invalid={"kind": "step"}),
+    _k("obstacles.motion", "rotation_axis", "-", "[0, 0, 1]", _UNIT_VEC, "the fixed "
+       "spatial direction of the rotation's axis (through the moving point)",
+       invalid=[0, 0, 0]),
+    _k("obstacles.motion", "rotation_angle", "deg", "0", "a number", "rotation of the "
+       "obstacle, times rotation_time (a drum turning: a cylinder about its own axis)",
+       invalid="quarter"),
+    _k("obstacles.motion", "rotation_time", "-", "constant 1", "a time function "
+       "(<time>), continuous", "scales rotation_angle", invalid={"kind": "release"}),
+    # -- [contact] ----------------------------------------------------------------------
+    _k("contact", "radius", "m", "the section's outer radius (circle: radius, tube: "
+       "outer_radius, a composite of concentric circles and tubes: the largest); "
+       "required for other sections", "> 0; in an assembly also a table {NAME = r} "
+       "(rods not named: their section's)", "the rod's contact radius: the round "
+       "envelope about the centreline the contact sees", invalid=-0.01),
+    _k("contact", "self", "-", "false", "true, false", "contact of the rods with "
+       "each other (in an assembly) and of a rod with itself (a plectoneme)",
+       invalid="yes"),
+    _k("contact", "friction", "-", "0", "0 ... 100", "the Coulomb coefficient of the "
+       "rods' contact with each other and themselves (self = true; an obstacle has its "
+       "own friction)", invalid=-0.5),
+    _k("contact", "penetration", "m", "1 % of the smallest contact radius", "> 0, at "
+       "most the contact radius", "the smoothing length of the law (the normal force "
+       "rises from zero to the linear penalty over a gap band this wide) and the "
+       "tolerance of the check that no rod starts inside an obstacle", invalid=0.0),
+    _k("contact", "slip_velocity", "m/s", "1e-4", "> 0", "the regularization of the "
+       "friction: full Coulomb friction above this sliding speed; a rod held by static "
+       "friction creeps at about slip_velocity f_t / (mu f_n)", invalid=0.0),
+    _k("contact", "restitution", "-", "0.1", "(0, 1]", "the coefficient of restitution "
+       "e of a node's mass on the contact spring (normal damping ratio -ln e / sqrt(pi^2 "
+       "+ ln^2 e): 0.59 at 0.1; 1: no damping)", invalid=1.5),
+    _k("contact", "stiffness", "N/m^2", "64 EI/h^4 per rod (EI: its softer bending "
+       "stiffness, smallest along the rod; h: its shortest element)", "> 0", "the "
+       "penalty: normal force per length per metre of penetration", invalid=-1.0),
+)
+
 #: which command-line aliases an assembly takes and how
 ASSEMBLY_OVERRIDES = (
     "In an assembly, PATH runs through the file's tables: `rods.NAME.material."
@@ -569,6 +670,12 @@ _ASSEMBLY_HEADS = {"": "assembly file: top level", "rods.NAME": "`[rods.NAME]` (
                    "analysis": "`[analysis]` in an assembly"}
 
 
+#: the contact part's headings, by table
+_CONTACT_HEADS = {"obstacles": "`[[obstacles]]`",
+                  "obstacles.motion": "`motion = {...}` of an obstacle",
+                  "contact": "`[contact]`"}
+
+
 def markdown() -> str:
     """The reference as Markdown tables, one per table (what the documentation shows)."""
     lines = ["### Changing keys: `--set` and overrides", "", OVERRIDES, ""]
@@ -584,6 +691,9 @@ def markdown() -> str:
               ASSEMBLY_OVERRIDES, ""]
     for table, keys in by_table(ASSEMBLY_KEYS).items():
         lines += [f"### {_ASSEMBLY_HEADS[table]}", ""] + _table_rows(keys)
+    lines += ["### Contact: obstacles and the contact law", "", CONTACT_INTRO, ""]
+    for table, keys in by_table(CONTACT_KEYS).items():
+        lines += [f"### {_CONTACT_HEADS[table]}", ""] + _table_rows(keys)
     return "\n".join(lines)
 
 
@@ -609,4 +719,7 @@ def text() -> str:
     out += ["", "assemblies (a file with [rods.NAME] tables):", para(ASSEMBLY_INTRO),
             para(ASSEMBLY_OVERRIDES), ""]
     out += entries(ASSEMBLY_KEYS, prefix="assembly: ")
+    out += ["", "contact (obstacles and the contact law, single rods and assemblies):",
+            para(CONTACT_INTRO), ""]
+    out += entries(CONTACT_KEYS)
     return "\n".join(out)

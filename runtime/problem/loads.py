@@ -99,29 +99,43 @@ def end_from_mapping(path: str, m: Any, base: Path | None = None) -> End:
         return End(kind)
     if kind == "free":
         raise ParameterError(f"{path}.motion", m["motion"], "only for a clamped or pinned end")
-    mm = C.table(f"{path}.motion", m["motion"])
-    mp = f"{path}.motion"
-    C.no_unknown_keys(mp, mm, ("translation", "translation_time", "rotation_axis",
-                               "rotation_angle", "rotation_time"))
+    return End(kind, motion_from_mapping(f"{path}.motion", m["motion"], base,
+                                         rotates=kind == "clamped",
+                                         fixed="a pinned end (its rotation is free)"))
+
+
+MOTION_KEYS = ("translation", "translation_time", "rotation_axis", "rotation_angle",
+               "rotation_time")
+
+
+def motion_from_mapping(path: str, m: Any, base: Path | None = None, *, rotates: bool = True,
+                        fixed: str = "") -> Motion:
+    """A prescribed rigid motion from its table (``[start.motion]``, an obstacle's
+    ``motion``): ``translation`` (m) times ``translation_time``, a rotation by
+    ``rotation_angle`` (degrees) times ``rotation_time`` about ``rotation_axis``; the time
+    functions continuous (a position cannot jump). ``rotates`` False: the angle must be 0
+    (``fixed`` says for what)."""
+    mm = C.table(path, m)
+    C.no_unknown_keys(path, mm, MOTION_KEYS)
     kw: dict[str, Any] = {}
     if "translation" in mm:
-        kw["translation"] = C.vector(f"{mp}.translation", mm["translation"])
+        kw["translation"] = C.vector(f"{path}.translation", mm["translation"])
     if "rotation_axis" in mm:
-        kw["rotation_axis"] = C.unit_vector(f"{mp}.rotation_axis", mm["rotation_axis"])
+        kw["rotation_axis"] = C.unit_vector(f"{path}.rotation_axis", mm["rotation_axis"])
     if "rotation_angle" in mm:
-        kw["rotation_angle"] = C.number(f"{mp}.rotation_angle", mm["rotation_angle"])
-        if kind != "clamped" and kw["rotation_angle"] != 0:
-            raise ParameterError(f"{mp}.rotation_angle", kw["rotation_angle"],
-                                 "0 for a pinned end (its rotation is free)")
+        kw["rotation_angle"] = C.number(f"{path}.rotation_angle", mm["rotation_angle"])
+        if not rotates and kw["rotation_angle"] != 0:
+            raise ParameterError(f"{path}.rotation_angle", kw["rotation_angle"],
+                                 f"0 for {fixed}")
     for key in ("translation_time", "rotation_time"):
         if key in mm:
-            tf = TimeFunction.from_mapping(mm[key], f"{mp}.{key}", base)
+            tf = TimeFunction.from_mapping(mm[key], f"{path}.{key}", base)
             if not tf.continuous:
-                raise ParameterError(f"{mp}.{key}.kind", tf.kind, "a continuous function for a "
+                raise ParameterError(f"{path}.{key}.kind", tf.kind, "a continuous function for a "
                                      "prescribed position (ramp, smooth_ramp, harmonic, table, "
                                      "constant)")
             kw[key] = tf
-    return End(kind, Motion(**kw))
+    return Motion(**kw)
 
 
 @dataclass(frozen=True)

@@ -13,6 +13,8 @@ A :class:`Problem` is a frozen tree of dataclasses::
     analysis    Analysis(maxima)                    [analysis]
     zones       tuple[Zone, ...]                    [[zones]]
     points      tuple[float, ...]                   (an assembly's named points on the rod)
+    obstacles   tuple[Obstacle, ...]                [[obstacles]]
+    contact     Contact | None                      [contact]
 
 :meth:`Problem.from_mapping` builds it from a TOML table (every value checked, every
 error naming its key, value and allowed range), :meth:`Problem.to_mapping` writes it back
@@ -21,7 +23,8 @@ error naming its key, value and allowed range), :meth:`Problem.to_mapping` write
 :data:`ALIASES` of the command line and of sweeps) through the same checks. The problem
 file reference lists every key: ``kvrod problem-keys`` (:mod:`runtime.problem.keys`).
 A file of several rods (``[rods.NAME]`` tables, joints, bodies) is an
-:class:`~runtime.problem.assembly.Assembly` of such problems.
+:class:`~runtime.problem.assembly.Assembly` of such problems. Obstacles and the contact
+law: :mod:`runtime.problem.obstacles` (:meth:`Problem.contact_law` gives the numbers).
 """
 
 from __future__ import annotations
@@ -50,6 +53,18 @@ from runtime.problem.materials import (
     GeneralizedMaxwell,
     Material,
     material_from_mapping,
+)
+from runtime.problem.obstacles import (
+    PENETRATION_FRACTION,
+    RADIUS_REQUIRED,
+    Contact,
+    ContactLaw,
+    Obstacle,
+    contact_from_mapping,
+    contact_law,
+    obstacles_from_mapping,
+    outer_radius,
+    section_label,
 )
 from runtime.problem.sections import (
     DAMPING_ROUTES,
@@ -97,7 +112,7 @@ GLASSY_RATIO_MAX = 1e10
 BETA1_L = 1.8751040687119611
 
 TOP_KEYS = ("name", "description", "rod", "section", "material", "materials", "start", "end",
-            "loads", "simulation", "statics", "analysis", "zones")
+            "loads", "simulation", "statics", "analysis", "zones", "obstacles", "contact")
 
 
 @dataclass(frozen=True)
@@ -226,6 +241,12 @@ class Problem:
     #: and point loads' points: runtime.problem.assembly); the rod has a node at each. A
     #: single-rod file has none (and to_mapping does not write them)
     points: tuple[float, ...] = ()
+    #: the rigid obstacles the rod touches (runtime.problem.obstacles; a rod of an
+    #: assembly holds the assembly's)
+    obstacles: tuple[Obstacle, ...] = ()
+    #: the [contact] table as given (None: not given; the defaults then hold for the
+    #: obstacles); contact_law() gives the numbers
+    contact: Contact | None = None
 
     def __post_init__(self) -> None:
         from runtime.problem.sections import LENGTH_MAX, LENGTH_MIN, LENGTH_RANGE
@@ -253,6 +274,16 @@ class Problem:
                 ld.kind == "gravity" for ld in self.loads):
             pass  # a falling rod (pendulum): nothing to check
         self._check_zone_nodes()
+        obstacles = tuple(self.obstacles)
+        for k, o in enumerate(obstacles):
+            if not isinstance(o, Obstacle):
+                raise ParameterError(f"obstacles[{k}]", o, "an Obstacle "
+                                     "(runtime.problem.obstacles) or a [[obstacles]] table")
+        object.__setattr__(self, "obstacles", tuple(
+            o if o.index == k else replace(o, index=k) for k, o in enumerate(obstacles)))
+        if self.contact is not None and not isinstance(self.contact, Contact):
+            raise ParameterError("contact", self.contact, "a Contact "
+                                 "(runtime.problem.obstacles) or a [contact] table")
         frames = self.simulation.centreline_frames
         if frames * 3 * (N + 1) > MAX_FRAME_VALUES:
             raise ParameterError("simulation.centreline_frames", frames,
@@ -264,6 +295,7 @@ class Problem:
             # give the kernels yet (check_simulable refuses its runs)
             self._check_positions()
             self._check_input_frequencies()
+            self._check_contact()
             return
         self._check_periods()
         self._check_viscous_rate()
@@ -272,6 +304,7 @@ class Problem:
         self._check_positions()
         self._check_input_frequencies()
         self._check_t_end()
+        self._check_contact()
 
     def _check_zone_nodes(self) -> None:
         """The nodes (one at every zone boundary and point load's s) exist, and every zone
@@ -445,6 +478,38 @@ class Problem:
                                      f"|rotation_angle| x its time function's peak <= "
                                      f"{a_max:.3g} deg (1e-8 rad / eps: the round-off of a "
                                      "larger angle exceeds 1e-8 rad)")
+        for o in self.obstacles:
+            self._check_obstacle_scale(o, r_max, a_max)
+
+    def _check_obstacle_scale(self, o: Obstacle, r_max: float, a_max: float) -> None:
+        """An obstacle's place, size and motion within the bounds of the rod's positions
+        (:meth:`_check_positions`): the round-off of a gap measured from a point or radius
+        farther out swamps the contact's smoothing length as it would the strains."""
+        path = f"obstacles[{o.index}]"
+        why = (f"at most 1e-8 (L/N)/eps = {r_max:.3g} m for this rod: farther, round-off of "
+               "the coordinates swamps the gaps of the contact")
+        where = "centre" if o.kind == "sphere" else "point"
+        if math.hypot(*o.point) > r_max:
+            raise ParameterError(f"{path}.{where}", list(o.point), f"|{where}| {why}")
+        for key in ("radius", "length"):
+            v = getattr(o, key)
+            if v is not None and v > r_max:
+                raise ParameterError(f"{path}.{key}", v, f"{key} {why}")
+        mo = o.motion
+        if mo is None:
+            return
+        with np.errstate(over="ignore"):
+            tr = math.hypot(*mo.translation) * _time_peak(mo.translation_time)
+            ang = abs(mo.rotation_angle) * _time_peak(mo.rotation_time)
+        if tr > r_max:
+            raise ParameterError(f"{path}.motion.translation", list(mo.translation),
+                                 f"|translation| x its time function's peak {why} (here "
+                                 f"{tr:.3g} m)")
+        if ang > a_max:
+            raise ParameterError(f"{path}.motion.rotation_angle", mo.rotation_angle,
+                                 f"|rotation_angle| x its time function's peak <= "
+                                 f"{a_max:.3g} deg (1e-8 rad / eps: the round-off of a "
+                                 "larger angle exceeds 1e-8 rad)")
 
     def _check_input_frequencies(self) -> None:
         """A harmonic input may hold at most MAX_PERIODS periods in t_end (a run resolves
@@ -454,6 +519,10 @@ class Problem:
             if end.motion is not None:
                 inputs += [(f"{name}.motion.translation_time", end.motion.translation_time),
                            (f"{name}.motion.rotation_time", end.motion.rotation_time)]
+        for o in self.obstacles:
+            if o.motion is not None:
+                inputs += [(f"obstacles[{o.index}].motion.{key}", getattr(o.motion, key))
+                           for key in ("translation_time", "rotation_time")]
         for name, tf in inputs:
             if getattr(tf, "kind", "") != "harmonic":
                 continue
@@ -558,6 +627,125 @@ class Problem:
             f"{w2:.3g} 1/s^2); beyond it the viscous forces exceed the inertia by more than "
             "1/(10 eps) and the integrator loses the inertia to round-off (the first mode's "
             f"damping ratio would be {self.characteristic_frequency() * tau / 2:.3g})")
+
+    # -- contact -------------------------------------------------------------------------
+    @property
+    def has_contact(self) -> bool:
+        """Whether the rod touches anything: obstacles, or ``contact.self``."""
+        return bool(self.obstacles) or (self.contact is not None
+                                        and self.contact.self_contact)
+
+    def _contact_settings(self) -> Contact:
+        return self.contact if self.contact is not None else Contact()
+
+    def contact_radii(self) -> np.ndarray:
+        """The contact radius (m) of each segment (N,): ``contact.radius`` if given, else
+        the outer radius of the segment's section at its midpoint (a circle's radius, a
+        tube's outer radius, tapers and zones included); a ParameterError naming
+        ``contact.radius`` for a section that has none."""
+        r = self.__dict__.get("_contact_radii")
+        if r is not None:
+            return r
+        N = self.rod.elements
+        given = self._contact_settings().radius
+        if given is not None:
+            r = np.full(N, given)
+        else:
+            s = self.node_arc_lengths()
+            mid = 0.5 * (s[:-1] + s[1:])
+            in_zone = np.zeros(N, dtype=bool)
+            r = np.full(N, np.nan)
+            for z in self.zones:
+                sel = (mid >= z.start) & (mid < z.end)
+                if not np.any(sel):
+                    continue
+                rz = outer_radius(z.section, (mid[sel] - z.start) / (z.end - z.start))
+                if rz is None:
+                    raise ParameterError("contact.radius", None, RADIUS_REQUIRED.format(
+                        what=f"rod whose zones[{z.index}] has a {section_label(z.section)}"))
+                r[sel], in_zone[sel] = rz, True
+            if not np.all(in_zone):
+                rb = outer_radius(self.section, self.segment_fractions())
+                if rb is None:
+                    raise ParameterError("contact.radius", None, RADIUS_REQUIRED.format(
+                        what=section_label(self.section)))
+                r[~in_zone] = rb[~in_zone]
+        r = np.asarray(r, dtype=float)
+        r.setflags(write=False)
+        object.__setattr__(self, "_contact_radii", r)
+        return r
+
+    def contact_penetration(self) -> float:
+        """The smoothing length delta of the contact law (m): ``contact.penetration``, or
+        ``PENETRATION_FRACTION`` of the rod's smallest contact radius."""
+        given = self._contact_settings().penetration
+        return given if given is not None else PENETRATION_FRACTION * float(
+            np.min(self.contact_radii()))
+
+    def contact_law(self) -> ContactLaw | None:
+        """The rod's contact law with the default rules applied
+        (:class:`~runtime.problem.obstacles.ContactLaw`), None without contact
+        (:attr:`has_contact`). Its stiffness needs the rod's matrices (a composite
+        section's analysis runs here, as for :meth:`segment_matrices`)."""
+        if not self.has_contact:
+            return None
+        m = self.segment_matrices()
+        EI = float(np.min(np.asarray(m["C_M"], dtype=float)[:, :2]))
+        settings = self._contact_settings()
+        if settings.penetration is None:
+            settings = replace(settings, penetration=self.contact_penetration())
+        return contact_law(self.contact_radii(), settings, EI, self.shortest_element(),
+                           np.asarray(m["rhoA"], dtype=float))
+
+    def _check_contact(self) -> None:
+        """``[contact]`` that changes something, a contact radius for the rod, a
+        penetration tolerance below it, and no node starting inside an obstacle."""
+        c = self.contact
+        if c is not None and not self.obstacles and not c.self_contact:
+            raise ParameterError("contact", c.to_mapping(), "[contact] only beside "
+                                 "[[obstacles]] or with self = true: without either it "
+                                 "changes nothing (add an obstacle, set contact.self = true, "
+                                 "or remove [contact])")
+        if c is not None and c.rod_radii:
+            raise ParameterError("contact.radius", dict(c.rod_radii), "a contact radius in "
+                                 "m, > 0 (a table of radii per rod only in an assembly)")
+        if not self.has_contact:
+            return
+        r = self.contact_radii()
+        if c is not None and c.penetration is not None and c.penetration > float(np.min(r)):
+            raise ParameterError("contact.penetration", c.penetration, f"0 < penetration <= "
+                                 f"the rod's contact radius {float(np.min(r)):.6g} m (a "
+                                 "smoothing wider than the rod would let it sink through "
+                                 "its own thickness)")
+        if self.obstacles:
+            self._check_starts_outside(r)
+
+    def _check_starts_outside(self, radii: np.ndarray) -> None:
+        """No node of the discrete reference lies inside an obstacle (at its pose at t =
+        0) by more than the penetration tolerance: its signed distance minus its contact
+        radius (the larger of its segments') >= -delta. The error names the obstacle, the
+        node's arc length and the depth of the deepest node."""
+        from runtime.problem.geometry import discretize
+
+        N = self.rod.elements
+        s = self.node_arc_lengths()
+        nodes = discretize(self.rod.geometry, N, s).nodes
+        r_node = np.empty(N + 1)
+        r_node[0], r_node[-1] = radii[0], radii[-1]
+        r_node[1:-1] = np.maximum(radii[:-1], radii[1:])
+        delta = self.contact_penetration()
+        for o in self.obstacles:
+            dist = o.signed_distance(nodes, t=0.0)
+            gap = dist - r_node
+            i = int(np.argmin(gap))
+            if gap[i] < -delta:
+                raise ParameterError(
+                    f"obstacles[{o.index}]", o.kind, f"a rod that starts outside the obstacle "
+                    f"({o.describe()}, at its pose at t = 0) or inside it by at most the "
+                    f"penetration tolerance {delta:.3g} m (contact.penetration): the rod's "
+                    f"node at s = {s[i]:.6g} m is {-gap[i]:.3g} m inside (its centreline "
+                    f"{dist[i]:.6g} m from the surface, contact radius {r_node[i]:.6g} m); "
+                    "move the obstacle or the rod (rod.geometry.origin)")
 
     # -- derived figures ---------------------------------------------------------------
     def error_control(self) -> str:
@@ -824,16 +1012,21 @@ class Problem:
             for z in self.zones:
                 if isinstance(z.section, Composite):
                     stuff.setdefault("materials", {}).update(z.section.materials_mapping())
-        return {"name": self.name, "description": self.description, "rod": rod,
-                "section": section, **stuff,
-                "start": self.start.to_mapping(), "end": self.end.to_mapping(),
-                "loads": [ld.to_mapping() for ld in self.loads],
-                "simulation": {k: v for k, v in vars(self.simulation).items()
-                               if v is not None},
-                "statics": {"load_steps": self.statics.load_steps,
-                            **({"report": list(self.statics.report)}
-                               if self.statics.report else {})},
-                "analysis": {k: v for k, v in vars(self.analysis).items() if v is not None}}
+        out = {"name": self.name, "description": self.description, "rod": rod,
+               "section": section, **stuff,
+               "start": self.start.to_mapping(), "end": self.end.to_mapping(),
+               "loads": [ld.to_mapping() for ld in self.loads],
+               "simulation": {k: v for k, v in vars(self.simulation).items()
+                              if v is not None},
+               "statics": {"load_steps": self.statics.load_steps,
+                           **({"report": list(self.statics.report)}
+                              if self.statics.report else {})},
+               "analysis": {k: v for k, v in vars(self.analysis).items() if v is not None}}
+        if self.obstacles:                 # a problem without contact writes what it did
+            out["obstacles"] = [o.to_mapping() for o in self.obstacles]
+        if self.contact is not None:
+            out["contact"] = self.contact.to_mapping()
+        return out
 
     @classmethod
     def from_mapping(cls, m: Mapping[str, Any], base: Path | None = None,
@@ -884,6 +1077,8 @@ class Problem:
             base=base,
             zones=zones,
             points=tuple(points),
+            obstacles=obstacles_from_mapping(m.get("obstacles"), base),
+            contact=contact_from_mapping(m.get("contact")),
         )
 
     def with_overrides(self, overrides: Mapping[str, Any]) -> Problem:

@@ -1184,6 +1184,10 @@ SPD_BAD = ('[materials.sheath]\nyoungs_modulus = 1e7\npoisson_ratio = 0.45\n'
                                        for j in range(6)) + "]" for i in range(6)) + "]\n")
 FOLDER = ("{out_name}",)
 GUARDED = {"guard": True}
+#: the contact radius of the square cantilever (which has no outer radius) and a floor
+#: 1 m below its clamp (issue 32)
+CONTACT_R = "contact.radius=0.005"
+FLOOR = 'obstacles.0={{kind="plane", point=[0,0,-1], normal=[0,0,1]}}'
 
 #: reasons a rejected calibration may give (spec 8), by data defect
 WHY_UNITS = ("unit", "scale", "residual", "amplitude", "magnitude", "mm", "metre", "meter")
@@ -2086,4 +2090,49 @@ CASES: list[Case] = [
          (UNCHANGED,), **GUARDED),
     Case("modes-into-section-folder-refused", "data_loss", (*MODES, *OUT), 2,
          (*FOLDER, "section.json"), (template("section"),), (UNCHANGED,)),
+    # ==================================================================================
+    # obstacles and the contact law (issue 32): each refusal is one line naming the key
+    # and the allowed range, before anything is computed or written
+    # ==================================================================================
+    *(Case(f"contact-{cid}-named", "message",
+           ("static", "cantilever", "--n-elements", "4", *sets, *OUT), 2, needles, (),
+           (ABSENT,), **GUARDED) for cid, sets, needles in (
+        ("zero-normal", ("--set", CONTACT_R, "--set",
+                         'obstacles.0={{kind="plane", point=[0,0,-1], normal=[0,0,0]}}'),
+         ("obstacles[0].normal", "not all zero")),
+        ("nan-axis", ("--set", CONTACT_R, "--set",
+                      'obstacles.0={{kind="cylinder", point=[1,0,0], axis=[nan,0,1], '
+                      'radius=0.1}}'), ("obstacles[0].axis", "finite")),
+        ("negative-radius", ("--set", CONTACT_R, "--set",
+                             'obstacles.0={{kind="sphere", centre=[1,0,0], radius=-0.1}}'),
+         ("obstacles[0].radius", "> 0")),
+        ("negative-friction", ("--set", CONTACT_R, "--set", FLOOR, "--set",
+                               "obstacles.0.friction=-0.3"),
+         ("obstacles[0].friction", "0 ... 100")),
+        ("unknown-kind", ("--set", CONTACT_R, "--set",
+                          'obstacles.0={{kind="cube", point=[1,0,0]}}'),
+         ("obstacles[0].kind", "'plane', 'sphere', 'cylinder'")),
+        ("inside-on-a-plane", ("--set", CONTACT_R, "--set", FLOOR, "--set",
+                               "obstacles.0.inside=true"),
+         ("obstacles[0].inside", "only for kind = 'cylinder'")),
+        ("length-on-a-sphere", ("--set", CONTACT_R, "--set",
+                                'obstacles.0={{kind="sphere", centre=[1,0,0], radius=0.1, '
+                                'length=0.2}}'),
+         ("obstacles[0].length", "only for kind = 'cylinder'")),
+        ("radius-missing-for-a-rectangle", ("--set", FLOOR),
+         ("contact.radius", "required for a rectangle section")),
+        ("restitution-above-one", ("--set", CONTACT_R, "--set", FLOOR, "--set",
+                                   "contact.restitution=1.5"),
+         ("contact.restitution", "(0, 1]")),
+        ("rod-starting-inside", ("--set", CONTACT_R, "--set",
+                                 'obstacles.0={{kind="plane", point=[0,0,0.1], '
+                                 'normal=[0,0,1]}}'),
+         ("obstacles[0]", "node at s = 0 m", "0.105 m inside")),
+        ("table-that-changes-nothing", ("--set", "contact={{restitution=0.5}}"),
+         ("contact", "changes nothing")),
+    )),
+    Case("contact-assembly-rod-starting-inside-named", "message",
+         ("static", "assembly_two_rod_cantilever", "--n-elements", "4", "--set", CONTACT_R,
+          "--set", 'obstacles.0={{kind="sphere", centre=[0,0,0.25], radius=0.01}}', *OUT),
+         2, ("obstacles[0]", "[rod tip]", "inside"), (), (ABSENT,), **GUARDED),
 ]
