@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from generated import rod_layout as L
+from runtime.model.contact import ContactArrays
 
 
 class RodStruct(ctypes.Structure):
@@ -38,7 +39,7 @@ class RodStruct(ctypes.Structure):
                 ("sload", ctypes.c_void_p), ("theta", ctypes.c_void_p),
                 ("segb", ctypes.c_void_p), ("jntb", ctypes.c_void_p),
                 ("coupled", ctypes.c_int), ("segc", ctypes.c_void_p),
-                ("jntc", ctypes.c_void_p)]
+                ("jntc", ctypes.c_void_p), ("contact", ctypes.c_void_p)]
 
 
 def _view(arr: np.ndarray, offsets: dict[str, int], fields, name: str) -> np.ndarray:
@@ -62,6 +63,8 @@ class RodArrays:
     jntb: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 3)))
     segc: np.ndarray | None = None
     jntc: np.ndarray | None = None
+    #: the rigid obstacles the rod touches (runtime.model.contact; None: none)
+    contact: ContactArrays | None = None
 
     @classmethod
     def zeros(cls, n_elements: int, branches: int = 0, coupled: bool = False) -> RodArrays:
@@ -91,7 +94,8 @@ class RodArrays:
                          self.nload.copy(), self.sload.copy(), self.theta.copy(),
                          self.segb.copy(), self.jntb.copy(),
                          None if self.segc is None else self.segc.copy(),
-                         None if self.jntc is None else self.jntc.copy())
+                         None if self.jntc is None else self.jntc.copy(),
+                         None if self.contact is None else self.contact.copy())
 
     # -- named access ----------------------------------------------------------------
     def param(self, name: str) -> np.ndarray:
@@ -175,7 +179,8 @@ class RodArrays:
                          self.jnt.ctypes.data, self.nload.ctypes.data, self.sload.ctypes.data,
                          self.theta.ctypes.data, self.segb.ctypes.data, self.jntb.ctypes.data,
                          int(c), self.segc.ctypes.data if c else None,
-                         self.jntc.ctypes.data if c else None)
+                         self.jntc.ctypes.data if c else None,
+                         None if self.contact is None else self.contact.struct_address)
 
     def node_masses(self) -> np.ndarray:
         """Lumped node masses (N+1,) in kg: half of each adjacent segment's rho A h."""

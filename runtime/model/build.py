@@ -51,12 +51,12 @@ from runtime.native import (
 )
 
 #: the generated C (checked against generated/MANIFEST.json before it is compiled)
-SOURCES = ("rod_kernels.c", "rod_kernels_x4.c")
-HEADERS = ("rod_kernels.h", "rod_kernels_x4.h", "rod_layout.h")
+SOURCES = ("rod_kernels.c", "rod_kernels_x4.c", "rod_contact_kernels.c")
+HEADERS = ("rod_kernels.h", "rod_kernels_x4.h", "rod_contact_kernels.h", "rod_layout.h")
 #: the assembly, written by hand, compiled with them
 NATIVE_DIR = Path(__file__).resolve().parent / "native"
-ASSEMBLY_SOURCES = ("rod_assembly.c", "system.c")
-ASSEMBLY_HEADERS = ("rod_assembly.h", "system.h")
+ASSEMBLY_SOURCES = ("rod_assembly.c", "rod_contact.c", "system.c")
+ASSEMBLY_HEADERS = ("rod_assembly.h", "rod_contact.h", "system.h")
 
 
 def source_paths(gdir: Path | None = None) -> list[Path]:
@@ -231,6 +231,14 @@ def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
                  "kvrod_energies", "kvrod_n_state"):
         getattr(lib, name).restype = i
     lib.kvrod_n_state.argtypes = [i, i]
+    # contact with obstacles (runtime/model/native/rod_contact.h)
+    lib.kvrod_contact_values.argtypes = [p, p, p]
+    lib.kvrod_contact_points.argtypes = [p, p, p, i]
+    lib.kvrod_energies_contact.argtypes = [p, i, p, p, p, p]
+    for name in ("kvrod_contact_values", "kvrod_contact_points", "kvrod_energies_contact"):
+        getattr(lib, name).restype = i
+    lib.kvrod_contact_max_step.argtypes = [p, p]
+    lib.kvrod_contact_max_step.restype = d
     # an assembly of rods (runtime/model/native/system.h)
     lib.kvsys_residual.argtypes = [p, d, p, p, p]
     lib.kvsys_jacobian.argtypes = [p, d, p, p, d, p]

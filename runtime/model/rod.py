@@ -27,6 +27,7 @@ from generated import rod_layout as L
 from runtime.errors import GeneratedCodeError, ParameterError
 from runtime.model import build
 from runtime.model.arrays import RodArrays
+from runtime.model.contact import N_VALUES, VALUE_NAMES
 from runtime.model.quaternion import end_quaternion, quat_mul, quat_rotation
 
 
@@ -121,6 +122,14 @@ class RodModel:
             raise GeneratedCodeError("compiled backend requested but no library could be "
                                      "built (see the warning above)")
         self._lib = lib
+        #: the rigid obstacles the rod touches (runtime.model.contact; None: none)
+        self.contact = arrays.contact if (arrays.contact is not None
+                                          and arrays.contact.n_obstacles) else None
+        if self.contact is not None and lib is None:
+            raise GeneratedCodeError("contact with obstacles runs on the compiled backend "
+                                     "only (a C compiler is needed: see the warning above)")
+        #: the state's bound on the next step (contact; the BDF reads it), None without
+        self.state_max_step = None if self.contact is None else self._contact_max_step
         self._struct = arrays.struct(self.kl, self.ku)
         self._sp = None
         self._casadi = None
@@ -138,7 +147,11 @@ class RodModel:
         self._zeros = np.zeros(self.n)
         self._ab = np.zeros((self.ldab, self.n), order="F")
         self._diag = np.zeros(L.diagnostics_size(N))
-        self._energy = np.zeros(len(L.DIAG_SCALARS))
+        #: values per state of :meth:`energies`: the DIAG_SCALARS, then per obstacle the
+        #: contact's values (runtime.model.contact.VALUE_NAMES)
+        self.n_energies = len(L.DIAG_SCALARS) + (0 if self.contact is None else
+                                                 N_VALUES * self.contact.n_obstacles)
+        self._energy = np.zeros(self.n_energies)
         nodes, segs = np.arange(N + 1), np.arange(1, N + 1)
         self.phi_index = np.array([L.node_phi(i, B) for i in nodes])[:, None] + np.arange(3)
         self.v_index = np.array([L.node_v(i, B) for i in nodes])[:, None] + np.arange(3)
@@ -500,13 +513,17 @@ class RodModel:
                 return lo, hi
 
         lib = self._lib
-        return CKernels(address(lib.kvrod_residual), address(lib.kvrod_jacobian_band),
-                        address(lib.kvrod_energies), ctypes.addressof(self._struct),
+        energies = lib.kvrod_energies if self.contact is None else lib.kvrod_energies_contact
+        kern = CKernels(address(lib.kvrod_residual), address(lib.kvrod_jacobian_band),
+                        address(energies), ctypes.addressof(self._struct),
                         drive=drive, keep=self,
                         jacobian_cells=(0 if self.coupled else
                                         address(lib.kvrod_jacobian_band_cells)),
                         drive_constant=drive is not None and not self.drive.time_dependent,
-                        n_energies=len(L.DIAG_SCALARS))
+                        n_energies=self.n_energies)
+        if self.contact is not None:
+            kern.max_step = address(lib.kvrod_max_step)
+        return kern
 
     def _struct_ptr(self):
         import ctypes
@@ -641,6 +658,54 @@ class RodModel:
     #: names of the energies' columns after the first five: the supports' reactions
     reaction_names: tuple[str, ...] = tuple(L.DIAG_REACTIONS)
 
+    # -- contact with obstacles (runtime/model/native/rod_contact.h) ----------------------
+    def _contact_max_step(self, t: float, y: np.ndarray) -> float:
+        """The largest next step (s) that moves no segment toward an obstacle by more than
+        ``step_fraction`` of its gap plus delta (inf: no bound)."""
+        self._time(t)
+        return float(self._lib.kvrod_contact_max_step(self._struct_ptr(), _ptr(y, self.n)))
+
+    def contact_values(self, t: float, y: np.ndarray) -> np.ndarray:
+        """(nobs, N_VALUES): per obstacle the force (N) and moment (N m, about its point)
+        it exerts on the rod (spatial), the contact energy (J), the dissipated power
+        (W) and its friction part, the power of its motion on the rod (W), the smallest
+        gap (m) and the number of segments in reach (``contact.VALUE_NAMES``); (0, ...)
+        without obstacles."""
+        if self.contact is None:
+            return np.zeros((0, N_VALUES))
+        self._time(t)
+        out = np.zeros((self.contact.n_obstacles, N_VALUES))
+        rc = self._lib.kvrod_contact_values(self._struct_ptr(), _ptr(y, self.n),
+                                            out.ctypes.data)
+        if rc:
+            raise GeneratedCodeError(f"kvrod_contact_values failed (code {rc})")
+        return out
+
+    def contact_points(self, t: float, y: np.ndarray) -> np.ndarray:
+        """(k, 6): the quadrature points touching an obstacle (gap below 3 delta): obstacle
+        index, segment (1..N), position (3, m), gap (m)."""
+        if self.contact is None:
+            return np.zeros((0, 6))
+        self._time(t)
+        cap = 256
+        while True:
+            out = np.zeros((cap, 6))
+            k = self._lib.kvrod_contact_points(self._struct_ptr(), _ptr(y, self.n),
+                                               out.ctypes.data, cap)
+            if k < 0:
+                raise GeneratedCodeError(f"kvrod_contact_points failed (code {k})")
+            if k <= cap:
+                return out[:k]
+            cap = k
+
+    def contact_value_names(self) -> tuple[str, ...]:
+        """Names of the columns of :meth:`energies` after the DIAG_SCALARS:
+        ``obstacle{k}_{value}``."""
+        if self.contact is None:
+            return ()
+        return tuple(f"obstacle{k}_{v}" for k in range(self.contact.n_obstacles)
+                     for v in VALUE_NAMES)
+
     def reactions(self, t: float, y: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
         """The force (N) and moment (N m, about the node) that each held end's support
         exerts on the rod in state ``y`` at time ``t``, spatial: ``{"start": {"force",
@@ -666,7 +731,16 @@ class RodModel:
         yps = np.ascontiguousarray(yps, dtype=float)
         ts = np.ascontiguousarray(ts, dtype=float)
         m = ys.shape[0]
-        out = np.empty((m, len(L.DIAG_SCALARS)))
+        out = np.empty((m, self.n_energies))
+        if self.contact is not None:
+            for k in range(m):
+                self._time(float(ts[k]))
+                rc = self._lib.kvrod_energies_contact(
+                    self._struct_ptr(), 1, ts[k:k + 1].ctypes.data, ys[k].ctypes.data,
+                    yps[k].ctypes.data, out[k].ctypes.data)
+                if rc:
+                    raise GeneratedCodeError(f"kvrod_energies_contact failed (code {rc})")
+            return out
         if self._lib is not None and self._steady_for(ts):
             rc = self._lib.kvrod_energies(self._struct_ptr(), m, ts.ctypes.data, ys.ctypes.data,
                                           yps.ctypes.data, out.ctypes.data)

@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from runtime.model.arrays import RodArrays, coupled_arrays
+from runtime.model.contact import ContactArrays
 from runtime.model.quaternion import (
     cayley_curvature,
     quat_exp,
@@ -26,6 +27,7 @@ from runtime.model.quaternion import (
 from runtime.model.rod import RodModel
 from runtime.problem.geometry import Straight, discretize
 from runtime.problem.materials import joint_average, joint_series
+from runtime.problem.obstacles import Obstacle
 from runtime.problem.schema import Problem
 from runtime.problem.timefunctions import TimeFunction
 
@@ -46,8 +48,11 @@ class ProblemDrive:
         self.r_ends, self.p_ends = r_ends, p_ends        # (2, 3), (2, 4)
         self.loads = problem.loads
         self.ends = (problem.start, problem.end)
+        #: the obstacles whose pose the drive writes (runtime.model.contact)
+        self.obstacles = problem.obstacles
         self.time_dependent = any(not ld.time.is_constant for ld in self.loads) or any(
-            e.motion is not None and e.motion.time_dependent for e in self.ends)
+            e.motion is not None and e.motion.time_dependent for e in self.ends) or any(
+            o.time_dependent for o in self.obstacles)
         s_nodes = problem.node_arc_lengths()
         self._nodes = [ld.node(N, self.length, s_nodes) for ld in self.loads]
         #: an end has prescribed motion (statics must move the held nodes)
@@ -69,6 +74,8 @@ class ProblemDrive:
                     out.append((mo.translation_time, True))
                 if mo.rotation_angle:
                     out.append((mo.rotation_time, True))
+        for o in self.obstacles:
+            out += o.inputs()
         return out
 
     def breakpoints(self, t0: float, t1: float) -> list[tuple[float, bool]]:
@@ -130,6 +137,7 @@ class ProblemDrive:
         funcs += [f for e in self.ends if e.motion is not None
                   for f, on in ((e.motion.translation_time, any(e.motion.translation)),
                                 (e.motion.rotation_time, e.motion.rotation_angle != 0.0)) if on]
+        funcs += [f for o in self.obstacles for f in o.time_functions()]
         for f in funcs:
             lo, hi = f.constant_interval(t)
             a, b = max(a, lo), min(b, hi)
@@ -198,6 +206,13 @@ class ProblemDrive:
             a.set_param("a_" + name, acc)
             a.set_param("p_" + name, p)
             a.set_param("Omega_" + name, om)
+        if a.contact is not None:
+            for k, o in enumerate(self.obstacles):
+                if o.moves:
+                    c, q, v, w = o.pose(t, left=left)
+                    if static:
+                        v, w = np.zeros(3), np.zeros(3)
+                    a.contact.set_pose(k, c, q, v, w)
 
 
 def reference_arrays(problem: Problem) -> tuple[RodArrays, np.ndarray, np.ndarray, np.ndarray]:
@@ -259,6 +274,8 @@ def reference_arrays(problem: Problem) -> tuple[RodArrays, np.ndarray, np.ndarra
     a.set_param("p_end", p_end)
     if "K6" in mats:          # coupled sections: the coupled kernels (docs/design.md, 10)
         a = coupled_arrays(a, mats["K6"], mats["V6"], mats["rhoJ"], mats["mass_centre"])
+    if problem.obstacles:
+        a.contact = contact_arrays(problem, h)
     B = a.branches
     y = np.zeros(L.n_state(N, B))         # at rest, stress free: internal strains 0
     for i in range(N + 1):
@@ -266,6 +283,65 @@ def reference_arrays(problem: Problem) -> tuple[RodArrays, np.ndarray, np.ndarra
     for i in range(1, N + 1):
         y[L.segment_p(i, B):L.segment_p(i, B) + 4] = p_seg[i - 1]
     return a, y, np.array([disc.nodes[0], disc.nodes[-1]]), np.array([p_start, p_end])
+
+
+def obstacle_parameters(o: Obstacle, radius: float, delta: float) -> tuple[int, np.ndarray]:
+    """(kernel kind, parameters ``OBS_PARAMS``) of an obstacle at its reference pose: its
+    frame's origin at its point (a sphere's centre), its shape in that frame; ``radius``
+    (m): the largest contact radius of the rods that touch it, ``delta`` (m) the smallest
+    smoothing length: a capped cylinder's rims are rounded over ``sqrt(radius delta)``
+    (their error at the rod's surface then stays below delta: derive.contact), a pipe's
+    open end switches the contact off over one rod radius."""
+    from generated import rod_layout as L
+    from runtime.model.contact import KINDS
+
+    kind = "pipe" if o.kind == "cylinder" and o.inside else o.kind
+    par = np.zeros(L.N_OBS)
+    put = lambda name, v: par.__setitem__(  # noqa: E731
+        slice(L.OBS_OFFSETS[name], L.OBS_OFFSETS[name] + np.size(v)), np.ravel(v))
+    put("c", o.centre)
+    put("q", (1.0, 0.0, 0.0, 0.0))
+    if o.direction is not None:
+        put("axis", o.direction)
+    if o.radius is not None:
+        put("radius", o.radius)
+    if o.kind == "cylinder":
+        put("length", o.length if o.length is not None else 0.0)
+        if o.length is not None:
+            put("edge", radius if o.inside else math.sqrt(radius * delta))
+    return KINDS.index(kind), par
+
+
+def contact_arrays(problem: Problem, h: np.ndarray) -> ContactArrays:
+    """The contact of a rod with its problem's obstacles (``runtime.model.contact``): per
+    obstacle its kernel and parameters (:func:`obstacle_parameters`; the pose of t = 0),
+    per obstacle and segment the law of :meth:`Problem.contact_law` (k, delta, the
+    segment's normal damping, the obstacle's friction, the slip velocity, the segment's
+    contact radius and length ``h`` (N,), m)."""
+    from generated import rod_layout as L
+
+    law = problem.contact_law()
+    N = h.size
+    kinds, obs = [], []
+    for o in problem.obstacles:
+        kind, par = obstacle_parameters(o, float(np.max(law.radius)), law.penetration)
+        kinds.append(kind)
+        obs.append(par)
+    cnt = np.zeros((len(kinds), N, L.N_CNT))
+    for k, o in enumerate(problem.obstacles):
+        col = lambda name: cnt[k, :, L.CNT_OFFSETS[name]]  # noqa: E731
+        col("k")[:] = law.stiffness
+        col("delta")[:] = law.penetration
+        col("c")[:] = law.damping
+        col("mu")[:] = o.friction
+        col("v_s")[:] = law.slip_velocity
+        col("r")[:] = law.radius
+        col("h")[:] = h
+    arrays = ContactArrays(np.array(kinds), np.array(obs), cnt)
+    for k, o in enumerate(problem.obstacles):
+        c, q, v, w = o.pose(0.0)
+        arrays.set_pose(k, c, q, v, w)
+    return arrays
 
 
 def build_model(problem: Problem, backend: str = "auto") -> RodModel:

@@ -313,6 +313,10 @@ class BDF:
         self._rr = 1.0
         self._hmax_inv = 1.0 / self.max_step
         self._fail_index = -1  # component blamed in failure reports
+        #: the state's bound on the next step (contact: no segment moves toward an
+        #: obstacle by more than a fraction of its gap; the problem's state_max_step(t, y),
+        #: None without), applied after every accepted step and to the first
+        self._state_max_step = getattr(problem, "state_max_step", None)
 
         self.t = float(t0)
         self.t_old: float | None = None
@@ -349,6 +353,8 @@ class BDF:
             h = min(h, self.max_step)
         if tdist > 0:
             h = min(h, tdist)
+        if self.fixed_step is None and self._state_max_step is not None:
+            h = min(h, max(self._state_max_step(self.t, self._y), self._hmin()))
         self._hh = self.direction * h
         self._phi[0] = self._y
         np.multiply(self._yp, self._hh, out=self._phi[1])
@@ -929,6 +935,10 @@ class BDF:
         self._y, self._yy = self._yy, self._y
         self._yp, self._ypw = self._ypw, self._yp
         self._update_weights()
+        if self._state_max_step is not None and self.fixed_step is None:
+            hb = max(self._state_max_step(self.t, self._y), self._hmin())
+            if abs(self._hh) > hb:
+                self._hh = self.direction * hb
 
     # ------------------------------------------------------------------ failures
     def _residual_report(self, t: float, y: np.ndarray, yp: np.ndarray) -> tuple[float, int]:

@@ -179,7 +179,11 @@ class CKernels:
 
     ``system_jacobian`` (optional, 0 if none): the Jacobian of a system of coupled band
     blocks (an assembly: ``kvsys_jacobian``), for a problem whose Newton system is its own
-    coupled blocks."""
+    coupled blocks.
+
+    ``max_step`` (optional, 0 if none): ``double f(ctx, t, y, yp)``, the largest next step
+    the state allows (contact: ``kvrod_max_step``); the loop applies it after every
+    accepted step as the BDF's ``_state_max_step`` does."""
 
     def __init__(self, residual: int, jacobian: int, energies: int, ctx: int,
                  drive=None, keep: Any = None, jacobian_cells: int = 0,
@@ -194,3 +198,4 @@ class CKernels:
         self.drive = drive
         self.keep = keep
         self.system_jacobian = 0
+        self.max_step = 0

@@ -17,6 +17,7 @@
 #include "rod_kernels_x4.h"
 #include "rod_layout.h"
 #include "rod_assembly.h"
+#include "rod_contact.h"
 
 /* indices of the fields of node i / segment i (i >= 1) / joint j in y */
 static inline int c0size(const kvrod_rod* r) { return CELL0_BASE + CELL0_PER * r->nb; }
@@ -356,9 +357,8 @@ static int residual_coupled(const kvrod_rod* rod, const double* y, const double*
   return 0;
 }
 
-int kvrod_residual(const kvrod_rod* rod, double t, const double* y, const double* yp,
-                   double* res) {
-  (void) t;
+static int residual_own(const kvrod_rod* rod, const double* y, const double* yp,
+                        double* res) {
   const int N = rod->N;
   if (check_rod(rod)) return check_rod(rod);
   work_t W;
@@ -761,10 +761,9 @@ static void zero_cell(const kvrod_rod* rod, int i, const band_t* B) {
            sizeof(double) * (rod->kl + rod->ku + 1));
 }
 
-int kvrod_jacobian_band_cells(const kvrod_rod* rod, double t, const double* y,
-                              const double* yp, double cy, double cj, int ldab, double* ab,
-                              int col0, int i0, int i1) {
-  (void) t;
+static int jacobian_cells_own(const kvrod_rod* rod, const double* y, const double* yp,
+                             double cy, double cj, int ldab, double* ab, int col0, int i0,
+                             int i1) {
   const int N = rod->N;
   if (check_rod(rod)) return check_rod(rod);
   if (ldab < 2 * rod->kl + rod->ku + 1) return -2;
@@ -824,6 +823,31 @@ int kvrod_jacobian_band_cells(const kvrod_rod* rod, double t, const double* y,
     if (jac_joint(rod, i, y, cy, cj, B, &W, J, in_g && gj ? JJ[i - g0] : 0)) return -3;
   }
   return 0;
+}
+
+/* the rod's own terms, then its contact with obstacles (segment i is part of element i:
+   it reaches the columns of cells i-1 and i, as the segment's internal forces do) */
+int kvrod_residual(const kvrod_rod* rod, double t, const double* y, const double* yp,
+                   double* res) {
+  (void) t;
+  const int rc = residual_own(rod, y, yp, res);
+  return rc ? rc : kvrod_contact_residual(rod, y, res);
+}
+
+int kvrod_jacobian_band_cells(const kvrod_rod* rod, double t, const double* y,
+                              const double* yp, double cy, double cj, int ldab, double* ab,
+                              int col0, int i0, int i1) {
+  (void) t;
+  const int rc = jacobian_cells_own(rod, y, yp, cy, cj, ldab, ab, col0, i0, i1);
+  return rc ? rc : kvrod_contact_jacobian(rod, y, cy, ldab, ab, col0, i0, i1);
+}
+
+void kvrod_segment_layout(const kvrod_rod* rod, int s, int idx[6], int free_ab[2]) {
+  idx[0] = i_phi(rod, s - 1); idx[1] = i_phi(rod, s);
+  idx[2] = i_v(rod, s - 1); idx[3] = i_v(rod, s);
+  idx[4] = i_p(rod, s); idx[5] = i_om(rod, s);
+  free_ab[0] = !(node_held(rod, s - 1) > 0.5);
+  free_ab[1] = !(node_held(rod, s) > 0.5);
 }
 
 int kvrod_jacobian_band(const kvrod_rod* rod, double t, const double* y, const double* yp,
@@ -1085,7 +1109,8 @@ int kvrod_diagnostics(const kvrod_rod* rod, double t, const double* y, const dou
   if (check_rod(rod)) return check_rod(rod);
   work_t W;
   memset(out, 0, sizeof(double) * (size_t)(NDIAG + 6 * N + 6 * (N + 1)));
-  return energies_one(rod, y, yp, out, out + NDIAG, &W);
+  const int rc = energies_one(rod, y, yp, out, out + NDIAG, &W);
+  return rc ? rc : kvrod_contact_energies(rod, y, out);
 }
 
 int kvrod_energies(const kvrod_rod* rod, int m, const double* ts, const double* ys,
@@ -1095,7 +1120,9 @@ int kvrod_energies(const kvrod_rod* rod, int m, const double* ts, const double* 
   const size_t n = (size_t) kvrod_n_state(rod->N, rod->nb);
   work_t W;
   int k;
-  for (k = 0; k < m; ++k)
+  for (k = 0; k < m; ++k) {
     if (energies_one(rod, ys + k * n, yps + k * n, out + (size_t)k * NDIAG, 0, &W)) return -3;
+    if (kvrod_contact_energies(rod, ys + k * n, out + (size_t)k * NDIAG)) return -3;
+  }
   return 0;
 }

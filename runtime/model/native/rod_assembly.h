@@ -23,6 +23,8 @@
 extern "C" {
 #endif
 
+typedef struct kvrod_contact_s kvrod_contact;   /* rod_contact.h */
+
 typedef struct {
   int N;                  /* number of elements (segments) */
   int nb;                 /* number of relaxation terms (0: Kelvin-Voigt) */
@@ -39,6 +41,9 @@ typedef struct {
                              segc, jntc instead of the diagonal ones; band KLC, KUC */
   const double* segc;     /* N x NSEGC coupled segment parameters (coupled only) */
   const double* jntc;     /* (N+1) x NJNTC coupled joint parameters (coupled only) */
+  const kvrod_contact* contact;   /* obstacles the rod touches (NULL: none; rod_contact.h):
+                                     their forces are part of the residual, the Jacobian
+                                     and the energies below */
 } kvrod_rod;
 
 int kvrod_n_state(int N, int nb);

@@ -40,6 +40,9 @@ typedef int (*kv_drive_fn)(double t);
    the couplings' values (kv_blocks in blocks.c) */
 typedef int (*kv_sysjac_fn)(const void *ctx, double t, const double *y, const double *yp,
                             double cj, kv_blocks *B);
+/* the largest next step the problem's state allows (s; HUGE_VAL: none), e.g. contact:
+   no segment moves toward an obstacle by more than a fraction of its gap */
+typedef double (*kv_maxstep_fn)(const void *ctx, double t, const double *y, const double *yp);
 
 #define KV_MAXORD 5
 #define KV_NH (KV_MAXORD + 2)
@@ -153,6 +156,9 @@ typedef struct {
     const double *t_rep;
     double *rep;
     kv_drive_fn rep_flush;      /* called with t (unused) */
+    /* NULL, or the state's bound on the next step, applied after every accepted step as
+       hmax is (bdf.py: BDF._state_max_step) */
+    kv_maxstep_fn maxstep;
 } kv_ida;
 
 enum { SEC_RES, SEC_JAC, SEC_LU, SEC_NEWTON, SEC_EN, SEC_DRIVE };
@@ -717,6 +723,12 @@ static void complete_step(kv_ida *S, double tnew, double err_k, double err_km1)
     S->t_old = S->t;
     S->t = tnew;
     S->started = 1;
+    if (S->maxstep && S->fixed_step <= 0.0) {
+        double hb = S->maxstep(S->ctx, S->t, S->y, S->yp);
+        const double hm = hmin(S);
+        if (hb < hm) hb = hm;
+        if (fabs(S->hh) > hb) S->hh = S->direction * hb;
+    }
 }
 
 /* one accepted step (bdf.py's _step_impl); 0 or a KV_FAIL_ / KV_CALLBACK / KV_NONFINITE */

@@ -125,6 +125,7 @@ class CoreStruct(ctypes.Structure):
         + _fields(_P, "blocks", "sysjac")
         + _fields(_I, "m_rep", "k_rep", "rep_w", "rep_cap", "rep_n")
         + _fields(_P, "t_rep", "rep", "rep_flush")
+        + _fields(_P, "maxstep")
     )
     #: names of the entries of ``sec`` (seconds per part when ``timing`` is set)
     SECTIONS = ("residual", "jacobian", "lu", "newton_solve_update", "energies", "drive")
@@ -158,6 +159,7 @@ class CoreLink:
         if kern is not None:
             s.res, s.jac, s.en, s.ctx = kern.residual, kern.jacobian, kern.energies, kern.ctx
             s.nen = kern.n_energies
+            s.maxstep = kern.max_step or None
             self._keep.append(kern.keep)
             self.has_energies = bool(kern.energies)
             if kern.drive is not None and not kern.drive_constant:

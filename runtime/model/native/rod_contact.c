@@ -1,0 +1,326 @@
+/*
+ * Contact of a rod with rigid obstacles: the loops over obstacles and segments around the
+ * generated kernels rod_contact_<kind>, _jac, _diagnostics and _bound (rod_contact.h says
+ * what each function does; derive/contact.py derives the kernels). Written by hand,
+ * compiled with the rod assembly. A segment whose gap bound exceeds CONTACT_CUTOFF delta
+ * is skipped: every term of its kernels is below exp(-40) there (derive.contact), so the
+ * culling changes nothing above round-off and keeps a rod far from every obstacle at the
+ * cost of one bound kernel per segment and obstacle.
+ */
+#include <math.h>
+#include <string.h>
+#include "rod_contact_kernels.h"
+#include "rod_layout.h"
+#include "rod_assembly.h"
+#include "rod_contact.h"
+
+typedef int (*ckernel)(const casadi_real** arg, casadi_real** res, casadi_int* iw,
+                       casadi_real* w, int mem);
+
+static const ckernel kForces[KV_NKINDS] = {rod_contact_plane, rod_contact_sphere,
+                                           rod_contact_cylinder, rod_contact_pipe};
+static const ckernel kJac[KV_NKINDS] = {rod_contact_plane_jac, rod_contact_sphere_jac,
+                                        rod_contact_cylinder_jac, rod_contact_pipe_jac};
+static const ckernel kDiag[KV_NKINDS] = {
+    rod_contact_plane_diagnostics, rod_contact_sphere_diagnostics,
+    rod_contact_cylinder_diagnostics, rod_contact_pipe_diagnostics};
+static const ckernel kBound[KV_NKINDS] = {rod_contact_plane_bound, rod_contact_sphere_bound,
+                                          rod_contact_cylinder_bound, rod_contact_pipe_bound};
+
+typedef struct {
+  const double* arg[16];
+  double* res[8];
+  casadi_int iw[8];
+  double w[1024];
+} cwork;
+
+/* one segment's inputs: phi_a, phi_b, v_a, v_b, p, Omega (kernel order), obs, cnt */
+typedef struct {
+  int idx[6], free_ab[2];
+  const double* obs;
+  const double* cnt;
+} cseg;
+
+static int active(const kvrod_rod* rod) {
+  return rod->contact != 0 && rod->contact->nobs > 0;
+}
+
+static const double* cnt_of(const kvrod_rod* rod, int o, int s) {
+  return rod->contact->cnt + ((size_t)o * (size_t)rod->N + (size_t)(s - 1)) * NCNT;
+}
+
+static void seg_of(const kvrod_rod* rod, int o, int s, cseg* g) {
+  kvrod_segment_layout(rod, s, g->idx, g->free_ab);
+  g->obs = rod->contact->obs + (size_t)o * NOBS;
+  g->cnt = cnt_of(rod, o, s);
+}
+
+/* the kernel arguments: idx is (phi_a, phi_b, v_a, v_b, p, Omega) */
+static void args_of(const cseg* g, const double* y, cwork* W) {
+  for (int k = 0; k < 6; ++k) W->arg[k] = y + g->idx[k];
+  W->arg[6] = g->obs;
+  W->arg[7] = g->cnt;
+}
+
+/* the gap's lower bound of the segment (m) */
+static int bound_of(int kind, const double* pa, const double* pb, const double* obs,
+                    const double* cnt, cwork* W, double* g) {
+  W->arg[0] = pa; W->arg[1] = pb; W->arg[2] = obs; W->arg[3] = cnt;
+  W->res[0] = g;
+  return kBound[kind](W->arg, W->res, W->iw, W->w, 0) ? -3 : 0;
+}
+
+/* whether segment g is in reach (its bound at most CONTACT_CUTOFF delta); *glb <- bound */
+static int in_reach(int kind, const cseg* g, const double* y, cwork* W, int* yes,
+                    double* glb) {
+  if (bound_of(kind, y + g->idx[0], y + g->idx[1], g->obs, g->cnt, W, glb)) return -3;
+  *yes = *glb <= CONTACT_CUTOFF * g->cnt[CNT_DELTA];
+  return 0;
+}
+
+int kvrod_contact_residual(const kvrod_rod* rod, const double* y, double* res) {
+  if (!active(rod)) return 0;
+  const kvrod_contact* C = rod->contact;
+  cwork W;
+  cseg g;
+  double Q[NCNTQ], glb;
+  int yes;
+  for (int o = 0; o < C->nobs; ++o) {
+    const int kind = C->kind[o];
+    if (kind < 0 || kind >= KV_NKINDS) return -4;
+    for (int s = 1; s <= rod->N; ++s) {
+      seg_of(rod, o, s, &g);
+      if (in_reach(kind, &g, y, &W, &yes, &glb)) return -3;
+      if (!yes) continue;
+      args_of(&g, y, &W);
+      W.res[0] = Q;
+      if (kForces[kind](W.arg, W.res, W.iw, W.w, 0)) return -3;
+      for (int k = 0; k < 3; ++k) {
+        if (g.free_ab[0]) res[g.idx[2] + k] -= Q[CNTQ_F_A + k];
+        if (g.free_ab[1]) res[g.idx[3] + k] -= Q[CNTQ_F_B + k];
+        res[g.idx[5] + k] -= Q[CNTQ_T + k];
+      }
+    }
+  }
+  return 0;
+}
+
+int kvrod_contact_jacobian(const kvrod_rod* rod, const double* y, double cy, int ldab,
+                           double* ab, int col0, int s0, int s1) {
+  if (!active(rod) || cy == 0.0) return 0;
+  const kvrod_contact* C = rod->contact;
+  const int kl = rod->kl, ku = rod->ku;
+  cwork W;
+  cseg g;
+  double J[NCNTQ * NCNTJ], glb;
+  int yes, rows[NCNTQ], cols[NCNTJ];
+  if (s0 < 1) s0 = 1;
+  if (s1 > rod->N) s1 = rod->N;
+  for (int o = 0; o < C->nobs; ++o) {
+    const int kind = C->kind[o];
+    if (kind < 0 || kind >= KV_NKINDS) return -4;
+    for (int s = s0; s <= s1; ++s) {
+      seg_of(rod, o, s, &g);
+      if (in_reach(kind, &g, y, &W, &yes, &glb)) return -3;
+      if (!yes) continue;
+      args_of(&g, y, &W);
+      W.res[0] = J;
+      if (kJac[kind](W.arg, W.res, W.iw, W.w, 0)) return -3;
+      /* rows: f_a on v_a, f_b on v_b, T on Omega; columns: phi_a, phi_b, p, v_a, v_b,
+         Omega (CNTJ_*) */
+      for (int k = 0; k < 3; ++k) {
+        rows[CNTQ_F_A + k] = g.free_ab[0] ? g.idx[2] + k : -1;
+        rows[CNTQ_F_B + k] = g.free_ab[1] ? g.idx[3] + k : -1;
+        rows[CNTQ_T + k] = g.idx[5] + k;
+        cols[CNTJ_PHI_A + k] = g.idx[0] + k;
+        cols[CNTJ_PHI_B + k] = g.idx[1] + k;
+        cols[CNTJ_V_A + k] = g.idx[2] + k;
+        cols[CNTJ_V_B + k] = g.idx[3] + k;
+        cols[CNTJ_OMEGA + k] = g.idx[5] + k;
+      }
+      for (int k = 0; k < 4; ++k) cols[CNTJ_P + k] = g.idx[4] + k;
+      for (int c = 0; c < NCNTJ; ++c) {
+        const int cc = cols[c];
+        double* col = ab + (size_t)(cc - col0) * (size_t)ldab + (size_t)(kl + ku - cc);
+        for (int r = 0; r < NCNTQ; ++r)
+          if (rows[r] >= 0) col[rows[r]] -= cy * J[r + NCNTQ * c];
+      }
+    }
+  }
+  return 0;
+}
+
+/* segment s's diagnostics with obstacle o: E, P_diss, F_obs (3), M_obs (3), P_obs, g_min,
+   points (NQ x 4, column-major), P_fric */
+typedef struct {
+  double E, P_diss, F[3], M[3], P_obs, g_min, points[NQ * 4], P_fric;
+} cdiag;
+
+static int diag_of(int kind, const cseg* g, const double* y, cwork* W, cdiag* d) {
+  args_of(g, y, W);
+  W->res[0] = &d->E; W->res[1] = &d->P_diss; W->res[2] = d->F; W->res[3] = d->M;
+  W->res[4] = &d->P_obs; W->res[5] = &d->g_min; W->res[6] = d->points;
+  W->res[7] = &d->P_fric;
+  return kDiag[kind](W->arg, W->res, W->iw, W->w, 0) ? -3 : 0;
+}
+
+/* obstacle o's NCV values (rod_contact.h) into v */
+static int obstacle_values(const kvrod_rod* rod, int o, const double* y, cwork* W,
+                           double* v) {
+  const int kind = rod->contact->kind[o];
+  cseg g;
+  cdiag d;
+  double glb;
+  int yes;
+  if (kind < 0 || kind >= KV_NKINDS) return -4;
+  memset(v, 0, sizeof(double) * NCV);
+  v[10] = HUGE_VAL;
+  for (int s = 1; s <= rod->N; ++s) {
+    seg_of(rod, o, s, &g);
+    if (in_reach(kind, &g, y, W, &yes, &glb)) return -3;
+    if (!yes) {
+      if (glb < v[10]) v[10] = glb;
+      continue;
+    }
+    if (diag_of(kind, &g, y, W, &d)) return -3;
+    for (int k = 0; k < 3; ++k) { v[k] -= d.F[k]; v[3 + k] -= d.M[k]; }
+    v[6] += d.E; v[7] += d.P_diss; v[8] += d.P_fric; v[9] += d.P_obs;
+    if (d.g_min < v[10]) v[10] = d.g_min;
+    v[11] += 1.0;
+  }
+  return 0;
+}
+
+int kvrod_contact_values(const kvrod_rod* rod, const double* y, double* out) {
+  if (!active(rod)) return 0;
+  cwork W;
+  for (int o = 0; o < rod->contact->nobs; ++o) {
+    const int rc = obstacle_values(rod, o, y, &W, out + (size_t)o * NCV);
+    if (rc) return rc;
+  }
+  return 0;
+}
+
+int kvrod_contact_energies(const kvrod_rod* rod, const double* y, double* e) {
+  if (!active(rod)) return 0;
+  cwork W;
+  double v[NCV];
+  for (int o = 0; o < rod->contact->nobs; ++o) {
+    const int rc = obstacle_values(rod, o, y, &W, v);
+    if (rc) return rc;
+    e[1] += v[6];
+    e[2] += v[7];
+    e[3] += v[9];
+  }
+  return 0;
+}
+
+/* q <- q + h/2 (0, w) * q (the obstacle's orientation a short time h later, first order;
+   the kernels take a quaternion of any norm) */
+static void turn(double* q, const double* w, double h) {
+  const double q0 = q[0], q1 = q[1], q2 = q[2], q3 = q[3];
+  q[0] = q0 + 0.5 * h * (-w[0] * q1 - w[1] * q2 - w[2] * q3);
+  q[1] = q1 + 0.5 * h * (w[0] * q0 + w[1] * q3 - w[2] * q2);
+  q[2] = q2 + 0.5 * h * (w[1] * q0 + w[2] * q1 - w[0] * q3);
+  q[3] = q3 + 0.5 * h * (w[2] * q0 + w[0] * q2 - w[1] * q1);
+}
+
+static double norm3(const double* a) { return sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]); }
+
+double kvrod_contact_max_step(const kvrod_rod* rod, const double* y) {
+  if (!active(rod) || !(rod->contact->step_fraction > 0.0)) return HUGE_VAL;
+  const kvrod_contact* C = rod->contact;
+  cwork W;
+  cseg g;
+  double hmax = HUGE_VAL, obs2[NOBS];
+  for (int o = 0; o < C->nobs; ++o) {
+    const int kind = C->kind[o];
+    if (kind < 0 || kind >= KV_NKINDS) return HUGE_VAL;
+    const double* obs = C->obs + (size_t)o * NOBS;
+    const double vo = norm3(obs + OBS_V);
+    for (int s = 1; s <= rod->N; ++s) {
+      seg_of(rod, o, s, &g);
+      const double* pa = y + g.idx[0];
+      const double* pb = y + g.idx[1];
+      const double* va = y + g.idx[2];
+      const double* vb = y + g.idx[3];
+      const double delta = g.cnt[CNT_DELTA];
+      /* the speed scale: the nodes' and the obstacle's point's (its turn is taken by
+         the same difference, over the same short time) */
+      double speed = norm3(va);
+      const double sb = norm3(vb);
+      if (sb > speed) speed = sb;
+      if (vo > speed) speed = vo;
+      const double wo = norm3(obs + OBS_W);
+      if (!(speed > 0.0) && !(wo > 0.0)) continue;
+      double g0, g1;
+      if (bound_of(kind, pa, pb, obs, g.cnt, &W, &g0)) return HUGE_VAL;
+      /* the bound's rate along the motion, by a difference over the time in which the
+         fastest point moves delta (the bound is smooth; the step bound needs no more) */
+      const double dt = delta / (speed > 0.0 ? speed : wo * delta);
+      double qa[3], qb[3];
+      for (int k = 0; k < 3; ++k) { qa[k] = pa[k] + dt * va[k]; qb[k] = pb[k] + dt * vb[k]; }
+      memcpy(obs2, obs, sizeof(double) * NOBS);
+      for (int k = 0; k < 3; ++k) obs2[OBS_C + k] += dt * obs[OBS_V + k];
+      turn(obs2 + OBS_Q, obs + OBS_W, dt);
+      if (bound_of(kind, qa, qb, obs2, g.cnt, &W, &g1)) return HUGE_VAL;
+      const double approach = (g0 - g1) / dt;        /* > 0: closing */
+      if (!(approach > 0.0)) continue;
+      const double h = C->step_fraction * ((g0 > 0.0 ? g0 : 0.0) + delta) / approach;
+      if (h < hmax) hmax = h;
+    }
+  }
+  return hmax;
+}
+
+double kvrod_max_step(const void* ctx, double t, const double* y, const double* yp) {
+  (void) t; (void) yp;
+  return kvrod_contact_max_step((const kvrod_rod*) ctx, y);
+}
+
+int kvrod_contact_points(const kvrod_rod* rod, const double* y, double* out, int cap) {
+  if (!active(rod)) return 0;
+  const kvrod_contact* C = rod->contact;
+  cwork W;
+  cseg g;
+  cdiag d;
+  double glb;
+  int yes, n = 0;
+  for (int o = 0; o < C->nobs; ++o) {
+    const int kind = C->kind[o];
+    if (kind < 0 || kind >= KV_NKINDS) return -4;
+    for (int s = 1; s <= rod->N; ++s) {
+      seg_of(rod, o, s, &g);
+      if (in_reach(kind, &g, y, &W, &yes, &glb)) return -3;
+      if (!yes) continue;
+      if (diag_of(kind, &g, y, &W, &d)) return -3;
+      for (int q = 0; q < NQ; ++q) {
+        const double gap = d.points[q + 3 * NQ];
+        /* touching: the normal force is within e^-3 of its linear law's */
+        if (gap > 3.0 * g.cnt[CNT_DELTA]) continue;
+        if (n < cap) {
+          double* row = out + (size_t)n * 6;
+          row[0] = o; row[1] = s;
+          for (int k = 0; k < 3; ++k) row[2 + k] = d.points[q + k * NQ];
+          row[5] = gap;
+        }
+        ++n;
+      }
+    }
+  }
+  return n;
+}
+
+int kvrod_energies_contact(const kvrod_rod* rod, int m, const double* ts, const double* ys,
+                           const double* yps, double* out) {
+  const size_t n = (size_t) kvrod_n_state(rod->N, rod->nb);
+  const int nobs = active(rod) ? rod->contact->nobs : 0;
+  const size_t stride = (size_t)NDIAG + (size_t)NCV * (size_t)nobs;
+  for (int k = 0; k < m; ++k) {
+    double* o = out + (size_t)k * stride;
+    const int rc = kvrod_energies(rod, 1, ts + k, ys + (size_t)k * n, yps + (size_t)k * n, o);
+    if (rc) return rc;
+    if (nobs && kvrod_contact_values(rod, ys + (size_t)k * n, o + NDIAG)) return -3;
+  }
+  return 0;
+}
