@@ -29,6 +29,7 @@ import os
 import sys
 import tempfile
 import warnings
+from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
@@ -36,6 +37,7 @@ import generated
 from generated import rod_layout as L
 from runtime.errors import GeneratedCodeError
 from runtime.native import (
+    CONTACT_KERNELS,
     LIBS,
     ROD_KERNELS,
     STEP_LOOP,
@@ -51,24 +53,53 @@ from runtime.native import (
 )
 
 #: the generated C (checked against generated/MANIFEST.json before it is compiled)
-SOURCES = ("rod_kernels.c", "rod_kernels_x4.c", "rod_contact_kernels.c")
-HEADERS = ("rod_kernels.h", "rod_kernels_x4.h", "rod_contact_kernels.h", "rod_layout.h")
+SOURCES = ("rod_kernels.c", "rod_kernels_x4.c")
+HEADERS = ("rod_kernels.h", "rod_kernels_x4.h", "rod_layout.h")
 #: the assembly, written by hand, compiled with them
 NATIVE_DIR = Path(__file__).resolve().parent / "native"
-ASSEMBLY_SOURCES = ("rod_assembly.c", "rod_contact.c", "system.c")
-ASSEMBLY_HEADERS = ("rod_assembly.h", "rod_contact.h", "system.h")
+ASSEMBLY_SOURCES = ("rod_assembly.c", "system.c")
+ASSEMBLY_HEADERS = ("rod_assembly.h", "rod_index.h", "rod_contact.h", "system.h")
+#: the contact library (issue 32): the generated contact kernels and the loops around
+#: them, compiled apart on the first problem with obstacles (the kernels' Jacobians are
+#: long straight-line code: compiling them with the rod library would double every first
+#: use); the rod library calls it through kvrod_contact's function pointers
+CONTACT_SOURCES = ("rod_contact_kernels.c",)
+CONTACT_HEADERS = ("rod_contact_kernels.h", "rod_layout.h")
+CONTACT_NATIVE_SOURCES = ("rod_contact.c",)
+CONTACT_NATIVE_HEADERS = ("rod_assembly.h", "rod_index.h", "rod_contact.h")
 
 
-def source_paths(gdir: Path | None = None) -> list[Path]:
-    """Every C source of the rod library: the generated kernels and the assembly."""
+@dataclass(frozen=True)
+class LibrarySpec:
+    """One shared library built from generated and hand-written C: its name's prefix,
+    what the compile observers are told, its sources and headers (generated/, native/)."""
+
+    prefix: str
+    what: str
+    sources: tuple[str, ...]
+    headers: tuple[str, ...]
+    native_sources: tuple[str, ...]
+    native_headers: tuple[str, ...]
+
+
+ROD_LIBRARY = LibrarySpec("kvrod_rod", ROD_KERNELS, SOURCES, HEADERS, ASSEMBLY_SOURCES,
+                          ASSEMBLY_HEADERS)
+CONTACT_LIBRARY = LibrarySpec("kvrod_contact", CONTACT_KERNELS, CONTACT_SOURCES,
+                              CONTACT_HEADERS, CONTACT_NATIVE_SOURCES,
+                              CONTACT_NATIVE_HEADERS)
+
+
+def source_paths(gdir: Path | None = None, spec: LibrarySpec = ROD_LIBRARY) -> list[Path]:
+    """Every C source of a library (default the rod's): the generated kernels and the
+    hand-written loops."""
     gdir = gdir or generated_dir()
-    return [gdir / s for s in SOURCES] + [NATIVE_DIR / s for s in ASSEMBLY_SOURCES]
+    return [gdir / s for s in spec.sources] + [NATIVE_DIR / s for s in spec.native_sources]
 
 
-def header_paths(gdir: Path | None = None) -> list[Path]:
-    """Every header the rod library is compiled with."""
+def header_paths(gdir: Path | None = None, spec: LibrarySpec = ROD_LIBRARY) -> list[Path]:
+    """Every header a library (default the rod's) is compiled with."""
     gdir = gdir or generated_dir()
-    return [gdir / s for s in HEADERS] + [NATIVE_DIR / s for s in ASSEMBLY_HEADERS]
+    return [gdir / s for s in spec.headers] + [NATIVE_DIR / s for s in spec.native_headers]
 
 
 def include_flags(gdir: Path | None = None) -> list[str]:
@@ -177,22 +208,25 @@ def require_casadi_kernels() -> None:
     verify_manifest(names=tuple(f"{name}.casadi" for name in L.KERNELS))
 
 
-def library_key(compiler: str, gdir: Path | None = None) -> str:
+def library_key(compiler: str, gdir: Path | None = None,
+                spec: LibrarySpec = ROD_LIBRARY) -> str:
     """sha256 of sources, headers, flags, compiler path and host CPU (the cache key)."""
     h = hashlib.sha256()
-    for path in (*source_paths(gdir), *header_paths(gdir)):
+    for path in (*source_paths(gdir, spec), *header_paths(gdir, spec)):
         h.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
     h.update(" ".join((*compile_command(compiler), *LIBS, host_id())).encode())
     return h.hexdigest()
 
 
-def compile_library(compiler: str, gdir: Path | None = None, outdir: Path | None = None) -> Path:
-    """Compile (or reuse) the shared library; returns its path. Atomic under concurrency."""
+def compile_library(compiler: str, gdir: Path | None = None, outdir: Path | None = None,
+                    spec: LibrarySpec = ROD_LIBRARY) -> Path:
+    """Compile (or reuse) a shared library (default the rod's); returns its path. Atomic
+    under concurrency."""
     gdir = gdir or generated_dir()
     outdir = outdir or cache_dir()
     outdir.mkdir(parents=True, exist_ok=True)
     suffix = ".dll" if sys.platform == "win32" else ".so"
-    target = outdir / f"kvrod_rod_{library_key(compiler, gdir)[:32]}{suffix}"
+    target = outdir / f"{spec.prefix}_{library_key(compiler, gdir, spec)[:32]}{suffix}"
     sidecar = target.with_name(target.name + ".sha256")
     if target.exists() and sidecar.exists() and sidecar.read_text().strip() == file_hash(target):
         return target
@@ -201,8 +235,9 @@ def compile_library(compiler: str, gdir: Path | None = None, outdir: Path | None
     fd, tmp = tempfile.mkstemp(prefix=target.name + ".", suffix=".tmp", dir=outdir)
     os.close(fd)
     try:
-        tail = [*include_flags(gdir), "-o", tmp, *(str(p) for p in source_paths(gdir)), *LIBS]
-        with compiling(ROD_KERNELS):
+        tail = [*include_flags(gdir), "-o", tmp,
+                *(str(p) for p in source_paths(gdir, spec)), *LIBS]
+        with compiling(spec.what):
             proc = run_compiler(tail, compiler)
         if proc.returncode != 0:
             raise RuntimeError(f"C compilation failed ({' '.join(proc.args)}):\n"
@@ -231,14 +266,8 @@ def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
                  "kvrod_energies", "kvrod_n_state"):
         getattr(lib, name).restype = i
     lib.kvrod_n_state.argtypes = [i, i]
-    # contact with obstacles (runtime/model/native/rod_contact.h)
-    lib.kvrod_contact_values.argtypes = [p, p, p]
-    lib.kvrod_contact_points.argtypes = [p, p, p, i]
     lib.kvrod_energies_contact.argtypes = [p, i, p, p, p, p]
-    for name in ("kvrod_contact_values", "kvrod_contact_points", "kvrod_energies_contact"):
-        getattr(lib, name).restype = i
-    lib.kvrod_contact_max_step.argtypes = [p, p]
-    lib.kvrod_contact_max_step.restype = d
+    lib.kvrod_energies_contact.restype = i
     # an assembly of rods (runtime/model/native/system.h)
     lib.kvsys_residual.argtypes = [p, d, p, p, p]
     lib.kvsys_jacobian.argtypes = [p, d, p, p, d, p]
@@ -282,10 +311,40 @@ def load_library() -> ctypes.CDLL | None:
     return _load_cached()
 
 
+def _declare_contact(lib: ctypes.CDLL) -> ctypes.CDLL:
+    """Argument and result types of the contact library (rod_contact.h)."""
+    i, d, p = ctypes.c_int, ctypes.c_double, ctypes.c_void_p
+    lib.kvrod_contact_values.argtypes = [p, p, p]
+    lib.kvrod_contact_points.argtypes = [p, p, p, i]
+    for name in ("kvrod_contact_values", "kvrod_contact_points"):
+        getattr(lib, name).restype = i
+    lib.kvrod_contact_max_step.argtypes = [p, p]
+    lib.kvrod_contact_max_step.restype = d
+    return lib
+
+
+@lru_cache(maxsize=1)
+def load_contact_library() -> ctypes.CDLL:
+    """The compiled contact library (ctypes; compiled on first use, cached like the rod
+    library). Contact has no in-process fallback: raises :class:`GeneratedCodeError`
+    saying why when it cannot be built."""
+    require_generated()
+    compiler = find_compiler()
+    if compiler is None:
+        raise GeneratedCodeError("contact with obstacles needs a C compiler (none found, or "
+                                 "KVROD_NO_COMPILER is set)")
+    try:
+        return _declare_contact(ctypes.CDLL(str(compile_library(compiler,
+                                                                spec=CONTACT_LIBRARY))))
+    except (RuntimeError, OSError) as exc:
+        raise GeneratedCodeError(f"compiling {CONTACT_KERNELS} failed: {exc}") from None
+
+
 def clear_cache() -> None:
     """Forget the loaded library (tests switch KVROD_NO_COMPILER / KVROD_CACHE_DIR)."""
     global _warned
     _load_cached.cache_clear()
+    load_contact_library.cache_clear()
     require_generated.cache_clear()
     require_casadi_kernels.cache_clear()
     _warned = False

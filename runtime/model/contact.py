@@ -42,7 +42,17 @@ class ContactStruct(ctypes.Structure):
     """``kvrod_contact`` of runtime/model/native/rod_contact.h."""
 
     _fields_ = [("nobs", ctypes.c_int), ("kind", ctypes.c_void_p), ("obs", ctypes.c_void_p),
-                ("cnt", ctypes.c_void_p), ("step_fraction", ctypes.c_double)]
+                ("cnt", ctypes.c_void_p), ("step_fraction", ctypes.c_double),
+                ("residual", ctypes.c_void_p), ("jacobian", ctypes.c_void_p),
+                ("energies", ctypes.c_void_p), ("values", ctypes.c_void_p)]
+
+    def bind(self, lib: ctypes.CDLL) -> None:
+        """Point at the contact library's functions (``build.load_contact_library``)."""
+        addr = lambda fn: ctypes.cast(fn, ctypes.c_void_p).value  # noqa: E731
+        self.residual = addr(lib.kvrod_contact_residual)
+        self.jacobian = addr(lib.kvrod_contact_jacobian)
+        self.energies = addr(lib.kvrod_contact_energies)
+        self.values = addr(lib.kvrod_contact_values)
 
 
 @dataclass(eq=False)
@@ -99,14 +109,24 @@ class ContactArrays:
             v = np.asarray(v, dtype=float).ravel()
             row[o:o + v.size] = v
 
+    def bind(self, lib: ctypes.CDLL) -> None:
+        """Let the compiled rod reach the contact library's functions (``lib``:
+        ``runtime.model.build.load_contact_library()``); the rod library refuses nothing
+        without it, so the model binds before its first evaluation."""
+        self._struct.bind(lib)
+        self.lib = lib
+
     @property
     def struct_address(self) -> int:
         """Address of the ``kvrod_contact`` (valid while ``self`` lives)."""
         return ctypes.addressof(self._struct)
 
     def copy(self) -> ContactArrays:
-        return ContactArrays(self.kind.copy(), self.obs.copy(), self.cnt.copy(),
-                             self.step_fraction)
+        out = ContactArrays(self.kind.copy(), self.obs.copy(), self.cnt.copy(),
+                            self.step_fraction)
+        if getattr(self, "lib", None) is not None:
+            out.bind(self.lib)
+        return out
 
 
 __all__ = ["KINDS", "N_VALUES", "STEP_FRACTION", "VALUE_NAMES", "ContactArrays",

@@ -125,9 +125,13 @@ class RodModel:
         #: the rigid obstacles the rod touches (runtime.model.contact; None: none)
         self.contact = arrays.contact if (arrays.contact is not None
                                           and arrays.contact.n_obstacles) else None
-        if self.contact is not None and lib is None:
-            raise GeneratedCodeError("contact with obstacles runs on the compiled backend "
-                                     "only (a C compiler is needed: see the warning above)")
+        if self.contact is not None:
+            if lib is None:
+                raise GeneratedCodeError("contact with obstacles runs on the compiled "
+                                         "backend only (a C compiler is needed: see the "
+                                         "warning above)")
+            self._clib = build.load_contact_library()
+            self.contact.bind(self._clib)
         #: the state's bound on the next step (contact; the BDF reads it), None without
         self.state_max_step = None if self.contact is None else self._contact_max_step
         self._struct = arrays.struct(self.kl, self.ku)
@@ -522,7 +526,7 @@ class RodModel:
                         drive_constant=drive is not None and not self.drive.time_dependent,
                         n_energies=self.n_energies)
         if self.contact is not None:
-            kern.max_step = address(lib.kvrod_max_step)
+            kern.max_step = address(self._clib.kvrod_max_step)
         return kern
 
     def _struct_ptr(self):
@@ -663,7 +667,7 @@ class RodModel:
         """The largest next step (s) that moves no segment toward an obstacle by more than
         ``step_fraction`` of its gap plus delta (inf: no bound)."""
         self._time(t)
-        return float(self._lib.kvrod_contact_max_step(self._struct_ptr(), _ptr(y, self.n)))
+        return float(self._clib.kvrod_contact_max_step(self._struct_ptr(), _ptr(y, self.n)))
 
     def contact_values(self, t: float, y: np.ndarray) -> np.ndarray:
         """(nobs, N_VALUES): per obstacle the force (N) and moment (N m, about its point)
@@ -675,7 +679,7 @@ class RodModel:
             return np.zeros((0, N_VALUES))
         self._time(t)
         out = np.zeros((self.contact.n_obstacles, N_VALUES))
-        rc = self._lib.kvrod_contact_values(self._struct_ptr(), _ptr(y, self.n),
+        rc = self._clib.kvrod_contact_values(self._struct_ptr(), _ptr(y, self.n),
                                             out.ctypes.data)
         if rc:
             raise GeneratedCodeError(f"kvrod_contact_values failed (code {rc})")
@@ -690,7 +694,7 @@ class RodModel:
         cap = 256
         while True:
             out = np.zeros((cap, 6))
-            k = self._lib.kvrod_contact_points(self._struct_ptr(), _ptr(y, self.n),
+            k = self._clib.kvrod_contact_points(self._struct_ptr(), _ptr(y, self.n),
                                                out.ctypes.data, cap)
             if k < 0:
                 raise GeneratedCodeError(f"kvrod_contact_points failed (code {k})")

@@ -17,57 +17,8 @@
 #include "rod_kernels_x4.h"
 #include "rod_layout.h"
 #include "rod_assembly.h"
+#include "rod_index.h"
 #include "rod_contact.h"
-
-/* indices of the fields of node i / segment i (i >= 1) / joint j in y */
-static inline int c0size(const kvrod_rod* r) { return CELL0_BASE + CELL0_PER * r->nb; }
-static inline int csize(const kvrod_rod* r) { return CELL_BASE + CELL_PER * r->nb; }
-static inline int cs(const kvrod_rod* r, int i) {
-  return i == 0 ? 0 : c0size(r) + csize(r) * (i - 1);
-}
-static inline int i_phi(const kvrod_rod* r, int i) {
-  return i == 0 ? CELL0_PHI_BASE + CELL0_PHI_PER * r->nb
-                : cs(r, i) + CELL_PHI_BASE + CELL_PHI_PER * r->nb;
-}
-static inline int i_v(const kvrod_rod* r, int i) {
-  return i == 0 ? CELL0_V_BASE + CELL0_V_PER * r->nb
-                : cs(r, i) + CELL_V_BASE + CELL_V_PER * r->nb;
-}
-static inline int i_p(const kvrod_rod* r, int i) {
-  return cs(r, i) + CELL_P_BASE + CELL_P_PER * r->nb;
-}
-static inline int i_om(const kvrod_rod* r, int i) {
-  return cs(r, i) + CELL_OMEGA_BASE + CELL_OMEGA_PER * r->nb;
-}
-/* internal strains: segment i's 3 nb values and joint j's 3 nb values (term b at 3b) */
-static inline int i_qs(const kvrod_rod* r, int i) {
-  return cs(r, i) + CELL_Q_SEGMENT_BASE + CELL_Q_SEGMENT_PER * r->nb;
-}
-static inline int i_qj(const kvrod_rod* r, int j) {
-  return j == 0 ? CELL0_Q_JOINT_BASE + CELL0_Q_JOINT_PER * r->nb
-                : cs(r, j) + CELL_Q_JOINT_BASE + CELL_Q_JOINT_PER * r->nb;
-}
-
-/* per-element data: segment i = 1..N, joint j = 0..N, node i = 0..N */
-static inline const double* segp(const kvrod_rod* r, int i) {
-  return r->seg + (size_t)(i - 1) * NSEG;
-}
-static inline const double* jntp(const kvrod_rod* r, int j) {
-  return r->jnt + (size_t)j * NJNT;
-}
-static inline const double* nlp(const kvrod_rod* r, int i) {
-  return r->nload + (size_t)i * NNL;
-}
-static inline const double* slp(const kvrod_rod* r, int i) {
-  return r->sload + (size_t)(i - 1) * NSL;
-}
-/* moduli C_b (3) of relaxation term b on segment i / joint j */
-static inline const double* segb(const kvrod_rod* r, int i, int b) {
-  return r->segb + ((size_t)(i - 1) * (size_t)r->nb + (size_t)b) * 3;
-}
-static inline const double* jntb(const kvrod_rod* r, int j, int b) {
-  return r->jntb + ((size_t)j * (size_t)r->nb + (size_t)b) * 3;
-}
 
 /* the resultant of the relaxation terms of segment i (joint: jq): -sum_b C_b q_b */
 static void seg_nq(const kvrod_rod* r, int i, const double* y, double* nq) {
@@ -133,12 +84,6 @@ static double node_length(const kvrod_rod* r, int i) {
   if (i >= 1) l += 0.5 * segp(r, i)[SEG_H];
   if (i < r->N) l += 0.5 * segp(r, i + 1)[SEG_H];
   return l;
-}
-
-static double node_held(const kvrod_rod* r, int i) {
-  if (i == 0) return r->par[PAR_FIX_START];
-  if (i == r->N) return r->par[PAR_FIX_END];
-  return 0.0;
 }
 
 /* the segment whose frame carries node i's follower force */
@@ -825,13 +770,18 @@ static int jacobian_cells_own(const kvrod_rod* rod, const double* y, const doubl
   return 0;
 }
 
-/* the rod's own terms, then its contact with obstacles (segment i is part of element i:
-   it reaches the columns of cells i-1 and i, as the segment's internal forces do) */
+/* the rod's own terms, then its contact with obstacles through the contact library
+   (rod_contact.h; segment i is part of element i: it reaches the columns of cells i-1 and
+   i, as the segment's internal forces do) */
+static int has_contact(const kvrod_rod* rod) {
+  return rod->contact && rod->contact->nobs > 0;
+}
+
 int kvrod_residual(const kvrod_rod* rod, double t, const double* y, const double* yp,
                    double* res) {
   (void) t;
   const int rc = residual_own(rod, y, yp, res);
-  return rc ? rc : kvrod_contact_residual(rod, y, res);
+  return rc || !has_contact(rod) ? rc : rod->contact->residual(rod, y, res);
 }
 
 int kvrod_jacobian_band_cells(const kvrod_rod* rod, double t, const double* y,
@@ -839,15 +789,8 @@ int kvrod_jacobian_band_cells(const kvrod_rod* rod, double t, const double* y,
                               int col0, int i0, int i1) {
   (void) t;
   const int rc = jacobian_cells_own(rod, y, yp, cy, cj, ldab, ab, col0, i0, i1);
-  return rc ? rc : kvrod_contact_jacobian(rod, y, cy, ldab, ab, col0, i0, i1);
-}
-
-void kvrod_segment_layout(const kvrod_rod* rod, int s, int idx[6], int free_ab[2]) {
-  idx[0] = i_phi(rod, s - 1); idx[1] = i_phi(rod, s);
-  idx[2] = i_v(rod, s - 1); idx[3] = i_v(rod, s);
-  idx[4] = i_p(rod, s); idx[5] = i_om(rod, s);
-  free_ab[0] = !(node_held(rod, s - 1) > 0.5);
-  free_ab[1] = !(node_held(rod, s) > 0.5);
+  return rc || !has_contact(rod) ? rc
+                                 : rod->contact->jacobian(rod, y, cy, ldab, ab, col0, i0, i1);
 }
 
 int kvrod_jacobian_band(const kvrod_rod* rod, double t, const double* y, const double* yp,
@@ -1110,7 +1053,7 @@ int kvrod_diagnostics(const kvrod_rod* rod, double t, const double* y, const dou
   work_t W;
   memset(out, 0, sizeof(double) * (size_t)(NDIAG + 6 * N + 6 * (N + 1)));
   const int rc = energies_one(rod, y, yp, out, out + NDIAG, &W);
-  return rc ? rc : kvrod_contact_energies(rod, y, out);
+  return rc || !has_contact(rod) ? rc : rod->contact->energies(rod, y, out);
 }
 
 int kvrod_energies(const kvrod_rod* rod, int m, const double* ts, const double* ys,
@@ -1122,7 +1065,23 @@ int kvrod_energies(const kvrod_rod* rod, int m, const double* ts, const double* 
   int k;
   for (k = 0; k < m; ++k) {
     if (energies_one(rod, ys + k * n, yps + k * n, out + (size_t)k * NDIAG, 0, &W)) return -3;
-    if (kvrod_contact_energies(rod, ys + k * n, out + (size_t)k * NDIAG)) return -3;
+    if (has_contact(rod) && rod->contact->energies(rod, ys + k * n, out + (size_t)k * NDIAG))
+      return -3;
+  }
+  return 0;
+}
+
+int kvrod_energies_contact(const kvrod_rod* rod, int m, const double* ts, const double* ys,
+                           const double* yps, double* out) {
+  if (check_rod(rod)) return check_rod(rod);
+  const size_t n = (size_t) kvrod_n_state(rod->N, rod->nb);
+  const int nobs = has_contact(rod) ? rod->contact->nobs : 0;
+  const size_t stride = (size_t)NDIAG + (size_t)NCV * (size_t)nobs;
+  for (int k = 0; k < m; ++k) {
+    double* o = out + (size_t)k * stride;
+    const int rc = kvrod_energies(rod, 1, ts + k, ys + (size_t)k * n, yps + (size_t)k * n, o);
+    if (rc) return rc;
+    if (nobs && rod->contact->values(rod, ys + (size_t)k * n, o + NDIAG)) return -3;
   }
   return 0;
 }

@@ -12,6 +12,7 @@
 #include "rod_contact_kernels.h"
 #include "rod_layout.h"
 #include "rod_assembly.h"
+#include "rod_index.h"
 #include "rod_contact.h"
 
 typedef int (*ckernel)(const casadi_real** arg, casadi_real** res, casadi_int* iw,
@@ -50,7 +51,11 @@ static const double* cnt_of(const kvrod_rod* rod, int o, int s) {
 }
 
 static void seg_of(const kvrod_rod* rod, int o, int s, cseg* g) {
-  kvrod_segment_layout(rod, s, g->idx, g->free_ab);
+  g->idx[0] = i_phi(rod, s - 1); g->idx[1] = i_phi(rod, s);
+  g->idx[2] = i_v(rod, s - 1); g->idx[3] = i_v(rod, s);
+  g->idx[4] = i_p(rod, s); g->idx[5] = i_om(rod, s);
+  g->free_ab[0] = !(node_held(rod, s - 1) > 0.5);
+  g->free_ab[1] = !(node_held(rod, s) > 0.5);
   g->obs = rod->contact->obs + (size_t)o * NOBS;
   g->cnt = cnt_of(rod, o, s);
 }
@@ -309,18 +314,4 @@ int kvrod_contact_points(const kvrod_rod* rod, const double* y, double* out, int
     }
   }
   return n;
-}
-
-int kvrod_energies_contact(const kvrod_rod* rod, int m, const double* ts, const double* ys,
-                           const double* yps, double* out) {
-  const size_t n = (size_t) kvrod_n_state(rod->N, rod->nb);
-  const int nobs = active(rod) ? rod->contact->nobs : 0;
-  const size_t stride = (size_t)NDIAG + (size_t)NCV * (size_t)nobs;
-  for (int k = 0; k < m; ++k) {
-    double* o = out + (size_t)k * stride;
-    const int rc = kvrod_energies(rod, 1, ts + k, ys + (size_t)k * n, yps + (size_t)k * n, o);
-    if (rc) return rc;
-    if (nobs && kvrod_contact_values(rod, ys + (size_t)k * n, o + NDIAG)) return -3;
-  }
-  return 0;
 }

@@ -7,7 +7,9 @@
  * every function below adds nothing). Per obstacle: its kernel kind, its parameter vector
  * (NOBS values, its current pose first: written by runtime/model/contact.py as the
  * obstacle moves) and per segment the contact law's parameters (NCNT values: k, delta,
- * c, mu, v_s, r, h). The contact forces act on the nodes' momentum rows and the
+ * c, mu, v_s, r, h). All functions but kvrod_energies_contact are the contact library's
+ * (rod_contact.c with the generated kernels); the rod library reaches them through the
+ * pointers of kvrod_contact. The contact forces act on the nodes' momentum rows and the
  * segment's angular momentum rows, as the segment's internal forces do (none on the rows
  * of a node the rod's own end condition holds); they depend on the state y only.
  */
@@ -33,6 +35,14 @@ struct kvrod_contact_s {
   const double* cnt;     /* nobs x N x NCNT (segment s at row s - 1) */
   double step_fraction;  /* the step bound: a step moves a segment toward an obstacle by
                             at most this fraction of its gap plus delta (0: no bound) */
+  /* the contact library's functions below (runtime/model/build.py compiles it apart, on
+     the first problem with obstacles: the rod library without contact stays as small and
+     as quick to compile as before); the rod assembly calls them through these */
+  int (*residual)(const kvrod_rod* rod, const double* y, double* res);
+  int (*jacobian)(const kvrod_rod* rod, const double* y, double cy, int ldab, double* ab,
+                  int col0, int s0, int s1);
+  int (*energies)(const kvrod_rod* rod, const double* y, double* e);
+  int (*values)(const kvrod_rod* rod, const double* y, double* out);
 };
 
 /* res[rows] -= Q of every segment in reach of an obstacle */
@@ -54,14 +64,9 @@ double kvrod_max_step(const void* ctx, double t, const double* y, const double* 
 /* the quadrature points of the segments in reach, at most cap rows of 6: obstacle,
    segment, x (3), gap (m); returns the number of rows there are (> cap: truncated) */
 int kvrod_contact_points(const kvrod_rod* rod, const double* y, double* out, int cap);
-/* kvrod_energies with the per obstacle values after each state's NDIAG scalars (stride
-   NDIAG + NCV nobs) */
+/* (rod library, rod_assembly.c) kvrod_energies with the per obstacle values after each
+   state's NDIAG scalars (stride NDIAG + NCV nobs) */
 int kvrod_energies_contact(const kvrod_rod* rod, int m, const double* ts, const double* ys,
                            const double* yps, double* out);
-
-/* the state indices of segment s (1..N): phi_a, phi_b, v_a, v_b, p, Omega; free_ab: 1
-   where the node's momentum rows are its own (not held by the rod's end condition)
-   (rod_assembly.c) */
-void kvrod_segment_layout(const kvrod_rod* rod, int s, int idx[6], int free_ab[2]);
 
 #endif
