@@ -39,7 +39,10 @@ def test_condensed_solve_equals_the_full_solve(kw):
     rng = np.random.default_rng(2)
     m = rod_model(9, **kw)
     cond = CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
-    assert cond is not None and cond.nc == m.n - 3 * (m.N + 1) - 4 * m.N
+    # v and p eliminated by the kinematic rows, a Maxwell rod's internal strains by their
+    # relaxation rows: phi and Omega are kept, as for a Kelvin-Voigt rod
+    assert cond is not None and cond.nc == 3 * (m.N + 1) + 3 * m.N
+    assert cond.relaxation_eliminated == (2 * m.N + 1 if m.branches else 0)
     assert 2 * cond.klc + cond.kuc + 1 < m.ldab
     for cj in (1e1, 3e3, 1e6):
         y = random_state(m, rng)
@@ -67,9 +70,11 @@ def test_rods_take_the_block_path(kw, N):
     assert cond.band_reason is None
     kv6 = cond._keep["kv6"]
     assert kv6.size == N + 1
-    # the fixed-size kernels serve the Kelvin-Voigt interior cells (not the ends, whose
-    # neighbours differ, nor the 30-unknown cells of a Maxwell rod with B = 4)
-    assert kv6[2:-1].sum() == (0 if m.branches else N - 2 if N > 2 else 0)
+    # the fixed-size kernels serve the interior cells (not the ends, whose neighbours
+    # differ), of a Maxwell rod too: its internal strains are eliminated first
+    assert kv6[2:-1].sum() == (N - 2 if N > 2 else 0)
+    assert cond.relaxation_reason is None
+    assert cond.relaxation_eliminated == (2 * N + 1 if m.branches else 0)
     assert not kv6[[0, 1, -1]].any()
     # the kinematic blocks phi' = v are recognised as diagonal
     assert CondensedNewton(cond._lib, m.n, m.kl, m.ku, m.ldab,
