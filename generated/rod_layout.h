@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_layout.h.jinja
 // derivation step: discrete_rod
-// inputs sha256: 5d13964be16d090f1a3cd0dd044387313e3e10ad2942da907299d1682e813e1e
+// inputs sha256: b850f334c026de4a8d9b1a69e5be703198769e4ee7039030bf58f2d31272dc58
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*

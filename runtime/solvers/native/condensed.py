@@ -67,7 +67,11 @@ class CondensedNewton:
             if pattern.shape != (ldab, n):
                 raise ValueError(f"CondensedNewton: pattern of shape {pattern.shape}, "
                                  f"expected {(ldab, n)}")
-            _check_block_rows(pattern, kl, ku, b)
+        # (i, j): J's structural nonzeros (every band position without a pattern)
+        entries = (_band_entries(kl, ku, n, pattern)
+                   if pattern is not None or cells is not None else None)
+        if pattern is not None:
+            _check_block_rows(pattern, kl, ku, b, entries)
         diag = _diagonal_blocks(pattern, kl, ku, b)
         rq = np.asarray(relaxation_blocks if relaxation_blocks is not None else [],
                         dtype=np.int64).reshape(-1, 2)
@@ -80,10 +84,10 @@ class CondensedNewton:
         while True:
             keep_row, keep_col, row2c, col2c = _kept(n, b, rq)
             bt, self.band_reason = _cell_tables(n, kl, ku, b, keep_row, keep_col, col2c, cells,
-                                                pattern, diag, rq)
+                                                pattern, diag, rq, entries)
             if len(rq) and bt is not None:
-                qt, self.relaxation_reason = _relaxation(n, kl, ku, b, rq, bt, keep_row,
-                                                         col2c, pattern)
+                qt, self.relaxation_reason = _relaxation(n, b, rq, bt, keep_row, col2c,
+                                                         entries)
             elif len(rq):
                 self.relaxation_reason = "the condensed matrix is not block tridiagonal"
             if not len(rq) or qt is not None:
@@ -225,7 +229,7 @@ def _kept(n: int, b, rq):
     return keep_row, keep_col, row2c, col2c
 
 
-def _relaxation(n: int, kl: int, ku: int, b, rq, bt, keep_row, col2c, pattern):
+def _relaxation(n: int, b, rq, bt, keep_row, col2c, entries):
     """relaxation.relaxation_tables on the block path's cells."""
     import numpy as np
 
@@ -236,8 +240,8 @@ def _relaxation(n: int, kl: int, ku: int, b, rq, bt, keep_row, col2c, pattern):
         ecol = np.concatenate([np.arange(e, e + z) for e, z in zip(b[:, 0], b[:, 1],
                                                                       strict=True)])
         ecol_pos[ecol] = np.arange(ecol.size)
-    i, j = _band_entries(kl, ku, n, pattern)
-    return relaxation_tables(n, kl, ku, rq, bt["cf"].astype(np.int64), keep_row,
+    i, j = entries
+    return relaxation_tables(n, rq, bt["cf"].astype(np.int64), keep_row,
                              col2c.astype(np.int64), ecol_pos, i, j)
 
 
@@ -254,13 +258,13 @@ def _band_entries(kl: int, ku: int, n: int, pattern):
     return i[ok], j[ok]
 
 
-def _check_block_rows(pattern, kl: int, ku: int, b) -> None:
+def _check_block_rows(pattern, kl: int, ku: int, b, entries=None) -> None:
     """The condensation's premise, on J's structural pattern: the rows of a block involve
     only its own eliminated and kept columns."""
     import numpy as np
 
     n = pattern.shape[1]
-    i, j = _band_entries(kl, ku, n, pattern)
+    i, j = entries if entries is not None else _band_entries(kl, ku, n, pattern)
     block_of_row = np.full(n, -1)
     for k, (_e0, es, r0, _k0, _ks) in enumerate(b):
         block_of_row[r0:r0 + es] = k
@@ -299,7 +303,7 @@ def _diagonal_blocks(pattern, kl: int, ku: int, b):
 
 
 def _cell_tables(n: int, kl: int, ku: int, b, keep_row, keep_col, col2c, cells, pattern,
-                 diag, rq=()):
+                 diag, rq=(), entries=None):
     """The per-cell tables of the block tridiagonal path (see ``kv_cond`` in
     condensed.c) and None, or None and why the condensed matrix is not block
     tridiagonal in ``cells``. ``diag``: per block, structurally diagonal; ``rq``: the
@@ -333,7 +337,7 @@ def _cell_tables(n: int, kl: int, ku: int, b, keep_row, keep_col, col2c, cells, 
         return None, "a cell keeps no unknowns"
     kept = np.zeros(n, bool)
     kept[keep_row] = True
-    i, j = _band_entries(kl, ku, n, pattern)
+    i, j = entries if entries is not None else _band_entries(kl, ku, n, pattern)
     far = kept[i] & (np.abs(cell[i] - cell[j]) > 1)
     if far.any():
         i, j = int(i[far][0]), int(j[far][0])

@@ -25,7 +25,14 @@ MAX_SIZE = 72
 MAX_SOURCES = 32
 
 
-def relaxation_tables(n: int, kl: int, ku: int, blocks, cf, keep_row, col2c, ecol_pos,
+def _ranges(starts, lengths):
+    """The concatenated ranges starts[i] .. starts[i] + lengths[i] - 1 (int64)."""
+    starts, lengths = np.asarray(starts, np.int64), np.asarray(lengths, np.int64)
+    first = np.cumsum(lengths) - lengths
+    return np.repeat(starts - first, lengths) + np.arange(int(lengths.sum()))
+
+
+def relaxation_tables(n: int, blocks, cf, keep_row, col2c, ecol_pos,
                       i, j):
     """The tables of the ``q_`` fields of ``kv_cond`` for the relaxation ``blocks``
     (``(offset, size)`` rows, sorted by offset) on cells ``cf`` (first index of each cell
@@ -85,37 +92,51 @@ def relaxation_tables(n: int, kl: int, ku: int, blocks, cf, keep_row, col2c, eco
                       "nor eliminated")
     lb, li = bj[link], i[link]
     lcell = cell[li]
-    fac = qcell.copy()                 # the factor step that computes A' (its first link)
-    fin = qcell.copy()                 # the backward step that finishes dq (its first source)
-    for b in range(nq):
-        lc = np.unique(lcell[lb == b])
-        sc = np.unique(cell[sj[so[b]:so[b + 1]]])
-        if lc.size and (np.abs(lc[:, None] - sc[None, :]) > 1).any():
-            return None, (f"the fill of relaxation block {b} (cell {qcell[b]}) couples cells "
-                          f"that are not neighbours")
-        if lc.size and np.any(np.abs(lc - qcell[b]) > 1):
-            return None, f"relaxation block {b} (cell {qcell[b]}) is involved beyond its neighbours"
-        if lc.size:
-            fac[b] = lc.min()
-        if sc.size and np.any(np.abs(sc - fac[b]) > 1) or abs(qcell[b] - fac[b]) > 1:
-            return None, f"relaxation block {b}'s columns are not in the factor's window"
-        if sc.size:
-            fin[b] = min(fin[b], sc.min())
+    big = np.iinfo(np.int64).max
+    # per block: the lowest and highest cell of the kept rows that involve it (lo > hi:
+    # none) and of its sources
+    llo, lhi = np.full(nq, big), np.full(nq, -1)
+    np.minimum.at(llo, lb, lcell)
+    np.maximum.at(lhi, lb, lcell)
+    slo, shi = np.full(nq, big), np.full(nq, -1)
+    np.minimum.at(slo, sb, cell[sj])
+    np.maximum.at(shi, sb, cell[sj])
+    linked, sourced = lhi >= 0, shi >= 0
+    both = linked & sourced
+    bad = both & ((lhi - slo > 1) | (shi - llo > 1))
+    if bad.any():
+        b = int(np.flatnonzero(bad)[0])
+        return None, (f"the fill of relaxation block {b} (cell {qcell[b]}) couples cells "
+                      f"that are not neighbours")
+    bad = linked & ((lhi > qcell + 1) | (llo < qcell - 1))
+    if bad.any():
+        b = int(np.flatnonzero(bad)[0])
+        return None, f"relaxation block {b} (cell {qcell[b]}) is involved beyond its neighbours"
+    fac = np.where(linked, llo, qcell)     # the factor step that forms A' (its first link)
+    bad = (sourced & ((shi > fac + 1) | (slo < fac - 1))) | (np.abs(qcell - fac) > 1)
+    if bad.any():
+        b = int(np.flatnonzero(bad)[0])
+        return None, f"relaxation block {b}'s columns are not in the factor's window"
+    fin = np.where(sourced, slo, qcell)    # the backward step that finishes dq
     # the cell by cell Newton update: after the last backward step that reads or writes
     # the cell (its own, its blocks' finish, a finish reading its unknowns as sources)
     upd = np.arange(ncell)
     np.minimum.at(upd, qcell, fin)
     np.minimum.at(upd, cell[sj], fin[sb])
     ucell = np.lexsort((-np.arange(ncell), -upd)).astype(np.int32)
-    # per cell, the range of blocks its kept rows involve (W: J[kept rows, their q])
-    kb = np.zeros((ncell, 2), np.int64)
-    for k in range(ncell):
-        inv = np.unique(lb[lcell == k])
-        if inv.size:
-            kb[k] = inv.min(), inv.max() + 1
-    kcols = [np.concatenate([np.arange(q[x, 0], q[x, 0] + q[x, 1]) for x in range(b0, b1)])
-             if b1 > b0 else np.zeros(0, np.int64) for b0, b1 in kb]
-    kn = np.array([c.size for c in kcols], np.int64)
+    # per cell, the range of blocks its kept rows involve (W: J[kept rows, their q]) and
+    # their columns, block after block
+    k0, k1 = np.zeros(ncell, np.int64), np.zeros(ncell, np.int64)
+    if lb.size:
+        k0[:] = big
+        np.minimum.at(k0, lcell, lb)
+        np.maximum.at(k1, lcell, lb + 1)
+        k0[k1 == 0] = 0
+    kb = np.stack([k0, k1], axis=1)
+    bsel = _ranges(k0, k1 - k0)
+    kn = np.zeros(ncell, np.int64)
+    np.add.at(kn, np.repeat(np.arange(ncell), k1 - k0), q[bsel, 1])
+    kcol = _ranges(q[bsel, 0], q[bsel, 1])
     m = np.diff(np.searchsorted(keep_row, cf))
     kco = np.concatenate(([0], np.cumsum(kn)))
     kwo = np.concatenate(([0], np.cumsum(m * kn)[:-1])).astype(np.int64)
@@ -131,8 +152,7 @@ def relaxation_tables(n: int, kl: int, ku: int, blocks, cf, keep_row, col2c, eco
         q_dinv=np.zeros(int(q[:, 1].sum())), q_g=np.zeros(int(q[:, 1].sum())),
         q_cb=i32(np.searchsorted(qcell, np.arange(ncell + 1))),
         q_fk=i32(np.searchsorted(fac[by_fac], np.arange(ncell + 1))), q_fl=i32(by_fac),
-        q_kb=i32(kb.ravel()), q_kco=i32(kco), q_kcol=i32(np.concatenate(kcols + [[0]])),
+        q_kb=i32(kb.ravel()), q_kco=i32(kco), q_kcol=i32(np.append(kcol, 0)),
         q_kwo=kwo, q_W=np.zeros(max(int((m * kn).sum()), 1)),
         q_bk=i32(np.searchsorted(fin[by_fin], np.arange(ncell + 1))), q_bl=i32(by_fin),
-        q_ucell=ucell, q_ustep=i32(upd[ucell]),
-        count=np.bincount(qcell, weights=q[:, 1], minlength=ncell).astype(np.int64)), None
+        q_ucell=ucell, q_ustep=i32(upd[ucell])), None
