@@ -754,6 +754,34 @@ KV_INLINE double newton_update2(int n, double *restrict res, double scale,
     return s0 + s1;
 }
 
+/* newton_update2 with four partial sums (four-wide vectors; the relaxation path, whose
+   cells are long) */
+KV_INLINE double newton_update4(int n, double *restrict res, double scale,
+                                const double *restrict ewt, double *restrict ee,
+                                double *restrict yy, double *restrict ypw, double cj)
+{
+    double s[4] = {0.0, 0.0, 0.0, 0.0};
+    int i = 0;
+    for (; i + 3 < n; i += 4)
+        for (int l = 0; l < 4; ++l) {
+            const double d = res[i + l] * scale, w = d * ewt[i + l];
+            res[i + l] = d;
+            s[l] += w * w;
+            ee[i + l] -= d;
+            yy[i + l] -= d;
+            ypw[i + l] -= cj * d;
+        }
+    for (int l = 0; i < n; ++i, ++l) {
+        const double d = res[i] * scale, w = d * ewt[i];
+        res[i] = d;
+        s[l] += w * w;
+        ee[i] -= d;
+        yy[i] -= d;
+        ypw[i] -= cj * d;
+    }
+    return (s[0] + s[1]) + (s[2] + s[3]);
+}
+
 /* cond_solve_bt with relaxation blocks (nq > 0): their g_q formed a cell ahead of the
    forward sweep, their dq in the backward sweep once their sources are known, and the
    cells updated in the order q_ucell (a cell after its last access). */
@@ -785,7 +813,7 @@ static double cond_solve_bt_q(kv_cond *c, double *res, int upd, double scale,
         q_backward_cell(c, k, res);
         for (; upd && u < c->ncell && c->q_ustep[u] == k; ++u) {
             const int f0 = c->cf[c->q_ucell[u]], len = c->cf[c->q_ucell[u] + 1] - f0;
-            s += newton_update2(len, res + f0, scale, ewt + f0, ee + f0, yy + f0, ypw + f0,
+            s += newton_update4(len, res + f0, scale, ewt + f0, ee + f0, yy + f0, ypw + f0,
                                 cj);
         }
     }
