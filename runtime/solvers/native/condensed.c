@@ -288,8 +288,13 @@ static int q_elim_cell(kv_cond *c, const double *ab, int k)
         }
         for (int s = 0; s < ns; ++s) {
             const int j = c->q_src[s0 + s];
-            double *a = A + (size_t)s * sz;
-            for (int u = 0; u < sz; ++u) a[u] = kv_at(c, ab, o + u, j) * di[u];
+            double *restrict a = A + (size_t)s * sz;
+            if (o - j >= -c->ku && o + sz - 1 - j <= c->kl) {  /* the rows in the band */
+                const double *restrict col = ab + kv_col(c, j, o);
+                for (int u = 0; u < sz; ++u) a[u] = col[u] * di[u];
+            } else {
+                for (int u = 0; u < sz; ++u) a[u] = kv_at(c, ab, o + u, j) * di[u];
+            }
         }
     }
     return 0;
