@@ -1,6 +1,6 @@
-"""The Newton systems of a BDF step condensed by the kinematic rows (``kv_cond`` in
-condensed.c): block tridiagonal in the rod's cells, else a band LU of the condensed
-matrix."""
+"""The Newton systems of a BDF step condensed by the kinematic rows and, on the block
+path, by the relaxation rows (``kv_cond`` in condensed.c; relaxation.py): block
+tridiagonal in the rod's cells, else a band LU of the condensed matrix."""
 
 from __future__ import annotations
 
@@ -50,6 +50,14 @@ class CondensedNewton:
     LU over them (``block_tridiagonal`` True; the rod's nearest-neighbour coupling);
     otherwise, or without cells, by the band LU of the condensed band
     (``block_tridiagonal`` False, ``band_reason`` says why).
+
+    ``relaxation_blocks`` (optional, the block path with a pattern only): ``(offset,
+    size)`` ranges of unknowns whose rows (the same range) are diagonal in them and
+    otherwise involve only the unknowns of the kinematic stage (a Maxwell rod's internal
+    strains: ``relaxation.py``). They are eliminated first, into the rows that involve
+    them, when J's pattern shows that their fill stays between neighbouring cells
+    (``relaxation_eliminated`` blocks); otherwise they stay kept unknowns
+    (``relaxation_reason`` says why).
     """
 
     def __init__(self, lib, n: int, kl: int, ku: int, ldab: int,
