@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_layout.h.jinja
 // derivation step: discrete_rod
-// inputs sha256: d818784bd69ba9cf04bbf742c2ef8356a2e5d0f6df0890d5e64aa852ad32b925
+// inputs sha256: 9c9b70e5d9770d28544d6f7b6f1e0bb9597c451679e3d9d4afab06bf81c211bd
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*
