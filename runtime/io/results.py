@@ -93,7 +93,10 @@ def write_run(out_dir: Path, run, extra: dict | None = None) -> dict:
     node, spatial, inertia included), likewise ``end_reaction_*``; the deformed
     centreline ``centreline`` (m, 3, N+1; m) at the frame times ``centreline_t`` (m,; s;
     ``simulation.centreline_frames``) and the stress-free ``reference`` centreline
-    (3, N+1; m). problem.toml: the resolved problem (rerun it with ``kvrod simulate
+    (3, N+1; m); per obstacle k ``obstacle{k}_force`` / ``_moment`` (3, n; N, N m about
+    its point, on the rod, spatial), ``obstacle{k}_energy`` (J), ``_dissipation``,
+    ``_friction_dissipation``, ``_power`` (W), ``_gap_min`` (m) and ``_segments`` (n,).
+    problem.toml: the resolved problem (rerun it with ``kvrod simulate
     DIR/problem.toml``).
     """
     out_dir = Path(out_dir)
@@ -108,6 +111,9 @@ def write_run(out_dir: Path, run, extra: dict | None = None) -> dict:
     for end, r in run.reactions.items():
         for what, v in r.items():
             ends[f"{end}_reaction_{what}"] = v
+    for k, r in enumerate(getattr(run, "obstacles", ())):
+        for what, v in r.items():
+            ends[f"obstacle{k}_{what}"] = v
     write_npz(out_dir / "series.npz", t=run.t, tip=run.tip, start=run.start,
               kinetic=run.kinetic, elastic=run.elastic, dissipated=run.dissipated,
               external_work=run.external_work, energy_balance_rel=run.energy_balance_rel,

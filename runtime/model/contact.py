@@ -34,6 +34,8 @@ VALUE_NAMES: tuple[str, ...] = ("force_x", "force_y", "force_z", "moment_x", "mo
                                 "moment_z", "energy", "dissipation", "friction_dissipation",
                                 "obstacle_power", "gap_min", "segments")
 N_VALUES = len(VALUE_NAMES)
+#: the smallest share of its forces statics gives the contact (load factor 0)
+MIN_FORCE_SCALE = 1e-12
 #: the default step bound: half the gap plus delta per step at the approach speed
 STEP_FRACTION = 0.5
 
@@ -108,6 +110,23 @@ class ContactArrays:
             o = L.OBS_OFFSETS[name]
             v = np.asarray(v, dtype=float).ravel()
             row[o:o + v.size] = v
+
+    def set_force_scale(self, scale: float) -> None:
+        """Scale the contact's forces (its stiffness k and damping c per length) by
+        ``scale`` from the values it was built with: statics takes the contact up with the
+        load factor (at load factor 0 a smooth law's push at zero gap would carry nothing
+        and the rod would have no equilibrium; scaled, the reference is one and the path
+        ends on the full law at 1)."""
+        base = getattr(self, "_base", None)
+        if base is None:
+            if scale == 1.0:
+                return
+            base = self._base = (self.cnt_field("k").copy(), self.cnt_field("c").copy())
+        # the kernels take k > 0 (the law's tail is k delta softplus(-g/delta)): load
+        # factor 0 keeps a push of 1e-12 of the law's, far below any residual test
+        scale = max(float(scale), MIN_FORCE_SCALE)
+        self.cnt_field("k")[:] = scale * base[0]
+        self.cnt_field("c")[:] = scale * base[1]
 
     def bind(self, lib: ctypes.CDLL) -> None:
         """Let the compiled rod reach the contact library's functions (``lib``:

@@ -168,6 +168,35 @@ def rigid_motions(model, y: np.ndarray, static_layout: tuple | None = None) -> R
     return RigidMotions(basis=basis, twist=twist, centre=c, what=what, hold=hold)
 
 
+#: a rigid motion is held by the obstacles when the contact's stiffness along it exceeds
+#: this share of the static Jacobian's largest diagonal entry (the rod's own stiffness
+#: vanishes along rigid motions of an unstressed state up to round-off, ~1e-16 of it)
+CONTACT_HOLD_RTOL = 1e-9
+
+
+def restrain_by_contact(J, motions: RigidMotions) -> RigidMotions:
+    """The part of ``motions`` that the obstacles leave free: the rigid motions along which
+    the static Jacobian ``J`` (n_static x n_static, the contact's stiffness included,
+    taken at an unstressed state where the rod's own stiffness vanishes along rigid
+    motions) stores no energy. A rod lying on a frictionless table keeps its slides and
+    turn on the table and its spin; a rod touching nothing keeps all of them."""
+    if motions.k == 0:
+        return motions
+    B = motions.basis
+    G = B.T @ (J @ B)
+    G = 0.5 * (G + G.T)
+    scale = float(np.max(np.abs(J.diagonal()))) if J.shape[0] else 0.0
+    lam, V = np.linalg.eigh(G)
+    free = V[:, lam <= CONTACT_HOLD_RTOL * scale]
+    if free.shape[1] == motions.k:
+        return motions
+    k = free.shape[1]
+    what = (f"{k} rigid motion{'s' if k != 1 else ''} that the obstacles do not hold "
+            f"(of {motions.what}, which its supports leave free)")
+    return RigidMotions(basis=B @ free, twist=motions.twist @ free, centre=motions.centre,
+                        what=what, hold=motions.hold + " or friction on an obstacle")
+
+
 def _describe(k: int, held, clamped, phi, twist, c, L) -> tuple[str, str]:
     if k == 0:
         return "none", ""

@@ -26,6 +26,7 @@ from runtime.model.rigid import (
     StaticGauge,
     check_stiffness,
     refuse_loaded_motions,
+    restrain_by_contact,
     rigid_motions,
 )
 from runtime.model.rod import RodModel
@@ -114,6 +115,14 @@ class RodStatics:
         self.gauge = None
         check_stiffness(self, y)
         motions = self.rigid_motions(y)
+        if motions.k and self.model.contact is not None:
+            saved = self.load_scale
+            try:                # the obstacles' full stiffness (statics scales it)
+                self.load_scale = 1.0
+                J = self.jacobian_csr(y)
+            finally:
+                self.load_scale = saved
+            motions = restrain_by_contact(J, motions)
         if motions.k == 0:
             return None
         refuse_loaded_motions(self, y, motions)

@@ -207,6 +207,7 @@ class ProblemDrive:
             a.set_param("p_" + name, p)
             a.set_param("Omega_" + name, om)
         if a.contact is not None:
+            a.contact.set_force_scale(scale if static else 1.0)
             for k, o in enumerate(self.obstacles):
                 if o.moves:
                     c, q, v, w = o.pose(t, left=left)

@@ -86,8 +86,11 @@ _MISPLACED: dict[tuple[str, str], str] = {
 FRICTION_MAX = 100.0
 
 #: the default ``[contact]`` settings (docs/design.md, "Obstacles and the contact law")
-#: the smoothing length of the law, as a fraction of the rod's contact radius
-PENETRATION_FRACTION = 0.01
+#: the largest default smoothing length delta of the law, as a fraction of the rod's
+#: contact radius (default_penetration: below it, the penetration under the rod's weight)
+PENETRATION_FRACTION = 0.002
+#: m/s^2: the pressure scale rho A g of the default penetration without gravity
+STANDARD_GRAVITY = 9.80665
 #: the friction's regularization (m/s): a rod held by static friction creeps at about
 #: slip_velocity * f_t / (mu f_n) < slip_velocity, 0.1 mm/s (under 1 mm in 10 s)
 SLIP_VELOCITY = 1.0e-4
@@ -413,8 +416,9 @@ class Contact:
     a rod with itself; ``friction``: their Coulomb coefficient (an obstacle has its own,
     ``Obstacle.friction``). ``penetration`` (m): the smoothing length delta of the law (the
     normal force goes from zero to the linear penalty over a gap band of that width) and
-    the tolerance of the check that no rod starts inside an obstacle; None: 1 % of the
-    rod's smallest contact radius. ``slip_velocity`` (m/s): the friction's
+    the tolerance of the check that no rod starts inside an obstacle; None: the penetration
+    under the rod's own weight, at most 0.2 % of its smallest contact radius
+    (:func:`default_penetration`). ``slip_velocity`` (m/s): the friction's
     regularization (full Coulomb friction above it; a rod held by static friction creeps
     at about slip_velocity f_t / (mu f_n)). ``restitution``: the coefficient of
     restitution e in (0, 1] of a node's mass on the contact spring, whose damping ratio
@@ -616,16 +620,37 @@ def default_stiffness(EI: float, h: float) -> float:
     return STIFFNESS_FACTOR * EI / h**4
 
 
+def default_penetration(radius: np.ndarray, k: float, rhoA: np.ndarray,
+                        gravity: float = STANDARD_GRAVITY) -> float:
+    """The default smoothing length delta (m): the penetration ``q / k`` under the rod's
+    own weight per length q = rho A g (the lightest segment's; g the problem's gravity,
+    else standard gravity as a scale of pressure), at most ``PENETRATION_FRACTION`` of the
+    smallest contact radius.
+
+    Why the weight: the smooth law carries kappa delta ln 2 at zero gap, so a rod laid
+    exactly on a floor (``initial = "reference"``) starts with that force on it, and a rod
+    at rest floats at ``delta ln(k delta / q)``. With delta = q / k both are the rod's own
+    weight and no float (a 1 cm steel rod on a floor: delta = 1e-11 m; with 1 % of r it
+    was thrown off by a force 5e5 times its weight). The radius cap keeps a soft rod's
+    float a small share of its radius."""
+    radius = np.asarray(radius, dtype=float)
+    q = float(np.min(np.asarray(rhoA, dtype=float))) * float(gravity)
+    cap = PENETRATION_FRACTION * float(np.min(radius))
+    return min(cap, q / k) if q > 0.0 and k > 0.0 else cap
+
+
 def contact_law(radius: np.ndarray, contact: Contact, EI_min: float, h_min: float,
-                rhoA: np.ndarray) -> ContactLaw:
+                rhoA: np.ndarray, gravity: float = 0.0) -> ContactLaw:
     """The law of one rod: ``radius`` (N,) its segments' contact radii (m), ``EI_min``
     (N m^2) its softest bending stiffness, ``h_min`` (m) its shortest element, ``rhoA``
-    (N,) kg/m its segments' masses per length."""
+    (N,) kg/m its segments' masses per length, ``gravity`` (m/s^2) the magnitude of the
+    problem's gravity (0: none; :func:`default_penetration` then takes standard gravity)."""
+    gravity = gravity if gravity > 0.0 else STANDARD_GRAVITY
     radius = np.asarray(radius, dtype=float)
     k = contact.stiffness if contact.stiffness is not None else default_stiffness(EI_min,
                                                                                   h_min)
     delta = (contact.penetration if contact.penetration is not None
-             else PENETRATION_FRACTION * float(np.min(radius)))
+             else default_penetration(radius, k, rhoA, gravity))
     zeta = contact.damping_ratio
     c = np.asarray(normal_damping(k, zeta, rhoA), dtype=float)
     for a in (radius, c):

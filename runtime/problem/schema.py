@@ -677,10 +677,19 @@ class Problem:
 
     def contact_penetration(self) -> float:
         """The smoothing length delta of the contact law (m): ``contact.penetration``, or
-        ``PENETRATION_FRACTION`` of the rod's smallest contact radius."""
+        the penetration under the rod's own weight, at most ``PENETRATION_FRACTION`` of
+        its smallest contact radius (``runtime.problem.obstacles.default_penetration``)."""
         given = self._contact_settings().penetration
-        return given if given is not None else PENETRATION_FRACTION * float(
+        if given is not None:
+            return given
+        law = self.contact_law()
+        return law.penetration if law is not None else PENETRATION_FRACTION * float(
             np.min(self.contact_radii()))
+
+    def gravity_magnitude(self) -> float:
+        """The largest magnitude (m/s^2) of the problem's gravity loads (0 without)."""
+        return max((float(np.linalg.norm(ld.vector)) for ld in self.loads
+                    if ld.kind == "gravity"), default=0.0)
 
     def contact_law(self) -> ContactLaw | None:
         """The rod's contact law with the default rules applied
@@ -691,11 +700,9 @@ class Problem:
             return None
         m = self.segment_matrices()
         EI = float(np.min(np.asarray(m["C_M"], dtype=float)[:, :2]))
-        settings = self._contact_settings()
-        if settings.penetration is None:
-            settings = replace(settings, penetration=self.contact_penetration())
-        return contact_law(self.contact_radii(), settings, EI, self.shortest_element(),
-                           np.asarray(m["rhoA"], dtype=float))
+        return contact_law(self.contact_radii(), self._contact_settings(), EI,
+                           self.shortest_element(), np.asarray(m["rhoA"], dtype=float),
+                           self.gravity_magnitude())
 
     def _check_contact(self) -> None:
         """``[contact]`` that changes something, a contact radius for the rod, a
@@ -733,7 +740,10 @@ class Problem:
         r_node = np.empty(N + 1)
         r_node[0], r_node[-1] = radii[0], radii[-1]
         r_node[1:-1] = np.maximum(radii[:-1], radii[1:])
-        delta = self.contact_penetration()
+        # the tolerance: delta, and never below the round-off of coordinates written in
+        # decimals (a default delta under a stiff rod's weight can be 1e-11 m)
+        delta = max(self.contact_penetration(),
+                    1e-10 * max(self.rod.length, float(np.max(radii))))
         for o in self.obstacles:
             dist = o.signed_distance(nodes, t=0.0)
             gap = dist - r_node

@@ -280,39 +280,17 @@ def static_equilibrium(problem, amap: AssemblyMap, t: float = 0.0,
 def pseudo_transient(st: SystemStatics, y0: np.ndarray, tol: float = 1e-8,
                      max_iter: int = 400) -> np.ndarray:
     """A state near the loaded equilibrium of a mechanism whose static stiffness is
-    singular at ``y0``, by pseudo-transient continuation (Kelley and Keyes 1998):
-    ``(J + M / d) dx = -R`` with the reduced mass matrix M and a pseudo time step d grown
-    as the residual falls (switched evolution relaxation, d <- d |R_old| / |R|), so that
-    the first steps move the mechanism like damped dynamics and the last are Newton's.
-    Raises :class:`~runtime.errors.IllPosedError` when it does not converge."""
-    import scipy.sparse.linalg as spla
-
+    singular at ``y0``, by pseudo-transient continuation with the reduced mass matrix
+    (:func:`runtime.solvers.pseudo_transient.pseudo_transient`). Raises
+    :class:`~runtime.errors.IllPosedError` when it does not converge."""
     from runtime.analysis.system_modal import linear_matrices
+    from runtime.solvers.pseudo_transient import pseudo_transient as ptc
 
-    model = st.model
     st.load_scale = 1.0
-    M, _, _, _ = linear_matrices(model, y0, st.time)
-    y = np.array(y0, dtype=float)
-    r = np.empty(st.n_static)
-    st.static_residual(y, r)
-    J = st.static_jacobian_sparse(y)
-    scale = float(abs(J.diagonal()).max()) / max(float(abs(M.diagonal()).max()), 1e-300)
-    d = 1e-6 / scale
-    r0 = rn = float(np.linalg.norm(r))
-    for _ in range(max_iter):
-        if rn <= tol * max(r0, 1e-300):
-            return y
-        J = st.static_jacobian_sparse(y)
-        dx = spla.spsolve((J + M / d).tocsc(), -r)
-        y = st.static_retract(y, dx)
-        st.static_residual(y, r)
-        rn_new = float(np.linalg.norm(r))
-        if not np.isfinite(rn_new):
-            break
-        d *= min(max(rn / max(rn_new, 1e-300), 0.5), 10.0)
-        rn = rn_new
-        if d * scale > 1e12:             # Newton's regime: solve_static finishes
-            return y
+    M, _, _, _ = linear_matrices(st.model, y0, st.time)
+    y, ok = ptc(st, y0, M, tol=tol, max_iter=max_iter)
+    if ok:
+        return y
     raise IllPosedError(
         "statics of this assembly: its supports leave a rigid motion free that its loads "
         "do not hold (pseudo-transient continuation found no equilibrium); hold it with "

@@ -117,6 +117,12 @@ class SimulationResult:
     #: per held end ("start", "end"): the support's "force" (N) and "moment" (N m, about
     #: the held node) on the rod, spatial, (3, n) on the output grid (inertia included)
     reactions: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
+    #: per obstacle (in file order): its "force" (N) and "moment" (N m, about its point)
+    #: on the rod, spatial, (3, n), and the contact's "energy" (J), "dissipation" and
+    #: "friction_dissipation" (W), the "power" of its motion on the rod (W), the smallest
+    #: "gap_min" (m, negative: penetration) and the "segments" in reach, (n,), on the
+    #: output grid (runtime.model.contact.VALUE_NAMES)
+    obstacles: list[dict[str, np.ndarray]] = field(default_factory=list)
     #: unit quaternions (4, n) of the frames at s = 0 ("start") and s = L ("end")
     end_quaternions: dict[str, np.ndarray] = field(default_factory=dict)
     counters: dict[str, int] = field(default_factory=dict)
@@ -325,6 +331,7 @@ class SimulationResult:
             "energy_audit": {"applicable": audit.applicable, "max_rel": audit.max_rel,
                              "scale_J": audit.scale, "note": audit.reason},
             "reactions": self.reaction_summary(),
+            **({"obstacles": self.obstacle_summary()} if self.problem.obstacles else {}),
             "end_rotation": {end: {"rotation_vector": [float(v) for v in r[:, -1]],
                                    "angle_deg": float(np.degrees(np.linalg.norm(r[:, -1])))}
                              for end, r in self.end_rotations().items() if r.size},
@@ -335,6 +342,28 @@ class SimulationResult:
             "backend": None if self.model is None else self.model.backend,
         }
 
+
+    def obstacle_summary(self) -> list[dict]:
+        """Per obstacle (file order): its kind, the force and moment it exerts on the rod
+        at the last output time and their largest magnitudes (with their times), the
+        smallest gap over the run (m; negative: the deepest penetration) and its time,
+        the energy it dissipated (J, friction and normal damping; the friction's share)."""
+        out = []
+        for o, v in zip(self.problem.obstacles, self.obstacles, strict=False):
+            e: dict = {"index": o.index, "kind": o.kind}
+            if self.t.size:
+                for what in ("force", "moment"):
+                    mag = np.linalg.norm(v[what], axis=0)
+                    k = int(np.argmax(mag))
+                    e[what] = {"final": [float(x) for x in v[what][:, -1]],
+                               "max_norm": float(mag[k]), "t_of_max": float(self.t[k])}
+                g = v["gap_min"]
+                k = int(np.argmin(g))
+                e["gap_min"] = {"value": float(g[k]), "t": float(self.t[k])}
+                e["dissipated"] = float(_trapezoid(v["dissipation"], self.t))
+                e["friction_dissipated"] = float(_trapezoid(v["friction_dissipation"], self.t))
+            out.append(e)
+        return out
 
     def reaction_summary(self) -> dict:
         """Per held end: the support's force and moment at the last output time and their
@@ -354,6 +383,25 @@ class SimulationResult:
             out["static"] = {end: {w: [float(x) for x in v] for w, v in r.items()}
                              for end, r in self.static.reactions.items()}
         return out
+
+
+def _obstacle_series(model: RodModel, extras: np.ndarray) -> list[dict[str, np.ndarray]]:
+    """The sampled per obstacle contact values (rows of ``extras`` after the reactions,
+    ``model.contact_value_names()``) as :attr:`SimulationResult.obstacles`."""
+    from runtime.model.contact import N_VALUES, VALUE_NAMES
+
+    out = []
+    for k in range(len(model.contact_value_names()) // N_VALUES):
+        block = extras[k * N_VALUES:(k + 1) * N_VALUES]
+        d = {"force": block[0:3], "moment": block[3:6]}
+        d.update({name: block[j] for j, name in enumerate(VALUE_NAMES) if j >= 6})
+        d["power"] = d.pop("obstacle_power")
+        out.append(d)
+    return out
+
+
+def _trapezoid(v: np.ndarray, t: np.ndarray) -> float:
+    return float(np.sum(0.5 * (v[1:] + v[:-1]) * np.diff(t))) if t.size > 1 else 0.0
 
 
 def _reference_value(res: SimulationResult, which: str) -> float:
@@ -416,7 +464,36 @@ def motion_scale(problem: Problem, model: RodModel, y0: np.ndarray) -> tuple[flo
     if problem.loads and (d < 1e-3 * Lr or problem.simulation.initial == "reference"):
         dl, tl = _linear_response(problem)
         d, theta = max(d, dl), max(theta, tl)
+    if problem.obstacles:
+        do, to = _obstacle_motion_scale(problem, model)
+        d, theta = max(d, do), max(theta, to)
     return min(max(d, ATOL_FLOOR * Lr), Lr), min(max(theta, ATOL_FLOOR), math.pi)
+
+
+def _obstacle_motion_scale(problem: Problem, model: RodModel) -> tuple[float, float]:
+    """(d, theta) of the moving obstacles: the travel of their surface near the rod over
+    the run (translation, plus the turn times the reference rod's farthest distance from
+    the turn's centre), and, where a friction can drag the rod along, the rotation that
+    travel rolls a rod of its contact radius through (the segments' spin follows the
+    surface: a drum turning under a wire jerks the spin with its friction, and the spin's
+    tolerance must be of that motion's size, not of the rod's bending)."""
+    T = problem.simulation.t_end
+    x = model.reference[model.phi_index]
+    law = problem.contact_law()
+    r = float(np.min(law.radius)) if law is not None else problem.rod.length
+    d = theta = 0.0
+    for o in problem.obstacles:
+        mo = o.motion
+        if mo is None:
+            continue
+        do = float(np.linalg.norm(mo.translation)) * mo.translation_time.peak(T)
+        if mo.rotation_angle:
+            reach = float(np.max(np.linalg.norm(x - o.centre, axis=1)))
+            do += math.radians(abs(mo.rotation_angle)) * mo.rotation_time.peak(T) * reach
+        d = max(d, do)
+        if o.friction > 0.0:
+            theta = max(theta, do / r)
+    return d, theta
 
 
 def _linear_response(problem: Problem) -> tuple[float, float]:
@@ -558,10 +635,13 @@ def static_equilibrium(problem: Problem, model: RodModel | None = None) -> Stati
         y0 = model.initial_state()
         gauge = st.hold_rigid_motions(y0)     # IllPosedError before any work
         try:
-            res = solve_static(st, y0, load_steps=problem.statics.load_steps,
-                               stations=problem.statics.report + (1.0,),
-                               on_station=lambda lam, y: path.append(
-                                   (lam, model.tip_position(y))))
+            if model.contact is not None:
+                res = _static_on_obstacles(st, y0, path)
+            else:
+                res = solve_static(st, y0, load_steps=problem.statics.load_steps,
+                                   stations=problem.statics.report + (1.0,),
+                                   on_station=lambda lam, y: path.append(
+                                       (lam, model.tip_position(y))))
             doubt = None if gauge is None else gauge.doubt(st, res.y)
             if doubt is not None:
                 raise StaticSolveError(f"solve_static: {doubt}", y=res.y, load_scale=1.0,
@@ -579,6 +659,29 @@ def static_equilibrium(problem: Problem, model: RodModel | None = None) -> Stati
                          reactions=reactions, end_frames=frames,
                          gauge=None if gauge is None else gauge.describe(),
                          largest=largest_displacement(model, res.y) if both_held else None)
+
+
+def _static_on_obstacles(st: RodStatics, y0: np.ndarray, path: list):
+    """The equilibrium of a rod that obstacles support: pseudo-transient continuation
+    at the full load (:func:`runtime.solvers.pseudo_transient.pseudo_transient`), then
+    Newton at load factor 1. Why not load stepping: the smooth contact law is nearly a
+    step on the scale of a Newton step (its width delta is the penetration under the
+    rod's weight), so the set of touching segments changes under every load step and
+    Newton's line search stalls; damped pseudo-dynamics settle the rod onto the
+    obstacles as a real rod would. ``statics.report`` stations are not visited (the path
+    is pseudo-time, not load)."""
+    from runtime.solvers.pseudo_transient import pseudo_transient
+
+    y1, ok = pseudo_transient(st, y0, first_step=1e-2, min_growth=1.5, max_iter=2000)
+    if not ok:
+        raise StaticSolveError(
+            "statics on obstacles: pseudo-transient continuation found no equilibrium "
+            "(the rod may leave the obstacles, or slide off them: a frictionless rod on "
+            "an incline has none); simulate it instead", y=y1, load_scale=1.0,
+            iterations=[], residual_norm=float("nan"))
+    res = solve_static(st, y1, first_load=1.0, stations=(1.0,))
+    path.append((1.0, st.model.tip_position(res.y)))
+    return res
 
 
 def simulate(problem: Problem, *, progress: Callable[[float], object] | None = None,
@@ -645,7 +748,7 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
     sampler = Sampler(model, energy, t_out,
                       {"tip": model.phi_index[-1], "start": model.phi_index[0],
                        "p_first": ends["first"], "p_last": ends["last"]},
-                      n_extras=len(model.reaction_names))
+                      n_extras=len(model.reaction_names) + len(model.contact_value_names()))
     observers: list = [sampler, energy]
     maxima = None
     if problem.analysis.maxima:
@@ -725,6 +828,7 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
     a = sampler.arrays()
     res.t, res.tip, res.start = a["t"], a["tip"], a["start"]
     names = model.reaction_names
+    res.obstacles = _obstacle_series(model, a["extras"][len(names):])
     held_at = getattr(model.drive, "held_positions", None)
     for end, i, series in (("start", 0, res.start), ("end", model.N, res.tip)):
         if i in model.held_nodes and held_at is not None and res.t.size:

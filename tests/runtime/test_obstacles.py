@@ -408,7 +408,15 @@ def test_the_default_law_of_a_round_rod():
     # the Winkler length (4 EI / k)^(1/4) of the default is half an element
     assert (4 * EI / law.stiffness) ** 0.25 == pytest.approx(h / 2, rel=1e-12)
     np.testing.assert_array_equal(law.radius, np.full(6, r))
-    assert law.penetration == pytest.approx(PENETRATION_FRACTION * r)
+    # delta: the penetration under the rod's own weight (standard gravity without a
+    # gravity load), capped at PENETRATION_FRACTION of r (a soft rod)
+    q = float(np.min(p.segment_matrices()["rhoA"])) * 9.80665
+    assert law.penetration == pytest.approx(q / law.stiffness, rel=1e-12)
+    assert law.penetration < PENETRATION_FRACTION * r
+    soft = _base()
+    soft["material"]["youngs_modulus"] = 1e3
+    soft_law = Problem.from_mapping(soft).contact_law()
+    assert soft_law.penetration == pytest.approx(PENETRATION_FRACTION * r, rel=1e-12)
     zeta = damping_ratio(0.2)
     np.testing.assert_allclose(law.damping, 2 * zeta * math.sqrt(law.stiffness * rhoA),
                                rtol=1e-12)
@@ -540,13 +548,14 @@ def test_the_rod_may_start_touching_but_not_inside():
     m = _base()
     m["obstacles"] = [{"kind": "plane", "point": [0.0, 0.0, -0.005], "normal": [0, 0, 1]}]
     assert Problem.from_mapping(m).obstacles       # resting on it: gap 0
+    m["contact"] = {"penetration": PENETRATION_FRACTION * 0.005}
     delta = PENETRATION_FRACTION * 0.005
     m["obstacles"][0]["point"] = [0.0, 0.0, -0.005 + 0.9 * delta]
     assert Problem.from_mapping(m).obstacles       # within the tolerance
     m["obstacles"][0]["point"] = [0.0, 0.0, -0.005 + 1.5 * delta]
     with pytest.raises(ParameterError) as exc:
         Problem.from_mapping(m)
-    assert exc.value.name == "obstacles[0]" and "7.5e-05 m inside" in str(exc.value)
+    assert exc.value.name == "obstacles[0]" and "1.5e-05 m inside" in str(exc.value)
     # a tilted plane: the deepest node is named by its arc length
     m["obstacles"][0] = {"kind": "plane", "point": [0.3, 0.0, 0.0],
                          "normal": [-0.01, 0.0, 1.0]}

@@ -260,9 +260,15 @@ double kvrod_contact_max_step(const kvrod_rod* rod, const double* y) {
       if (!(speed > 0.0) && !(wo > 0.0)) continue;
       double g0, g1;
       if (bound_of(kind, pa, pb, obs, g.cnt, &W, &g0)) return HUGE_VAL;
+      /* a segment in contact already (the force within e^-3 of the linear law's) is the
+         error test's: the bound keeps steps from jumping into contact, not through it */
+      if (g0 < 3.0 * delta) continue;
       /* the bound's rate along the motion, by a difference over the time in which the
-         fastest point moves delta (the bound is smooth; the step bound needs no more) */
-      const double dt = delta / (speed > 0.0 ? speed : wo * delta);
+         fastest point moves a thousandth of the contact radius (the bound is smooth on
+         that scale; a shorter travel would leave the difference to round-off) */
+      double travel = 1e-3 * g.cnt[CNT_R];
+      if (travel < delta) travel = delta;
+      const double dt = travel / (speed > 0.0 ? speed : wo * travel);
       double qa[3], qb[3];
       for (int k = 0; k < 3; ++k) { qa[k] = pa[k] + dt * va[k]; qb[k] = pb[k] + dt * vb[k]; }
       memcpy(obs2, obs, sizeof(double) * NOBS);
@@ -271,7 +277,12 @@ double kvrod_contact_max_step(const kvrod_rod* rod, const double* y) {
       if (bound_of(kind, qa, qb, obs2, g.cnt, &W, &g1)) return HUGE_VAL;
       const double approach = (g0 - g1) / dt;        /* > 0: closing */
       if (!(approach > 0.0)) continue;
-      const double h = C->step_fraction * ((g0 > 0.0 ? g0 : 0.0) + delta) / approach;
+      /* the impact's own time scale c/k (= 2 zeta sqrt(m/k), the damped contact
+         spring's): in contact the error test resolves the impact on steps of that size,
+         a bound by delta alone would ask for far smaller ones on a stiff contact */
+      const double k = g.cnt[CNT_K], c = g.cnt[CNT_C];
+      const double tc = (k > 0.0 && c > 0.0) ? c / k : 0.0;
+      const double h = C->step_fraction * (((g0 > 0.0 ? g0 : 0.0) + delta) / approach + tc);
       if (h < hmax) hmax = h;
     }
   }
