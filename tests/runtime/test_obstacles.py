@@ -408,9 +408,10 @@ def test_the_default_law_of_a_round_rod():
     # the Winkler length (4 EI / k)^(1/4) of the default is half an element
     assert (4 * EI / law.stiffness) ** 0.25 == pytest.approx(h / 2, rel=1e-12)
     np.testing.assert_array_equal(law.radius, np.full(6, r))
-    # delta: the penetration under the rod's own weight (standard gravity without a
-    # gravity load), capped at PENETRATION_FRACTION of r (a soft rod)
-    q = float(np.min(p.segment_matrices()["rhoA"])) * 9.80665
+    # delta: the penetration under the rod's own weight (its gravity, standard gravity
+    # without one), capped at PENETRATION_FRACTION of r (a soft rod)
+    g = p.gravity_magnitude() or 9.80665
+    q = float(np.min(p.segment_matrices()["rhoA"])) * g
     assert law.penetration == pytest.approx(q / law.stiffness, rel=1e-12)
     assert law.penetration < PENETRATION_FRACTION * r
     soft = _base()
