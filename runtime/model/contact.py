@@ -46,7 +46,8 @@ class ContactStruct(ctypes.Structure):
     _fields_ = [("nobs", ctypes.c_int), ("kind", ctypes.c_void_p), ("obs", ctypes.c_void_p),
                 ("cnt", ctypes.c_void_p), ("step_fraction", ctypes.c_double),
                 ("residual", ctypes.c_void_p), ("jacobian", ctypes.c_void_p),
-                ("energies", ctypes.c_void_p), ("values", ctypes.c_void_p)]
+                ("energies", ctypes.c_void_p), ("values", ctypes.c_void_p),
+                ("max_step", ctypes.c_void_p)]
 
     def bind(self, lib: ctypes.CDLL) -> None:
         """Point at the contact library's functions (``build.load_contact_library``)."""
@@ -55,6 +56,7 @@ class ContactStruct(ctypes.Structure):
         self.jacobian = addr(lib.kvrod_contact_jacobian)
         self.energies = addr(lib.kvrod_contact_energies)
         self.values = addr(lib.kvrod_contact_values)
+        self.max_step = addr(lib.kvrod_contact_max_step)
 
 
 @dataclass(eq=False)
