@@ -112,7 +112,7 @@ RESULT_MARKERS = {"summary.json": "kvrod simulate or kvrod static",
                   "modes.json": "kvrod modes", "section.json": "kvrod section",
                   "calibration.json": "kvrod calibrate", "dma.json": "kvrod calibrate --dma",
                   "compare_damping.json": "kvrod compare-damping",
-                  "study.toml": "kvrod sweep"}
+                  "study.toml": "kvrod sweep", "fit.json": "kvrod fit"}
 
 
 def refuse_other_result(path: Path, command: str, markers: Iterable[str],

@@ -333,6 +333,9 @@ def read_fit_data(path: str | Path, rod_names: Sequence[str] | None = None) -> F
         raise DataError(f"data file {str(path)!r}: line {lines[0]}, column 't': t = "
                         f"{x[0]:g} s is before the start of the simulation (t = 0, the "
                         "release): shift the record's time so that it counts from there")
+    if kind == "series" and x[-1] <= 0:
+        raise DataError(f"data file {str(path)!r}: the record holds only t = 0 (the state "
+                        "before the motion); a record needs times after it")
     rod = None
     if kind == "shape" and rod_names is not None:
         rods = sorted({allowed[h][0].rsplit(".", 1)[0] for h in data_cols})
