@@ -2,7 +2,7 @@
 
 Writes ``DIR/integrators.json``, ``scaling.json``, ``codegen.json``, ``peers.json``,
 ``kernels.json`` (+ ``kernels.md``), ``energy_audit.json``, ``modes.json``, ``maxwell.json``,
-``sections.json``, ``overhead.json`` and ``README.md`` (all tables).
+``sections.json``, ``overhead.json``, ``fit.json`` and ``README.md`` (all tables).
 Every JSON document records its date, platform, versions and command line (``meta``) and
 its targets with a verdict (``targets``: met / missed / not measured).
 ``--only SECTION`` (repeatable) reruns just those sections and rebuilds the README from
@@ -24,6 +24,7 @@ import time
 from pathlib import Path
 
 from bench import codegen_timing, energy_audit, integrators, peers, report, scaling
+from bench import fit as fit_bench
 from bench import maxwell as maxwell_bench
 from bench import modes as modes_bench
 from bench import overhead as overhead_bench
@@ -155,6 +156,9 @@ def run_all(quick: bool = False, out_dir: Path = Path("bench/results"),
     if "overhead" in chosen:
         _log("== kvrod simulate's own cost beside its integrator and beside IDAS")
         keep("overhead", overhead_bench.run(quick, log=_log))
+    if "fit" in chosen:
+        _log("== kvrod fit: two parameters of the paper's cantilever from a 4 s record")
+        keep("fit", fit_bench.run(quick, log=_log))
     if not quick:
         if "codegen" in chosen:
             _log("== derivation / generate / compile")

@@ -6,6 +6,7 @@ import math
 from typing import Any
 
 from bench.energy_audit import markdown as energy_audit_md
+from bench.fit import markdown as fit_md
 from bench.maxwell import QUICK as MAXWELL_QUICK
 from bench.maxwell import markdown as maxwell_md
 from bench.meta import targets_md
@@ -250,7 +251,7 @@ def kernels_md(doc: dict) -> list[str]:
 SECTION_MD = {"integrators": integrators_md, "scaling": scaling_md, "codegen": codegen_md,
               "peers": peers_md, "kernels": kernels_md, "energy_audit": energy_audit_md,
               "modes": modes_md, "maxwell": maxwell_md, "sections": sections_md,
-              "overhead": overhead_md}
+              "overhead": overhead_md, "fit": fit_md}
 
 
 def markdown(docs: dict) -> str:
