@@ -23,7 +23,6 @@ asked and under its unique short alias.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -68,6 +67,13 @@ class Sensitivities:
                               ("difference_error", "f8")])
         return {**self.channels, "t": self.t, "parameters": rec}
 
+    def summary(self) -> dict[str, Any]:
+        """What summary.json records of them (the counters are the run's own)."""
+        return {"parameters": dict(self.values), "aliases": dict(self.aliases),
+                "difference_errors": dict(self.errors),
+                "channels": sorted({k.split("/", 1)[0] for k in self.channels}),
+                "file": "sensitivities.npz"}
+
 
 def _labels(resolved: Sequence[ResolvedParameter]) -> list[tuple[str, ...]]:
     """The names each parameter's channels are stored under (an alias shared by two
@@ -97,6 +103,9 @@ class SensitivityRun:
         self.errcon = errcon
         self.info: list = []
         self.static: np.ndarray | None = None
+        #: the run's Sensitivities once it is over (None before, or when the static solve
+        #: failed before the integration)
+        self.collected: Sensitivities | None = None
 
     def prepare(self, model) -> None:
         """The parameters' directions on the model (before its static solve)."""
@@ -246,10 +255,11 @@ def simulate_with_sensitivities(problem, parameters: Sequence[str], *,
     from runtime.simulate.simulate import simulate
 
     run = SensitivityRun(problem, resolved, errcon)
-    wall0 = time.perf_counter()
     res = simulate(problem, progress=progress, sensitivity=run, **kwargs)
     sens = run.collected
-    sens.counters["wall_time_s_total"] = int(round(1e3 * (time.perf_counter() - wall0)))
+    if sens is None:          # the static solve failed: nothing integrated
+        sens = Sensitivities(tuple(r.name for r in resolved),
+                             {r.name: r.value for r in resolved}, np.zeros(0), {}, {})
     return res, sens
 
 
@@ -258,9 +268,8 @@ def static_with_sensitivities(problem, parameters: Sequence[str]):
     static_equilibrium`) and its sensitivities to ``parameters`` by the implicit function
     theorem (one factorisation of the static Jacobian, every parameter a solve).
 
-    Returns ``(StaticOutcome, Sensitivities)``: channels ``"tip/<p>"``, ``"start/<p>"``
-    (3, 1), ``"positions/<p>"`` (3, N+1), ``"end_rotation/<p>"``,
-    ``"start_rotation/<p>"`` (3, 1); ``t`` = [0]."""
+    Returns ``(StaticOutcome, Sensitivities)`` with the channels of static.npz and the
+    static summary (:func:`static_sensitivity_channels`); ``t`` = [0]."""
     from runtime.problem.schema import Problem
 
     resolved = resolve_parameters(problem, parameters)
@@ -268,7 +277,6 @@ def static_with_sensitivities(problem, parameters: Sequence[str]):
         from runtime.simulate.assembly_sensitivity import static_assembly_sensitivities
 
         return static_assembly_sensitivities(problem, resolved)
-    from runtime.model.static_sensitivity import static_sensitivities
     from runtime.problem.assemble import build_model
     from runtime.simulate.simulate import static_equilibrium
 
@@ -276,26 +284,37 @@ def static_with_sensitivities(problem, parameters: Sequence[str]):
     run = SensitivityRun(problem, resolved)
     run.prepare(model)
     outcome = static_equilibrium(problem, model)
+    return outcome, static_sensitivity_channels(model, outcome.y, run)
+
+
+def static_sensitivity_channels(model, y: np.ndarray, run: SensitivityRun) -> Sensitivities:
+    """The sensitivities of a rod's static equilibrium ``y`` (its model carrying the
+    directions of ``run``, :meth:`SensitivityRun.prepare`): channels ``"y/<p>"`` (n),
+    ``"positions/<p>"`` (3, N+1), ``"tip/<p>"``, ``"start/<p>"`` (3,) (static.npz's and
+    the summary's), ``"end_rotation/<p>"``, ``"start_rotation/<p>"`` (3,)."""
+    from runtime.model.static_sensitivity import static_sensitivities
+
     with model.statics():
-        S = static_sensitivities(model, outcome.y)
+        S = static_sensitivities(model, y)
+    resolved = run.resolved
     labels = _labels(resolved)
     channels: dict[str, np.ndarray] = {}
-    rot = _static_rotations(model, outcome.y, S)
+    rot = _static_rotations(model, y, S)
     for i, names in enumerate(labels):
         pos = S[i][model.phi_index].T
-        arrays = {"tip": pos[:, -1:].copy(), "start": pos[:, :1].copy(), "positions": pos}
+        arrays = {"y": S[i].copy(), "positions": pos, "tip": pos[:, -1].copy(),
+                  "start": pos[:, 0].copy()}
         for end, r in rot.items():
-            arrays[f"{end}_rotation"] = r[i][:, None]
+            arrays[f"{end}_rotation"] = r[i]
         for name in names:
             for ch, v in arrays.items():
                 channels[f"{ch}/{name}"] = v
-    sens = Sensitivities(tuple(r.name for r in resolved), {r.name: r.value for r in resolved},
+    return Sensitivities(tuple(r.name for r in resolved), {r.name: r.value for r in resolved},
                          np.zeros(1), channels, {"static_solves": len(resolved)},
                          {r.name: float(d.error) for r, d in zip(resolved, run.info,
                                                                  strict=True)},
                          {r.name: lab[1] for r, lab in zip(resolved, labels, strict=True)
                           if len(lab) > 1})
-    return outcome, sens
 
 
 def _static_rotations(model, y: np.ndarray, S: np.ndarray) -> dict[str, np.ndarray]:
