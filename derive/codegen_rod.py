@@ -8,6 +8,10 @@ Files (all in ``generated/``):
   and rigid bodies) through one ``casadi.CodeGenerator`` (size independent of N);
 * ``rod_kernels_x4.c`` / ``rod_kernels_x4.h``: the hottest kernels four elements per
   call (:mod:`derive.codegen_lanes`, from their SX algorithms; bit for bit the scalar ones);
+* ``rod_tangent_kernels.c`` / ``rod_tangent_kernels.h``: the forward-mode (tangent)
+  kernels of the residual's kernels (:func:`derive.tangents.tangent_kernels`: the
+  sensitivities' ``F_y s + F_y' s' + F_p dp``) through a CodeGenerator of their own, the
+  header ending with their work sizes;
 * ``rod_layout.h``: the layout the C assembly (``runtime/model/native/rod_assembly.c``,
   written by hand) is compiled with: cell sizes, field and parameter offsets, band
   widths, kernel work sizes (``templates/rod_layout.h.jinja``);
@@ -24,7 +28,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from derive import cache, codegen_lanes, links
+from derive import cache, codegen_lanes, links, tangents
 from derive import discrete_rod as dr
 from derive.artifact import Artifact, sha256_text
 from derive.templating import render
@@ -59,6 +63,20 @@ def _build() -> tuple[list[ca.Function], str, str, tuple, tuple]:
         h_text = (Path(tmp) / "rod_kernels.h").read_text()
     bands = _band_data()
     return fns, c_text, h_text, bands["bands"], bands["static"]
+
+
+@lru_cache(maxsize=1)
+def _build_tangents() -> tuple[list[ca.Function], str, str]:
+    """The tangent kernels and their C source and header (rod_tangent_kernels.c/.h)."""
+    fns = tangents.tangent_kernels()
+    cg = ca.CodeGenerator("rod_tangent_kernels.c", CODEGEN_OPTIONS)
+    for f in fns:
+        cg.add(f)
+    with tempfile.TemporaryDirectory() as tmp:
+        cg.generate(tmp + "/")
+        c_text = (Path(tmp) / "rod_tangent_kernels.c").read_text()
+        h_text = (Path(tmp) / "rod_tangent_kernels.h").read_text()
+    return fns, c_text, h_text + tangents.work_defines(fns)
 
 
 def _band_data() -> dict:
@@ -204,6 +222,15 @@ def artifacts() -> list[Artifact]:
                      x4_hash),
             Artifact("rod_kernels_x4.h", codegen_lanes.header(x4),
                      "derive.codegen_lanes.header", STEP, x4_hash)]
+    tfns, tc_text, th_text = _build_tangents()
+    tserial = [f.serialize() for f in tfns]
+    tangent_hash = sha256_text(opts, Path(tangents.__file__).read_text(), *tserial)
+    out += [Artifact("rod_tangent_kernels.c", tc_text,
+                     "casadi.CodeGenerator(derive.tangents.tangent_kernels())", STEP,
+                     tangent_hash, {"functions": {f.name(): _signature(f) for f in tfns}}),
+            Artifact("rod_tangent_kernels.h", th_text,
+                     "casadi.CodeGenerator (header) + derive.tangents.work_defines", STEP,
+                     tangent_hash)]
     for tpl, path in (("rod_layout.h.jinja", "rod_layout.h"),
                       ("rod_layout.py.jinja", "rod_layout.py")):
         text = _render(tpl, ctx)

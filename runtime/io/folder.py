@@ -243,7 +243,7 @@ def remove_previous(path: Path, names: Iterable[str] = (), patterns: Iterable[st
 RUN_FIGURES = ("ends.png", "energy.png", "damping_ratio.png", "centreline.png",
                "centreline.gif", "centreline.mp4", "shape.png")
 RUN_FILES = ("summary.json", "series.npz", "checkpoint.npz", "vtk", "problem.toml",
-             "static.npz", *RUN_FIGURES)
+             "static.npz", "sensitivities.npz", *RUN_FIGURES)
 #: half-written files of an earlier process
 RUN_PATTERNS = (".*.tmp", ".*.tmp.npz", ".*.tmp.*")
 
