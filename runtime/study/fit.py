@@ -171,7 +171,7 @@ def parameter_specs(problem, names: Sequence[str], start: Mapping[str, float] | 
     bounds = dict(bounds or {})
     specs = []
     for name, rp in zip(names, resolved, strict=True):
-        path = str(rp.path)
+        path = str(rp.paths[0]) if rp.paths else str(rp.key)
         v = start.get(name, float(rp.value))
         specs.append(make_spec(name, path, v, limit=problem_limit(problem, path),
                                bounds=bounds.get(name)))
