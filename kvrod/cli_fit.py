@@ -45,6 +45,7 @@ def _cmd_fit(args) -> int:
     from runtime.io.folder import results_folder, safe_name
     from runtime.study import fit as F
     from runtime.study.fit_data import check_against_problem, read_fit_data
+    from runtime.study.fit_model import check_model
     from runtime.study.fit_parameters import parse_bounds, parse_start
 
     problem = problem_from_args(args, "fit")
@@ -59,6 +60,7 @@ def _cmd_fit(args) -> int:
                   else problem.rod.length)
     check_against_problem(data, n_parameters=len(names), t_end=problem.simulation.t_end,
                           length=length)
+    check_model(problem, data)
     out = Path(args.out) if args.out else Path("results") / f"fit-{safe_name(problem.name)}"
     with results_folder(out, "fit", markers=("fit.json",), overwrite=args.overwrite,
                         names=FIT_FILES):

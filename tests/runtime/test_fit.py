@@ -201,3 +201,78 @@ def test_intervals_cover_the_truth_at_their_stated_rate(tmp_path):
     # the Gauss-Newton stop ends each fit after a few steps (SciPy's own tests alone took
     # 13-20 evaluations a draw, probing the integrator's jitter)
     assert evaluations <= 5 * draws, evaluations
+
+
+# --------------------------------------------------------------------------------------
+# a static shape
+# --------------------------------------------------------------------------------------
+
+
+def test_youngs_modulus_from_a_static_shape(tmp_path, capsys):
+    """The paper's cantilever at rest under its tip force (N = 8): its deflected centreline
+    at 13 arc lengths that are not the nodes (x and z, 0.1 mm noise), made by kvrod's static
+    solve with E = 1.3 MPa; `kvrod fit` (model: static) finds E within 1 % from the file's
+    1 MPa, inside its interval."""
+    from runtime.problem.assemble import build_model
+    from runtime.simulate.simulate import static_equilibrium
+
+    truth = load_problem(CANTILEVER, {"rod.elements": 8, "material.youngs_modulus": 1.3e6})
+    model = build_model(truth)
+    pos = model.positions(static_equilibrium(truth, model).y)
+    s_nodes = truth.node_arc_lengths()
+    s = np.linspace(0.01, 0.3, 13)
+    cols = {c: noisy(np.interp(s, s_nodes, pos[i]), seed=5 + i)
+            for i, c in ((0, "x"), (2, "z"))}
+    p = tmp_path / "shape.csv"
+    p.write_text("s,x,z\n" + "".join(f"{si:.6f},{cols['x'][k]:.10e},{cols['z'][k]:.10e}\n"
+                                     for k, si in enumerate(s)))
+    out = tmp_path / "fit"
+    assert main(["fit", str(CANTILEVER), "--n-elements", "8", "--data", str(p),
+                 "--params", "youngs_modulus", "--out", str(out)]) == 0, capsys.readouterr()
+    doc = json.loads((out / "fit.json").read_text())
+    assert doc["model"] == "static" and doc["data"]["kind"] == "shape"
+    assert doc["parameters"]["youngs_modulus"] == pytest.approx(1.3e6, rel=1e-2)
+    assert within(doc["confidence"]["youngs_modulus"], 1.3e6)
+    assert doc["warnings"] == []
+    assert (out / "fit.png").is_file()
+
+
+# --------------------------------------------------------------------------------------
+# refusals through the command line: one line, exit 2, nothing written
+# --------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("text, needles", [
+    ("t,end.x\n0,0.1\n0.005,nan\n0.01,0.1\n", ("line 3", "'end.x'", "nan")),
+    ("t,end.x\n0,0.1\n0.01,0.2\n0.005,0.3\n", ("line 4", "'t'", "sorted")),
+    ("t,end.x,tip.y\n0,0.1,0\n0.005,0.1,0\n0.01,0.1,0\n", ("'tip.y'", "allowed", "end.x")),
+    ("t,end.x\n0,0.1\n5,0.1\n12,0.1\n", ("t = 12", "t_end = 10", "--t-end")),
+    ("mode,omega\n1,20\n2,120\n3,300\n", ("measured modes", "derivatives")),
+])
+def test_cli_refuses_bad_data_in_one_line(tmp_path, capsys, text, needles):
+    p = tmp_path / "data.csv"
+    p.write_text(text)
+    out = tmp_path / "fit"
+    assert main(["fit", str(CANTILEVER), "--data", str(p), "--params", "youngs_modulus,tau",
+                 "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and err.startswith("kvrod fit"), err
+    for n in needles:
+        assert n in err, (n, err)
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["--params", "youngs_modulus,nonsense"], "nonsense"),
+    (["--params", "tau,tau"], "twice"),
+    (["--params", "tau", "--start", "tau=-1"], "tau"),
+    (["--params", "tau", "--max-iterations", "0"], "--max-iterations"),
+])
+def test_cli_refuses_bad_flags_in_one_line(tmp_path, capsys, argv, needle):
+    p = write_record(tmp_path / "r.csv", np.array([0.0, 0.005, 0.01]),
+                     {"end.x": np.array([0.1, 0.1, 0.1])})
+    out = tmp_path / "fit"
+    assert main(["fit", str(CANTILEVER), "--data", str(p), "--out", str(out), *argv]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and needle in err, err
+    assert not out.exists()
