@@ -164,3 +164,30 @@ def test_spec_refusals_name_the_parameter():
         parse_start(["E=1"], ["tau"])
     with pytest.raises(ParameterError, match="--bounds tau"):
         parse_bounds(["tau=0.1"], ["tau"])
+
+
+def test_stops_where_the_models_jitter_hides_the_rest():
+    """A model whose residual carries a deterministic jitter (as a simulation's does: a
+    nearby parameter takes other steps) of a tenth of the noise, incoherent between nearby
+    points: the fit stops within a few evaluations of reaching the optimum, by the
+    Gauss-Newton test, still inside the intervals; SciPy's own tests alone (step_tol None)
+    spend far more evaluations probing the jitter for the same answer."""
+    truth = np.array([0.05, 0.3, 7.0])
+    data = damped(truth)[0] + 1e-4 * np.random.default_rng(1).standard_normal(T.size)
+
+    def evaluate(theta):
+        x, J = damped(theta)
+        seed = int.from_bytes(np.asarray(theta, float).tobytes()[-4:], "little")
+        jitter = 1e-5 * np.random.default_rng(seed).standard_normal(T.size)
+        return x + jitter - data, J
+
+    specs = specs_for([0.045, 0.28, 6.9])
+    ours = solve(evaluate, specs)
+    scipy_only = solve(evaluate, specs, step_tol=None)
+    assert ours.converged and ours.status in (5, 6), ours.message
+    assert "standard errors" in ours.message
+    st = fit_statistics(specs, ours.u, ours.r, ours.jac_u)
+    for (lo, hi), v in zip(st.intervals, truth, strict=True):
+        assert lo < v < hi
+    assert ours.nfev <= 8, ours.nfev
+    assert scipy_only.nfev >= ours.nfev + 4, (scipy_only.nfev, scipy_only.message)
