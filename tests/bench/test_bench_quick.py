@@ -34,7 +34,8 @@ def test_quick_writes_the_documents(quick_run):
     assert "us/step" in readme
 
 
-@pytest.mark.parametrize("name", ["integrators", "scaling", "modes", "maxwell", "sections"])
+@pytest.mark.parametrize("name", ["integrators", "scaling", "modes", "maxwell", "sections",
+                                  "sensitivities"])
 def test_json_has_metadata_and_verdicts(quick_run, name):
     out, _ = quick_run
     doc = json.loads((out / f"{name}.json").read_text())
