@@ -159,7 +159,8 @@ def _cmd_static(args) -> int:
         print("\n".join(_joint_lines(summary["joints"], False)))
         for name, b in summary.get("bodies", {}).items():
             print(f"  body {name}: position [m] {[round(x, 9) for x in b['position']]}")
-        print(f"wrote {out}/ summary.json, static.npz, problem.toml")
+        print(f"wrote {out}/ summary.json, static.npz, problem.toml"
+              + (", sensitivities.npz" if "sensitivities" in summary else ""))
         if summary["status"] != "finished":
             print(f"kvrod static: {summary['message']}", file=sys.stderr)
             return 1

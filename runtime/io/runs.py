@@ -204,6 +204,16 @@ def run_assembly_and_write(problem, out: Path, label: str, plots: bool = False,
     from runtime.problem.assemble_system import build_system
     from runtime.simulate.assembly import simulate_assembly
 
+    sens_run = None
+    if sensitivities is not None:
+        from runtime.problem.parameters import resolve_parameters
+        from runtime.simulate.assembly_sensitivity import AssemblySensitivityRun
+
+        if resume:
+            raise ValueError("sensitivities are not kept in checkpoints: a run with them "
+                             "cannot resume")
+        sens_run = AssemblySensitivityRun(problem, resolve_parameters(problem, sensitivities),
+                                          sens_errcon)
     out = Path(out)
     params = jsonable(problem.to_mapping())
     F.check_output_path(out)
@@ -236,7 +246,7 @@ def run_assembly_and_write(problem, out: Path, label: str, plots: bool = False,
         try:
             run = simulate_assembly(problem, progress=cb, checkpoint=on_checkpoint,
                                     checkpoint_every=checkpoint_every, resume=state,
-                                    amap=amap)
+                                    amap=amap, sensitivity=sens_run)
         except BaseException as exc:
             write_status(out, params, "failed", t_start, f"{type(exc).__name__}: {exc}")
             raise
@@ -247,7 +257,11 @@ def run_assembly_and_write(problem, out: Path, label: str, plots: bool = False,
 
             write_assembly_frames(out / "vtk", run)
         extra = {"resumed_from_t": t_start} if state else None
+        if sens_run is not None and sens_run.collected is not None:
+            extra = {**(extra or {}), "sensitivities": sens_run.collected.summary()}
         try:
+            if sens_run is not None and sens_run.collected is not None:
+                write_sensitivities(out, sens_run.collected)
             summary = write_assembly_run(out, run, extra=extra)
         except BaseException as exc:
             with contextlib.suppress(Exception):

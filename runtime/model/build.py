@@ -56,8 +56,9 @@ SOURCES = ("rod_kernels.c", "rod_kernels_x4.c", "rod_tangent_kernels.c")
 HEADERS = ("rod_kernels.h", "rod_kernels_x4.h", "rod_tangent_kernels.h", "rod_layout.h")
 #: the assembly, written by hand, compiled with them
 NATIVE_DIR = Path(__file__).resolve().parent / "native"
-ASSEMBLY_SOURCES = ("rod_assembly.c", "rod_tangent.c", "system.c")
-ASSEMBLY_HEADERS = ("rod_assembly.h", "rod_access.h", "rod_tangent.h", "system.h")
+ASSEMBLY_SOURCES = ("rod_assembly.c", "rod_tangent.c", "system.c", "system_tangent.c")
+ASSEMBLY_HEADERS = ("rod_assembly.h", "rod_access.h", "rod_tangent.h", "system.h",
+                    "system_tangent.h")
 
 
 def source_paths(gdir: Path | None = None) -> list[Path]:
@@ -244,6 +245,10 @@ def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
     lib.kvsys_link_values.argtypes = [p, i, p, p, p]
     for name in ("kvsys_residual", "kvsys_jacobian", "kvsys_energies", "kvsys_link_values"):
         getattr(lib, name).restype = i
+    lib.kvsys_residual_tangent.argtypes = [p, p, d, p, p, p, p, p]
+    lib.kvsys_residual_tangent.restype = i
+    lib.kvsys_sens_residual.argtypes = [p, d, p, p, i, p, p, p]
+    lib.kvsys_sens_residual.restype = i
     return lib
 
 

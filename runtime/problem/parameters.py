@@ -476,3 +476,89 @@ def array_directions(problem: Problem, resolved: Sequence[ResolvedParameter],
     dirs = [_direction(problem, r, arrays) for r in resolved]
     return (Directions(tuple(r.name for r in resolved), [d.arrays for d in dirs],
                        [d.drive for d in dirs]), dirs)
+
+
+# -- assemblies ----------------------------------------------------------------------------
+
+def _system_builds(stencil):
+    from runtime.problem.assemble_system import build_system
+
+    return [(c, build_system(p).model) for c, p in stencil]
+
+
+def _combine_system(terms, ref_model):
+    """The derivative of an assembly's numbers from builds (coefficient, SystemModel)."""
+    from runtime.model.system_sensitivity import system_tables
+
+    rods = [_combine([(c, m.rods[r].arrays) for c, m in terms])
+            for r in range(len(ref_model.rods))]
+    tabs = [(c, system_tables(m)) for c, m in terms]
+    tables = {k: sum(c * t[k] for c, t in tabs) for k in tabs[0][1]}
+    return rods, tables
+
+
+def _system_difference(a, b) -> float:
+    rods_a, tab_a = a
+    rods_b, tab_b = b
+    worst = max((_relative_difference(x, y) for x, y in zip(rods_a, rods_b, strict=True)),
+                default=0.0)
+    for k, v in tab_a.items():
+        x, y = np.abs(v), np.abs(v - tab_b[k])
+        if x.size:
+            floor = max(1e-12 * float(x.max()), 1e-300)
+            worst = max(worst, float(np.max(y / np.maximum(x, floor))))
+    return worst
+
+
+def _system_direction(problem, r: ResolvedParameter, model):
+    """The derivative of an assembly's numbers (:class:`~runtime.model.system_sensitivity.
+    SystemDirection`) along one parameter, as :func:`array_directions` for one rod."""
+    from runtime.model.system_sensitivity import SystemDirection
+
+    main, check, delta = _stencils(problem, r)
+    b1, b2 = _system_builds(main), _system_builds(check)
+    for _, m in b1 + b2:
+        same = (len(m.rods) == len(model.rods) and m.n == model.n
+                and len(m.links) == len(model.links) and len(m.bodies) == len(model.bodies)
+                and len(m.holds) == len(model.holds)
+                and all(x.arrays.coupled == y.arrays.coupled for x, y in
+                        zip(m.rods, model.rods, strict=True)))
+        if not same:
+            raise ParameterError(r.name, r.value, "a key that keeps the assembly's "
+                                 "structure (rods, elements, joints, bodies) when it "
+                                 "changes a little")
+    d1, d2 = _combine_system(b1, model), _combine_system(b2, model)
+    diff = _system_difference(d1, d2)
+    final, error = b1, 0.0
+    if diff > LINEAR_RTOL:
+        if len(main) == 2:
+            final = ([(4.0 / 3.0 * c, m) for c, m in b1] + [(-1.0 / 3.0 * c, m) for c, m in b2])
+            error = diff / 3.0
+        else:
+            error = diff
+    rods, tables = _combine_system(final, model)
+    reference = np.sum([c * m.reference for c, m in final], axis=0)
+    rod_drives = []
+    for k in range(len(model.rods)):
+        if _drives(r) or any(p.split(".")[0] == "loads" for p in r.paths):
+            rod_drives.append(_DriveDirection([(c, m.rods[k].drive, m.rods[k].arrays.copy())
+                                               for c, m in final]))
+        else:
+            rod_drives.append(None)
+    gravs = [(c, m._gravity) for c, m in final if m._gravity is not None]
+
+    def gravity(t: float, left: bool, scale: float) -> np.ndarray:
+        return sum((c * np.asarray(g(t, left, scale)) for c, g in gravs), np.zeros(3))
+
+    return SystemDirection(rods, rod_drives, tables, np.asarray(reference, dtype=float),
+                           gravity if gravs else None, error)
+
+
+def system_directions(problem, resolved: Sequence[ResolvedParameter], model):
+    """The directions of an assembly's parameters (:class:`~runtime.model.
+    system_sensitivity.SystemDirections`) for its system ``model`` (the build of
+    ``problem``)."""
+    from runtime.model.system_sensitivity import SystemDirections
+
+    return SystemDirections(tuple(r.name for r in resolved),
+                            [_system_direction(problem, r, model) for r in resolved])
