@@ -129,7 +129,7 @@ def markdown(doc: dict) -> list[str]:
         return "-" if v is None else format(v, fmt)
 
     m0, m1 = doc["machine_before"], doc["machine_after"]
-    out = ["## 11. kvrod fit: two parameters of the paper's cantilever (issue 34)", "",
+    out = ["## 13. kvrod fit: two parameters of the paper's cantilever (issue 34)", "",
            f"`{doc['command']}` on a {doc['t_end']:g} s record of the tip's x (every 5 ms, "
            f"N = {doc['N']}, truth E = {doc['truth']['youngs_modulus']:g} Pa, tau = "
            f"{doc['truth']['tau']:g} s, Gaussian noise {doc['noise_m'] * 1e3:g} mm, seed "
