@@ -20,8 +20,10 @@ delta the integrator's error), which at the paper's cantilever (rtol 1e-6, n = 8
 SciPy's tests on the cost's reduction (``ftol``, the trust region's ratio) see noise and
 go on shrinking the region for a dozen evaluations. The exact Jacobian does not suffer:
 the fit stops as soon as the Gauss-Newton step ``-(J^T J)^-1 J^T r`` at an accepted point
-is below ``step_tol`` (a tenth) of every free parameter's standard error ``s sqrt(((J^T
-J)^-1)_ii)``, a change no measurement could tell (SciPy's ``callback``, which stops on
+is below ``step_tol`` (a tenth) of a standard error in the metric of the confidence
+ellipsoid, ``|J step| / s`` (for one parameter ``|step| / se``; for collinear parameters
+it still counts a step along their well-determined combination in full), a change no
+measurement could tell (SciPy's ``callback``, which stops on
 ``StopIteration``). A tenth, not less: the integrator's jitter alone moves the
 Gauss-Newton step by 1-2 % of a standard error there, so a 1 % test seldom passes and
 the fit wastes a dozen evaluations (16 instead of 2 from the truth on a 1.5 s record of
@@ -33,8 +35,8 @@ the cost: the cost cannot resolve the rest, and SciPy would otherwise shrink its
 region down to ``xtol`` for eight evaluations more. ``xtol``, ``ftol`` and ``gtol`` stay
 as the last resort (a noise-free record has no standard error to compare with).
 
-A trial point whose model cannot be evaluated (:class:`ModelFailure`: a failed simulation, a value the
-problem refuses) returns non-finite residuals, on which the trust region shrinks and the
+A trial point whose model cannot be evaluated (:class:`ModelFailure`: a failed
+simulation, a value the problem refuses) returns non-finite residuals, on which the trust region shrinks and the
 step is retried closer (SciPy's own handling); at the start it is an error.
 """
 
@@ -53,7 +55,7 @@ from runtime.study.fit_parameters import ParameterSpec
 Evaluate = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
-#: stop when the Gauss-Newton step is below this fraction of every standard error
+#: stop when the Gauss-Newton step is below this many standard errors (|J step| / s)
 STEP_TOL = 0.1
 #: ... or when it is below this fraction and a trial step fails to lower the cost
 SETTLE_TOL = 0.5
@@ -98,9 +100,12 @@ def jacobian_u(specs: Sequence[ParameterSpec], theta: np.ndarray, jac_theta: np.
 
 def gauss_newton_ratio(r: np.ndarray, J: np.ndarray, u: np.ndarray, lb: np.ndarray,
                        ub: np.ndarray) -> float:
-    """The Gauss-Newton step at u in standard errors: max over the free parameters of
-    ``|step_i| / se_i`` (a parameter at a bound whose step points out of its range is
-    held); inf without a residual degree of freedom or with a rank-deficient J."""
+    """The Gauss-Newton step at u in standard errors: ``|J step| / s``, the step's length
+    in the metric of the confidence ellipsoid (s^2 = |r|^2 / (n - p)), so a step along a
+    well-determined combination counts in full even where the parameters themselves are
+    collinear and their own standard errors huge (for one parameter: |step| / se). A
+    parameter at a bound whose step points out of its range is held; inf without a
+    residual degree of freedom or with a rank-deficient J."""
     n, p = J.shape
     span = np.maximum(1.0, np.abs(u))
     free = np.ones(p, bool)
@@ -122,8 +127,7 @@ def gauss_newton_ratio(r: np.ndarray, J: np.ndarray, u: np.ndarray, lb: np.ndarr
     s2 = float(r @ r) / (n - idx.size)
     if s2 <= 0:
         return math.inf
-    se = np.sqrt(s2 * np.diag(np.linalg.inv(Jf.T @ Jf)))
-    return float(np.max(np.abs(step) / se))
+    return float(np.linalg.norm(Jf @ step) / math.sqrt(s2))
 
 
 class _Settled(Exception):
