@@ -36,8 +36,9 @@ region down to ``xtol`` for eight evaluations more. ``xtol``, ``ftol`` and ``gto
 as the last resort (a noise-free record has no standard error to compare with).
 
 A trial point whose model cannot be evaluated (:class:`ModelFailure`: a failed
-simulation, a value the problem refuses) returns non-finite residuals, on which the trust region shrinks and the
-step is retried closer (SciPy's own handling); at the start it is an error.
+simulation, a value the problem refuses) returns non-finite residuals, on which the
+trust region shrinks and the step is retried closer (SciPy's own handling); at the start
+it is an error.
 """
 
 from __future__ import annotations
