@@ -6,6 +6,7 @@ import math
 from typing import Any
 
 from bench.energy_audit import markdown as energy_audit_md
+from bench.fit import markdown as fit_md
 from bench.maxwell import QUICK as MAXWELL_QUICK
 from bench.maxwell import markdown as maxwell_md
 from bench.maxwell_kv import markdown as maxwell_kv_md
@@ -13,6 +14,7 @@ from bench.meta import targets_md
 from bench.modes import markdown as modes_md
 from bench.overhead import markdown as overhead_md
 from bench.sections import markdown as sections_md
+from bench.sensitivities import markdown as sensitivities_md
 
 
 def _f(v: Any, fmt: str = ".3f") -> str:
@@ -251,7 +253,8 @@ def kernels_md(doc: dict) -> list[str]:
 SECTION_MD = {"integrators": integrators_md, "scaling": scaling_md, "codegen": codegen_md,
               "peers": peers_md, "kernels": kernels_md, "energy_audit": energy_audit_md,
               "modes": modes_md, "maxwell": maxwell_md, "sections": sections_md,
-              "overhead": overhead_md, "maxwell_kv": maxwell_kv_md}
+              "overhead": overhead_md, "maxwell_kv": maxwell_kv_md,
+              "sensitivities": sensitivities_md, "fit": fit_md}
 
 
 def markdown(docs: dict) -> str:

@@ -12,6 +12,10 @@ Files (all in ``generated/``):
   :func:`derive.contact.contact_kernels` (rod-obstacle) and
   :func:`derive.contact_pair.pair_kernels` (rod-rod) through a CodeGenerator of their
   own (their ~0.9 MB would take rod_kernels.c over its 1 MB bound);
+* ``rod_tangent_kernels.c`` / ``rod_tangent_kernels.h``: the forward-mode (tangent)
+  kernels of the residual's kernels (:func:`derive.tangents.tangent_kernels`: the
+  sensitivities' ``F_y s + F_y' s' + F_p dp``) through a CodeGenerator of their own, the
+  header ending with their work sizes;
 * ``rod_layout.h``: the layout the C assembly (``runtime/model/native/rod_assembly.c``,
   written by hand) is compiled with: cell sizes, field and parameter offsets, band
   widths, kernel work sizes (``templates/rod_layout.h.jinja``);
@@ -28,7 +32,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from derive import cache, codegen_lanes, contact, contact_pair, links
+from derive import cache, codegen_lanes, contact, contact_pair, links, tangents
 from derive import discrete_rod as dr
 from derive.artifact import Artifact, sha256_text
 from derive.templating import render
@@ -77,6 +81,20 @@ def _build_contact() -> tuple[list[ca.Function], str, str]:
         c_text = (Path(tmp) / "rod_contact_kernels.c").read_text()
         h_text = (Path(tmp) / "rod_contact_kernels.h").read_text()
     return fns, c_text, h_text
+
+
+@lru_cache(maxsize=1)
+def _build_tangents() -> tuple[list[ca.Function], str, str]:
+    """The tangent kernels and their C source and header (rod_tangent_kernels.c/.h)."""
+    fns = tangents.tangent_kernels()
+    cg = ca.CodeGenerator("rod_tangent_kernels.c", CODEGEN_OPTIONS)
+    for f in fns:
+        cg.add(f)
+    with tempfile.TemporaryDirectory() as tmp:
+        cg.generate(tmp + "/")
+        c_text = (Path(tmp) / "rod_tangent_kernels.c").read_text()
+        h_text = (Path(tmp) / "rod_tangent_kernels.h").read_text()
+    return fns, c_text, h_text + tangents.work_defines(fns)
 
 
 def _band_data() -> dict:
@@ -255,6 +273,15 @@ def artifacts() -> list[Artifact]:
                      contact_hash)]
     serial.update(cserial)
     sigs.update({f.name(): _signature(f) for f in cfns})
+    tfns, tc_text, th_text = _build_tangents()
+    tserial = [f.serialize() for f in tfns]
+    tangent_hash = sha256_text(opts, Path(tangents.__file__).read_text(), *tserial)
+    out += [Artifact("rod_tangent_kernels.c", tc_text,
+                     "casadi.CodeGenerator(derive.tangents.tangent_kernels())", STEP,
+                     tangent_hash, {"functions": {f.name(): _signature(f) for f in tfns}}),
+            Artifact("rod_tangent_kernels.h", th_text,
+                     "casadi.CodeGenerator (header) + derive.tangents.work_defines", STEP,
+                     tangent_hash)]
     for tpl, path in (("rod_layout.h.jinja", "rod_layout.h"),
                       ("rod_layout.py.jinja", "rod_layout.py")):
         text = _render(tpl, ctx)

@@ -229,11 +229,12 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--out", help="target folder (default: the generated/ package)")
     g.set_defaults(func=_cmd_generate)
 
-    from kvrod import cli_analysis, cli_notes, cli_runtime, cli_section, cli_sweep
+    from kvrod import cli_analysis, cli_fit, cli_notes, cli_runtime, cli_section, cli_sweep
 
     cli_runtime.add_commands(sub, _Parser)
     cli_sweep.add_commands(sub, _Parser)
     cli_analysis.add_commands(sub, _Parser)
+    cli_fit.add_commands(sub, _Parser)
     cli_notes.add_commands(sub, _Parser)
     cli_section.add_commands(sub, _Parser)
     b = sub.add_parser("bench", help="run the benchmarks in bench/ (JSON + Markdown)")

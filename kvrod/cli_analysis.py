@@ -29,7 +29,7 @@ def _cli_error(message: str) -> Exception:
 
 
 def _cmd_modes(args) -> int:
-    from kvrod.problem_args import problem_from_args
+    from kvrod.problem_args import problem_from_args, sensitivity_names
 
     if args.count < 1:
         raise _cli_error(f"kvrod modes: --count must be >= 1, got {args.count}")
@@ -42,6 +42,7 @@ def _cmd_modes(args) -> int:
             "version (they need the contact linearised with its sticking contacts held): "
             "without [[obstacles]] kvrod modes gives the free rod's modes; kvrod simulate "
             "gives the damped motion on the obstacles")
+    sens = sensitivity_names(args, problem, "modes")
     nq = 6 * problem.rod.elements
     if args.count > nq:
         raise _cli_error(f"kvrod modes: --count {args.count} exceeds the {nq} degrees of "
@@ -53,12 +54,13 @@ def _cmd_modes(args) -> int:
     with results_folder(out, "modes", markers=("modes.json",), overwrite=args.overwrite,
                         names=("modes.json", "modes.npz", "mode_shapes.png",
                                "mode_shapes_3d.png")):
-        return _modes_into(args, problem, out)
+        return _modes_into(args, problem, out, sens)
 
 
-def _modes_into(args, problem, out: Path) -> int:
+def _modes_into(args, problem, out: Path, sensitivities: list[str] | None = None) -> int:
     target = None if args.near is None else 2 * math.pi * args.near
-    res = run_modes(problem, args.count, args.deformed, target=target)
+    res = run_modes(problem, args.count, args.deformed, target=target,
+                    sensitivities=sensitivities)
     modes = res["modes"]
     state = "pre-deformed by its static loads" if args.deformed else "straight, unloaded"
     near = "" if args.near is None else f"; the {args.count} modes nearest {args.near:g} Hz"
@@ -248,9 +250,10 @@ def add_commands(sub, parser_class) -> None:
     _ = parser_class
     m = sub.add_parser("modes", help="damped modal analysis (frequencies, damping ratios, "
                                      "mode shapes)")
-    from kvrod.problem_args import add_problem_arguments
+    from kvrod.problem_args import add_problem_arguments, add_sensitivity_arguments
 
     add_problem_arguments(m)
+    add_sensitivity_arguments(m, errcon=False)
     m.add_argument("--count", type=int, default=10, help="number of modes (default 10)")
     m.add_argument("--near", type=float, metavar="HZ",
                    help="the --count modes whose natural frequency is nearest HZ (Hz) "

@@ -6,7 +6,12 @@ import math
 import sys
 from pathlib import Path
 
-from kvrod.problem_args import add_problem_arguments, problem_from_args
+from kvrod.problem_args import (
+    add_problem_arguments,
+    add_sensitivity_arguments,
+    problem_from_args,
+    sensitivity_names,
+)
 from kvrod.progress import progress_bar
 from runtime.io.folder import safe_name
 from runtime.io.runs import already_finished, run_and_write, static_and_write
@@ -75,6 +80,7 @@ def _print_assembly(s: dict, out: Path, files: str) -> None:
 def _print_summary(s: dict, out: Path, vtk: bool, plots: bool) -> None:
     if "assembly" in s:
         _print_assembly(s, out, "summary.json, series.npz, problem.toml"
+                        + (", sensitivities.npz" if "sensitivities" in s else "")
                         + (", vtk/*.pvd" if vtk else "") + (", *.png" if plots else ""))
         return
     if s["static"]["tip"] is not None:
@@ -96,8 +102,9 @@ def _print_summary(s: dict, out: Path, vtk: bool, plots: bool) -> None:
     print(f"energy balance max rel. error: {eb:.2e}" if eb is not None
           else f"energy balance: not applicable ({s['energy_audit']['note']})")
     print(f"counters: {s['counters']}, wall time {s['wall_time_s']:.2f} s")
-    files = "summary.json, series.npz, problem.toml" + (", vtk/rod.pvd" if vtk else "") + (
-        ", *.png" if plots else "")
+    files = ("summary.json, series.npz, problem.toml"
+             + (", sensitivities.npz" if "sensitivities" in s else "")
+             + (", vtk/rod.pvd" if vtk else "") + (", *.png" if plots else ""))
     print(f"wrote {out}/ {files}")
 
 
@@ -110,6 +117,10 @@ def _cmd_simulate(args) -> int:
     if args.resume and args.overwrite:
         raise CliError("kvrod simulate: --resume and --overwrite exclude each other")
     problem = problem_from_args(args, "simulate")
+    sens = sensitivity_names(args, problem, "simulate")
+    if sens is not None and args.resume:
+        raise CliError("kvrod simulate: --sensitivities with --resume: the sensitivities "
+                       "are not kept in checkpoints; rerun with --overwrite")
     if args.vtk is not None and problem.simulation.t_end / args.vtk > 100_000:
         raise CliError(f"kvrod simulate: --vtk = {args.vtk} would write "
                        f"{problem.simulation.t_end / args.vtk:.3g} frames (at most 100000; "
@@ -120,7 +131,8 @@ def _cmd_simulate(args) -> int:
         return 0
     run, s = run_and_write(problem, out, problem.name, plots=args.plots, resume=args.resume,
                            progress=progress_bar,
-                           vtk_every=args.vtk, overwrite=args.overwrite)
+                           vtk_every=args.vtk, overwrite=args.overwrite,
+                           sensitivities=sens, sens_errcon=args.sens_errcon)
     _print_summary(s, out, args.vtk is not None, args.plots)
     for w in s.get("warnings", []):
         print(f"kvrod: warning: {w}", file=sys.stderr)
@@ -133,8 +145,10 @@ def _cmd_simulate(args) -> int:
 def _cmd_static(args) -> int:
     """`kvrod static PROBLEM --out DIR` (see :func:`static_and_write`)."""
     problem = problem_from_args(args, "static")
+    sens = sensitivity_names(args, problem, "static")
     out = Path(args.out) if args.out else Path("results") / f"{safe_name(problem.name)}-static"
-    summary, _, _ = static_and_write(problem, out, overwrite=args.overwrite)
+    summary, _, _ = static_and_write(problem, out, overwrite=args.overwrite,
+                                     sensitivities=sens)
     st = summary["static"]
     if "assembly" in summary:
         print(f"{summary['problem']}: static equilibrium of an assembly of "
@@ -145,7 +159,8 @@ def _cmd_static(args) -> int:
         print("\n".join(_joint_lines(summary["joints"], False)))
         for name, b in summary.get("bodies", {}).items():
             print(f"  body {name}: position [m] {[round(x, 9) for x in b['position']]}")
-        print(f"wrote {out}/ summary.json, static.npz, problem.toml")
+        print(f"wrote {out}/ summary.json, static.npz, problem.toml"
+              + (", sensitivities.npz" if "sensitivities" in summary else ""))
         if summary["status"] != "finished":
             print(f"kvrod static: {summary['message']}", file=sys.stderr)
             return 1
@@ -157,7 +172,8 @@ def _cmd_static(args) -> int:
         f = ", ".join(f"{v:.6g}" for v in r["force"])
         m = ", ".join(f"{v:.6g}" for v in r["moment"])
         print(f"  support at the {end}: force [N] [{f}], moment [N m] [{m}]")
-    print(f"wrote {out}/ summary.json, static.npz, problem.toml")
+    print(f"wrote {out}/ summary.json, static.npz, problem.toml"
+          + (", sensitivities.npz" if "sensitivities" in summary else ""))
     if summary["status"] != "finished":
         print(f"kvrod static: {summary['message']}", file=sys.stderr)
         return 1
@@ -188,6 +204,7 @@ def add_commands(sub, parser_class) -> None:
     s.add_argument("--out", help="results folder (default results/<problem name>)")
     s.add_argument("--overwrite", action="store_true",
                    help="replace a finished result in --out (default: refuse)")
+    add_sensitivity_arguments(s)
     s.set_defaults(func=_cmd_simulate)
 
     t = sub.add_parser("static", help="static equilibrium of a rod problem under its loads")
@@ -195,6 +212,7 @@ def add_commands(sub, parser_class) -> None:
     t.add_argument("--out", help="results folder (default results/<problem name>-static)")
     t.add_argument("--overwrite", action="store_true",
                    help="replace a finished result in --out (default: refuse)")
+    add_sensitivity_arguments(t, errcon=False)
     t.set_defaults(func=_cmd_static)
 
     pl = sub.add_parser("plot", help="draw the pictures of a results folder: a run, a static "

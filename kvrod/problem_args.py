@@ -60,6 +60,42 @@ def add_problem_arguments(p: argparse.ArgumentParser, required: bool = False) ->
                    help=SET_HELP.replace("%", "%%"))
 
 
+#: what --sensitivities does (its --help)
+SENSITIVITIES_HELP = ("forward sensitivities of the outputs to these parameters, "
+                      "comma-separated: any numeric key --set takes (material.youngs_modulus, "
+                      "material.tau_S, section.width, material.branches.0.tau, "
+                      "loads.0.vector.x, rods.NAME.material.E, ...), an alias (E, tau, "
+                      "tip_force) or the last word of a key when unique (youngs_modulus, "
+                      "tau_S); written to sensitivities.npz as <channel>/<parameter>")
+
+
+def add_sensitivity_arguments(p: argparse.ArgumentParser, errcon: bool = True) -> None:
+    """--sensitivities (and, for runs, --sensitivity-error-control)."""
+    p.add_argument("--sensitivities", metavar="P1,P2", help=SENSITIVITIES_HELP)
+    if errcon:
+        p.add_argument("--sensitivity-error-control", dest="sens_errcon",
+                       action="store_true",
+                       help="the sensitivities in the integrator's error test too (IDAS's "
+                            "errconS; default: the steps are the plain run's)")
+
+
+def sensitivity_names(args, problem, command: str) -> list[str] | None:
+    """The parameters of --sensitivities, validated against ``problem`` (None: none
+    asked); one line naming a bad name and why, before anything is written."""
+    from kvrod.errors import CliError
+    from runtime.problem.parameters import resolve_parameters
+
+    text = getattr(args, "sensitivities", None)
+    if text is None:
+        return None
+    names = [n.strip() for n in text.split(",")]
+    if not names or any(not n for n in names):
+        raise CliError(f"kvrod {command}: --sensitivities {text!r}: parameter names "
+                       "separated by commas (e.g. material.youngs_modulus,tau_S)")
+    resolve_parameters(problem, names)          # ParameterError: one line, the name
+    return names
+
+
 def parse_set(item: str) -> tuple[str, Any]:
     """``path=value`` with a TOML value (a bare word is a string)."""
     from kvrod.errors import CliError

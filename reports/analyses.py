@@ -38,7 +38,8 @@ def write_modes(res: dict, out: Path, figures: bool = True) -> list[Path]:
     out = Path(out)
     paths = write_files(out, res["problem"], res["modes"], model=res["model"],
                         y_eq=res.get("y_eq"), deformed=res["deformed"],
-                        static_tip=res["static_tip"], target=res.get("target"))
+                        static_tip=res["static_tip"], target=res.get("target"),
+                        sensitivities=res.get("sensitivities"))
     if figures:
         from runtime.io.shapes import plot_mode_components, plot_mode_shapes_3d
 
@@ -49,7 +50,7 @@ def write_modes(res: dict, out: Path, figures: bool = True) -> list[Path]:
 
 
 def run_modes(problem, count: int = 10, deformed: bool = False,
-              target: float | None = None) -> dict:
+              target: float | None = None, sensitivities: list[str] | None = None) -> dict:
     """Modal analysis of a problem; returns {"modes", "model", "y_eq", "static_tip", ...}.
 
     Straight (default): about the stress-free reference without loads; deformed: about
@@ -57,7 +58,10 @@ def run_modes(problem, count: int = 10, deformed: bool = False,
     ``count`` modes nearest that natural frequency instead of the lowest. Continuum
     reference frequencies (the independent ``references`` package) are attached where
     they apply (not with a target: the modes' family_index then counts within the modes
-    returned, not from the family's first).
+    returned, not from the family's first). ``sensitivities``: parameter names whose
+    derivatives of every mode's omega and zeta go to ``res["sensitivities"]``
+    (:func:`runtime.analysis.modal_sensitivity.modal_sensitivities`; under the name
+    asked and its unique alias).
     """
     from dataclasses import replace
 
@@ -75,8 +79,18 @@ def run_modes(problem, count: int = 10, deformed: bool = False,
     modes = modal_analysis(model, y_eq, count=count, target=target)
     if not deformed and target is None:
         continuum.attach(problem, modes)
+    sens = None
+    if sensitivities is not None:
+        from runtime.analysis.modal_sensitivity import modal_sensitivities
+        from runtime.problem.parameters import resolve_parameters
+        from runtime.simulate.sensitivity import _labels
+
+        resolved = resolve_parameters(problem, sensitivities)
+        d = modal_sensitivities(problem, resolved, modes, model, y_eq, deformed)
+        sens = {label: d[r.name] for r, labels in zip(resolved, _labels(resolved), strict=True)
+                for label in labels}
     return {"problem": problem, "model": model, "modes": modes, "deformed": deformed,
-            "y_eq": y_eq, "static_tip": tip, "target": target}
+            "y_eq": y_eq, "static_tip": tip, "target": target, "sensitivities": sens}
 
 
 def compare_table(result) -> str:

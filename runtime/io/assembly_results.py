@@ -75,10 +75,14 @@ def static_joint_values(amap, y: np.ndarray) -> list[dict[str, list[float]]]:
             for j in joint_forces(amap, extras)]
 
 
-def static_assembly_and_write(problem, out: Path, overwrite: bool = False) -> tuple:
+def static_assembly_and_write(problem, out: Path, overwrite: bool = False,
+                              sensitivities: list[str] | None = None) -> tuple:
     """The static equilibrium of an assembly under its loads at t = 0- into results folder
     ``out`` (checked and locked like a single rod's; see the module docstring). Returns
-    (summary, amap, y); a failed solve keeps its last converged state (status "failed")."""
+    (summary, amap, y); a failed solve keeps its last converged state (status "failed")
+    and writes no sensitivities. ``sensitivities``: parameter names (validated before
+    anything is written) whose static sensitivities go to ``sensitivities.npz``
+    (:func:`runtime.simulate.assembly_sensitivity.static_assembly_channels`)."""
     from runtime.io.folder import RUN_FILES, results_folder
     from runtime.model import build
     from runtime.model.system_statics import SystemStatics
@@ -86,12 +90,20 @@ def static_assembly_and_write(problem, out: Path, overwrite: bool = False) -> tu
     from runtime.simulate.assembly import body_state, static_ends, static_equilibrium
     from runtime.solvers.statics import StaticSolveError
 
+    sens_run = None
+    if sensitivities is not None:
+        from runtime.problem.parameters import resolve_parameters
+        from runtime.simulate.assembly_sensitivity import AssemblySensitivityRun
+
+        sens_run = AssemblySensitivityRun(problem, resolve_parameters(problem, sensitivities))
     build.require_generated()
     wall0 = time.perf_counter()
     amap = build_system(problem)
     model = amap.model
     with model.statics():                     # an ill-posed problem: before the folder
         SystemStatics(model).hold_rigid_motions(model.initial_state())
+    if sens_run is not None:
+        sens_run.prepare(model)
     with results_folder(out, "static", markers=("summary.json",), overwrite=overwrite,
                         names=RUN_FILES):
         params = jsonable(problem.to_mapping())
@@ -128,6 +140,13 @@ def static_assembly_and_write(problem, out: Path, overwrite: bool = False) -> tu
             arrays[f"joint{k}/force"] = np.array(j["force"])
             arrays[f"joint{k}/moment"] = np.array(j["moment"])
         write_npz(out / "static.npz", **arrays)
+        if sens_run is not None and status == "finished":
+            from runtime.io.runs import write_sensitivities
+            from runtime.simulate.assembly_sensitivity import static_assembly_channels
+
+            sens = static_assembly_channels(amap, y, sens_run)
+            write_sensitivities(out, sens)
+            summary["sensitivities"] = sens.summary()
         write_problem(out / "problem.toml", params)
         write_json(out / "summary.json", summary)
     return summary, amap, y

@@ -112,7 +112,7 @@ RESULT_MARKERS = {"summary.json": "kvrod simulate or kvrod static",
                   "modes.json": "kvrod modes", "section.json": "kvrod section",
                   "calibration.json": "kvrod calibrate", "dma.json": "kvrod calibrate --dma",
                   "compare_damping.json": "kvrod compare-damping",
-                  "study.toml": "kvrod sweep"}
+                  "study.toml": "kvrod sweep", "fit.json": "kvrod fit"}
 
 
 def refuse_other_result(path: Path, command: str, markers: Iterable[str],
@@ -243,7 +243,7 @@ def remove_previous(path: Path, names: Iterable[str] = (), patterns: Iterable[st
 RUN_FIGURES = ("ends.png", "energy.png", "damping_ratio.png", "centreline.png",
                "centreline.gif", "centreline.mp4", "shape.png")
 RUN_FILES = ("summary.json", "series.npz", "checkpoint.npz", "vtk", "problem.toml",
-             "static.npz", *RUN_FIGURES)
+             "static.npz", "sensitivities.npz", *RUN_FIGURES)
 #: half-written files of an earlier process
 RUN_PATTERNS = (".*.tmp", ".*.tmp.npz", ".*.tmp.*")
 

@@ -15,7 +15,11 @@ modes.json (format 2)
     (undamped, rad/s), ``frequency_hz``, ``eigenvalues`` (the damped pair as [re, im],
     1/s), ``zeta`` (null for a rigid mode), ``omega_damped`` (rad/s), ``zeta_modal``,
     ``energy_fractions`` (V1, V2, V3, U1, U2, U3) and ``analytic_omega`` (rad/s, or null):
-    see :class:`runtime.analysis.modal.Mode`.
+    see :class:`runtime.analysis.modal.Mode`. With ``kvrod modes --sensitivities``
+    also ``sensitivities``: ``{parameter: {"omega": [...], "zeta": [...]}}``, the
+    derivatives of every mode's omega (rad/s) and zeta per unit of the parameter, in
+    the order of ``modes``, under the name asked and its unique alias
+    (:mod:`runtime.analysis.modal_sensitivity`; null: a rigid mode's zeta).
 
 modes.npz
     ``index`` (k,) the modes' indices; ``displacement`` (k, 3, N+1) node displacements
@@ -34,6 +38,7 @@ the equilibrium, which format 1 did not store).
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -50,14 +55,17 @@ NPZ_NAME = "modes.npz"
 
 def write_modes(out: Path, problem, modes: Sequence, *, model, y_eq: np.ndarray | None,
                 deformed: bool, static_tip: np.ndarray | None = None,
-                target: float | None = None) -> list[Path]:
+                target: float | None = None,
+                sensitivities: dict[str, dict[str, np.ndarray]] | None = None) -> list[Path]:
     """Write ``out/modes.npz`` then ``out/modes.json`` (the folder's marker, last).
 
     ``modes``: :class:`runtime.analysis.modal.Mode` list of ``model`` (the problem's
     rod) linearised about ``y_eq`` (None: the reference); ``static_tip``: the static
     s = L position (m) of a deformed analysis; ``target``: the natural angular frequency
     (rad/s) the modes are nearest to (``target_omega`` in the JSON; null: the lowest
-    modes). Returns both paths.
+    modes); ``sensitivities``: ``{parameter: {"omega": (k,), "zeta": (k,)}}``, the
+    modes' derivatives (``"sensitivities"`` in the JSON, mode by mode; a rigid mode's
+    d zeta null). Returns both paths.
     """
     out = Path(out)
     y = model.reference if y_eq is None else np.asarray(y_eq, dtype=float)
@@ -75,7 +83,10 @@ def write_modes(out: Path, problem, modes: Sequence, *, model, y_eq: np.ndarray 
         "static_tip": None if static_tip is None else [float(v) for v in static_tip],
         "target_omega": None if target is None else float(target),
         "shapes": NPZ_NAME,
-        "modes": [m.to_dict(shapes=False) for m in modes]})
+        "modes": [m.to_dict(shapes=False) for m in modes],
+        **({} if sensitivities is None else {"sensitivities": {
+            name: {key: [float(v) if math.isfinite(v) else None for v in values]
+                   for key, values in d.items()} for name, d in sensitivities.items()}})})
     return [js, npz]
 
 

@@ -38,7 +38,8 @@ ProgressDisplay = Callable[[float, str], tuple[Callable[[float], object], Callab
 
 def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: bool = False,
                   vtk_every: float | None = None, checkpoint_every: float = 1.0,
-                  overwrite: bool = False, progress: ProgressDisplay | None = None) -> tuple:
+                  overwrite: bool = False, progress: ProgressDisplay | None = None,
+                  sensitivities: list[str] | None = None, sens_errcon: bool = False) -> tuple:
     """Run one problem into results folder ``out`` and write its results.
 
     Everything that can be checked is checked before anything is written (parameters, the
@@ -49,7 +50,10 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
     when the run stops, ``summary.json`` says "finished", "failed" or
     "interrupted" (never "running", except after SIGKILL). ``resume`` continues from
     DIR/checkpoint.npz (VTK frames before the checkpoint are kept); ``overwrite`` replaces
-    a finished result. Returns (result, summary).
+    a finished result. ``sensitivities``: parameter names (validated here, before
+    anything is written) whose forward sensitivities go to ``sensitivities.npz``
+    (:func:`write_sensitivities`; summary.json's ``sensitivities``); ``sens_errcon``: in
+    the error test too. Returns (result, summary).
     """
     from runtime.io import folder as F
     from runtime.io.assembly_results import is_assembly
@@ -64,10 +68,23 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
     from runtime.model import build
     from runtime.simulate.simulate import simulate
 
+    sens_run = None
+    if sensitivities is not None:
+        from runtime.problem.parameters import resolve_parameters
+
+        if resume:
+            raise ValueError("sensitivities are not kept in checkpoints: a run with them "
+                             "cannot resume")
+        resolved = resolve_parameters(problem, sensitivities)
     if is_assembly(problem):
         return run_assembly_and_write(problem, out, label, plots=plots, resume=resume,
                                       vtk_every=vtk_every, checkpoint_every=checkpoint_every,
-                                      overwrite=overwrite, progress=progress)
+                                      overwrite=overwrite, progress=progress,
+                                      sensitivities=sensitivities, sens_errcon=sens_errcon)
+    if sensitivities is not None:
+        from runtime.simulate.sensitivity import SensitivityRun
+
+        sens_run = SensitivityRun(problem, resolved, sens_errcon)
     out = Path(out)
     params = jsonable(problem.to_mapping())
     F.check_output_path(out)
@@ -124,7 +141,8 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
                            checkpoint_every=checkpoint_every,
                            checkpoint_wall=CHECKPOINT_WALL, resume=state,
                            snapshot_every=vtk_every,
-                           snapshot_sink=series.add if series else None, model=model)
+                           snapshot_sink=series.add if series else None, model=model,
+                           sensitivity=sens_run)
         except BaseException as exc:   # a bug or resource error: say so, keep the checkpoint
             write_status(out, params, "failed", t_start, f"{type(exc).__name__}: {exc}")
             raise
@@ -133,7 +151,11 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
             if series is not None:
                 series.close()
         extra = {"resumed_from_t": t_start} if state else None
+        if sens_run is not None and sens_run.collected is not None:
+            extra = {**(extra or {}), "sensitivities": sens_run.collected.summary()}
         try:
+            if sens_run is not None and sens_run.collected is not None:
+                write_sensitivities(out, sens_run.collected)
             summary = write_run(out, run, extra=extra)
         except BaseException as exc:   # e.g. disk full: do not leave "running" behind
             with contextlib.suppress(Exception):
@@ -151,10 +173,21 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
     return run, summary
 
 
+def write_sensitivities(out: Path, sens) -> Path:
+    """``sensitivities.npz`` of a run or a static result: every channel
+    ``"<channel>/<parameter>"``, ``t`` and the ``parameters`` record
+    (:meth:`runtime.simulate.sensitivity.Sensitivities.arrays`), atomically."""
+    from runtime.io.results import write_npz
+
+    return write_npz(Path(out) / "sensitivities.npz", **sens.arrays())
+
+
 def run_assembly_and_write(problem, out: Path, label: str, plots: bool = False,
                            resume: bool = False, vtk_every: float | None = None,
                            checkpoint_every: float = 1.0, overwrite: bool = False,
-                           progress: ProgressDisplay | None = None) -> tuple:
+                           progress: ProgressDisplay | None = None,
+                           sensitivities: list[str] | None = None,
+                           sens_errcon: bool = False) -> tuple:
     """:func:`run_and_write` for an assembly of rods (results: ``runtime.io.
     assembly_results``): the same checks, lock, status, checkpoints and resume."""
     from runtime.io import folder as F
@@ -171,6 +204,16 @@ def run_assembly_and_write(problem, out: Path, label: str, plots: bool = False,
     from runtime.problem.assemble_system import build_system
     from runtime.simulate.assembly import simulate_assembly
 
+    sens_run = None
+    if sensitivities is not None:
+        from runtime.problem.parameters import resolve_parameters
+        from runtime.simulate.assembly_sensitivity import AssemblySensitivityRun
+
+        if resume:
+            raise ValueError("sensitivities are not kept in checkpoints: a run with them "
+                             "cannot resume")
+        sens_run = AssemblySensitivityRun(problem, resolve_parameters(problem, sensitivities),
+                                          sens_errcon)
     out = Path(out)
     params = jsonable(problem.to_mapping())
     F.check_output_path(out)
@@ -203,7 +246,7 @@ def run_assembly_and_write(problem, out: Path, label: str, plots: bool = False,
         try:
             run = simulate_assembly(problem, progress=cb, checkpoint=on_checkpoint,
                                     checkpoint_every=checkpoint_every, resume=state,
-                                    amap=amap)
+                                    amap=amap, sensitivity=sens_run)
         except BaseException as exc:
             write_status(out, params, "failed", t_start, f"{type(exc).__name__}: {exc}")
             raise
@@ -214,7 +257,11 @@ def run_assembly_and_write(problem, out: Path, label: str, plots: bool = False,
 
             write_assembly_frames(out / "vtk", run)
         extra = {"resumed_from_t": t_start} if state else None
+        if sens_run is not None and sens_run.collected is not None:
+            extra = {**(extra or {}), "sensitivities": sens_run.collected.summary()}
         try:
+            if sens_run is not None and sens_run.collected is not None:
+                write_sensitivities(out, sens_run.collected)
             summary = write_assembly_run(out, run, extra=extra)
         except BaseException as exc:
             with contextlib.suppress(Exception):
@@ -243,7 +290,8 @@ def check_statics(model) -> None:
         RodStatics(model).hold_rigid_motions(model.initial_state())
 
 
-def static_and_write(problem, out: Path, overwrite: bool = False) -> tuple[dict, object, object]:
+def static_and_write(problem, out: Path, overwrite: bool = False,
+                     sensitivities: list[str] | None = None) -> tuple[dict, object, object]:
     """Static equilibrium of ``problem`` under its loads at t = 0- into results folder
     ``out`` (checked and locked like :func:`run_and_write`; a problem statics cannot solve
     as posed is refused before, see :func:`check_statics`): summary.json with the end
@@ -254,8 +302,12 @@ def static_and_write(problem, out: Path, overwrite: bool = False) -> tuple[dict,
     equilibrium and of the ``reference``, the segment ``quaternions`` (4, N), the end
     frames ``start_frame``, ``end_frame`` (3, 3) and, per held end, the support's
     ``start_reaction_force`` / ``_moment`` (N, N m about the node; also in summary.json);
-    problem.toml. Returns (summary, model, y); a failed solve keeps its last converged
-    state (status "failed")."""
+    problem.toml; with ``sensitivities`` (parameter names, validated before anything is
+    written) also ``sensitivities.npz`` (the derivatives of static.npz's ``y`` and
+    ``positions`` and of the summary's ``tip`` and ``start``, by the implicit function
+    theorem: :func:`runtime.simulate.sensitivity.static_sensitivity_channels`). Returns
+    (summary, model, y); a failed solve keeps its last converged state (status
+    "failed") and writes no sensitivities."""
     import time
 
     from runtime.io.assembly_results import is_assembly, static_assembly_and_write
@@ -267,12 +319,23 @@ def static_and_write(problem, out: Path, overwrite: bool = False) -> tuple[dict,
     from runtime.simulate.simulate import load_path_table, static_equilibrium
     from runtime.solvers.statics import StaticSolveError
 
+    sens_run = None
+    if sensitivities is not None:
+        from runtime.problem.parameters import resolve_parameters
+
+        resolved = resolve_parameters(problem, sensitivities)
     if is_assembly(problem):
-        return static_assembly_and_write(problem, out, overwrite=overwrite)
+        return static_assembly_and_write(problem, out, overwrite=overwrite,
+                                         sensitivities=sensitivities)
     build.require_generated()
     wall0 = time.perf_counter()
     model = build_model(problem)
     check_statics(model)            # an ill-posed problem is refused before the folder
+    if sensitivities is not None:
+        from runtime.simulate.sensitivity import SensitivityRun
+
+        sens_run = SensitivityRun(problem, resolved)
+        sens_run.prepare(model)
     with results_folder(out, "static", markers=("summary.json",), overwrite=overwrite,
                         names=RUN_FILES):   # a run's files too: the same marker
         params = jsonable(problem.to_mapping())
@@ -309,6 +372,12 @@ def static_and_write(problem, out: Path, overwrite: bool = False) -> tuple[dict,
         write_npz(out / "static.npz", y=y, positions=pos, quaternions=model.quaternions(y),
                   frames=model.frames(y), reference=model.positions(model.reference),
                   reference_frames=model.frames(model.reference), **extra)
+        if sens_run is not None and status == "finished":
+            from runtime.simulate.sensitivity import static_sensitivity_channels
+
+            sens = static_sensitivity_channels(model, y, sens_run)
+            write_sensitivities(out, sens)
+            summary["sensitivities"] = sens.summary()
         write_problem(out / "problem.toml", params)
         write_json(out / "summary.json", summary)
     return summary, model, y

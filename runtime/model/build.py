@@ -1,8 +1,9 @@
 """Compile and load the generated rod C code.
 
-On first use the generated kernels (``generated/rod_kernels.c``, ``rod_kernels_x4.c``, with
-the layout header ``rod_layout.h``) and the assembly written by hand
-(``runtime/model/native/rod_assembly.c``) are compiled with the system C compiler into a
+On first use the generated kernels (``generated/rod_kernels.c``, ``rod_kernels_x4.c``,
+``rod_tangent_kernels.c``, with the layout header ``rod_layout.h``) and the assembly
+written by hand (``runtime/model/native/rod_assembly.c``, its tangent ``rod_tangent.c``,
+the assemblies' ``system.c``) are compiled with the system C compiler into a
 shared library in a cache folder keyed by the sha256 of the sources, the flags and the
 compiler path. The cache folder is
 ``$KVROD_CACHE_DIR`` when set, else the platformdirs user cache dir of ``kvrod``.
@@ -53,12 +54,10 @@ from runtime.native import (
 )
 
 #: the generated C (checked against generated/MANIFEST.json before it is compiled)
-SOURCES = ("rod_kernels.c", "rod_kernels_x4.c")
-HEADERS = ("rod_kernels.h", "rod_kernels_x4.h", "rod_layout.h")
+SOURCES = ("rod_kernels.c", "rod_kernels_x4.c", "rod_tangent_kernels.c")
+HEADERS = ("rod_kernels.h", "rod_kernels_x4.h", "rod_tangent_kernels.h", "rod_layout.h")
 #: the assembly, written by hand, compiled with them
 NATIVE_DIR = Path(__file__).resolve().parent / "native"
-ASSEMBLY_SOURCES = ("rod_assembly.c", "system.c")
-ASSEMBLY_HEADERS = ("rod_assembly.h", "rod_index.h", "rod_contact.h", "system.h")
 #: the contact library (issue 32): the generated contact kernels and the loops around
 #: them, compiled apart on the first problem with obstacles (the kernels' Jacobians are
 #: long straight-line code: compiling them with the rod library would double every first
@@ -66,7 +65,10 @@ ASSEMBLY_HEADERS = ("rod_assembly.h", "rod_index.h", "rod_contact.h", "system.h"
 CONTACT_SOURCES = ("rod_contact_kernels.c",)
 CONTACT_HEADERS = ("rod_contact_kernels.h", "rod_layout.h")
 CONTACT_NATIVE_SOURCES = ("rod_contact.c",)
-CONTACT_NATIVE_HEADERS = ("rod_assembly.h", "rod_index.h", "rod_contact.h")
+CONTACT_NATIVE_HEADERS = ("rod_assembly.h", "rod_access.h", "rod_contact.h")
+ASSEMBLY_SOURCES = ("rod_assembly.c", "rod_tangent.c", "system.c", "system_tangent.c")
+ASSEMBLY_HEADERS = ("rod_assembly.h", "rod_access.h", "rod_contact.h", "rod_tangent.h",
+                    "system.h", "system_tangent.h")
 
 
 @dataclass(frozen=True)
@@ -268,6 +270,11 @@ def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
     lib.kvrod_n_state.argtypes = [i, i]
     lib.kvrod_energies_contact.argtypes = [p, i, p, p, p, p]
     lib.kvrod_energies_contact.restype = i
+    # the residual's tangent (runtime/model/native/rod_tangent.h)
+    lib.kvrod_residual_tangent.argtypes = [p, p, d, p, p, p, p, p]
+    lib.kvrod_residual_tangent.restype = i
+    lib.kvrod_sens_residual.argtypes = [p, d, p, p, i, p, p, p]
+    lib.kvrod_sens_residual.restype = i
     # an assembly of rods (runtime/model/native/system.h)
     lib.kvsys_residual.argtypes = [p, d, p, p, p]
     lib.kvsys_jacobian.argtypes = [p, d, p, p, d, p]
@@ -277,6 +284,10 @@ def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
     lib.kvsys_max_step.restype = d
     for name in ("kvsys_residual", "kvsys_jacobian", "kvsys_energies", "kvsys_link_values"):
         getattr(lib, name).restype = i
+    lib.kvsys_residual_tangent.argtypes = [p, p, d, p, p, p, p, p]
+    lib.kvsys_residual_tangent.restype = i
+    lib.kvsys_sens_residual.argtypes = [p, d, p, p, i, p, p, p]
+    lib.kvsys_sens_residual.restype = i
     return lib
 
 

@@ -183,6 +183,8 @@ class RodModel:
         self._pattern: sp.csc_matrix | None = None
         self._band_pattern: np.ndarray | None = None
         self._pattern_flat = np.zeros(0, dtype=np.intp)
+        self._directions = None     # parameter directions of the sensitivities
+        self._csens = None
         self.at(0.0)
 
     # -- time, loads, ends --------------------------------------------------------------
@@ -213,6 +215,8 @@ class RodModel:
         if key != self._key:
             self.drive.apply(self.arrays, t, left=left, scale=self.load_scale,
                              static=self._static)
+            if self._directions is not None:
+                self._directions.drive(t, left, self.load_scale, self._static)
             self._key = key
             if self._static or not self.drive.time_dependent:
                 self._steady = (-math.inf, -math.inf)
@@ -287,7 +291,7 @@ class RodModel:
         self._static = True
         self._key = ()
         a = self.arrays
-        saved = None
+        saved = dsaved = None
         if self.branches and relaxed and not previous:
             saved = (a.seg_field("C_F").copy(), a.jnt_field("C_M").copy(), a.segb.copy(),
                      a.jntb.copy())
@@ -295,6 +299,8 @@ class RodModel:
             a.jnt_field("C_M")[:] -= a.jntb.sum(axis=1)
             a.segb[:] = 0.0
             a.jntb[:] = 0.0
+            if self._directions is not None:       # the derivatives relaxed alike
+                dsaved = self._directions.relax()
         try:
             self.at(t)
             yield
@@ -302,6 +308,8 @@ class RodModel:
             if saved is not None:
                 a.seg_field("C_F")[:], a.jnt_field("C_M")[:] = saved[0], saved[1]
                 a.segb[:], a.jntb[:] = saved[2], saved[3]
+            if dsaved is not None:
+                self._directions.restore(dsaved)
             self._static = previous
             self._key = ()
 
@@ -321,6 +329,28 @@ class RodModel:
         y[self.q_segment_index] = np.broadcast_to(dV, self.q_segment_index.shape)
         y[self.q_joint_index] = np.broadcast_to(dU[:, None, :], self.q_joint_index.shape)
         return y
+
+    def relaxed_sensitivities(self, t: float, y: np.ndarray, s: np.ndarray) -> np.ndarray:
+        """The sensitivities (k, n) of :meth:`relaxed`'s state ``y`` (every relaxation
+        term at its element's strain) given those ``s`` of its configuration (their
+        internal strains ignored): the terms' ``dq = d(strain)``, exactly, from the
+        tangent of their rows ``q' - (strain - q)/theta`` (at q = strain, with dq = 0 and
+        no rates, the row's tangent is ``-d(strain)/theta``); ``s`` itself for a
+        Kelvin-Voigt rod."""
+        if not self.branches:
+            return s
+        out = np.array(s, dtype=float)
+        zero = np.zeros(self.n)
+        qs, qj = self.q_segment_index, self.q_joint_index       # (N, B, 3), (N+1, B, 3)
+        theta = self.arrays.theta
+        for i, d in enumerate(self._directions.arrays):
+            si = out[i]
+            si[qs] = 0.0
+            si[qj] = 0.0
+            r = self.residual_tangent(t, y, zero, si, zero, d)
+            si[qs] = -theta[None, :, None] * r[qs]
+            si[qj] = -theta[None, :, None] * r[qj]
+        return out
 
     def glassy_decay_rate(self) -> float:
         """Slowest decay rate sigma_g (1/s) of the rod's glassy modes (math.inf for a
@@ -498,6 +528,100 @@ class RodModel:
                 raise GeneratedCodeError(f"kvrod_residual failed (code {rc})")
         else:
             out[:] = np.asarray(self._casadi.residual(*self._cargs(t, y, yp))).ravel()
+
+    # -- sensitivities (issue 34; runtime/model/sensitivity.py) ------------------------
+    def residual_tangent(self, t: float, y: np.ndarray, yp: np.ndarray, dy: np.ndarray,
+                         dyp: np.ndarray, darrays: RodArrays | None = None,
+                         out: np.ndarray | None = None) -> np.ndarray:
+        """``dF = F_y dy + F_y' dy' + F_p dA`` (n,): the directional derivative of the
+        residual at (t, y, y') along the state direction (dy, dy') and the direction
+        ``darrays`` of the rod's numbers (the derivatives of its arrays with respect to
+        one parameter, :class:`RodArrays` of the model's shapes; None: none). Exact
+        (the generated tangent kernels, ``native/rod_tangent.c``; on the CasADi
+        backend the oracle's forward derivative)."""
+        self._time(t)
+        n = self.n
+        out = np.empty(n) if out is None else out
+        dy = np.ascontiguousarray(dy, dtype=float)
+        dyp = np.ascontiguousarray(dyp, dtype=float)
+        if self._lib is not None:
+            import ctypes
+
+            P = self._ptrs
+            dptr = None
+            if darrays is not None:
+                ds = darrays.struct(self.kl, self.ku)
+                dptr = ctypes.byref(ds)
+            rc = self._lib.kvrod_residual_tangent(self._struct_ptr(), dptr, t, P(y, n),
+                                                  P(yp, n), _ptr(dy, n), _ptr(dyp, n),
+                                                  _ptr(out, n))
+            if rc:
+                raise GeneratedCodeError(f"kvrod_residual_tangent failed (code {rc})")
+            return out
+        from runtime.model.casadi_oracle import CasadiOracle
+
+        if getattr(self, "_casadi_fwd", None) is None:
+            self._casadi_fwd = self._casadi.residual.forward(1)
+        args = self._cargs(t, y, yp)
+        dargs = ([0.0, dy, dyp] + (CasadiOracle.args(darrays) if darrays is not None
+                                   else [np.zeros_like(a) for a in args[3:]]))
+        nominal = self._casadi.residual(*args)
+        out[:] = np.asarray(self._casadi_fwd(*args, nominal, *dargs)).ravel()
+        return out
+
+    @property
+    def directions(self):
+        """The parameter directions of the sensitivities (:class:`~runtime.model.
+        sensitivity.Directions`), or None."""
+        return self._directions
+
+    def set_directions(self, directions) -> None:
+        """Give the model its parameters' directions (None: none): the sensitivity
+        residual of parameter ``ip`` is then :meth:`sensitivity_residual`, driven in
+        time with the model's arrays (:meth:`at`)."""
+        if directions is not None:
+            directions.check(self.arrays)
+        self._directions = directions
+        self._csens = None
+        self._key = ()                      # drive both at the next at()
+
+    @property
+    def n_sensitivities(self) -> int:
+        return 0 if self._directions is None else len(self._directions.arrays)
+
+    def sensitivity_residual(self, t: float, y: np.ndarray, yp: np.ndarray, ip: int,
+                             s: np.ndarray, sp: np.ndarray, out: np.ndarray) -> None:
+        """out <- F_y s + F_y' s' + F_theta of parameter ``ip`` (its direction,
+        :meth:`set_directions`; ip < 0: without the parameter's term)."""
+        d = None if ip < 0 else self._directions.arrays[ip]
+        self.residual_tangent(t, y, yp, s, sp, d, out)
+
+    def sensitivity_prescribed_rates(self, t: float, ip: int, sp: np.ndarray) -> np.ndarray:
+        """``sp`` with the rates of the held nodes' sensitivities set exactly: the
+        derivatives of their prescribed velocity and acceleration with respect to
+        parameter ``ip`` (as :meth:`prescribed_rates` for the state)."""
+        self.at(t)
+        sp = np.array(sp, dtype=float)
+        d = self._directions.arrays[ip]
+        for end, i in (("start", 0), ("end", self.N)):
+            if i in self.held_nodes:
+                sp[self.phi_index[i]] = d.param("v_" + end)
+                sp[self.v_index[i]] = d.param("a_" + end)
+        return sp
+
+    def c_sensitivities(self) -> tuple[int, int, object] | None:
+        """(address of ``kvrod_sens_residual``, its context, what must stay alive) for
+        the compiled step loop; None on the CasADi backend or without directions."""
+        if self._lib is None or self._directions is None:
+            return None
+        import ctypes
+
+        from runtime.model.sensitivity import CSensitivities
+
+        if self._csens is None:
+            self._csens = CSensitivities(self._struct, self._directions, self.kl, self.ku)
+        fn = ctypes.cast(self._lib.kvrod_sens_residual, ctypes.c_void_p).value
+        return fn, self._csens.ptr, self._csens
 
     def c_kernels(self):
         """The compiled residual, Jacobian and energies for the C step loop

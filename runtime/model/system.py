@@ -187,6 +187,8 @@ class SystemModel:
         self._load_scale = 1.0
         self._t = math.nan
         self.nextra = 12 * len(self.rods) + 3 * len(self.holds) + 6 * len(self.links)
+        self._sdirs = None            # parameter directions (runtime/model/system_sensitivity)
+        self._csys_sens = None
         self.at(0.0)
 
     # -- indices --------------------------------------------------------------------------
@@ -233,6 +235,10 @@ class SystemModel:
                                       self._load_scale), dtype=float))
         for k in range(3):
             self._struct.gravity[k] = float(g[k])
+        if self._sdirs is not None:          # the sensitivities' gravity, alike
+            self._sdirs.set_gravity(t, self._static or t >= self._piece_end, self._load_scale)
+            if self._csys_sens is not None:
+                self._csys_sens.refresh_gravity()
 
     _piece_end = math.inf
 
@@ -565,6 +571,81 @@ class SystemModel:
         rc = self._lib.kvsys_jacobian(p, t, y.ctypes.data, yp.ctypes.data, cj, None)
         if rc:
             raise RuntimeError(f"kvsys_jacobian failed ({rc})")
+
+    # -- sensitivities (issue 34; runtime/model/system_sensitivity.py) -----------------------
+    @property
+    def directions(self):
+        """The parameter directions (:class:`SystemDirections`), or None."""
+        return self._sdirs
+
+    def set_directions(self, directions) -> None:
+        """Give the assembly (and its rods) its parameters' directions (None: none)."""
+        self._sdirs = directions
+        self._csys_sens = None
+        if directions is not None:
+            directions.install(self)
+        self._t = math.nan
+
+    @property
+    def n_sensitivities(self) -> int:
+        return 0 if self._sdirs is None else len(self._sdirs.dirs)
+
+    def residual_tangent(self, t: float, y: np.ndarray, yp: np.ndarray, dy: np.ndarray,
+                         dyp: np.ndarray, ip: int | None = None,
+                         out: np.ndarray | None = None) -> np.ndarray:
+        """``F_y dy + F_y' dy' + F_p dp`` of the whole assembly along parameter ``ip``'s
+        direction (:meth:`set_directions`; None: the state direction only)."""
+        p = self._ptr()
+        self.at(t)
+        if ip is not None:
+            self._c_sensitivity_context()
+        out = np.empty(self.n) if out is None else out
+        d = None if ip is None else ctypes.addressof(self._csys_sens.dirs[ip])
+        c = np.ascontiguousarray
+        dy, dyp = c(dy, dtype=float), c(dyp, dtype=float)
+        rc = self._lib.kvsys_residual_tangent(p, d, t, y.ctypes.data, yp.ctypes.data,
+                                              dy.ctypes.data, dyp.ctypes.data,
+                                              out.ctypes.data)
+        if rc:
+            raise RuntimeError(f"kvsys_residual_tangent failed ({rc})")
+        return out
+
+    def sensitivity_residual(self, t, y, yp, ip, s, sp, out) -> None:
+        """out <- F_y s + F_y' s' + F_theta of parameter ``ip`` (ip < 0: without it)."""
+        self.residual_tangent(t, y, yp, s, sp, None if ip < 0 else ip, out)
+
+    def sensitivity_prescribed_rates(self, t: float, ip: int, sp: np.ndarray) -> np.ndarray:
+        """sp with the held nodes' rates set exactly (the rods' own held ends by their
+        prescribed motion's derivatives; supports at rest; ties as their masters)."""
+        sp = np.array(sp, dtype=float)
+        for k, r in enumerate(self.rods):
+            sl = self.rod_slice(k)
+            sp[sl] = r.sensitivity_prescribed_rates(t, ip, sp[sl])
+        for h in self.holds:
+            ph, v = self.phi_index[h.rod][h.node], self.v_index[h.rod][h.node]
+            if h.master is None:
+                sp[ph] = 0.0
+                sp[v] = 0.0
+            else:
+                sp[ph] = sp[self.phi_index[h.master[0]][h.master[1]]]
+                sp[v] = sp[self.v_index[h.master[0]][h.master[1]]]
+        return sp
+
+    def _c_sensitivity_context(self):
+        from runtime.model.system_sensitivity import CSystemSensitivities
+
+        if self._csys_sens is None:
+            self._csys_sens = CSystemSensitivities(self, self._sdirs)
+        return self._csys_sens
+
+    def c_sensitivities(self) -> tuple[int, int, object] | None:
+        """(address of ``kvsys_sens_residual``, its context, what must stay alive) for the
+        compiled step loop; None without directions."""
+        if self._sdirs is None:
+            return None
+        ctx = self._c_sensitivity_context()
+        fn = ctypes.cast(self._lib.kvsys_sens_residual, ctypes.c_void_p).value
+        return fn, ctx.ptr, ctx
 
     @property
     def blocks(self):

@@ -380,10 +380,12 @@ def error_control(problem, amap: AssemblyMap) -> ErrorControl:
 
 def simulate_assembly(problem, *, progress=None, checkpoint=None,
                       checkpoint_every: float = 1.0, resume: dict | None = None,
-                      max_steps: int = 2_000_000, amap: AssemblyMap | None = None
-                      ) -> AssemblyResult:
+                      max_steps: int = 2_000_000, amap: AssemblyMap | None = None,
+                      sensitivity=None) -> AssemblyResult:
     """Run an assembly problem (see the module docstring); never raises for a failed
-    solve: the result says why and keeps what was computed."""
+    solve: the result says why and keeps what was computed. ``sensitivity``: forward
+    sensitivities to carry (``runtime.simulate.assembly_sensitivity``), their channels in
+    ``sensitivity.collected``."""
     sim = problem.simulation
     res = AssemblyResult(problem=problem)
     wall0 = time.perf_counter()
@@ -391,6 +393,10 @@ def simulate_assembly(problem, *, progress=None, checkpoint=None,
         amap = build_system(problem)
     res.amap = amap
     model = amap.model
+    if sensitivity is not None:
+        if resume is not None:
+            raise ValueError("sensitivities of a resumed run are not kept in checkpoints")
+        sensitivity.prepare(model)
     t_out = np.arange(0.0, sim.t_end + 0.5 * sim.output_step, sim.output_step)
     t_out = t_out[t_out <= sim.t_end]
     energy = EnergyIntegrator(model)
@@ -431,6 +437,11 @@ def simulate_assembly(problem, *, progress=None, checkpoint=None,
         y0, yp0 = consistent_initial(model, 0.0, y0, np.zeros(model.n))
         yp0 = model.prescribed_rates(0.0, yp0)
         t_start = 0.0
+        sens_options = {}
+        if sensitivity is not None:
+            s0 = sensitivity.initial(model, res.static.y if res.static is not None else None)
+            model.at(0.0)
+            sens_options = sensitivity.options(model, 0.0, y0, yp0, s0)
     else:
         t_start, y0, yp0 = float(resume["t"]), np.array(resume["y"]), np.array(resume["yp"])
         if y0.shape != (model.n,):
@@ -450,7 +461,8 @@ def simulate_assembly(problem, *, progress=None, checkpoint=None,
                    checkpoint=checkpoint, checkpoint_every=checkpoint_every,
                    counters0=counters0, describe_dof=model.describe_dof,
                    solver_options={"error_mask": control.error_mask,
-                                   "stiff_decay_rate": control.stiff_decay_rate})
+                                   "stiff_decay_rate": control.stiff_decay_rate,
+                                   **(sens_options if resume is None else {})})
     res.status, res.message, res.interrupt = out.status, out.message, out.interrupt
     res.t_last, res.y_last, res.counters = out.t_last, out.y_last, out.counters
     a = sampler.arrays()
@@ -470,6 +482,8 @@ def simulate_assembly(problem, *, progress=None, checkpoint=None,
     if maxima is not None and res.y_last is not None:
         res.maxima_t, res.maxima_x = np.array(maxima.t), np.array(maxima.x)
         _centre_maxima(res, problem, amap)
+    if sensitivity is not None:
+        sensitivity.collected = sensitivity.collect(res, a, centreline, res.counters, amap)
     res.wall_time_s = time.perf_counter() - wall0
     return res
 

@@ -164,7 +164,9 @@ class Sampler:
     ``W`` energy (J), dissipated energy ``int 2D`` and external work ``int P`` (J) since
     the start, and ``extras``: the values of ``model.energies`` beyond the first five.
     The outputs of a step are evaluated together with the step's energy quadrature
-    (:meth:`EnergyIntegrator.evaluate`) and kept as arrays per step.
+    (:meth:`EnergyIntegrator.evaluate`) and kept as arrays per step. With forward
+    sensitivities (``dense.sens``, ``run.s``) each channel's sensitivities are sampled
+    at the same times (:meth:`arrays`: ``"sens"``).
     """
 
     name = "sampler"
@@ -180,6 +182,9 @@ class Sampler:
         self.k_out = 0
         self.rec: dict[str, list[np.ndarray]] = {k: [] for k in self._keys()}
         self._core = None
+        #: rows (m, k * size) of the sensitivities of the sampled components (parameter
+        #: by parameter), when the run has them
+        self.srec: list[np.ndarray] = []
 
     def _keys(self) -> tuple[str, ...]:
         return ("t", *self.channels, *self.SCALARS, "extras")
@@ -208,7 +213,9 @@ class Sampler:
         """Sample in the compiled step loop (with the energy integrator there too)."""
         if self._core is None and self.energy.attach(solver):
             core = solver.core
-            if core.enable_sampling(self.t_out, self.k_out, self._all_indices(), self._rows):
+            sens = self._sens_rows if solver.n_sensitivities else None
+            if core.enable_sampling(self.t_out, self.k_out, self._all_indices(), self._rows,
+                                    sens):
                 self._core = core
         return self._core is not None
 
@@ -219,6 +226,14 @@ class Sampler:
         self._record(rows[:, 0].copy(), rows[:, 1:b], en, rows[:, b + 2].copy(),
                      rows[:, b + 3].copy())
         self.k_out += rows.shape[0]
+
+    def _sens_rows(self, rows: np.ndarray) -> None:
+        self.srec.append(np.array(rows))
+
+    def _sens_sample(self, s: np.ndarray) -> None:
+        """Rows of the sampled components' sensitivities from full ones (m, k, n)."""
+        idx = self._all_indices()
+        self.srec.append(s[:, :, idx].reshape(s.shape[0], -1))
 
     def _collect(self) -> None:
         self._core.flush_samples()
@@ -232,6 +247,8 @@ class Sampler:
             e = self.model.energies(np.array([run.t]), run.y[None, :], run.yp[None, :])
             self._record(np.array([run.t]), run.y[None, self._all_indices()], e,
                          np.zeros(1), np.zeros(1))
+            if run.s is not None:
+                self._sens_sample(run.s[None])
             self.k_out = 1
 
     def step(self, run: RunState, dense, t0: float, t1: float) -> None:
@@ -250,6 +267,9 @@ class Sampler:
         dd, ww = e.partial(dense, t0, t1, ts)
         self._record(ts, ys[:, self._all_indices()], en, e.dissipated + dd,
                      e.external_work + ww)
+        if dense.sens is not None:
+            sy, _ = dense.sens.values(ts)
+            self._sens_sample(sy.reshape(ts.size, -1, self.model.n))
         self.k_out = k
 
     def arrays(self) -> dict[str, np.ndarray]:
@@ -267,6 +287,15 @@ class Sampler:
             out[name] = cat(name, idx.size).T
         out.update(kinetic=cat("T"), elastic=cat("W"), dissipated=cat("D"),
                    external_work=cat("P"), extras=cat("extras", self.n_extras).T)
+        if self.srec:          # per channel (k, size, m): the sensitivities' samples
+            rows = np.concatenate(self.srec)
+            m, width = rows.shape[0], self._all_indices().size
+            rows = rows.reshape(m, -1, width)
+            col, sens = 0, {}
+            for name, idx in self.channels.items():
+                sens[name] = rows[:, :, col:col + idx.size].transpose(1, 2, 0).copy()
+                col += idx.size
+            out["sens"] = sens
         return out
 
     def state(self) -> dict[str, Any]:
@@ -409,10 +438,14 @@ class Centreline:
         self.idx = np.asarray(phi_index, dtype=int)
         self.k = 0
         self.rec: list[np.ndarray] = []
+        #: the positions' sensitivities (k, 3, N+1) per frame, when the run has them
+        self.srec: list[np.ndarray] = []
 
     def begin(self, run: RunState) -> None:
         if self.k == 0 and self.t_frames.size and self.t_frames[0] <= run.t:
             self.rec.append(np.array(run.y[self.idx].T))
+            if run.s is not None:
+                self.srec.append(np.array(run.s[:, self.idx].transpose(0, 2, 1)))
             self.k = 1
 
     def replay_times(self, t_end: float) -> np.ndarray:
@@ -423,6 +456,9 @@ class Centreline:
         k = int(np.searchsorted(self.t_frames, t1 + 1e-12 * max(1.0, abs(t1)), side="right"))
         for t in self.t_frames[self.k:k]:
             self.rec.append(np.array(np.asarray(dense(min(t, t1)))[self.idx].T))
+            if dense.sens is not None:
+                s = np.asarray(dense.sens(min(t, t1))).reshape(-1, run.y.size)
+                self.srec.append(np.array(s[:, self.idx].transpose(0, 2, 1)))
         self.k = max(self.k, k)
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray]:

@@ -687,7 +687,7 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
              snapshot_every: float | None = None,
              snapshot_sink: Callable[[float, np.ndarray, np.ndarray], object] | None = None,
              max_steps: int = 2_000_000, backend: str = "auto",
-             model: RodModel | None = None) -> SimulationResult:
+             model: RodModel | None = None, sensitivity=None) -> SimulationResult:
     """Run a problem: static equilibrium (if ``simulation.initial = "static"``), then the
     BDF integration with energy audit, outputs and maxima (see the module docstring).
 
@@ -722,6 +722,10 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
     model : RodModel, optional
         The problem's model when the caller built it already (e.g. for VTK output); it
         is driven by this run.
+    sensitivity : optional
+        Forward sensitivities to carry (a ``runtime.simulate.sensitivity.SensitivityRun``;
+        :func:`~runtime.simulate.sensitivity.simulate_with_sensitivities` is the way to
+        ask for them): the same steps, their channels in ``sensitivity.collected``.
 
     Returns
     -------
@@ -737,6 +741,11 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
     if model is None:
         model = build_model(problem, backend=backend)
     res.model = model
+    if sensitivity is not None:
+        if resume is not None:
+            raise ValueError("sensitivities of a resumed run are not kept in checkpoints: "
+                             "run without --resume")
+        sensitivity.prepare(model)
     t_out = np.arange(0.0, sim.t_end + 0.5 * sim.output_step, sim.output_step)
     t_out = t_out[t_out <= sim.t_end]
     energy = EnergyIntegrator(model)
@@ -784,6 +793,11 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
         y0, yp0 = consistent_initial(model, 0.0, y0, np.zeros(model.n))
         yp0 = model.prescribed_rates(0.0, yp0)
         t_start = 0.0
+        sens_options = {}
+        if sensitivity is not None:
+            s0 = sensitivity.initial(model, res.static.y if res.static is not None else None)
+            model.at(0.0)
+            sens_options = sensitivity.options(model, 0.0, y0, yp0, s0)
     else:
         t_start, y0, yp0 = float(resume["t"]), np.array(resume["y"]), np.array(resume["yp"])
         if y0.shape != (model.n,):
@@ -818,7 +832,8 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
                    counters0=counters0,
                    describe_dof=model.describe_dof,
                    solver_options={"error_mask": control.error_mask,
-                                   "stiff_decay_rate": control.stiff_decay_rate})
+                                   "stiff_decay_rate": control.stiff_decay_rate,
+                                   **(sens_options if resume is None else {})})
     res.status, res.message, res.interrupt = out.status, out.message, out.interrupt
     res.t_last, res.y_last, res.counters = out.t_last, out.y_last, out.counters
     a = sampler.arrays()
@@ -846,5 +861,7 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
     if maxima is not None:
         res.maxima_t, res.maxima_x = np.array(maxima.t), np.array(maxima.x)
         res.centre_maxima()
+    if sensitivity is not None:
+        sensitivity.collected = sensitivity.collect(res, a, centreline, res.counters)
     res.wall_time_s = time.perf_counter() - wall0
     return res

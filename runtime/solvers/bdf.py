@@ -166,6 +166,15 @@ class BDF:
     condense : bool
         Solve the Newton systems condensed when the problem names kinematic blocks
         (``condensation_blocks()``) and the C helpers are available.
+    sensitivities : tuple, optional
+        Forward sensitivities ``(s0, sp0, pbar)``: consistent initial sensitivities and
+        their rates (k, n) and the parameters' sizes (k,) (``runtime/solvers/
+        sensitivity.py``: IDAS's staggered corrector, the same steps); the problem then
+        provides ``sensitivity_residual`` (and, for the compiled loop,
+        ``c_sensitivities``).
+    sens_errcon : bool
+        The sensitivities in the local error test and the order selection (IDAS's
+        ``errconS``; default False: the steps are the state's alone).
     compiled_loop : bool
         Take the steps in C (``native/step_loop.c``: the same algorithm, statement for
         statement) when the C helpers are available; else, or with False, in Python.
@@ -201,6 +210,8 @@ class BDF:
         max_error_fails: int = 10,
         min_step: float = 0.0,
         condense: bool = True,
+        sensitivities: tuple | None = None,
+        sens_errcon: bool = False,
         compiled_loop: bool = True,
     ) -> None:
         n = int(problem.n)
@@ -328,6 +339,18 @@ class BDF:
         if not np.all(np.isfinite(self._res)):
             self._raise_nonfinite(self.t, self._y, self._yp, 0.0)
 
+        #: forward sensitivities (runtime/solvers/sensitivity.py), or None
+        self._sens = None
+        self._lu_stamp = -1     # nstep at the state's last factorisation
+        if sensitivities is not None:
+            from .sensitivity import StaggeredSensitivities
+
+            own = None            # the sensitivities' own Newton system (not an assembly's)
+            if not hasattr(problem, "newton_system"):
+                own = newton_system(problem, band_storage(n, self.kl, self.ku), self.kl,
+                                    self.ku, self._c, condense)
+            self._sens = StaggeredSensitivities(self, *sensitivities, errcon=sens_errcon,
+                                                own=own)
         self._start_history(first_step)
         # The compiled step loop (runtime/solvers/native/step_loop.c), from this state on.
         self._core = (CoreLink(self._c, self)
@@ -360,6 +383,8 @@ class BDF:
         np.multiply(self._yp, self._hh, out=self._phi[1])
         self._psi[0] = self._hh
         self._cj = 1.0 / self._hh
+        if self._sens is not None:
+            self._sens.start_history(self._hh)
 
     # ------------------------------------------------------------------ public API
     @property
@@ -384,7 +409,7 @@ class BDF:
 
     @property
     def counters(self) -> dict[str, int]:
-        return {
+        out = {
             "nstep": self.nstep,
             "nfev": self.nfev,
             "njev": self.njev,
@@ -393,6 +418,24 @@ class BDF:
             "netf": self.netf,
             "ncfn": self.ncfn,
         }
+        if self._sens is not None:
+            out.update(self._sens.counters)
+        return out
+
+    @property
+    def n_sensitivities(self) -> int:
+        """Number k of forward sensitivities (0: none)."""
+        return 0 if self._sens is None else self._sens.k
+
+    @property
+    def sensitivities(self) -> np.ndarray | None:
+        """The sensitivities at ``t``, (k, n) (an internal buffer), or None."""
+        return None if self._sens is None else self._sens.y.reshape(self._sens.k, self.n)
+
+    @property
+    def sensitivity_rates(self) -> np.ndarray | None:
+        """Their rates s' at ``t``, (k, n) (an internal buffer), or None."""
+        return None if self._sens is None else self._sens.yp.reshape(self._sens.k, self.n)
 
     def step(self) -> str | None:
         """Take one accepted step; return None, or a message when finished.
@@ -488,12 +531,14 @@ class BDF:
             if self._core is not None:
                 self._core.s.hh = self._hh
 
-    def restart(self, y: np.ndarray, yp: np.ndarray, first_step: float | None = None) -> None:
+    def restart(self, y: np.ndarray, yp: np.ndarray, first_step: float | None = None,
+                s: np.ndarray | None = None, sp: np.ndarray | None = None) -> None:
         """Start afresh at the current ``t`` from consistent ``y, y'`` (order 1, a new
         history, a new Jacobian), as IDA does after ``IDAReInit``: at an input's
         breakpoint where a load, a prescribed motion or its rate jumps, the history
         before it does not describe the solution after it. The counters go on;
-        ``first_step``: as in the constructor (default: IDA's rule)."""
+        ``first_step``: as in the constructor (default: IDA's rule). With sensitivities,
+        ``s``, ``sp`` (k, n): their consistent values (default: s kept, s' zero)."""
         y = np.asarray(y, dtype=float)
         yp = np.asarray(yp, dtype=float)
         if y.shape != (self.n,) or yp.shape != (self.n,):
@@ -512,6 +557,11 @@ class BDF:
         self._have_lu = False
         self._nst0 = self.nstep
         self._update_weights()
+        if self._sens is not None:
+            sens = self._sens
+            sens.y[:] = sens.y if s is None else np.asarray(s, dtype=float).reshape(-1)
+            sens.yp[:] = 0.0 if sp is None else np.asarray(sp, dtype=float).reshape(-1)
+            sens.update_weights(self.rtol)
         self._start_history(first_step)
         if self._core is not None:
             self._core.push(self)
@@ -555,8 +605,13 @@ class BDF:
             raise RuntimeError("dense_output() is available after the first step")
         k = max(self._kused, 1)
         phi = self._phi[: k + 1]
-        return BDFDenseOutput(self.t_old, self.t, phi.copy() if copy else phi,
-                              np.array(self._psi[: k + 1]), self._c)
+        dense = BDFDenseOutput(self.t_old, self.t, phi.copy() if copy else phi,
+                               np.array(self._psi[: k + 1]), self._c)
+        if self._sens is not None:
+            sphi = self._sens.phi[: k + 1]
+            dense.sens = BDFDenseOutput(self.t_old, self.t, sphi.copy() if copy else sphi,
+                                        np.array(self._psi[: k + 1]), self._c)
+        return dense
 
     # ------------------------------------------------------------------ internals
     def _wrms(self, v: np.ndarray, w: np.ndarray) -> float:
@@ -645,6 +700,8 @@ class BDF:
         phi, beta = self._phi, self._beta
         for j in range(self._ns, kk + 1):
             phi[j] *= 1.0 / beta[j]
+        if self._sens is not None:
+            self._sens.restore(self)
 
     def _setup(self, t: float) -> bool:
         """Evaluate and factorise J at the current iterate; False if J is singular."""
@@ -659,24 +716,32 @@ class BDF:
             self.njev += 1
             info = self._newton.factor()
         self.nlu += 1
+        self._lu_stamp = self.nstep
         self._cjold = self._cj
         self._cjratio = 1.0
         self._ss = 20.0
+        if self._sens is not None:
+            self._sens.ss = 20.0
         self._have_lu = info == 0
         return info == 0
 
     def _nls(self, tnew: float) -> int:
         """Corrector: simplified Newton for the correction ``ee``; _OK or _CONV_FAIL."""
         call_setup = False
+        sens = self._sens
         if self.nstep == self._nst0 and not self._have_lu:
             self._cjold = self._cj
             self._ss = 20.0
+            if sens is not None:
+                sens.ss = 20.0
             call_setup = True
         self._cjratio = self._cj / self._cjold
         if self._cjratio < _CJ_LO or self._cjratio > _CJ_HI or not self._have_lu:
             call_setup = True
         if self._cj != self._cjlast:
             self._ss = 100.0
+            if sens is not None:
+                sens.ss = 100.0
 
         problem = self.problem
         yy, ypw, ee, res = self._yy, self._ypw, self._ee, self._res
@@ -785,6 +850,8 @@ class BDF:
             if self.direction * (self._hh - remaining) > -1e-8 * abs(self._hh):
                 if self.nstep == self._nst0:
                     self._phi[1] *= remaining / self._hh
+                    if self._sens is not None:
+                        self._sens.rescale_first(remaining / self._hh)
                     self._psi[0] = remaining
                 self._hh = remaining
             hh = self._hh
@@ -799,7 +866,13 @@ class BDF:
             nflag = self._nls(tnew)
             err_k = err_km1 = 0.0
             if nflag == _OK and self.fixed_step is None:
-                nflag, err_k, err_km1, _ = self._test_error(ck)
+                nflag, err_k, err_km1, err_km2 = self._test_error(ck)
+            if nflag == _OK and self._sens is not None:     # IDAS's staggered corrector
+                nflag = self._sens.nls(self, tnew)
+                if nflag == _OK and self._sens.errcon and self.fixed_step is None:
+                    errs = [err_k, err_km1, err_km2]
+                    nflag = self._sens.test_error(self, ck, errs)
+                    err_k, err_km1 = errs[0], errs[1]
             if nflag == _OK:
                 break
             self._restore()
@@ -812,6 +885,8 @@ class BDF:
                 # IDAReset: rescale h*y'0 to the new step.
                 self._psi[0] = self._hh
                 self._phi[1] *= self._rr
+                if self._sens is not None:
+                    self._sens.rescale_first(self._rr)
         self._complete_step(tnew, err_k, err_km1)
 
     def _handle_failure(self, nflag: int, ncf: int, nef: int, err_k: float, err_km1: float) -> None:
@@ -889,7 +964,10 @@ class BDF:
                 else:
                     delta = self._res
                     np.subtract(ee, phi[kk + 1], out=delta)
-                    err_kp1 = self._wrms(delta, self._ewt_err) / (kk + 2)
+                    enorm = self._wrms(delta, self._ewt_err)
+                    if self._sens is not None and self._sens.errcon:
+                        enorm = self._sens.order_norm(self, enorm)
+                    err_kp1 = enorm / (kk + 2)
                     terr_k = (kk + 1) * err_k
                     terr_kp1 = (kk + 2) * err_kp1
                     if kk == 1:
@@ -928,6 +1006,8 @@ class BDF:
         phi[kused] += ee
         for j in range(kused - 1, -1, -1):
             phi[j] += phi[j + 1]
+        if self._sens is not None:
+            self._sens.complete(self, kused, self.rtol)
 
         self.t_old = self.t
         self.t = tnew

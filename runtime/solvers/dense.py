@@ -48,8 +48,11 @@ class BDFDenseOutput:
     """The BDF interpolating polynomial of one step, valid on ``[t_old, t]``.
 
     Calling it gives ``y(t)`` with shape (n,) for scalar ``t`` or (n, m) for an array;
-    ``derivative(t)`` gives ``y'(t)`` in the same shapes.
+    ``derivative(t)`` gives ``y'(t)`` in the same shapes. ``sens``: the interpolant of the
+    same step's forward sensitivities (their k n values stacked), or None.
     """
+
+    sens: BDFDenseOutput | None = None
 
     def __init__(self, t_old: float, t: float, phi: np.ndarray, psi: np.ndarray,
                  clib=None) -> None:

@@ -48,6 +48,8 @@ class RunState:
     yp: np.ndarray
     solver: BDF | None = None
     stop_at: float | None = None
+    #: the forward sensitivities at t, (k, n) (None without them)
+    s: np.ndarray | None = None
 
 
 class Observer(Protocol):
@@ -144,8 +146,11 @@ def _replay(solver: BDF, run: RunState, observers: Sequence[Any], t_end: float
     times = np.sort(times) if solver.direction > 0 else -np.sort(-times)
     hooks = [o.step for o in observers]
 
-    def replay(t0: float, t1: float, k: int, psi: np.ndarray, phi: np.ndarray) -> None:
+    def replay(t0: float, t1: float, k: int, psi: np.ndarray, phi: np.ndarray,
+               sphi: np.ndarray | None = None) -> None:
         dense = BDFDenseOutput(t0, t1, phi, psi, solver._c)
+        if sphi is not None:
+            dense.sens = BDFDenseOutput(t0, t1, sphi, psi, solver._c)
         for f in hooks:
             f(run, dense, t0, t1)
 
@@ -196,7 +201,8 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
                  max_order=max_order, max_step=min(pieces.enter(), user_max_step),
                  **options)
     run = RunState(t=t0, y=np.array(y0, dtype=float), yp=np.array(yp0, dtype=float),
-                   solver=solver)
+                   solver=solver, s=None if solver.sensitivities is None
+                   else solver.sensitivities.copy())
     hooks = {name: [getattr(o, name) for o in observers if hasattr(o, name)]
              for name in ("begin", "step", "restart", "end")}
     for f in hooks["begin"]:
@@ -239,6 +245,7 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
                 restart = pieces.next(solver)      # past the inputs' next breakpoint
                 solver.set_max_step(min(solver.max_step, user_max_step))
                 run.t, run.y, run.yp = solver.t, solver.y, solver.yp
+                run.s = solver.sensitivities
                 if restart is not None:
                     for f in hooks["restart"]:
                         f(run, restart)
@@ -263,6 +270,7 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
                                        worst_index=int(np.argmin(np.isfinite(solver.y))))
             dense = solver.dense_output(copy=False)   # used by the observers right away
             run.t, run.y, run.yp = t1, solver.y, solver.yp
+            run.s = solver.sensitivities
             if flush_replay is not None:
                 flush_replay()
             for f in hooks["step"]:

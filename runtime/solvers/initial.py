@@ -10,7 +10,7 @@ import numpy as np
 from runtime.solvers.protocols import ResidualProblem, band_storage
 
 from .bdf import IntegrationError
-from .native.band import band_solve
+from .native.band import BandLU, band_solve
 
 
 def consistent_initial(
@@ -112,3 +112,49 @@ def _sparse_mixed_solve(problem, t0: float, y: np.ndarray, yp: np.ndarray,
         return spla.splu(M).solve(f), 0
     except RuntimeError:               # "Factor is exactly singular"
         return f, 1
+
+
+def consistent_sensitivities(problem, t0: float, y: np.ndarray, yp: np.ndarray,
+                             s0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Consistent initial sensitivities: for each parameter i (rows of ``s0``, (k, n))
+    keep the differential components of ``s0[i]`` and solve ``F_y s + F_y' s' +
+    F_theta_i = 0`` (``problem.sensitivity_residual``) for the differential components
+    of ``s'`` and the algebraic components of ``s``: the equations are linear, so one
+    solve with the mixed matrix of :func:`consistent_initial` (its columns of dF/dy' for
+    differential, of dF/dy for algebraic unknowns) at the state's consistent ``(y,
+    y')`` is exact. The algebraic unknowns' rates are the prescribed ones where the
+    problem gives them (``sensitivity_prescribed_rates(t, i, sp)``), else 0. Returns
+    ``(s, s')`` (new arrays, (k, n))."""
+    s = np.array(s0, dtype=float, copy=True)
+    k, n = s.shape
+    diff = np.asarray(problem.differential, dtype=bool)
+    sp = np.zeros_like(s)
+    res = np.empty(n)
+    sparse = hasattr(problem, "newton_system")
+    if not sparse:
+        kl, ku = int(problem.kl), int(problem.ku)
+        ab = band_storage(n, kl, ku)
+        ab1 = band_storage(n, kl, ku)
+        problem.jacobian_band(t0, y, yp, 0.0, ab)
+        problem.jacobian_band(t0, y, yp, 1.0, ab1)
+        ab1 -= ab
+        ab[:, diff] = ab1[:, diff]
+        lu = BandLU(ab, kl, ku)                 # one factorisation for every parameter
+    rates = getattr(problem, "sensitivity_prescribed_rates", None)
+    for i in range(k):
+        problem.sensitivity_residual(t0, y, yp, i, s[i], sp[i], res)
+        if sparse:
+            du, info = _sparse_mixed_solve(problem, t0, y, yp, diff, res.copy())
+        else:
+            du, info = (lu.solve(res), 0) if lu.info == 0 else (res, lu.info)
+        if info != 0:
+            raise IntegrationError(
+                "consistent_sensitivities: the mixed iteration matrix at t0 = "
+                f"{t0:.9g} is singular (the problem is not index 1 there)", t=float(t0),
+                y=np.array(y), yp=np.array(yp), h=0.0, residual_norm=math.inf,
+                worst_index=-1)
+        sp[i, diff] -= du[diff]
+        s[i, ~diff] -= du[~diff]
+        if rates is not None:
+            sp[i] = rates(t0, i, sp[i])
+    return s, sp

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .bdf import BDF
-from .initial import consistent_initial
+from .initial import consistent_initial, consistent_sensitivities
 
 
 @dataclass
@@ -86,8 +86,12 @@ class Pieces:
             rates = getattr(self.problem, "prescribed_rates", None)
             if rates is not None:
                 yp = rates(t, yp)
+            s = sp = None
+            if solver.n_sensitivities:       # consistent with the inputs after the jump
+                s, sp = consistent_sensitivities(self.problem, t, y, yp,
+                                                 solver.sensitivities.copy())
             solver.set_max_step(max_step)
-            solver.restart(y, yp)
+            solver.restart(y, yp, s=s, sp=sp)
             restart = Restart(t, y_before, y.copy(), yp.copy())
         else:
             solver.set_max_step(max_step)

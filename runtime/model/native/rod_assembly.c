@@ -17,8 +17,9 @@
 #include "rod_kernels_x4.h"
 #include "rod_layout.h"
 #include "rod_assembly.h"
-#include "rod_index.h"
+#include "rod_access.h"
 #include "rod_contact.h"
+
 
 /* the resultant of the relaxation terms of segment i (joint: jq): -sum_b C_b q_b */
 static void seg_nq(const kvrod_rod* r, int i, const double* y, double* nq) {
@@ -71,37 +72,6 @@ typedef struct {
   double w[MAXW];
 } work_t;
 
-/* lumped node mass (kg) and length (m): half of each adjacent segment */
-static double node_mass(const kvrod_rod* r, int i) {
-  double m = 0.0;
-  if (i >= 1) m += 0.5 * segp(r, i)[SEG_RHOA] * segp(r, i)[SEG_H];
-  if (i < r->N) m += 0.5 * segp(r, i + 1)[SEG_RHOA] * segp(r, i + 1)[SEG_H];
-  return m;
-}
-
-static double node_length(const kvrod_rod* r, int i) {
-  double l = 0.0;
-  if (i >= 1) l += 0.5 * segp(r, i)[SEG_H];
-  if (i < r->N) l += 0.5 * segp(r, i + 1)[SEG_H];
-  return l;
-}
-
-/* the segment whose frame carries node i's follower force */
-static inline int host(int i) { return i >= 1 ? i : 1; }
-
-static const double* held_r(const kvrod_rod* r, int i) {
-  return r->par + (i == 0 ? PAR_R_START : PAR_R_END);
-}
-
-static const double* held_v(const kvrod_rod* r, int i) {
-  return r->par + (i == 0 ? PAR_V_START : PAR_V_END);
-}
-
-static const double* held_a(const kvrod_rod* r, int i) {
-  return r->par + (i == 0 ? PAR_A_START : PAR_A_END);
-}
-
-static int has_follower(const double* f) { return f[0] != 0.0 || f[1] != 0.0 || f[2] != 0.0; }
 
 /* total external force on node i (spatial), scaled by load_scale */
 static int node_force(const kvrod_rod* r, int i, const double* y, work_t* W, double* f) {
@@ -173,12 +143,6 @@ static int check_rod(const kvrod_rod* rod) {
  * nodes, its own frame and those of its neighbours (segments i-1, i+1, or the clamp
  * frames, or itself where the joint is absent: its coupling weight is then 0) ---- */
 
-static inline const double* segcp(const kvrod_rod* r, int i) {
-  return r->segc + (size_t)(i - 1) * NSEGC;
-}
-static inline const double* jntcp(const kvrod_rod* r, int j) {
-  return r->jntc + (size_t)j * NJNTC;
-}
 
 /* a joint row for an absent joint (h = 1, U0 = 0: its coupling weight is 0) */
 static const double kNoJoint[NJNT] = {1.0};

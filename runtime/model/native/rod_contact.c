@@ -12,7 +12,7 @@
 #include "rod_contact_kernels.h"
 #include "rod_layout.h"
 #include "rod_assembly.h"
-#include "rod_index.h"
+#include "rod_access.h"
 #include "rod_contact.h"
 
 typedef int (*ckernel)(const casadi_real** arg, casadi_real** res, casadi_int* iw,

@@ -36,6 +36,10 @@ typedef int (*kv_jac_cells_fn)(const void *ctx, double t, const double *y, const
 typedef int (*kv_en_fn)(const void *ctx, int m, const double *ts, const double *ys,
                         const double *yps, double *out);
 typedef int (*kv_drive_fn)(double t);
+/* the sensitivity residual of parameter ip: out <- F_y s + F_y' s' + F_theta_ip at
+   (t, y, y') (runtime/model/native/rod_tangent.c: kvrod_sens_residual) */
+typedef int (*kv_sres_fn)(const void *ctx, double t, const double *y, const double *yp,
+                          int ip, const double *s, const double *sp, double *out);
 /* a system of coupled band blocks (an assembly of rods): J into the blocks' bands and
    the couplings' values (kv_blocks in blocks.c) */
 typedef int (*kv_sysjac_fn)(const void *ctx, double t, const double *y, const double *yp,
@@ -159,6 +163,30 @@ typedef struct {
     /* NULL, or the state's bound on the next step, applied after every accepted step as
        hmax is (bdf.py: BDF._state_max_step) */
     kv_maxstep_fn maxstep;
+    /* forward sensitivities (runtime/solvers/sensitivity.py, the same algorithm: IDAS's
+       staggered corrector after the state's; nsens = 0: none). Vectors of ns = nsens n
+       values, parameter i's at [i n, (i+1) n); sphi: KV_NH x ns */
+    int nsens, errconS, sscaled;
+    kv_sres_fn sres;
+    const void *sctx;
+    double *sphi, *s_y, *s_yp, *s_yy, *s_ypw, *s_ee, *s_ewt, *s_ewt_err, *s_mask, *s_atol;
+    double *s_res, *s_delta;
+    double ssS;
+    long long nfevS, nniS, ncfnS, netfS, nsetupS;
+    /* the sensitivities at the output samples: srec row r holds, for the state's row r
+       of rec, s_i[samp_idx[j]] at [i nsamp + j] (NULL: not sampled); s_wy, s_wyp: work
+       (ns each) */
+    double *srec, *s_wy, *s_wyp;
+    /* the sensitivities' own Newton system (s_ab NULL: they share the state's): band
+       storage, its condensed systems (NULL: band LU), pivots; the cj of its factors, the
+       step count when they were made and whether they are regular; lu_stamp: the step
+       count at the state's last factorisation */
+    double *s_ab;
+    kv_cond *s_cond;
+    int *s_ipiv, *s_prof;
+    double s_cj;
+    long long s_stamp, lu_stamp;
+    int s_have_lu;
 } kv_ida;
 
 enum { SEC_RES, SEC_JAC, SEC_LU, SEC_NEWTON, SEC_EN, SEC_DRIVE };
@@ -360,6 +388,8 @@ static void predict_scaled(kv_ida *S, int ns)
 
 static void predict(kv_ida *S) { predict_scaled(S, S->kk + 1); }
 
+static void sens_restore(kv_ida *S);
+
 static void restore(kv_ida *S)           /* IDARestore */
 {
     const int kk = S->kk, n = S->n;
@@ -368,6 +398,7 @@ static void restore(kv_ida *S)           /* IDARestore */
         double *p = PHI(j), r = 1.0 / S->beta[j];
         for (int q = 0; q < n; ++q) p[q] *= r;
     }
+    if (S->nsens) sens_restore(S);
 }
 
 /* J by cells, condensed and factored behind the sweep (kv_ida.jac_cells): the same
@@ -459,9 +490,11 @@ static int setup(kv_run *R, double t)
         TOC(S, SEC_LU);
     }
     S->nlu++;
+    S->lu_stamp = S->nstep;
     S->cjold = S->cj;
     S->cjratio = 1.0;
     S->ss = 20.0;
+    S->ssS = 20.0;
     S->have_lu = info == 0;
     return info == 0;
 }
@@ -494,12 +527,13 @@ static int nls(kv_run *R, double tnew)   /* IDANls: simplified Newton for ee */
     if (S->nstep == S->nst0 && !S->have_lu) {
         S->cjold = S->cj;
         S->ss = 20.0;
+        S->ssS = 20.0;
         call_setup = 1;
     }
     S->cjratio = S->cj / S->cjold;
     const double cj_lo = (1.0 - XRATE) / (1.0 + XRATE), cj_hi = 1.0 / cj_lo;
     if (S->cjratio < cj_lo || S->cjratio > cj_hi || !S->have_lu) call_setup = 1;
-    if (S->cj != S->cjlast) S->ss = 100.0;
+    if (S->cj != S->cjlast) { S->ss = 100.0; S->ssS = 100.0; }
 
     int first = 1;
     for (;;) {
@@ -600,6 +634,273 @@ static int test_error(kv_ida *S, double ck, double *err)
     return NLS_OK;
 }
 
+/* ---- forward sensitivities: runtime/solvers/sensitivity.py statement for statement
+   (IDAS's staggered corrector, IDASensNls / IDASensTestError) ---- */
+#define SPHI(j) (S->sphi + (size_t)(j) * (size_t)S->nsens * (size_t)S->n)
+
+/* the largest of the sensitivities' weighted RMS norms (IDASensWrmsNorm) */
+static double sens_norm(const kv_ida *S, const double *v, const double *w)
+{
+    double big = 0.0;
+    const int n = S->n;
+    for (int i = 0; i < S->nsens; ++i) {
+        const double a = kv_wrms(n, v + (size_t)i * n, 0, w + (size_t)i * n);
+        if (a > big || a != a) big = a;
+    }
+    return big;
+}
+
+static void sens_weights(kv_ida *S)
+{
+    const size_t ns = (size_t)S->nsens * (size_t)S->n;
+    for (size_t q = 0; q < ns; ++q)
+        S->s_ewt[q] = 1.0 / (fabs(S->s_y[q]) * S->rtol + S->s_atol[q]);
+    if (S->s_mask)
+        for (size_t q = 0; q < ns; ++q) S->s_ewt_err[q] = S->s_ewt[q] * S->s_mask[q];
+}
+
+static void sens_scale(kv_ida *S)         /* phi -> phi* (IDASetCoeffs), the state's */
+{
+    const size_t ns = (size_t)S->nsens * (size_t)S->n;
+    for (int j = S->ns; j <= S->kk; ++j) {
+        double *p = SPHI(j), b = S->beta[j];
+        for (size_t q = 0; q < ns; ++q) p[q] *= b;
+    }
+    S->sscaled = 1;
+}
+
+static void sens_restore(kv_ida *S)       /* IDARestore */
+{
+    const size_t ns = (size_t)S->nsens * (size_t)S->n;
+    if (S->sscaled)
+        for (int j = S->ns; j <= S->kk; ++j) {
+            double *p = SPHI(j), r = 1.0 / S->beta[j];
+            for (size_t q = 0; q < ns; ++q) p[q] *= r;
+        }
+    S->sscaled = 0;
+}
+
+static void sens_rescale_first(kv_ida *S, double f)   /* IDAReset: h s'0 to a new h */
+{
+    const size_t ns = (size_t)S->nsens * (size_t)S->n;
+    double *p = SPHI(1);
+    for (size_t q = 0; q < ns; ++q) p[q] *= f;
+}
+
+static void sens_predict(kv_ida *S)       /* IDASensPredict, summed in j order */
+{
+    const size_t ns = (size_t)S->nsens * (size_t)S->n;
+    const int kk = S->kk;
+    for (size_t q = 0; q < ns; ++q) {
+        double a = SPHI(0)[q], b = 0.0;
+        for (int j = 1; j <= kk; ++j) {
+            const double v = SPHI(j)[q];
+            a += v;
+            b += v * S->gamma[j];
+        }
+        S->s_yy[q] = a;
+        S->s_ypw[q] = b;
+    }
+}
+
+static double newton_solve(kv_ida *S, int own, double *res, double scale,
+                           const double *ewt, double *ee, double *yy, double *ypw, double cj)
+{
+    if (own) {
+        if (S->s_cond)
+            return kv_cond_newton(S->s_cond, S->s_ab, res, scale, ewt, ee, yy, ypw, cj);
+        return kv_newton(S->n, S->kl, S->ku, S->s_ab, S->ldab, S->s_ipiv, S->s_prof, res,
+                         scale, ewt, ee, yy, ypw, cj);
+    }
+    if (S->blocks)
+        return blocks_newton_raw(S->blocks, res, scale, ewt, ee, yy, ypw, cj);
+    if (S->cond)
+        return kv_cond_newton(S->cond, S->ab, res, scale, ewt, ee, yy, ypw, cj);
+    return kv_newton(S->n, S->kl, S->ku, S->ab, S->ldab, S->ipiv, S->prof, res, scale, ewt,
+                     ee, yy, ypw, cj);
+}
+
+/* one Newton iteration of every sensitivity: the largest weighted correction (NAN:
+   not finite; -1: a callback failed) */
+static double sens_iterate(kv_run *R, double tnew, double scale, double cj, int own)
+{
+    kv_ida *S = R->S;
+    const int n = S->n;
+    double worst = 0.0;
+    for (int i = 0; i < S->nsens; ++i) {
+        const size_t o = (size_t)i * n;
+        if (drive_to(R, tnew)) return -1.0;
+        int rc;
+        {
+            TIC(S);
+            USER_MODE(R);
+            rc = S->sres(S->sctx, tnew, S->yy, S->ypw, i, S->s_yy + o, S->s_ypw + o,
+                         S->s_res);
+            CORE_MODE(R);
+            TOC(S, SEC_RES);
+        }
+        S->nfevS++;
+        if (rc) return -1.0;
+        for (int k = 0; k < S->nexact; ++k) S->exact_res[k] = S->s_res[S->exact[k]];
+        double d;
+        {
+            TIC(S);
+            d = newton_solve(S, own, S->s_res, scale, S->s_ewt + o, S->s_ee + o,
+                             S->s_yy + o, S->s_ypw + o, cj);
+            TOC(S, SEC_NEWTON);
+        }
+        if (scale != 1.0)
+            for (int k = 0; k < S->nexact; ++k) {
+                const int r = S->exact[k];
+                const double dd = (1.0 - scale) * S->exact_res[k];
+                S->s_ee[o + r] -= dd;
+                S->s_yy[o + r] -= dd;
+                S->s_ypw[o + r] -= cj * dd;
+            }
+        if (!isfinite(d)) return NAN;
+        if (d > worst) worst = d;
+    }
+    return worst;
+}
+
+/* J at the converged state into the sensitivities' own Newton system, factorised: 1
+   regular, 0 singular, -1 callback failure */
+static int sens_setup(kv_run *R, double t)
+{
+    kv_ida *S = R->S;
+    if (drive_to(R, t)) return -1;
+    int rc, info;
+    {
+        TIC(S);
+        USER_MODE(R);
+        rc = S->jac(S->ctx, t, S->yy, S->ypw, 1.0, S->cj, S->ldab, S->s_ab);
+        CORE_MODE(R);
+        TOC(S, SEC_JAC);
+    }
+    if (rc) return -1;
+    {
+        TIC(S);
+        if (S->s_cond) info = kv_cond_factor(S->s_cond, S->s_ab);
+        else info = kv_gbtrf(S->n, S->kl, S->ku, S->s_ab, S->ldab, S->s_ipiv, S->s_prof);
+        TOC(S, SEC_LU);
+    }
+    S->s_have_lu = info == 0;
+    S->s_cj = S->cj;
+    S->s_stamp = S->nstep;
+    return info == 0;
+}
+
+/* IDASensNls: NLS_OK, NLS_CONV_FAIL or NLS_CALLBACK (after the state's corrector and
+   error test at tnew) */
+static int sens_nls(kv_run *R, double tnew)
+{
+    kv_ida *S = R->S;
+    const size_t ns = (size_t)S->nsens * (size_t)S->n;
+    if (!S->sscaled) sens_scale(S);
+    int jcur = 0;
+    for (;;) {
+        sens_predict(S);
+        memset(S->s_ee, 0, sizeof(double) * ns);
+        const double cj = S->cj;
+        const int own = S->s_ab && S->s_have_lu && S->s_stamp >= S->lu_stamp;
+        const double ratio = own ? cj / S->s_cj : S->cjratio;
+        const double scale = ratio != 1.0 ? 2.0 / (1.0 + ratio) : 1.0;
+        int m = 0;
+        double oldnrm = 0.0;
+        for (;;) {
+            const double delnrm = sens_iterate(R, tnew, scale, cj, own);
+            if (delnrm == -1.0) return NLS_CALLBACK;
+            S->nniS++;
+            if (!isfinite(delnrm)) break;
+            if (m == 0) {
+                oldnrm = delnrm;
+                if (delnrm <= TOL_DEL) return NLS_OK;
+            } else {
+                const double rate = pow(delnrm / oldnrm, 1.0 / m);
+                if (rate > RATE_MAX) break;
+                S->ssS = rate / (1.0 - rate);
+                if (S->ssS * delnrm <= EPS_NEWT) return NLS_OK;
+            }
+            m += 1;
+            if (m >= S->maxcor) break;
+        }
+        if (jcur) { S->ncfnS++; return NLS_CONV_FAIL; }
+        /* J afresh at the converged state: into their own system (the state's else) */
+        const int ok = S->s_ab ? sens_setup(R, tnew) : setup(R, tnew);
+        if (ok < 0) return NLS_CALLBACK;
+        S->nsetupS++;
+        if (!ok) { S->ncfnS++; return NLS_CONV_FAIL; }
+        S->ssS = 20.0;
+        jcur = 1;
+    }
+}
+
+/* IDASensTestError: raises err[0..2] with the sensitivities' estimates, may lower knew */
+static int sens_test_error(kv_ida *S, double ck, double *err)
+{
+    const int kk = S->kk;
+    const size_t ns = (size_t)S->nsens * (size_t)S->n;
+    const double *sigma = S->sigma, *w = S->s_ewt_err;
+    const double enorm = sens_norm(S, S->s_ee, w);
+    const double e_k = sigma[kk] * enorm;
+    int check = 0;
+    if (e_k > err[0]) { err[0] = e_k; check = 1; }
+    const double terr_k = (kk + 1) * err[0];
+    if (kk > 1) {
+        double *d = S->s_delta;
+        const double *pk = SPHI(kk);
+        for (size_t q = 0; q < ns; ++q) d[q] = pk[q] + S->s_ee[q];
+        const double e_km1 = sigma[kk - 1] * sens_norm(S, d, w);
+        if (e_km1 > err[1]) { err[1] = e_km1; check = 1; }
+        const double terr_km1 = kk * err[1];
+        if (S->knew != kk) check = 0;
+        if (check) {
+            if (kk > 2) {
+                const double *pk1 = SPHI(kk - 1);
+                for (size_t q = 0; q < ns; ++q) d[q] += pk1[q];
+                const double e_km2 = sigma[kk - 2] * sens_norm(S, d, w);
+                if (e_km2 > err[2]) err[2] = e_km2;
+                const double terr_km2 = (kk - 1) * err[2];
+                if ((terr_km1 > terr_km2 ? terr_km1 : terr_km2) <= terr_k) S->knew = kk - 1;
+            } else if (terr_km1 <= 0.5 * terr_k) {
+                S->knew = kk - 1;
+            }
+        }
+    }
+    if (ck * enorm > 1.0) { S->netfS++; return NLS_ERR_FAIL; }
+    return NLS_OK;
+}
+
+/* the estimate at order k+1 with the sensitivities (IDASensWrmsNormUpdate) */
+static double sens_order_norm(kv_ida *S, double enorm)
+{
+    const size_t ns = (size_t)S->nsens * (size_t)S->n;
+    const double *p = SPHI(S->kk + 1);
+    for (size_t q = 0; q < ns; ++q) S->s_delta[q] = S->s_ee[q] - p[q];
+    const double e = sens_norm(S, S->s_delta, S->s_ewt_err);
+    return e > enorm ? e : enorm;
+}
+
+/* IDACompleteStep's history update of the sensitivities; accept s, s' */
+static void sens_complete(kv_ida *S, int ku)
+{
+    const size_t ns = (size_t)S->nsens * (size_t)S->n;
+    for (size_t q = 0; q < ns; ++q) {
+        const double e = S->s_ee[q];
+        if (ku < S->max_order) SPHI(ku + 1)[q] = e;
+        double v = SPHI(ku)[q] + e;
+        SPHI(ku)[q] = v;
+        for (int j = ku - 1; j >= 0; --j) {
+            v = SPHI(j)[q] + v;
+            SPHI(j)[q] = v;
+        }
+    }
+    double *sw = S->s_y; S->s_y = S->s_yy; S->s_yy = sw;
+    sw = S->s_yp; S->s_yp = S->s_ypw; S->s_ypw = sw;
+    S->sscaled = 0;
+    sens_weights(S);
+}
+
 /* IDAHandleNFlag: shrink h (and maybe the order); 0 to retry, or a KV_FAIL_ code */
 static int handle_failure(kv_ida *S, int nflag, int ncf, int nef, double err_k,
                           double err_km1)
@@ -671,7 +972,9 @@ static void complete_step(kv_ida *S, double tnew, double err_k, double err_km1)
                     const double t = (ee[q] - pk1[q]) * w[q];
                     sq += t * t;
                 }
-                err_kp1 = (n > 0 ? sqrt(sq / n) : 0.0) / (kk + 2);
+                double enorm = n > 0 ? sqrt(sq / n) : 0.0;
+                if (S->nsens && S->errconS) enorm = sens_order_norm(S, enorm);
+                err_kp1 = enorm / (kk + 2);
                 double terr_k = (kk + 1) * err_k, terr_kp1 = (kk + 2) * err_kp1;
                 if (kk == 1) {
                     action = terr_kp1 >= 0.5 * terr_k ? 0 : 1;
@@ -720,6 +1023,7 @@ static void complete_step(kv_ida *S, double tnew, double err_k, double err_km1)
     }
     if (S->errmask)
         for (int q = 0; q < n; ++q) S->ewt_err[q] = ewt[q] * S->errmask[q];
+    if (S->nsens) sens_complete(S, ku);
     S->t_old = S->t;
     S->t = tnew;
     S->started = 1;
@@ -744,6 +1048,7 @@ static int step(kv_run *R)
             if (S->nstep == S->nst0) {
                 double f = remaining / S->hh, *p = PHI(1);
                 for (int q = 0; q < S->n; ++q) p[q] *= f;
+                if (S->nsens) sens_rescale_first(S, f);
                 S->psi[0] = remaining;
             }
             S->hh = remaining;
@@ -762,6 +1067,12 @@ static int step(kv_run *R)
         if (nflag == NLS_NONFINITE) return KV_NONFINITE;
         err[0] = err[1] = err[2] = 0.0;
         if (nflag == NLS_OK && S->fixed_step <= 0.0) nflag = test_error(S, ck, err);
+        if (nflag == NLS_OK && S->nsens) {          /* IDAS's staggered corrector */
+            nflag = sens_nls(R, tnew);
+            if (nflag == NLS_CALLBACK) return KV_CALLBACK;
+            if (nflag == NLS_OK && S->errconS && S->fixed_step <= 0.0)
+                nflag = sens_test_error(S, ck, err);
+        }
         if (nflag == NLS_OK) break;
         restore(S);
         if (nflag == NLS_CONV_FAIL) ncf++;
@@ -772,6 +1083,7 @@ static int step(kv_run *R)
             S->psi[0] = S->hh;
             double *p = PHI(1);
             for (int q = 0; q < S->n; ++q) p[q] *= S->rr;
+            if (S->nsens) sens_rescale_first(S, S->rr);
         }
     }
     complete_step(S, tnew, err[0], err[1]);
@@ -831,6 +1143,14 @@ static int sample_step(kv_run *R)
             CORE_MODE(R);
             if (rc || S->rec_n == S->rec_cap) return 1;
         }
+        if (S->nsens && S->srec) {      /* the sensitivities of the sampled components */
+            const int k = S->kused > 1 ? S->kused : 1, n = S->n;
+            kv_interp(k, S->nsens * n, 1, S->t, S->psi, S->sphi, &ts, S->s_wy, S->s_wyp);
+            double *srow = S->srec + (size_t)S->rec_n * (size_t)S->nsens * (size_t)S->nsamp;
+            for (int i = 0; i < S->nsens; ++i)
+                for (int j = 0; j < S->nsamp; ++j)
+                    srow[i * S->nsamp + j] = S->s_wy[(size_t)i * n + S->samp_idx[j]];
+        }
         double *row = S->rec + (size_t)S->rec_n++ * (size_t)S->rec_w;
         row[0] = ts;
         for (int i = 0; i < S->nsamp; ++i) row[1 + i] = S->sy[S->samp_idx[i]];
@@ -863,6 +1183,9 @@ static int replay_step(kv_run *R)
     row[2] = k;
     for (int j = 0; j < KV_NH; ++j) row[3 + j] = S->psi[j];
     memcpy(row + 3 + KV_NH, S->phi, sizeof(double) * (size_t)(k + 1) * (size_t)S->n);
+    if (S->nsens)          /* and the sensitivities' history, after the state's rows */
+        memcpy(row + 3 + KV_NH + (size_t)KV_NH * S->n, S->sphi,
+               sizeof(double) * (size_t)(k + 1) * (size_t)S->nsens * (size_t)S->n);
     return 0;
 }
 

@@ -75,6 +75,9 @@ JAC_FN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_double, ctypes
                           ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_int,
                           ctypes.c_void_p)
 DRIVE_FN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_double)
+SRES_FN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_double, ctypes.c_void_p,
+                           ctypes.c_void_p, ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p,
+                           ctypes.c_void_p)
 
 
 def _fields(kind, *names):
@@ -126,6 +129,15 @@ class CoreStruct(ctypes.Structure):
         + _fields(_I, "m_rep", "k_rep", "rep_w", "rep_cap", "rep_n")
         + _fields(_P, "t_rep", "rep", "rep_flush")
         + _fields(_P, "maxstep")
+        + _fields(_I, "nsens", "errconS", "sscaled")
+        + _fields(_P, "sres", "sctx", "sphi", "s_y", "s_yp", "s_yy", "s_ypw", "s_ee", "s_ewt",
+                  "s_ewt_err", "s_mask", "s_atol", "s_res", "s_delta")
+        + _fields(_D, "ssS")
+        + _fields(_L, "nfevS", "nniS", "ncfnS", "netfS", "nsetupS")
+        + _fields(_P, "srec", "s_wy", "s_wyp", "s_ab", "s_cond", "s_ipiv", "s_prof")
+        + _fields(_D, "s_cj")
+        + _fields(_L, "s_stamp", "lu_stamp")
+        + _fields(_I, "s_have_lu")
     )
     #: names of the entries of ``sec`` (seconds per part when ``timing`` is set)
     SECTIONS = ("residual", "jacobian", "lu", "newton_solve_update", "energies", "drive")
@@ -149,6 +161,7 @@ class CoreLink:
         n = solver.n
         # every buffer the C code may hand to a callback, by address
         self._arrays: dict[int, np.ndarray] = {}
+        self._abs: dict[int, np.ndarray] = {solver._ab.ctypes.data: solver._ab}
         for a in (solver._y, solver._yp, solver._yy, solver._ypw, solver._res, solver._tmp,
                   solver._ee):
             self._arrays[a.ctypes.data] = a
@@ -203,7 +216,50 @@ class CoreLink:
         s.max_order, s.maxcor = solver.max_order, solver.max_nonlinear_iter
         s.stab_hmin[:] = solver._stab_hmin
         s.max_conv_fails, s.max_error_fails = solver.max_conv_fails, solver.max_error_fails
+        self._sens_arrays: dict[int, np.ndarray] = {}
+        if solver._sens is not None:
+            self._link_sensitivities(solver, kern is not None)
         self.push(solver)
+
+    def _link_sensitivities(self, solver: BDF, compiled: bool) -> None:
+        """The sensitivities' arrays and residual (the problem's compiled
+        ``c_sensitivities()``, else a callback to its ``sensitivity_residual``)."""
+        s, sens, problem = self.s, solver._sens, solver.problem
+        p = lambda a: a.ctypes.data if a is not None else None  # noqa: E731
+        s.nsens, s.errconS = sens.k, int(sens.errcon)
+        s.sphi, s.s_ee, s.s_atol = p(sens.phi), p(sens.ee), p(sens.atol)
+        s.s_ewt, s.s_ewt_err, s.s_mask = p(sens.ewt), p(sens.ewt_err), p(sens.mask)
+        s.s_res, s.s_delta = p(sens.res), p(sens.delta)
+        for a in (sens.y, sens.yp, sens.yy, sens.ypw):
+            self._sens_arrays[a.ctypes.data] = a
+        own = sens.own
+        if own is not None:                 # their own Newton system
+            s.s_ab, s.s_cond = p(own.ab), own.cond_ptr
+            s.s_ipiv, s.s_prof = p(own.ipiv), p(own.prof)
+            self._abs[own.ab.ctypes.data] = own.ab
+        get = getattr(problem, "c_sensitivities", None)
+        native = get() if (get is not None and compiled) else None
+        if native is not None:
+            fn, ctx, keep = native
+            s.sres, s.sctx = fn, ctx
+            self._keep.append(keep)
+            return
+        n = solver.n
+        views = {}
+        for a in (sens.y, sens.yp, sens.yy, sens.ypw):
+            for i in range(sens.k):
+                v = a[i * n:(i + 1) * n]
+                views[v.ctypes.data] = v
+        state = self._arrays
+
+        def sres(ctx, t, py, pyp, ip, ps, psp, pout):
+            problem.sensitivity_residual(t, state[py], state[pyp], ip, views[ps],
+                                         views[psp], sens.res)
+
+        cb = SRES_FN(self._guard(sres))
+        self._keep.append(cb)
+        self._callbacks = True
+        s.sres = ctypes.cast(cb, ctypes.c_void_p).value
 
     #: cells of the Jacobian evaluated per call when it is factored behind its sweep:
     #: the window (JAC_CHUNK + 4 cells of band columns, ~120 kB for the rod) stays in L2
@@ -254,8 +310,9 @@ class CoreLink:
             problem.residual(t, arrays[py], arrays[pyp], arrays[pout])
 
         def jacobian(ctx, t, py, pyp, cy, cj, ldab, pab):
-            ab.fill(0.0)
-            problem.jacobian_band(t, arrays[py], arrays[pyp], cj, ab)
+            target = self._abs.get(pab, ab)       # the state's or the sensitivities' own
+            target.fill(0.0)
+            problem.jacobian_band(t, arrays[py], arrays[pyp], cj, target)
 
         r = RES_FN(self._guard(residual))
         j = JAC_FN(self._guard(jacobian))
@@ -271,6 +328,7 @@ class CoreLink:
     _SCALARS = ("kk", "kused", "knew", "ns", "phase", "hh", "hused", "cj", "cjold",
                 "cjlast", "cjratio", "ss", "oldnrm", "rr")
     _COUNTERS = ("nstep", "nfev", "njev", "nlu", "nni", "netf", "ncfn")
+    _SENS_COUNTERS = ("nfevS", "nniS", "ncfnS", "netfS", "nsetupS")
 
     def push(self, solver: BDF) -> None:
         """Copy the solver's Python-side state into the struct (at construction)."""
@@ -285,6 +343,15 @@ class CoreLink:
             setattr(s, name, getattr(solver, name))
         s.nst0 = solver._nst0
         s.t_bound, s.hmax_inv = solver.t_bound, solver._hmax_inv
+        sens = solver._sens
+        if sens is not None:
+            s.s_y, s.s_yp = sens.y.ctypes.data, sens.yp.ctypes.data
+            s.s_yy, s.s_ypw = sens.yy.ctypes.data, sens.ypw.ctypes.data
+            s.ssS, s.sscaled = sens.ss, int(sens.scaled)
+            s.s_cj, s.s_stamp, s.s_have_lu = sens.own_cj, sens.own_stamp, int(sens.own_ok)
+            for name in self._SENS_COUNTERS:
+                setattr(s, name, getattr(sens, name))
+        s.lu_stamp = solver._lu_stamp
         for name in ("psi", "alpha", "beta", "sigma", "gamma"):
             vals = getattr(solver, "_" + name)
             arr = getattr(s, name)
@@ -303,6 +370,15 @@ class CoreLink:
         a = self._arrays
         solver._y, solver._yp, solver._yy, solver._ypw = a[s.y], a[s.yp], a[s.yy], a[s.ypw]
         solver._fail_index = s.fail_index
+        sens = solver._sens
+        if sens is not None:
+            b = self._sens_arrays
+            sens.y, sens.yp, sens.yy, sens.ypw = b[s.s_y], b[s.s_yp], b[s.s_yy], b[s.s_ypw]
+            sens.ss, sens.scaled = s.ssS, bool(s.sscaled)
+            sens.own_cj, sens.own_stamp, sens.own_ok = s.s_cj, s.s_stamp, bool(s.s_have_lu)
+            for name in self._SENS_COUNTERS:
+                setattr(sens, name, getattr(s, name))
+        solver._lu_stamp = s.lu_stamp
 
     def advance(self, t_stop: float, max_steps: int) -> int:
         """Run kv_ida_advance and copy the state back into the solver; returns the code
@@ -362,11 +438,13 @@ class CoreLink:
     SAMPLE_ROWS = 1024
 
     def enable_sampling(self, t_out: np.ndarray, k_out: int, indices: np.ndarray,
-                        sink) -> bool:
+                        sink, sens_sink=None) -> bool:
         """Record rows ``[t, y[indices]..., T, W, int 2D, int P, extras...]`` at the output
         times ``t_out[k_out:]`` (needs the audit; extras: the energies' values beyond the
         first five, ``CKernels.n_energies``); ``sink(rows)`` receives them (a view: copy
-        what you keep) when the buffer is full and at :meth:`flush_samples`."""
+        what you keep) when the buffer is full and at :meth:`flush_samples`. With
+        sensitivities, ``sens_sink(rows)`` receives theirs at the same times: rows of
+        ``s_i[indices]`` for each parameter i in turn."""
         s = self.s
         if not s.audit:
             return False
@@ -384,6 +462,14 @@ class CoreLink:
         self._keep.append(cb)
         self._callbacks = True
         s.flush = ctypes.cast(cb, ctypes.c_void_p).value
+        self._ssink = None
+        if s.nsens and sens_sink is not None:
+            ns = s.nsens * self._solver.n
+            self._srec = np.full((self.SAMPLE_ROWS, s.nsens * self._idx.size), math.nan)
+            self._s_wy, self._s_wyp = np.zeros(ns), np.zeros(ns)
+            s.srec, s.s_wy, s.s_wyp = (self._srec.ctypes.data, self._s_wy.ctypes.data,
+                                       self._s_wyp.ctypes.data)
+            self._ssink = sens_sink
         return True
 
     def flush_samples(self) -> None:
@@ -391,6 +477,8 @@ class CoreLink:
         s = self.s
         if s.rec_n:
             self._sink(self._rec[:s.rec_n])
+            if self._ssink is not None:
+                self._ssink(self._srec[:s.rec_n])
             s.rec_n = 0
 
     #: bytes of the replay buffer (at least one step's row): at N = 4000 a row (the
@@ -404,10 +492,11 @@ class CoreLink:
         integration) for ``sink(t_old, t, k, psi, phi)`` (psi (k+1,), phi (k+1, n): the
         step's interpolant, :meth:`~runtime.solvers.bdf.BDF.dense_output`; views, valid
         during the call), called in step order when the buffer is full and at
-        :meth:`flush_replay`."""
+        :meth:`flush_replay`. With sensitivities the sink gets their history too, as a
+        sixth argument ``sphi`` (k+1, k_s n)."""
         s, n = self.s, self._solver.n
         self._t_rep = np.ascontiguousarray(times, dtype=float)
-        w = 3 + NH + NH * n
+        w = 3 + NH + NH * n + NH * s.nsens * n
         cap = int(max(1, min(self.REPLAY_ROWS, self.REPLAY_BYTES // (8 * w))))
         self._rep = np.zeros((cap, w))
         self._rep_sink = sink
@@ -425,10 +514,15 @@ class CoreLink:
             return
         n, rows = self._solver.n, self._rep[:s.rep_n]
         s.rep_n = 0
+        ns = s.nsens * n
         for row in rows:
             k = int(row[2])
-            self._rep_sink(float(row[0]), float(row[1]), k, row[3:4 + k],
-                           row[3 + NH:3 + NH + (k + 1) * n].reshape(k + 1, n))
+            args = (float(row[0]), float(row[1]), k, row[3:4 + k],
+                    row[3 + NH:3 + NH + (k + 1) * n].reshape(k + 1, n))
+            if ns:
+                o = 3 + NH + NH * n
+                args += (row[o:o + (k + 1) * ns].reshape(k + 1, ns),)
+            self._rep_sink(*args)
 
     def set_watches(self, watches: list[tuple[int, float]]) -> None:
         """Stop after any step in which ``y[index]`` changes sign in ``direction`` (< 0:

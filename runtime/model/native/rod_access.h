@@ -1,10 +1,14 @@
 /*
- * Where each field of the discrete rod lives in the state and in the parameter tables
- * (from the generated layout, generated/rod_layout.h), for the hand-written C that walks a
- * rod: the assembly (rod_assembly.c) and the contact loops (rod_contact.c).
+ * Where the rod's unknowns and numbers are (generated/rod_layout.h): the indices of a
+ * node's, segment's and joint's fields in the state, the rows of the per-element
+ * arrays, the lumped node masses and lengths and the held ends' prescribed values.
+ * Shared by the residual's assembly (rod_assembly.c) and its tangent (rod_tangent.c);
+ * every function takes a kvrod_rod, which for the tangent may also hold the derivatives
+ * of the arrays (the same layout).
  */
-#ifndef KVROD_ROD_INDEX_H
-#define KVROD_ROD_INDEX_H
+#ifndef KVROD_ROD_ACCESS_H
+#define KVROD_ROD_ACCESS_H
+#include <stddef.h>
 #include "rod_layout.h"
 #include "rod_assembly.h"
 
@@ -58,11 +62,50 @@ static inline const double* jntb(const kvrod_rod* r, int j, int b) {
   return r->jntb + ((size_t)j * (size_t)r->nb + (size_t)b) * 3;
 }
 
-/* 1 where node i's position and velocity are prescribed by the rod's end condition */
+/* lumped node mass (kg) and length (m): half of each adjacent segment */
+static inline double node_mass(const kvrod_rod* r, int i) {
+  double m = 0.0;
+  if (i >= 1) m += 0.5 * segp(r, i)[SEG_RHOA] * segp(r, i)[SEG_H];
+  if (i < r->N) m += 0.5 * segp(r, i + 1)[SEG_RHOA] * segp(r, i + 1)[SEG_H];
+  return m;
+}
+
+static inline double node_length(const kvrod_rod* r, int i) {
+  double l = 0.0;
+  if (i >= 1) l += 0.5 * segp(r, i)[SEG_H];
+  if (i < r->N) l += 0.5 * segp(r, i + 1)[SEG_H];
+  return l;
+}
+
 static inline double node_held(const kvrod_rod* r, int i) {
   if (i == 0) return r->par[PAR_FIX_START];
   if (i == r->N) return r->par[PAR_FIX_END];
   return 0.0;
+}
+
+/* the segment whose frame carries node i's follower force */
+static inline int host(int i) { return i >= 1 ? i : 1; }
+
+static inline const double* held_r(const kvrod_rod* r, int i) {
+  return r->par + (i == 0 ? PAR_R_START : PAR_R_END);
+}
+
+static inline const double* held_v(const kvrod_rod* r, int i) {
+  return r->par + (i == 0 ? PAR_V_START : PAR_V_END);
+}
+
+static inline const double* held_a(const kvrod_rod* r, int i) {
+  return r->par + (i == 0 ? PAR_A_START : PAR_A_END);
+}
+
+static inline int has_follower(const double* f) { return f[0] != 0.0 || f[1] != 0.0 || f[2] != 0.0; }
+
+/* coupled sections: the rows of the coupled tables */
+static inline const double* segcp(const kvrod_rod* r, int i) {
+  return r->segc + (size_t)(i - 1) * NSEGC;
+}
+static inline const double* jntcp(const kvrod_rod* r, int j) {
+  return r->jntc + (size_t)j * NJNTC;
 }
 
 #endif
