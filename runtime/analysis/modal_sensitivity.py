@@ -1,5 +1,6 @@
 """Derivatives of a rod's damped modes with respect to problem parameters (issue 34):
-d omega / d theta and d zeta / d theta of the modes of :func:`~runtime.analysis.modal.modal_analysis`.
+d omega / d theta and d zeta / d theta of the modes of
+:func:`~runtime.analysis.modal.modal_analysis`.
 
 Eigenvalue derivatives
 ----------------------

@@ -5,8 +5,10 @@ named the same way: a dotted path (``material.youngs_modulus``, ``material.tau_S
 ``section.width``, ``material.branches.0.tau``, ``loads.0.vector.0`` (or ``.x``),
 ``loads.0.time.frequency``, ``zones.0.material.youngs_modulus``,
 ``rods.arm.material.youngs_modulus`` in an assembly, ``joints.0.rotational_stiffness``,
-``bodies.0.mass``), a short alias of the command line (:data:`~runtime.problem.schema.ALIASES`: ``E``, ``tau``, ``tip_force``; in an assembly they stand for the key of every
-rod, whose values must then agree), or the last word of a path when no other parameter
+``bodies.0.mass``), a short alias of the command line
+(:data:`~runtime.problem.schema.ALIASES`: ``E``, ``tau``, ``tip_force``; in an assembly
+they stand for the key of every rod, whose values must then agree), or the last word of
+a path when no other parameter
 of the problem ends in it (``youngs_modulus``, ``tau_S``, ``frequency``).
 
 Keys given one way and asked another are derived: ``tau`` of a material written with
@@ -510,7 +512,8 @@ def _system_difference(a, b) -> float:
 
 
 def _system_direction(problem, r: ResolvedParameter, model):
-    """The derivative of an assembly's numbers (``SystemDirection``) along one parameter, as ``array_directions`` for one rod."""
+    """The derivative of an assembly's numbers (``SystemDirection``) along one
+    parameter, as ``array_directions`` for one rod."""
     from runtime.model.system_sensitivity import SystemDirection
 
     main, check, delta = _stencils(problem, r)
@@ -553,8 +556,8 @@ def _system_direction(problem, r: ResolvedParameter, model):
 
 
 def system_directions(problem, resolved: Sequence[ResolvedParameter], model):
-    """The directions of an assembly's parameters (``SystemDirections``) for its system ``model`` (the build of
-    ``problem``)."""
+    """The directions of an assembly's parameters (``SystemDirections``) for its
+    system ``model`` (the build of ``problem``)."""
     from runtime.model.system_sensitivity import SystemDirections
 
     return SystemDirections(tuple(r.name for r in resolved),

@@ -1,8 +1,9 @@
 """Exact sensitivities of a run's outputs to problem parameters (issue 34).
 
-:func:`simulate_with_sensitivities` runs a problem as :func:`~runtime.simulate.simulate.simulate` does and carries the forward sensitivities of the state with respect to the
-parameters asked (IDAS's staggered corrector in the BDF integrator,
-``runtime/solvers/sensitivity.py``; the residual's exact tangent,
+:func:`simulate_with_sensitivities` runs a problem as
+:func:`~runtime.simulate.simulate.simulate` does and carries the forward sensitivities of
+the state with respect to the parameters asked (IDAS's staggered corrector in the BDF
+integrator, ``runtime/solvers/sensitivity.py``; the residual's exact tangent,
 ``runtime/model/native/rod_tangent.c``): the same steps as the plain run. The initial
 sensitivities are those of the static equilibrium (``simulation.initial = "static"``:
 implicit function theorem, ``static_sensitivities``) or of the reference at rest
@@ -263,8 +264,10 @@ def simulate_with_sensitivities(problem, parameters: Sequence[str], *,
 
 
 def static_with_sensitivities(problem, parameters: Sequence[str]):
-    """The static equilibrium of ``problem`` (:func:`~runtime.simulate.simulate.static_equilibrium`) and its sensitivities to ``parameters`` by the implicit function
-    theorem (one factorisation of the static Jacobian, every parameter a solve).
+    """The static equilibrium of ``problem``
+    (:func:`~runtime.simulate.simulate.static_equilibrium`) and its sensitivities to
+    ``parameters`` by the implicit function theorem (one factorisation of the static
+    Jacobian, every parameter a solve).
 
     Returns ``(StaticOutcome, Sensitivities)`` with the channels of static.npz and the
     static summary (``static_sensitivity_channels``); ``t`` = [0]."""
