@@ -2,8 +2,8 @@
 
 Writes ``DIR/integrators.json``, ``scaling.json``, ``codegen.json``, ``peers.json``,
 ``kernels.json`` (+ ``kernels.md``), ``energy_audit.json``, ``modes.json``, ``maxwell.json``,
-``sections.json``, ``overhead.json``, ``sensitivities.json`` (+ ``sensitivities.md``) and
-``README.md`` (all tables).
+``sections.json``, ``overhead.json``, ``maxwell_kv.json``, ``sensitivities.json`` (+
+``sensitivities.md``) and ``README.md`` (all tables).
 Every JSON document records its date, platform, versions and command line (``meta``) and
 its targets with a verdict (``targets``: met / missed / not measured).
 ``--only SECTION`` (repeatable) reruns just those sections and rebuilds the README from
@@ -26,6 +26,7 @@ from pathlib import Path
 
 from bench import codegen_timing, energy_audit, integrators, peers, report, scaling
 from bench import maxwell as maxwell_bench
+from bench import maxwell_kv as maxwell_kv_bench
 from bench import modes as modes_bench
 from bench import overhead as overhead_bench
 from bench import sections as sections_bench
@@ -157,6 +158,9 @@ def run_all(quick: bool = False, out_dir: Path = Path("bench/results"),
     if "overhead" in chosen:
         _log("== kvrod simulate's own cost beside its integrator and beside IDAS")
         keep("overhead", overhead_bench.run(quick, log=_log))
+    if "maxwell_kv" in chosen:
+        _log("== generalized Maxwell over Kelvin-Voigt at matched accuracy")
+        keep("maxwell_kv", maxwell_kv_bench.run(quick, log=_log))
     if "sensitivities" in chosen:
         _log("== the cost of forward sensitivities: kvrod simulate with k = 0, 1, 2, 4")
         keep("sensitivities", sensitivities_bench.run(quick, log=_log))

@@ -8,6 +8,7 @@ from typing import Any
 from bench.energy_audit import markdown as energy_audit_md
 from bench.maxwell import QUICK as MAXWELL_QUICK
 from bench.maxwell import markdown as maxwell_md
+from bench.maxwell_kv import markdown as maxwell_kv_md
 from bench.meta import targets_md
 from bench.modes import markdown as modes_md
 from bench.overhead import markdown as overhead_md
@@ -251,7 +252,8 @@ def kernels_md(doc: dict) -> list[str]:
 SECTION_MD = {"integrators": integrators_md, "scaling": scaling_md, "codegen": codegen_md,
               "peers": peers_md, "kernels": kernels_md, "energy_audit": energy_audit_md,
               "modes": modes_md, "maxwell": maxwell_md, "sections": sections_md,
-              "overhead": overhead_md, "sensitivities": sensitivities_md}
+              "overhead": overhead_md, "maxwell_kv": maxwell_kv_md,
+              "sensitivities": sensitivities_md}
 
 
 def markdown(docs: dict) -> str:

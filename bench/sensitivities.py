@@ -113,7 +113,7 @@ def markdown(doc: dict) -> list[str]:
         return "-" if v is None else format(v, fmt)
 
     m0, m1 = doc["machine_before"], doc["machine_after"]
-    out = ["## 11. The cost of forward sensitivities (issue 34)", "",
+    out = ["## 12. The cost of forward sensitivities (issue 34)", "",
            f"Whole `kvrod simulate cantilever --n-elements {doc['N']} --t-end "
            f"{doc['t_end']:g}` processes (rtol {doc['rtol']:g}, released from the static "
            "deflection) with k sensitivities (`--sensitivities`, the first k of "

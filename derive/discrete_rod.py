@@ -624,6 +624,11 @@ def kernels() -> list[ca.Function]:
         _fn("rod_joint_branch", {"p_a": s.p, "p_b": s.p_b, "jnt": s.jp},
             {"dU": br["dU"], "dU_dx": ca.densify(br["dU_dx"]),
              "G": ca.densify(br["G_jnt"])}),
+        # the strains alone, for the residual's relaxation rows (the kernels above also
+        # form the derivatives the Jacobian needs, four times the work)
+        _fn("rod_segment_strain", {"phi_a": s.phi_a, "phi_b": s.phi_b, "p": s.p,
+                                   "seg": s.sp}, {"dV": br["dV"]}),
+        _fn("rod_joint_strain", {"p_a": s.p, "p_b": s.p_b, "jnt": s.jp}, {"dU": br["dU"]}),
     ]
 
 

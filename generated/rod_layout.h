@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_layout.h.jinja
 // derivation step: discrete_rod
-// inputs sha256: aff475847aae28fe943e1fda7b15cca646873bad09e5289375641318e28ed2dc
+// inputs sha256: 2fe8a26dfef0a2c5332be7fa813c874cc56eb125f7af2ac50a55659ab0b97837
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*

@@ -464,6 +464,17 @@ class RodModel:
             assert e0 >= 0 and r0 >= 0 and k0 >= 0 and es <= 4 and ks <= 4
         return blocks
 
+    def condensation_relaxation_blocks(self) -> list[tuple[int, int]]:
+        """The internal strains of a generalized Maxwell rod as relaxation blocks of the
+        condensed Newton systems (``runtime.solvers.native.relaxation``): per segment and
+        per joint, its 3B strains ``(offset, 3B)``, whose rows ``q_b' - (strain -
+        q_b)/theta_b`` are diagonal in them; none for B = 0."""
+        if not self.branches:
+            return []
+        B3 = 3 * self.branches
+        return ([(int(i), B3) for i in self.q_segment_index[:, 0, 0]]
+                + [(int(j), B3) for j in self.q_joint_index[:, 0, 0]])
+
     def condensation_cells(self) -> list[int]:
         """First state index of each cell of the layout (cell 0: node 0 and joint 0; cell
         i: segment i, node i, joint i). Couplings are nearest-neighbour, so the Newton

@@ -88,6 +88,9 @@ class RodStatics:
         self._rowmask = np.ones(self.n_static, dtype=bool)
         self._rowmask[self.fixed_cols] = False
         self._plan: tuple[np.ndarray, ...] | None = None   # static_jacobian_band's gather
+        # the rod's band Jacobian, kept between Newton iterations (a fresh one costs its
+        # page faults: 1.4 MB for the Maxwell cantilever, every iteration)
+        self._ab: np.ndarray | None = None
         # solve_static moves held nodes to their targets when the load factor changes;
         # only needed when an end moves (a fixed end stays where the reference put it)
         moving = bool(getattr(m.drive, "moving_ends", False))
@@ -239,7 +242,9 @@ class RodStatics:
         src, widx, dst, fixed = self._plan
         m = self.model
         y0 = self.at_rest(y)
-        ab = np.zeros((m.ldab, m.n), order="F")
+        if self._ab is None:
+            self._ab = np.zeros((m.ldab, m.n), order="F")
+        ab = self._ab                      # (jacobian_band2 writes all of J's band)
         m.jacobian_band2(self.time, y0, m._zeros, 1.0, 0.0, ab)
         Lm = _half_L(y0[m.p_index])
         weights = np.concatenate([[1.0], Lm.ravel()])

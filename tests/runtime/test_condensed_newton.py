@@ -8,6 +8,7 @@ are not block tridiagonal take the band path; singular matrices are reported."""
 from __future__ import annotations
 
 import ctypes
+import re
 
 import numpy as np
 import pytest
@@ -39,7 +40,10 @@ def test_condensed_solve_equals_the_full_solve(kw):
     rng = np.random.default_rng(2)
     m = rod_model(9, **kw)
     cond = CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
-    assert cond is not None and cond.nc == m.n - 3 * (m.N + 1) - 4 * m.N
+    # v and p eliminated by the kinematic rows, a Maxwell rod's internal strains by their
+    # relaxation rows: phi and Omega are kept, as for a Kelvin-Voigt rod
+    assert cond is not None and cond.nc == 3 * (m.N + 1) + 3 * m.N
+    assert cond.relaxation_eliminated == (2 * m.N + 1 if m.branches else 0)
     assert 2 * cond.klc + cond.kuc + 1 < m.ldab
     for cj in (1e1, 3e3, 1e6):
         y = random_state(m, rng)
@@ -67,9 +71,11 @@ def test_rods_take_the_block_path(kw, N):
     assert cond.band_reason is None
     kv6 = cond._keep["kv6"]
     assert kv6.size == N + 1
-    # the fixed-size kernels serve the Kelvin-Voigt interior cells (not the ends, whose
-    # neighbours differ, nor the 30-unknown cells of a Maxwell rod with B = 4)
-    assert kv6[2:-1].sum() == (0 if m.branches else N - 2 if N > 2 else 0)
+    # the fixed-size kernels serve the interior cells (not the ends, whose neighbours
+    # differ), of a Maxwell rod too: its internal strains are eliminated first
+    assert kv6[2:-1].sum() == (N - 2 if N > 2 else 0)
+    assert cond.relaxation_reason is None
+    assert cond.relaxation_eliminated == (2 * N + 1 if m.branches else 0)
     assert not kv6[[0, 1, -1]].any()
     # the kinematic blocks phi' = v are recognised as diagonal
     assert CondensedNewton(cond._lib, m.n, m.kl, m.ku, m.ldab,
@@ -267,3 +273,149 @@ def test_singular_hand_made_system_is_reported_on_the_block_path():
     assert cs[3] < info <= cs[4]
     _, band_info = band_solve(bad.copy(order="F"), kl, ku, np.ones(A.shape[0]))
     assert band_info > 0
+
+
+# ---- relaxation blocks (the second stage) ------------------------------------------------
+
+def _relaxation_system(ncell, rng, q_size=4, bad=None):
+    """A random system of ``ncell`` cells, each: a kinematic block (rows 0..2 involve
+    columns 0..2, eliminated, and 3..5, kept), 3 more kept unknowns (6..8) and two
+    relaxation blocks of ``q_size`` unknowns (rows diagonal in them): a "segment" block
+    whose rows involve the kept columns 3..5 of the cell and of the cell before and the
+    eliminated column 0 of the cell, involved by the kept rows of both cells; and a
+    "joint" block whose rows involve the eliminated columns of the cell and the next,
+    involved by the kept rows of both (the rod's pattern). ``bad``: "offdiagonal" (a
+    relaxation row involves another unknown of its block), "far" (a relaxation row
+    involves a column two cells away). Returns as _cell_system, and the relaxation
+    blocks."""
+    z = 9 + 2 * q_size
+    n = ncell * z
+    A = np.zeros((n, n))
+    blocks, relax = [], []
+    for c in range(ncell):                       # kept rows: nearest-neighbour couplings
+        s = c * z
+        kept = np.r_[s + 3:s + 9]
+        A[s:s + 3, s:s + 3] = 2.0 * np.eye(3) + 0.3 * rng.standard_normal((3, 3))
+        A[s:s + 3, s + 3:s + 6] = rng.standard_normal((3, 3))
+        blocks.append((s, 3, s, s + 3, 3))
+        lo, hi = max(c - 1, 0) * z, min(c + 2, ncell) * z
+        A[kept[:, None], np.arange(lo, hi)] = 1e-2 * rng.standard_normal((6, hi - lo))
+        A[kept, kept] += 4.0
+    for c in range(ncell):                       # relaxation rows and columns: D dq + ...
+        s = c * z
+        kept = np.r_[s + 3:s + 9]
+        qs, qj = s + 9, s + 9 + q_size
+        for q0 in (qs, qj):
+            A[q0:q0 + q_size, :] = 0.0
+            A[:, q0:q0 + q_size] = 0.0
+            A[np.arange(q0, q0 + q_size), np.arange(q0, q0 + q_size)] = rng.uniform(1.0, 3.0,
+                                                                                  q_size)
+            relax.append((q0, q_size))
+        src_s = [s + 3, s + 4, s + 5, s] + ([s - z + 3, s - z + 4, s - z + 5] if c else [])
+        A[qs:qs + q_size, src_s] = rng.standard_normal((q_size, len(src_s)))
+        rows_s = np.r_[kept, kept - z] if c else kept
+        A[rows_s[:, None], np.arange(qs, qs + q_size)] = rng.standard_normal(
+            (rows_s.size, q_size))
+        src_j = [s, s + 1, s + 2] + ([s + z, s + z + 1, s + z + 2] if c + 1 < ncell else [])
+        A[qj:qj + q_size, src_j] = rng.standard_normal((q_size, len(src_j)))
+        rows_j = np.r_[kept, kept + z] if c + 1 < ncell else kept
+        A[rows_j[:, None], np.arange(qj, qj + q_size)] = rng.standard_normal(
+            (rows_j.size, q_size))
+    if bad == "offdiagonal":
+        q0 = relax[3][0]
+        A[q0, q0 + 1] = 0.5
+    elif bad == "far":
+        q0 = relax[2][0]
+        A[q0, 3 * z + 4] = 0.5
+    rows, cols = np.nonzero(A)
+    kl, ku = int((rows - cols).max()), int((cols - rows).max())
+    ab = np.zeros((2 * kl + ku + 1, n), order="F")
+    ab[kl + ku + rows - cols, cols] = A[rows, cols]
+    pattern = ab != 0
+    ab[:kl] = np.nan
+    return A, ab, kl, ku, blocks, [c * z for c in range(ncell)], pattern, relax
+
+
+@pytest.mark.parametrize("q_size", [3, 4, 9])
+def test_relaxation_blocks_are_eliminated_on_a_hand_made_system(q_size):
+    """Relaxation blocks of several sizes (the literal 3, 9 and the generic kernels),
+    their sources kept and eliminated unknowns in two cells: the condensed system keeps
+    6 unknowns per cell, and its solve, the fused Newton update and the band LU of the
+    full matrix agree."""
+    rng = np.random.default_rng(21)
+    A, ab, kl, ku, blocks, cells, pattern, relax = _relaxation_system(7, rng, q_size)
+    cond = CondensedNewton(load(), A.shape[0], kl, ku, ab.shape[0], blocks, cells=cells,
+                           pattern=pattern, relaxation_blocks=relax)
+    assert cond.block_tridiagonal and cond.relaxation_reason is None
+    assert cond.relaxation_eliminated == len(relax) and cond.nc == 6 * 7
+    assert cond.factor(ab) == 0
+    b = rng.standard_normal(A.shape[0])
+    want = np.linalg.solve(A, b)
+    np.testing.assert_allclose(cond.solve(ab, b), want, rtol=1e-10, atol=1e-12)
+    ewt = rng.uniform(0.5, 2.0, A.shape[0])
+    ee, yy, ypw = (rng.standard_normal(A.shape[0]) for _ in range(3))
+    r, e, y_, yp_ = b.copy(), ee.copy(), yy.copy(), ypw.copy()
+    P = lambda a: a.ctypes.data  # noqa: E731
+    nrm = cond._lib.kv_cond_newton(cond.ptr, P(ab), P(r), 0.7, P(ewt), P(e), P(y_),
+                                   P(yp_), 5.0)
+    d = 0.7 * want
+    np.testing.assert_allclose(nrm, np.sqrt(np.mean((d * ewt) ** 2)), rtol=1e-10)
+    for got, ref in zip((r, e, y_, yp_), (d, ee - d, yy - d, ypw - 5.0 * d), strict=True):
+        np.testing.assert_allclose(got, ref, rtol=1e-10, atol=1e-12)
+
+
+@pytest.mark.parametrize("bad,why", [("offdiagonal", "not diagonal"),
+                                     ("far", "not neighbours|beyond|window")])
+def test_relaxation_blocks_that_do_not_qualify_stay_kept(bad, why):
+    """A relaxation row that is not diagonal in its block, or whose fill would reach two
+    cells away: the blocks stay kept unknowns (said why), and the solve is still right."""
+    rng = np.random.default_rng(22)
+    A, ab, kl, ku, blocks, cells, pattern, relax = _relaxation_system(6, rng, 3, bad=bad)
+    cond = CondensedNewton(load(), A.shape[0], kl, ku, ab.shape[0], blocks, cells=cells,
+                           pattern=pattern, relaxation_blocks=relax)
+    assert cond.relaxation_eliminated == 0
+    assert re.search(why, cond.relaxation_reason), cond.relaxation_reason
+    assert cond.factor(ab) == 0
+    b = rng.standard_normal(A.shape[0])
+    np.testing.assert_allclose(cond.solve(ab, b), np.linalg.solve(A, b), rtol=1e-9,
+                               atol=1e-11)
+
+
+def test_a_singular_relaxation_block_is_reported():
+    rng = np.random.default_rng(23)
+    A, ab, kl, ku, blocks, cells, pattern, relax = _relaxation_system(5, rng, 3)
+    cond = CondensedNewton(load(), A.shape[0], kl, ku, ab.shape[0], blocks, cells=cells,
+                           pattern=pattern, relaxation_blocks=relax)
+    assert cond.relaxation_eliminated == len(relax)
+    q0 = relax[4][0] + 1
+    bad = ab.copy(order="F")
+    bad[kl + ku, q0] = 0.0                         # its diagonal entry
+    assert cond.factor(bad) == -1
+    assert cond.factor(ab) == 0
+
+
+def test_maxwell_rod_with_and_without_relaxation_blocks():
+    """The Maxwell rod's internal strains eliminated (6 kept unknowns per cell, the
+    fixed-size path) or kept (the path before: 6 + 6B per cell) give the same Newton
+    corrections, to rounding; its fused update equals the solve and the update."""
+    m, ab, rng = _rod_system(dict(tau=None, **MAXWELL), 3e2, seed=9, N=12)
+    with_q = CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
+    kept = CondensedNewton(with_q._lib, m.n, m.kl, m.ku, m.ldab, m.condensation_blocks(),
+                           cells=m.condensation_cells(), pattern=m.band_pattern())
+    assert with_q.relaxation_eliminated == 2 * m.N + 1 and kept.relaxation_eliminated == 0
+    assert with_q.nc == 6 * m.N + 3 and kept.nc == (6 + 6 * m.branches) * m.N + 3 + 3 * m.branches
+    assert with_q._keep["kv6"].sum() == m.N - 2 and not kept._keep["kv6"].any()
+    b = rng.standard_normal(m.n)
+    assert with_q.factor(ab) == 0 and kept.factor(ab) == 0
+    x, x0 = with_q.solve(ab, b), kept.solve(ab, b)
+    np.testing.assert_allclose(x, x0, rtol=1e-9, atol=1e-11 * np.abs(x0).max())
+    ewt = rng.uniform(0.5, 2.0, m.n)
+    ee, yy, ypw = (rng.standard_normal(m.n) for _ in range(3))
+    r, e, y_, yp_ = b.copy(), ee.copy(), yy.copy(), ypw.copy()
+    P = lambda a: a.ctypes.data  # noqa: E731
+    nrm = with_q._lib.kv_cond_newton(with_q.ptr, P(ab), P(r), 0.5, P(ewt), P(e), P(y_),
+                                     P(yp_), 3e2)
+    d = 0.5 * x
+    np.testing.assert_allclose(nrm, np.sqrt(np.mean((d * ewt) ** 2)), rtol=1e-12)
+    for got, ref in zip((r, e, y_, yp_), (d, ee - d, yy - d, ypw - 3e2 * d), strict=True):
+        np.testing.assert_allclose(got, ref, rtol=1e-12, atol=1e-14 * np.abs(ref).max())

@@ -271,7 +271,7 @@ int kvrod_residual(const kvrod_rod* rod, double t, const double* y, const double
   const int N = rod->N;
   if (check_rod(rod)) return check_rod(rod);
   work_t W;
-  double T[6], f[3], m, held, dV[3], dVx[24], G[18];
+  double T[6], f[3], m, held, dV[3];
   int i, j, k, l, nl;
   /* nodes: kinematics and momentum, or the prescribed position and velocity */
   for (i = 0; i <= N; ++i) {
@@ -322,8 +322,8 @@ int kvrod_residual(const kvrod_rod* rod, double t, const double* y, const double
       if (rod->nb) {
         W.arg[0] = y + i_phi(rod, s - 1); W.arg[1] = y + i_phi(rod, s);
         W.arg[2] = y + i_p(rod, s); W.arg[3] = segp(rod, s);
-        W.res[0] = dV; W.res[1] = dVx; W.res[2] = G;
-        if (rod_segment_branch(W.arg, W.res, W.iw, W.w, 0)) return -3;
+        W.res[0] = dV;
+        if (rod_segment_strain(W.arg, W.res, W.iw, W.w, 0)) return -3;
         relax_rows(rod, i_qs(rod, s), dV, y, yp, res);
       }
       double* ra = res + i_v(rod, s - 1);
@@ -366,8 +366,8 @@ int kvrod_residual(const kvrod_rod* rod, double t, const double* y, const double
           W.arg[0] = y + i_p(rod, jj); W.arg[1] = y + i_p(rod, jj + 1);
         }                              /* else (p_a, p_b) are still in arg[0], arg[1] */
         W.arg[2] = jntp(rod, jj);
-        W.res[0] = dV; W.res[1] = dVx; W.res[2] = G;
-        if (rod_joint_branch(W.arg, W.res, W.iw, W.w, 0)) return -3;
+        W.res[0] = dV;
+        if (rod_joint_strain(W.arg, W.res, W.iw, W.w, 0)) return -3;
         relax_rows(rod, i_qj(rod, jj), dV, y, yp, res);
       }
     }

@@ -77,8 +77,41 @@ typedef struct {
     /* the first column of J held by the ab the block path reads (0: all of J; a window of
        columns while the C step loop factors cell by cell behind the Jacobian's sweep) */
     int col0;
+    /* ---- relaxation blocks (nq > 0; bt = 1 only; relaxation.py builds the tables) ----
+       A relaxation block q: rows = columns q_off[q] .. + q_sz[q] - 1, diagonal in them
+       (D), and else involving only first-stage unknowns, its sources x (q_src[q_so[q]
+       .. q_so[q+1]-1], full columns; q_tgt: the condensed column of a kept one, else
+       -1 - its position in ecol): D dq + A dx = r_q, so dq = g_q - A' dx with
+       g_q = D^-1 r_q (q_g + q_eo[q]), A' = D^-1 A (q_A + q_ao[q], column s at s q_sz,
+       D^-1 in q_dinv + q_eo[q]). The kept rows that involve q see J[kept, x] -
+       J[kept, q] A' and r - J[kept, q] g_q: the first stage then runs unchanged on
+       them. Tables per cell k (ncell + 1 long, offsets into lists):
+         q_cb: the blocks lying in cell k (their g_q is formed a cell ahead of the
+               forward sweep);
+         q_fk/q_fl: the blocks whose D^-1, A' the factorisation forms at cell k (the
+               first cell whose rows involve them: all they read is in its window);
+         q_kb: the range of blocks [q_kb[2k], q_kb[2k+1]) that the cell's kept rows
+               involve, their columns q_kcol[q_kco[k] .. q_kco[k+1]-1] (in block order,
+               so that their g_q are consecutive) and q_W + q_kwo[k]: J[the cell's
+               kept rows, those columns] (m_k x their number, column-major);
+         q_bk/q_bl: the blocks whose dq the backward sweep finishes at cell k (the
+               lowest cell of their sources);
+       and q_ucell/q_ustep: the cells in the order of the fused Newton update, each after
+       the backward step q_ustep (its last access). */
+    int nq;
+    const int *q_off, *q_sz, *q_eo, *q_so, *q_src, *q_tgt, *q_ao;
+    double *q_A, *q_dinv, *q_g;
+    const int *q_cb, *q_fk, *q_fl, *q_kb, *q_kco, *q_kcol;
+    const long long *q_kwo;
+    double *q_W;
+    const int *q_bk, *q_bl, *q_ucell, *q_ustep;
 } kv_cond;
 
+
+/* the relaxation blocks' limits (MAX_SIZE, MAX_SOURCES in relaxation.py, which checks
+   them): unknowns and sources per block */
+#define KV_QMAX 72
+#define KV_QMAX_SRC 32
 
 #define J_(i, j) ab[(size_t)(kv + (i) - (j)) + (size_t)(j) * (size_t)c->ldab]
 #define JC_(i, j) abc[(size_t)(kvc + (i) - (j)) + (size_t)(j) * (size_t)c->ldc]
@@ -232,6 +265,126 @@ KV_INLINE void gather_cols(const kv_cond *c, const double *ab, int ncol, const i
 KV_INLINE size_t kv_col(const kv_cond *c, int j, int r0)
 {
     return (size_t)(j - c->col0) * (size_t)c->ldab + (size_t)(c->kl + c->ku + r0 - j);
+}
+
+/* J(i, j), 0 outside the band */
+KV_INLINE double kv_at(const kv_cond *c, const double *ab, int i, int j)
+{
+    return (i - j > c->kl || j - i > c->ku) ? 0.0 : ab[kv_col(c, j, i)];
+}
+
+/* D^-1 and A' of the relaxation blocks formed at cell k (q_fk); -1 when a D is
+   singular (a zero or non-finite diagonal entry). */
+static int q_elim_cell(kv_cond *c, const double *ab, int k)
+{
+    for (int l = c->q_fk[k]; l < c->q_fk[k + 1]; ++l) {
+        const int q = c->q_fl[l], o = c->q_off[q], sz = c->q_sz[q], s0 = c->q_so[q];
+        const int ns = c->q_so[q + 1] - s0;
+        double *di = c->q_dinv + c->q_eo[q], *A = c->q_A + c->q_ao[q];
+        for (int u = 0; u < sz; ++u) {
+            const double d = ab[kv_col(c, o + u, o + u)];
+            if (!(d != 0.0) || !isfinite(d)) return -1;
+            di[u] = 1.0 / d;
+        }
+        for (int s = 0; s < ns; ++s) {
+            const int j = c->q_src[s0 + s];
+            double *restrict a = A + (size_t)s * sz;
+            if (o - j >= -c->ku && o + sz - 1 - j <= c->kl) {  /* the rows in the band */
+                const double *restrict col = ab + kv_col(c, j, o);
+                for (int u = 0; u < sz; ++u) a[u] = col[u] * di[u];
+            } else {
+                for (int u = 0; u < sz; ++u) a[u] = kv_at(c, ab, o + u, j) * di[u];
+            }
+        }
+    }
+    return 0;
+}
+
+/* The relaxation blocks' fill on the gathered columns of cell k (bt_factor_cell: T =
+   [L_k | A_k] over the kept columns from condensed column s0, Cu = C_k, W = W_k over
+   the eliminated columns from position e0; m rows in nrun runs, rl as gather_cols):
+   Wq <- J[kept rows, q], then J[kept rows, x] -= J[kept rows, q] A' for every block q
+   that the cell's rows involve, one source column at a time. */
+KV_INLINE void q_fill_cell(kv_cond *c, const double *ab, int k, int mp, int m, int s0,
+                           int e0, int nrun, const int *run, int rl, double *T, double *Cu,
+                           double *W)
+{
+    const int b0 = c->q_kb[2 * k], b1 = c->q_kb[2 * k + 1];
+    if (b1 <= b0) return;
+    double *Wq = c->q_W + c->q_kwo[k];
+    const int qe0 = c->q_eo[b0];
+    gather_cols(c, ab, c->q_kco[k + 1] - c->q_kco[k], c->q_kcol + c->q_kco[k], nrun, run, rl,
+                m, Wq);
+    for (int q = b0; q < b1; ++q) {
+        const int sz = c->q_sz[q], so = c->q_so[q], ns = c->q_so[q + 1] - so;
+        const double *w = Wq + (size_t)(c->q_eo[q] - qe0) * m, *A = c->q_A + c->q_ao[q];
+        for (int s = 0; s < ns; ++s) {
+            const int tg = c->q_tgt[so + s];
+            double *t;
+            if (tg >= 0) {
+                const int col = tg - s0;
+                t = col < mp + m ? T + (size_t)col * m : Cu + (size_t)(col - mp - m) * m;
+            } else {
+                t = W + (size_t)(-1 - tg - e0) * m;
+            }
+            mv_acc(m, sz, w, A + (size_t)s * sz, 0, t, t);
+        }
+    }
+}
+
+/* g_q = D^-1 r_q of the relaxation blocks of cell k */
+KV_INLINE void q_g_cell(kv_cond *c, const double *restrict res, int k)
+{
+    const int q0 = c->q_cb[k], q1 = c->q_cb[k + 1];
+    for (int q = q0; q < q1; ++q) {
+        const int o = c->q_off[q], sz = c->q_sz[q];
+        const double *restrict di = c->q_dinv + c->q_eo[q];
+        double *restrict g = c->q_g + c->q_eo[q];
+        for (int u = 0; u < sz; ++u) g[u] = di[u] * res[o + u];
+    }
+}
+
+/* tmp (the kept residual of cell k, m rows) -= J[kept rows, q] g_q over the blocks the
+   cell's rows involve */
+KV_INLINE void q_forward_cell(const kv_cond *c, int k, int m, double *restrict tmp)
+{
+    const int b0 = c->q_kb[2 * k], b1 = c->q_kb[2 * k + 1];
+    if (b1 <= b0) return;
+    mv_acc(m, c->q_kco[k + 1] - c->q_kco[k], c->q_W + c->q_kwo[k], c->q_g + c->q_eo[b0], 0,
+           tmp, tmp);
+}
+
+/* d (sz) = g - A x, A (sz x ns, column-major); sz a literal for the common sizes */
+KV_INLINE void q_finish_n(int sz, int ns, const double *restrict A, const double *restrict x,
+                          const double *restrict g, double *restrict d)
+{
+    double acc[KV_QMAX];
+    for (int u = 0; u < sz; ++u) acc[u] = g[u];
+    for (int s = 0; s < ns; ++s) {
+        const double t = x[s];
+        const double *restrict a = A + (size_t)s * sz;
+        for (int u = 0; u < sz; ++u) acc[u] -= a[u] * t;
+    }
+    for (int u = 0; u < sz; ++u) d[u] = acc[u];
+}
+
+/* dq = g_q - A' dx into res, for the blocks finished at backward step k (their sources
+   are in res) */
+KV_INLINE void q_backward_cell(const kv_cond *c, int k, double *res)
+{
+    double x[KV_QMAX_SRC];
+    for (int l = c->q_bk[k]; l < c->q_bk[k + 1]; ++l) {
+        const int q = c->q_bl[l], sz = c->q_sz[q], so = c->q_so[q];
+        const int ns = c->q_so[q + 1] - so;
+        const double *A = c->q_A + c->q_ao[q], *g = c->q_g + c->q_eo[q];
+        for (int s = 0; s < ns; ++s) x[s] = res[c->q_src[so + s]];
+        double *d = res + c->q_off[q];
+        if (sz == 9) q_finish_n(9, ns, A, x, g, d);
+        else if (sz == 6) q_finish_n(6, ns, A, x, g, d);
+        else if (sz == 12) q_finish_n(12, ns, A, x, g, d);
+        else if (sz == 3) q_finish_n(3, ns, A, x, g, d);
+        else q_finish_n(sz, ns, A, x, g, d);
+    }
 }
 
 /* Minv_b = M_b^-1 (e x e) and G_b = M_b^-1 K_b (e x k) of block b, column-major, at
@@ -442,6 +595,7 @@ KV_INLINE int bt_factor_cell(kv_cond *c, const double *ab, int k, int mp, int m,
     gather_cols(c, ab, mp + m, c->keep_col + s0, nrun, run, rl, m, T);
     gather_cols(c, ab, mn, c->keep_col + c->cs[k] + m, nrun, run, rl, m, Cu);
     gather_cols(c, ab, ne3, c->ecol + e0, nrun, run, rl, m, W);
+    if (c->nq) q_fill_cell(c, ab, k, mp, m, s0, e0, nrun, run, rl, T, Cu, W);
     for (int b = c->cb[kp]; b < c->cb[kn]; ++b) {
         /* kv6 (rl = 3 only there): the blocks of cells k-1 .. k+1 alternate p (4 x 3)
            and v (3 x 3) */
@@ -508,6 +662,7 @@ static int cond_factor_bt_cells(kv_cond *c, const double *ab, int k0, int k1)
         if (k + 1 < c->ncell)
             for (int b = c->cb[k + 1]; b < c->cb[k + 2]; ++b)
                 if (block_elim(c, ab, b)) return -1;
+        if (c->nq && q_elim_cell(c, ab, k)) return -1;
         BT_SIZES(c, k)
         const int info = c->kv6[k] ? bt_factor_cell(c, ab, k, 6, 6, 6, 21, 3)
                                    : bt_factor_cell(c, ab, k, mp, m, mn, ne3, 0);
@@ -532,6 +687,7 @@ KV_INLINE void bt_forward_cell(kv_cond *c, const double *res, int k, int mp, int
     double *z = c->rc + c->cs[k];
     for (int r = 0; r < m; ++r) tmp[r] = res[kr[r]];
     mv_acc(m, ne3, W, c->ge + e0, 0, tmp, tmp);
+    if (c->nq) q_forward_cell(c, k, m, tmp);
     mv_acc(m, mp, Lk, z - mp, 0, tmp, tmp);
     for (int r = 0; r < m; ++r) z[r] = 0.0;
     mv_acc(m, m, Di, tmp, 1, z, z);
@@ -603,12 +759,79 @@ KV_INLINE double newton_update2(int n, double *restrict res, double scale,
     return s0 + s1;
 }
 
+/* newton_update2 with four partial sums (four-wide vectors; the relaxation path, whose
+   cells are long) */
+KV_INLINE double newton_update4(int n, double *restrict res, double scale,
+                                const double *restrict ewt, double *restrict ee,
+                                double *restrict yy, double *restrict ypw, double cj)
+{
+    double s[4] = {0.0, 0.0, 0.0, 0.0};
+    int i = 0;
+    for (; i + 3 < n; i += 4)
+        for (int l = 0; l < 4; ++l) {
+            const double d = res[i + l] * scale, w = d * ewt[i + l];
+            res[i + l] = d;
+            s[l] += w * w;
+            ee[i + l] -= d;
+            yy[i + l] -= d;
+            ypw[i + l] -= cj * d;
+        }
+    for (int l = 0; i < n; ++i, ++l) {
+        const double d = res[i] * scale, w = d * ewt[i];
+        res[i] = d;
+        s[l] += w * w;
+        ee[i] -= d;
+        yy[i] -= d;
+        ypw[i] -= cj * d;
+    }
+    return (s[0] + s[1]) + (s[2] + s[3]);
+}
+
+/* cond_solve_bt with relaxation blocks (nq > 0): their g_q formed a cell ahead of the
+   forward sweep, their dq in the backward sweep once their sources are known, and the
+   cells updated in the order q_ucell (a cell after its last access). */
+static double cond_solve_bt_q(kv_cond *c, double *res, int upd, double scale,
+                              const double *ewt, double *ee, double *yy, double *ypw,
+                              double cj)
+{
+    double tmp6[6];
+    bt_g_cell(c, res, 0, 0);
+    q_g_cell(c, res, 0);
+    for (int k = 0; k < c->ncell; ++k) {
+        if (k + 1 < c->ncell) {
+            if (c->kv6[k + 1]) bt_g_cell(c, res, k + 1, 1);
+            else bt_g_cell(c, res, k + 1, 0);
+            q_g_cell(c, res, k + 1);
+        }
+        BT_SIZES(c, k)
+        (void)mn;
+        if (c->kv6[k]) bt_forward_cell(c, res, k, 6, 6, 21, tmp6);
+        else bt_forward_cell(c, res, k, mp, m, ne3, c->T);
+    }
+    double s = 0.0;
+    int u = 0;
+    for (int k = c->ncell - 1; k >= 0; --k) {
+        BT_SIZES(c, k)
+        (void)mp; (void)ne3;
+        if (c->kv6[k]) bt_backward_cell(c, res, k, 6, 6, 1);
+        else bt_backward_cell(c, res, k, m, mn, 0);
+        q_backward_cell(c, k, res);
+        for (; upd && u < c->ncell && c->q_ustep[u] == k; ++u) {
+            const int f0 = c->cf[c->q_ucell[u]], len = c->cf[c->q_ucell[u] + 1] - f0;
+            s += newton_update4(len, res + f0, scale, ewt + f0, ee + f0, yy + f0, ypw + f0,
+                                cj);
+        }
+    }
+    return s;
+}
+
 /* res <- J^-1 res by the block path; with upd, then the corrector update (newton_update)
    cell by cell while the cell is in cache; returns its sum of squares (0 without upd). */
 KV_INLINE double cond_solve_bt(kv_cond *c, double *res, int upd, double scale,
                                const double *ewt, double *ee, double *yy, double *ypw,
                                double cj)
 {
+    if (c->nq) return cond_solve_bt_q(c, res, upd, scale, ewt, ee, yy, ypw, cj);
     double tmp6[6];
     bt_g_cell(c, res, 0, 0);
     for (int k = 0; k < c->ncell; ++k) {

@@ -1,6 +1,6 @@
-"""The Newton systems of a BDF step condensed by the kinematic rows (``kv_cond`` in
-condensed.c): block tridiagonal in the rod's cells, else a band LU of the condensed
-matrix."""
+"""The Newton systems of a BDF step condensed by the kinematic rows and, on the block
+path, by the relaxation rows (``kv_cond`` in condensed.c; relaxation.py): block
+tridiagonal in the rod's cells, else a band LU of the condensed matrix."""
 
 from __future__ import annotations
 
@@ -9,6 +9,11 @@ import ctypes
 import numpy as np
 
 from .loader import load
+
+#: the relaxation blocks' tables (relaxation.py), in the order of ``kv_cond``
+_Q_FIELDS = ("q_off", "q_sz", "q_eo", "q_so", "q_src", "q_tgt", "q_ao", "q_A", "q_dinv",
+             "q_g", "q_cb", "q_fk", "q_fl", "q_kb", "q_kco", "q_kcol", "q_kwo", "q_W", "q_bk",
+             "q_bl", "q_ucell", "q_ustep")
 
 
 class _CondStruct(ctypes.Structure):
@@ -22,7 +27,8 @@ class _CondStruct(ctypes.Structure):
          "W")] + [(name, ctypes.c_int) for name in ("bt", "ncell", "mmax")] + [
         (name, ctypes.c_void_p) for name in
         ("cf", "cs", "cb", "ce", "eo", "fo", "xo", "F", "X", "ge", "T", "rp", "run", "ecol",
-         "kv6", "diag")] + [("col0", ctypes.c_int)]
+         "kv6", "diag")] + [("col0", ctypes.c_int), ("nq", ctypes.c_int)] + [
+        (name, ctypes.c_void_p) for name in _Q_FIELDS]
 
 
 class CondensedNewton:
@@ -44,11 +50,19 @@ class CondensedNewton:
     LU over them (``block_tridiagonal`` True; the rod's nearest-neighbour coupling);
     otherwise, or without cells, by the band LU of the condensed band
     (``block_tridiagonal`` False, ``band_reason`` says why).
+
+    ``relaxation_blocks`` (optional, the block path with a pattern only): ``(offset,
+    size)`` ranges of unknowns whose rows (the same range) are diagonal in them and
+    otherwise involve only the unknowns of the kinematic stage (a Maxwell rod's internal
+    strains: ``relaxation.py``). They are eliminated first, into the rows that involve
+    them, when J's pattern shows that their fill stays between neighbouring cells
+    (``relaxation_eliminated`` blocks); otherwise they stay kept unknowns
+    (``relaxation_reason`` says why).
     """
 
     def __init__(self, lib, n: int, kl: int, ku: int, ldab: int,
                  blocks: list[tuple[int, int, int, int, int]], cells=None,
-                 pattern=None) -> None:
+                 pattern=None, relaxation_blocks=None) -> None:
         import numpy as np
 
         b = np.asarray(blocks, dtype=np.int32).reshape(-1, 5)
@@ -56,29 +70,40 @@ class CondensedNewton:
         b = b[np.argsort(b[:, 0], kind="stable")]
         if b.size and (b[:, 1].max() > 4 or b[:, 4].max() > 4):
             raise ValueError("CondensedNewton: blocks of at most 4 unknowns")
-        elim_rows = np.zeros(n, bool)
-        elim_cols = np.zeros(n, bool)
-        for e0, es, r0, _k0, _ks in b:
-            elim_cols[e0:e0 + es] = True
-            elim_rows[r0:r0 + es] = True
-        keep_row = np.flatnonzero(~elim_rows).astype(np.int32)
-        keep_col = np.flatnonzero(~elim_cols).astype(np.int32)
-        if keep_row.size != keep_col.size:
-            raise ValueError("CondensedNewton: eliminated rows and columns differ in number")
-        nc = keep_row.size
-        row2c = np.full(n, -1, np.int32)
-        row2c[keep_row] = np.arange(nc, dtype=np.int32)
-        col2c = np.full(n, -1, np.int32)
-        col2c[keep_col] = np.arange(nc, dtype=np.int32)
         if pattern is not None:
             pattern = np.asarray(pattern)
             if pattern.shape != (ldab, n):
                 raise ValueError(f"CondensedNewton: pattern of shape {pattern.shape}, "
                                  f"expected {(ldab, n)}")
-            _check_block_rows(pattern, kl, ku, b)
+        # (i, j): J's structural nonzeros (every band position without a pattern)
+        entries = (_band_entries(kl, ku, n, pattern)
+                   if pattern is not None or cells is not None else None)
+        if pattern is not None:
+            _check_block_rows(pattern, kl, ku, b, entries)
         diag = _diagonal_blocks(pattern, kl, ku, b)
-        bt, self.band_reason = _cell_tables(n, kl, ku, b, keep_row, keep_col, col2c, cells,
-                                            pattern, diag)
+        rq = np.asarray(relaxation_blocks if relaxation_blocks is not None else [],
+                        dtype=np.int64).reshape(-1, 2)
+        rq = rq[np.argsort(rq[:, 0], kind="stable")]
+        self.relaxation_reason: str | None = None
+        qt = None
+        if len(rq) and (cells is None or pattern is None):
+            self.relaxation_reason = "relaxation blocks need the cells and the pattern"
+            rq = rq[:0]
+        while True:
+            keep_row, keep_col, row2c, col2c = _kept(n, b, rq)
+            bt, self.band_reason = _cell_tables(n, kl, ku, b, keep_row, keep_col, col2c, cells,
+                                                pattern, diag, rq, entries)
+            if len(rq) and bt is not None:
+                qt, self.relaxation_reason = _relaxation(n, b, rq, bt, keep_row, col2c,
+                                                         entries)
+            elif len(rq):
+                self.relaxation_reason = "the condensed matrix is not block tridiagonal"
+            if not len(rq) or qt is not None:
+                break
+            rq = rq[:0]                  # the relaxation blocks stay kept unknowns
+        nc = keep_row.size
+        #: relaxation blocks eliminated (the second stage: relaxation.py)
+        self.relaxation_eliminated = len(rq)
         band = bt is None
         self.block_tridiagonal = not band
         # the kept rows in the band of each block's eliminated columns: a contiguous
@@ -126,6 +151,11 @@ class CondensedNewton:
                 X=np.zeros(1), ge=np.zeros(1), T=np.zeros(1))
         self._keep.update({k: v for k, v in bt.items() if k not in ("ncell", "mmax")})
         self._keep["diag"] = diag
+        if qt is None:
+            qt = {k: np.zeros(1, np.int64 if k == "q_kwo" else
+                              np.float64 if k in ("q_A", "q_dinv", "q_g", "q_W") else np.int32)
+                  for k in _Q_FIELDS}
+        self._keep.update({k: qt[k] for k in _Q_FIELDS})
         ptrs = (self._keep[k].ctypes.data for k in (
             "e_off", "e_sz", "r_off", "k_off", "k_sz", "keep_row", "keep_col", "row2c",
             "col2c", "G", "Minv", "g", "abc", "ipiv", "prof", "rc", "w_off", "w_r0", "w_nr",
@@ -134,7 +164,8 @@ class CondensedNewton:
             "cf", "cs", "cb", "ce", "eo", "fo", "xo", "F", "X", "ge", "T", "rp", "run", "ecol",
             "kv6", "diag"))
         s = _CondStruct(n, kl, ku, ldab, nc, lo, hi, ldc, len(b), *ptrs,
-                        int(self.block_tridiagonal), bt["ncell"], bt["mmax"], *bt_ptrs)
+                        int(self.block_tridiagonal), bt["ncell"], bt["mmax"], *bt_ptrs, 0,
+                        len(rq), *(self._keep[k].ctypes.data for k in _Q_FIELDS))
         self._struct = s
         self.ptr = ctypes.addressof(s)
         self._lib = lib
@@ -150,7 +181,9 @@ class CondensedNewton:
         """For a problem that describes its kinematic blocks (``condensation_blocks()``),
         with the C helpers available; else None. The block tridiagonal path needs the
         problem's ``condensation_cells()`` and, to prove the structure,
-        ``band_pattern()`` (J's structural nonzeros in band storage)."""
+        ``band_pattern()`` (J's structural nonzeros in band storage); there, the
+        problem's ``condensation_relaxation_blocks()`` (if it has them) are eliminated
+        too."""
         lib = load()
         get = getattr(problem, "condensation_blocks", None)
         if lib is None or get is None:
@@ -160,8 +193,10 @@ class CondensedNewton:
             return None
         cells = getattr(problem, "condensation_cells", None)
         pattern = getattr(problem, "band_pattern", None)
+        relax = getattr(problem, "condensation_relaxation_blocks", None)
         return cls(lib, n, kl, ku, ldab, blocks, cells=cells() if cells else None,
-                   pattern=pattern() if pattern else None)
+                   pattern=pattern() if pattern else None,
+                   relaxation_blocks=relax() if relax else None)
 
     def factor(self, ab) -> int:
         """Condense J (band ``ab``, unchanged) and factorise: LAPACK's info (-1: a
@@ -177,6 +212,47 @@ class CondensedNewton:
         return x
 
 
+def _kept(n: int, b, rq):
+    """keep_row, keep_col (condensed -> full) and row2c, col2c (full -> condensed, -1:
+    eliminated) with the kinematic blocks ``b`` and the relaxation blocks ``rq``
+    ((offset, size): rows = columns) eliminated."""
+    import numpy as np
+
+    elim_rows = np.zeros(n, bool)
+    elim_cols = np.zeros(n, bool)
+    for e0, es, r0, _k0, _ks in b:
+        elim_cols[e0:e0 + es] = True
+        elim_rows[r0:r0 + es] = True
+    for o, sz in rq:
+        elim_cols[o:o + sz] = True
+        elim_rows[o:o + sz] = True
+    keep_row = np.flatnonzero(~elim_rows).astype(np.int32)
+    keep_col = np.flatnonzero(~elim_cols).astype(np.int32)
+    if keep_row.size != keep_col.size:
+        raise ValueError("CondensedNewton: eliminated rows and columns differ in number")
+    row2c = np.full(n, -1, np.int32)
+    row2c[keep_row] = np.arange(keep_row.size, dtype=np.int32)
+    col2c = np.full(n, -1, np.int32)
+    col2c[keep_col] = np.arange(keep_col.size, dtype=np.int32)
+    return keep_row, keep_col, row2c, col2c
+
+
+def _relaxation(n: int, b, rq, bt, keep_row, col2c, entries):
+    """relaxation.relaxation_tables on the block path's cells."""
+    import numpy as np
+
+    from .relaxation import relaxation_tables
+
+    ecol_pos = np.full(n, -1, np.int64)
+    if len(b):
+        ecol = np.concatenate([np.arange(e, e + z) for e, z in zip(b[:, 0], b[:, 1],
+                                                                      strict=True)])
+        ecol_pos[ecol] = np.arange(ecol.size)
+    i, j = entries
+    return relaxation_tables(n, rq, bt["cf"].astype(np.int64), keep_row,
+                             col2c.astype(np.int64), ecol_pos, i, j)
+
+
 def _band_entries(kl: int, ku: int, n: int, pattern):
     """(i, j) of J's structural nonzeros: those of ``pattern`` (band storage), or every
     position of the band."""
@@ -190,13 +266,13 @@ def _band_entries(kl: int, ku: int, n: int, pattern):
     return i[ok], j[ok]
 
 
-def _check_block_rows(pattern, kl: int, ku: int, b) -> None:
+def _check_block_rows(pattern, kl: int, ku: int, b, entries=None) -> None:
     """The condensation's premise, on J's structural pattern: the rows of a block involve
     only its own eliminated and kept columns."""
     import numpy as np
 
     n = pattern.shape[1]
-    i, j = _band_entries(kl, ku, n, pattern)
+    i, j = entries if entries is not None else _band_entries(kl, ku, n, pattern)
     block_of_row = np.full(n, -1)
     for k, (_e0, es, r0, _k0, _ks) in enumerate(b):
         block_of_row[r0:r0 + es] = k
@@ -246,10 +322,11 @@ def _diagonal_blocks(pattern, kl: int, ku: int, b):
 
 
 def _cell_tables(n: int, kl: int, ku: int, b, keep_row, keep_col, col2c, cells, pattern,
-                 diag):
+                 diag, rq=(), entries=None):
     """The per-cell tables of the block tridiagonal path (see ``kv_cond`` in
     condensed.c) and None, or None and why the condensed matrix is not block
-    tridiagonal in ``cells``. ``diag``: per block, structurally diagonal."""
+    tridiagonal in ``cells``. ``diag``: per block, structurally diagonal; ``rq``: the
+    relaxation blocks eliminated too ((offset, size))."""
     import numpy as np
 
     if cells is None:
@@ -279,7 +356,7 @@ def _cell_tables(n: int, kl: int, ku: int, b, keep_row, keep_col, col2c, cells, 
         return None, "a cell keeps no unknowns"
     kept = np.zeros(n, bool)
     kept[keep_row] = True
-    i, j = _band_entries(kl, ku, n, pattern)
+    i, j = entries if entries is not None else _band_entries(kl, ku, n, pattern)
     far = kept[i] & (np.abs(cell[i] - cell[j]) > 1)
     if far.any():
         i, j = int(i[far][0]), int(j[far][0])
@@ -317,8 +394,11 @@ def _cell_tables(n: int, kl: int, ku: int, b, keep_row, keep_col, col2c, cells, 
           & (es[b0 + 1] == 3) & (ks[b0 + 1] == 3) & (diag[b0 + 1] == 1)) if len(b) > 1 else False
     pv = np.broadcast_to(pv, (ncell,))
     pv3 = pv & np.concatenate(([False], pv[:-1])) & np.concatenate((pv[1:], [False]))
+    nrelax = np.zeros(ncell, np.int64)         # unknowns of relaxation blocks per cell
+    for o, sz in rq:
+        nrelax[cell[o]] += sz
     kv6 = ((mp == 6) & (m == 6) & (mn == 6) & (ne_p == 7) & (ne == 7) & (ne_n == 7)
-           & (np.diff(cf) == 13) & two3 & pv3)
+           & (np.diff(cf) - nrelax == 13) & two3 & pv3)
     i32 = lambda a: np.ascontiguousarray(a, dtype=np.int32)  # noqa: E731
     return dict(ncell=ncell, mmax=mmax, cf=i32(cf), cs=i32(cs), cb=i32(cb), ce=i32(ce),
                 eo=i32(eo[:-1] if len(b) else [0]), fo=fo, xo=xo,

@@ -1,0 +1,158 @@
+"""The second stage of the condensed Newton systems (``CondensedNewton`` in condensed.py,
+the ``q_`` fields of ``kv_cond`` in condensed.c): relaxation blocks eliminated on the
+block tridiagonal path.
+
+A relaxation block is a contiguous range of unknowns q whose rows (the same range)
+involve q only on the diagonal, plus unknowns of the first stage (kept, or eliminated by
+a kinematic block), "sources" x: ``D dq + A dx = r_q`` with D diagonal, as the rod's
+internal strains, ``q_b' = (strain(x) - q_b)/theta_b``, whose iteration-matrix block in q
+is ``(cj + 1/theta_b) I``. So ``dq = D^-1 r_q - A' dx`` with ``A' = D^-1 A``, and the kept
+rows that involve q see ``J[kept, x] - J[kept, q] A'`` (and ``r - J[kept, q] D^-1 r_q``):
+the condensation of the first stage then runs on that as on a rod without relaxation
+terms. The fill ``J[kept, q] A'`` couples the cells of the rows that involve q with the
+cells of its sources, which must therefore be neighbours (checked here on J's pattern;
+the rod's segment strains depend on the segment's frame and its two nodes, its joint
+strains on the two frames of the joint).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: most unknowns and sources of one block (KV_QMAX, KV_QMAX_SRC in condensed.c; the rod:
+#: 3 per relaxation term, at most 24 terms; 10 sources)
+MAX_SIZE = 72
+MAX_SOURCES = 32
+
+
+def _ranges(starts, lengths):
+    """The concatenated ranges starts[i] .. starts[i] + lengths[i] - 1 (int64)."""
+    starts, lengths = np.asarray(starts, np.int64), np.asarray(lengths, np.int64)
+    first = np.cumsum(lengths) - lengths
+    return np.repeat(starts - first, lengths) + np.arange(int(lengths.sum()))
+
+
+def relaxation_tables(n: int, blocks, cf, keep_row, col2c, ecol_pos,
+                      i, j):
+    """The tables of the ``q_`` fields of ``kv_cond`` for the relaxation ``blocks``
+    (``(offset, size)`` rows, sorted by offset) on cells ``cf`` (first index of each cell
+    and n), and None; or None and why the blocks cannot be eliminated on the block path.
+
+    ``keep_row``/``col2c``: the kept rows and the condensed index of each column (-1:
+    eliminated), with the relaxation blocks eliminated; ``ecol_pos``: the position of a
+    first-stage eliminated column in the block order (-1 for others); ``i, j``: J's
+    structural nonzeros.
+    """
+    q = np.asarray(blocks, dtype=np.int64).reshape(-1, 2)
+    nq = len(q)
+    ncell = len(cf) - 1
+    cell = np.repeat(np.arange(ncell), np.diff(cf))
+    qid = np.full(n, -1, np.int64)
+    for b, (o, s) in enumerate(q):
+        if s < 1 or o < 0 or o + s > n or np.any(qid[o:o + s] >= 0):
+            return None, "relaxation blocks are not disjoint ranges of the state"
+        qid[o:o + s] = b
+    if np.any(q[:, 1] > MAX_SIZE):
+        return None, f"a relaxation block has more than {MAX_SIZE} unknowns"
+    qcell = cell[q[:, 0]]
+    if np.any(cell[q[:, 0] + q[:, 1] - 1] != qcell):
+        return None, "a relaxation block spans two cells"
+    kept = np.zeros(n, bool)
+    kept[keep_row] = True
+    # the rows of the blocks: diagonal in their own unknowns, no other block's
+    bi, bj = qid[i], qid[j]
+    own = (bi >= 0) & (bj == bi)
+    if np.any(own & (i != j)):
+        r = int(i[own & (i != j)][0])
+        return None, f"row {r} of a relaxation block is not diagonal in the block"
+    if np.any((bi >= 0) & (bj >= 0) & (bj != bi)):
+        return None, "a relaxation block's rows involve another block's unknowns"
+    diag = np.zeros(n, bool)
+    diag[i[own]] = True
+    if not diag[qid >= 0].all():
+        return None, "a relaxation block has a structurally zero diagonal entry"
+    # rows involving q: kept rows only (a kinematic row never involves q)
+    link = (bj >= 0) & (bi < 0)
+    if np.any(~kept[i[link]]):
+        return None, "a kinematic row involves a relaxation block's unknowns"
+    # sources: the other columns of the blocks' rows, in column order per block
+    src = (bi >= 0) & (bj < 0)
+    sb, sj = bi[src], j[src]
+    order = np.lexsort((sj, sb))
+    sb, sj = sb[order], sj[order]
+    first = np.ones(sb.size, bool)
+    first[1:] = (sb[1:] != sb[:-1]) | (sj[1:] != sj[:-1])
+    sb, sj = sb[first], sj[first]
+    so = np.searchsorted(sb, np.arange(nq + 1))
+    if np.any(np.diff(so) > MAX_SOURCES):
+        return None, f"a relaxation block's rows involve more than {MAX_SOURCES} unknowns"
+    tgt = np.where(col2c[sj] >= 0, col2c[sj], -1 - ecol_pos[sj])
+    if np.any((col2c[sj] < 0) & (ecol_pos[sj] < 0)):
+        return None, ("a relaxation block's rows involve an unknown that is neither kept "
+                      "nor eliminated")
+    lb, li = bj[link], i[link]
+    lcell = cell[li]
+    big = np.iinfo(np.int64).max
+    # per block: the lowest and highest cell of the kept rows that involve it (lo > hi:
+    # none) and of its sources
+    llo, lhi = np.full(nq, big), np.full(nq, -1)
+    np.minimum.at(llo, lb, lcell)
+    np.maximum.at(lhi, lb, lcell)
+    slo, shi = np.full(nq, big), np.full(nq, -1)
+    np.minimum.at(slo, sb, cell[sj])
+    np.maximum.at(shi, sb, cell[sj])
+    linked, sourced = lhi >= 0, shi >= 0
+    both = linked & sourced
+    bad = both & ((lhi - slo > 1) | (shi - llo > 1))
+    if bad.any():
+        b = int(np.flatnonzero(bad)[0])
+        return None, (f"the fill of relaxation block {b} (cell {qcell[b]}) couples cells "
+                      f"that are not neighbours")
+    bad = linked & ((lhi > qcell + 1) | (llo < qcell - 1))
+    if bad.any():
+        b = int(np.flatnonzero(bad)[0])
+        return None, f"relaxation block {b} (cell {qcell[b]}) is involved beyond its neighbours"
+    fac = np.where(linked, llo, qcell)     # the factor step that forms A' (its first link)
+    bad = (sourced & ((shi > fac + 1) | (slo < fac - 1))) | (np.abs(qcell - fac) > 1)
+    if bad.any():
+        b = int(np.flatnonzero(bad)[0])
+        return None, f"relaxation block {b}'s columns are not in the factor's window"
+    fin = np.where(sourced, slo, qcell)    # the backward step that finishes dq
+    # the cell by cell Newton update: after the last backward step that reads or writes
+    # the cell (its own, its blocks' finish, a finish reading its unknowns as sources)
+    upd = np.arange(ncell)
+    np.minimum.at(upd, qcell, fin)
+    np.minimum.at(upd, cell[sj], fin[sb])
+    ucell = np.lexsort((-np.arange(ncell), -upd)).astype(np.int32)
+    # per cell, the range of blocks its kept rows involve (W: J[kept rows, their q]) and
+    # their columns, block after block
+    k0, k1 = np.zeros(ncell, np.int64), np.zeros(ncell, np.int64)
+    if lb.size:
+        k0[:] = big
+        np.minimum.at(k0, lcell, lb)
+        np.maximum.at(k1, lcell, lb + 1)
+        k0[k1 == 0] = 0
+    kb = np.stack([k0, k1], axis=1)
+    bsel = _ranges(k0, k1 - k0)
+    kn = np.zeros(ncell, np.int64)
+    np.add.at(kn, np.repeat(np.arange(ncell), k1 - k0), q[bsel, 1])
+    kcol = _ranges(q[bsel, 0], q[bsel, 1])
+    m = np.diff(np.searchsorted(keep_row, cf))
+    kco = np.concatenate(([0], np.cumsum(kn)))
+    kwo = np.concatenate(([0], np.cumsum(m * kn)[:-1])).astype(np.int64)
+    ns = np.diff(so)
+    ao = np.concatenate(([0], np.cumsum(q[:, 1] * ns)[:-1]))
+    eo = np.concatenate(([0], np.cumsum(q[:, 1])[:-1]))
+    by_fac = np.argsort(fac, kind="stable")
+    by_fin = np.argsort(fin, kind="stable")
+    i32 = lambda a: np.ascontiguousarray(a, dtype=np.int32)  # noqa: E731
+    return dict(
+        q_off=i32(q[:, 0]), q_sz=i32(q[:, 1]), q_eo=i32(eo), q_so=i32(so), q_src=i32(sj),
+        q_tgt=i32(tgt), q_ao=i32(ao), q_A=np.zeros(max(int((q[:, 1] * ns).sum()), 1)),
+        q_dinv=np.zeros(int(q[:, 1].sum())), q_g=np.zeros(int(q[:, 1].sum())),
+        q_cb=i32(np.searchsorted(qcell, np.arange(ncell + 1))),
+        q_fk=i32(np.searchsorted(fac[by_fac], np.arange(ncell + 1))), q_fl=i32(by_fac),
+        q_kb=i32(kb.ravel()), q_kco=i32(kco), q_kcol=i32(np.append(kcol, 0)),
+        q_kwo=kwo, q_W=np.zeros(max(int((m * kn).sum()), 1)),
+        q_bk=i32(np.searchsorted(fin[by_fin], np.arange(ncell + 1))), q_bl=i32(by_fin),
+        q_ucell=ucell, q_ustep=i32(upd[ucell])), None
