@@ -253,7 +253,12 @@ def add_commands(sub, parser_class) -> None:
     from kvrod.problem_args import add_problem_arguments, add_sensitivity_arguments
 
     add_problem_arguments(m)
-    add_sensitivity_arguments(m, errcon=False)
+    add_sensitivity_arguments(
+        m, errcon=False,
+        help_text="derivatives of every mode's omega and zeta with respect to these "
+                  "parameters (names as for kvrod simulate --sensitivities: "
+                  "material.youngs_modulus, tau_S, section.width, ...), written to "
+                  "modes.json as sensitivities: {parameter: {omega: [...], zeta: [...]}}")
     m.add_argument("--count", type=int, default=10, help="number of modes (default 10)")
     m.add_argument("--near", type=float, metavar="HZ",
                    help="the --count modes whose natural frequency is nearest HZ (Hz) "

@@ -69,9 +69,10 @@ SENSITIVITIES_HELP = ("forward sensitivities of the outputs to these parameters,
                       "tau_S); written to sensitivities.npz as <channel>/<parameter>")
 
 
-def add_sensitivity_arguments(p: argparse.ArgumentParser, errcon: bool = True) -> None:
+def add_sensitivity_arguments(p: argparse.ArgumentParser, errcon: bool = True,
+                              help_text: str = SENSITIVITIES_HELP) -> None:
     """--sensitivities (and, for runs, --sensitivity-error-control)."""
-    p.add_argument("--sensitivities", metavar="P1,P2", help=SENSITIVITIES_HELP)
+    p.add_argument("--sensitivities", metavar="P1,P2", help=help_text)
     if errcon:
         p.add_argument("--sensitivity-error-control", dest="sens_errcon",
                        action="store_true",

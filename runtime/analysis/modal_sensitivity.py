@@ -1,11 +1,11 @@
 """Derivatives of a rod's damped modes with respect to problem parameters (issue 34):
-d omega / d theta and d zeta / d theta of the modes of :func:`~runtime.analysis.modal.
-modal_analysis`.
+d omega / d theta and d zeta / d theta of the modes of
+:func:`~runtime.analysis.modal.modal_analysis`.
 
 Eigenvalue derivatives
 ----------------------
 A damped eigenvalue ``lambda`` of the first-order pencil ``(A + lambda E) x = 0``
-(:class:`~runtime.analysis.modal.Linearization`) with its left eigenvector ``u``
+(``Linearization``) with its left eigenvector ``u``
 (``u^H (A + lambda E) = 0``) moves with a parameter as
 
     d lambda = - u^H (dA + lambda dE) x / (u^H E x)
@@ -22,9 +22,9 @@ eigenvalues (one complex LU per eigenvalue cluster).
 ``dA``, ``dE`` (and ``dK``, ``dM``)
 -----------------------------------
 The derivatives of the linearisation's matrices along the parameter: central
-differences of :func:`~runtime.analysis.modal.linearize` of the problem at
+differences of ``linearize`` of the problem at
 ``theta +- h`` (mesh fixed, ``h`` = 1e-4 of the value), linearised about ``y_eq +- h
-dy_eq/dtheta`` (the static sensitivities, :mod:`runtime.model.static_sensitivity`, for a
+dy_eq/dtheta`` (the static sensitivities, ``runtime.model.static_sensitivity``, for a
 deformed analysis; the perturbed problem's reference otherwise). Where the matrices are
 linear in the parameter (moduli, densities, retardation times, about the reference) the
 difference is exact to round-off; elsewhere its error is O(h^2) (1e-8 relative).
@@ -163,7 +163,7 @@ def _zeta_derivative(l1: complex, l2: complex, d1: complex, d2: complex
 def mode_derivatives(lin: Linearization, modes: Sequence[Mode], mats: dict,
                      seed: int = 0) -> dict[str, np.ndarray]:
     """d omega and d zeta (len(modes),) of the modes of ``lin`` along the matrices'
-    derivatives ``mats`` (:func:`matrix_derivatives`)."""
+    derivatives ``mats`` (``matrix_derivatives``)."""
     rng = np.random.default_rng(seed)
     maxwell = lin.model.branches > 0
     k = len(modes)
@@ -216,7 +216,7 @@ def modal_sensitivities(problem, resolved: Sequence[ResolvedParameter], modes: S
                         model, y_eq: np.ndarray | None, deformed: bool
                         ) -> dict[str, dict[str, np.ndarray]]:
     """``{name: {"omega": (k,), "zeta": (k,)}}`` (rad/s and 1 per unit of the parameter)
-    of ``modes``, the modes of ``model`` (the build of :func:`analysed_problem`) about
+    of ``modes``, the modes of ``model`` (the build of ``analysed_problem``) about
     ``y_eq`` (the static state of a ``deformed`` analysis, else None), for the
     parameters ``resolved`` of ``problem`` (the problem as given, loads included)."""
     from runtime.model.static_sensitivity import static_sensitivities

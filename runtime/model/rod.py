@@ -536,7 +536,7 @@ class RodModel:
         """``dF = F_y dy + F_y' dy' + F_p dA`` (n,): the directional derivative of the
         residual at (t, y, y') along the state direction (dy, dy') and the direction
         ``darrays`` of the rod's numbers (the derivatives of its arrays with respect to
-        one parameter, :class:`RodArrays` of the model's shapes; None: none). Exact
+        one parameter, ``RodArrays`` of the model's shapes; None: none). Exact
         (the generated tangent kernels, ``native/rod_tangent.c``; on the CasADi
         backend the oracle's forward derivative)."""
         self._time(t)
@@ -571,8 +571,8 @@ class RodModel:
 
     @property
     def directions(self):
-        """The parameter directions of the sensitivities (:class:`~runtime.model.
-        sensitivity.Directions`), or None."""
+        """The parameter directions of the sensitivities
+        (``runtime.model.sensitivity.Directions``), or None."""
         return self._directions
 
     def set_directions(self, directions) -> None:

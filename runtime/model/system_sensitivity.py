@@ -1,11 +1,11 @@
 """Parameter directions of an assembly of rods for its sensitivities (issue 34), the
-system's counterpart of :mod:`runtime.model.sensitivity`.
+system's counterpart of ``runtime.model.sensitivity``.
 
 A parameter of an assembly moves the numbers of its rods (each rod's
-:class:`~runtime.model.arrays.RodArrays`), of its links (``LINK_PARAMS`` and the 40
+``RodArrays``), of its links (``LINK_PARAMS`` and the 40
 constants of a link's ground side), of its bodies (``BODY_PARAMS``), the supports'
-positions and the bodies' gravity. A :class:`SystemDirection` holds their derivatives;
-the rods' parts are given to the rods themselves (:meth:`RodModel.set_directions`), so
+positions and the bodies' gravity. A ``SystemDirection`` holds their derivatives;
+the rods' parts are given to the rods themselves (``RodModel.set_directions``), so
 each rod drives its loads' derivatives in time as a single rod does, and the system's
 compiled tangent (``native/system_tangent.c``) adds the links', the bodies' and the
 holds'.
@@ -42,7 +42,7 @@ class SysSensCtx(ctypes.Structure):
 
 
 def system_tables(model) -> dict[str, np.ndarray]:
-    """The parameter tables of a :class:`~runtime.model.system.SystemModel` as its
+    """The parameter tables of a ``SystemModel`` as its
     compiled struct holds them: ``lpar`` (links, N_LINK), ``lconst`` (links, 40), ``bpar``
     (bodies, N_BODY), ``hold_r`` (holds, 3: a support's position, 0 for a tie)."""
     from runtime.model.system import _body_params, _link_params
@@ -59,7 +59,7 @@ def system_tables(model) -> dict[str, np.ndarray]:
 class SystemDirection:
     """The derivatives of an assembly's numbers along one parameter: ``rods`` (one
     RodArrays of derivatives per rod), ``rod_drives`` (their time-dependent entries, or
-    None), ``tables`` (:func:`system_tables`' derivatives), ``reference`` (the reference
+    None), ``tables`` (``system_tables``' derivatives), ``reference`` (the reference
     state's, (n,)), ``gravity`` (``(t, left, scale) -> dg``, the bodies' gravity's, or
     None)."""
 
@@ -80,7 +80,7 @@ class SystemDirections:
     _dgravity: list[np.ndarray] = field(default_factory=list)
 
     def install(self, model) -> None:
-        """Give every rod its part (:meth:`RodModel.set_directions`)."""
+        """Give every rod its part (``RodModel.set_directions``)."""
         for r, rod in enumerate(model.rods):
             rod.set_directions(Directions(self.names, [d.rods[r] for d in self.dirs],
                                           [d.rod_drives[r] for d in self.dirs]))
@@ -154,7 +154,7 @@ def held_sensitivities(model, ip: int, s: np.ndarray) -> np.ndarray:
 def static_sensitivities(model, y: np.ndarray, statics=None) -> np.ndarray:
     """dy/dtheta (k, n) at the assembly's static equilibrium ``y`` for its parameters'
     directions, by the implicit function theorem in the reduced coordinates of
-    :class:`~runtime.model.system_statics.SystemStatics` (a support's position, a rod's
+    ``SystemStatics`` (a support's position, a rod's
     held end and a tied node's master move with the parameter: their derivatives enter
     the right-hand side; the gauge holding free rigid motions is kept). Call inside
     ``with model.statics():``. One sparse factorisation serves every parameter."""

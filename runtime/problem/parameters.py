@@ -5,9 +5,10 @@ named the same way: a dotted path (``material.youngs_modulus``, ``material.tau_S
 ``section.width``, ``material.branches.0.tau``, ``loads.0.vector.0`` (or ``.x``),
 ``loads.0.time.frequency``, ``zones.0.material.youngs_modulus``,
 ``rods.arm.material.youngs_modulus`` in an assembly, ``joints.0.rotational_stiffness``,
-``bodies.0.mass``), a short alias of the command line (:data:`~runtime.problem.schema.
-ALIASES`: ``E``, ``tau``, ``tip_force``; in an assembly they stand for the key of every
-rod, whose values must then agree), or the last word of a path when no other parameter
+``bodies.0.mass``), a short alias of the command line
+(:data:`~runtime.problem.schema.ALIASES`: ``E``, ``tau``, ``tip_force``; in an assembly
+they stand for the key of every rod, whose values must then agree), or the last word of
+a path when no other parameter
 of the problem ends in it (``youngs_modulus``, ``tau_S``, ``frequency``).
 
 Keys given one way and asked another are derived: ``tau`` of a material written with
@@ -23,8 +24,8 @@ breakpoints are (a point load's ``s``, a zone's ``from``/``to``, a time function
 ``start``, ``duration`` or table times): the discrete solution is not differentiable in
 them. An unknown name lists the close matches.
 
-:func:`array_directions` gives the derivative of the rod's numbers with respect to each
-parameter (the direction of its sensitivity, :mod:`runtime.model.sensitivity`) by
+``array_directions`` gives the derivative of the rod's numbers with respect to each
+parameter (the direction of its sensitivity, ``runtime.model.sensitivity``) by
 differencing the build of the arrays with the mesh fixed (N, the node placement rule):
 where the build is linear in the key (moduli, densities, retardation times, loads) the
 central difference is exact to round-off (checked: two step sizes agree to 1e-9), else
@@ -511,8 +512,8 @@ def _system_difference(a, b) -> float:
 
 
 def _system_direction(problem, r: ResolvedParameter, model):
-    """The derivative of an assembly's numbers (:class:`~runtime.model.system_sensitivity.
-    SystemDirection`) along one parameter, as :func:`array_directions` for one rod."""
+    """The derivative of an assembly's numbers (``SystemDirection``) along one
+    parameter, as ``array_directions`` for one rod."""
     from runtime.model.system_sensitivity import SystemDirection
 
     main, check, delta = _stencils(problem, r)
@@ -555,9 +556,8 @@ def _system_direction(problem, r: ResolvedParameter, model):
 
 
 def system_directions(problem, resolved: Sequence[ResolvedParameter], model):
-    """The directions of an assembly's parameters (:class:`~runtime.model.
-    system_sensitivity.SystemDirections`) for its system ``model`` (the build of
-    ``problem``)."""
+    """The directions of an assembly's parameters (``SystemDirections``) for its
+    system ``model`` (the build of ``problem``)."""
     from runtime.model.system_sensitivity import SystemDirections
 
     return SystemDirections(tuple(r.name for r in resolved),

@@ -1,5 +1,5 @@
-"""Sensitivities of an assembly of rods (issue 34): :func:`simulate_assembly_sensitivities`
-and :func:`static_assembly_sensitivities`, as :mod:`runtime.simulate.sensitivity` for a
+"""Sensitivities of an assembly of rods (issue 34): ``simulate_assembly_sensitivities``
+and ``static_assembly_sensitivities``, as :mod:`runtime.simulate.sensitivity` for a
 single rod. Channels: per rod ``"NAME.start/<p>"`` and ``"NAME.end/<p>"`` (3, n) (series.npz's
 ``NAME/start``, ``NAME/end``), ``"NAME.centreline/<p>"`` (m, 3, N+1); statics:
 ``"NAME.positions/<p>"`` (3, N+1), ``"NAME.start/<p>"``, ``"NAME.end/<p>"`` (3,),
@@ -17,7 +17,7 @@ from runtime.simulate.sensitivity import Sensitivities, _labels
 
 
 class AssemblySensitivityRun:
-    """What :func:`~runtime.simulate.assembly.simulate_assembly` does for the
+    """What ``simulate_assembly`` does for the
     sensitivities of one run (the assembly's counterpart of ``SensitivityRun``)."""
 
     def __init__(self, problem, resolved: Sequence[ResolvedParameter],

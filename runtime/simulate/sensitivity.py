@@ -1,12 +1,12 @@
 """Exact sensitivities of a run's outputs to problem parameters (issue 34).
 
-:func:`simulate_with_sensitivities` runs a problem as :func:`~runtime.simulate.simulate.
-simulate` does and carries the forward sensitivities of the state with respect to the
-parameters asked (IDAS's staggered corrector in the BDF integrator,
-``runtime/solvers/sensitivity.py``; the residual's exact tangent,
+:func:`simulate_with_sensitivities` runs a problem as
+:func:`~runtime.simulate.simulate.simulate` does and carries the forward sensitivities of
+the state with respect to the parameters asked (IDAS's staggered corrector in the BDF
+integrator, ``runtime/solvers/sensitivity.py``; the residual's exact tangent,
 ``runtime/model/native/rod_tangent.c``): the same steps as the plain run. The initial
 sensitivities are those of the static equilibrium (``simulation.initial = "static"``:
-implicit function theorem, :func:`static_sensitivities`) or of the reference at rest
+implicit function theorem, ``static_sensitivities``) or of the reference at rest
 (the geometry's derivative; zero for a material parameter), then made consistent with
 the equations at t = 0 (and at every restart of the integrator).
 
@@ -236,14 +236,14 @@ def _clamp_rotation_sensitivity(model, i: int, end: str, ts: np.ndarray, ref) ->
 def simulate_with_sensitivities(problem, parameters: Sequence[str], *,
                                 progress: Callable[[float], object] | None = None,
                                 errcon: bool = False, **kwargs):
-    """Run ``problem`` (a Problem; an Assembly: :mod:`runtime.simulate.assembly`) with
+    """Run ``problem`` (a Problem; an Assembly: ``runtime.simulate.assembly``) with
     the forward sensitivities of its outputs to ``parameters`` (names as
-    :func:`resolve_parameters` takes them; validated before anything runs).
+    ``resolve_parameters`` takes them; validated before anything runs).
 
-    Returns ``(result, Sensitivities)``: the run's result as :func:`simulate` gives it
+    Returns ``(result, Sensitivities)``: the run's result as ``simulate`` gives it
     (the same steps) and the sensitivities on its output grid. ``errcon``: the
     sensitivities in the error test (IDAS's errconS; the steps may then differ).
-    Further keyword arguments go to :func:`simulate`."""
+    Further keyword arguments go to ``simulate``."""
     from runtime.problem.schema import Problem
 
     resolved = resolve_parameters(problem, parameters)
@@ -264,12 +264,13 @@ def simulate_with_sensitivities(problem, parameters: Sequence[str], *,
 
 
 def static_with_sensitivities(problem, parameters: Sequence[str]):
-    """The static equilibrium of ``problem`` (:func:`~runtime.simulate.simulate.
-    static_equilibrium`) and its sensitivities to ``parameters`` by the implicit function
-    theorem (one factorisation of the static Jacobian, every parameter a solve).
+    """The static equilibrium of ``problem``
+    (:func:`~runtime.simulate.simulate.static_equilibrium`) and its sensitivities to
+    ``parameters`` by the implicit function theorem (one factorisation of the static
+    Jacobian, every parameter a solve).
 
     Returns ``(StaticOutcome, Sensitivities)`` with the channels of static.npz and the
-    static summary (:func:`static_sensitivity_channels`); ``t`` = [0]."""
+    static summary (``static_sensitivity_channels``); ``t`` = [0]."""
     from runtime.problem.schema import Problem
 
     resolved = resolve_parameters(problem, parameters)
@@ -289,7 +290,7 @@ def static_with_sensitivities(problem, parameters: Sequence[str]):
 
 def static_sensitivity_channels(model, y: np.ndarray, run: SensitivityRun) -> Sensitivities:
     """The sensitivities of a rod's static equilibrium ``y`` (its model carrying the
-    directions of ``run``, :meth:`SensitivityRun.prepare`): channels ``"y/<p>"`` (n),
+    directions of ``run``, ``SensitivityRun.prepare``): channels ``"y/<p>"`` (n),
     ``"positions/<p>"`` (3, N+1), ``"tip/<p>"``, ``"start/<p>"`` (3,) (static.npz's and
     the summary's), ``"end_rotation/<p>"``, ``"start_rotation/<p>"`` (3,)."""
     from runtime.model.static_sensitivity import static_sensitivities
