@@ -3,7 +3,7 @@
 Writes ``DIR/integrators.json``, ``scaling.json``, ``codegen.json``, ``peers.json``,
 ``kernels.json`` (+ ``kernels.md``), ``energy_audit.json``, ``modes.json``, ``maxwell.json``,
 ``sections.json``, ``overhead.json``, ``maxwell_kv.json``, ``sensitivities.json`` (+
-``sensitivities.md``), ``fit.json`` and ``README.md`` (all tables).
+``sensitivities.md``), ``fit.json``, ``contact.json`` and ``README.md`` (all tables).
 Every JSON document records its date, platform, versions and command line (``meta``) and
 its targets with a verdict (``targets``: met / missed / not measured).
 ``--only SECTION`` (repeatable) reruns just those sections and rebuilds the README from
@@ -25,6 +25,7 @@ import time
 from pathlib import Path
 
 from bench import codegen_timing, energy_audit, integrators, peers, report, scaling
+from bench import contact as contact_bench
 from bench import fit as fit_bench
 from bench import maxwell as maxwell_bench
 from bench import maxwell_kv as maxwell_kv_bench
@@ -170,6 +171,9 @@ def run_all(quick: bool = False, out_dir: Path = Path("bench/results"),
     if "fit" in chosen:
         _log("== kvrod fit: two parameters of the paper's cantilever from a 4 s record")
         keep("fit", fit_bench.run(quick, log=_log))
+    if "contact" in chosen:
+        _log("== contact: a cable falling onto a floor against the free swing")
+        keep("contact", contact_bench.run(quick, log=_log))
     if not quick:
         if "codegen" in chosen:
             _log("== derivation / generate / compile")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from bench.contact import markdown as contact_md
 from bench.energy_audit import markdown as energy_audit_md
 from bench.fit import markdown as fit_md
 from bench.maxwell import QUICK as MAXWELL_QUICK
@@ -254,7 +255,8 @@ SECTION_MD = {"integrators": integrators_md, "scaling": scaling_md, "codegen": c
               "peers": peers_md, "kernels": kernels_md, "energy_audit": energy_audit_md,
               "modes": modes_md, "maxwell": maxwell_md, "sections": sections_md,
               "overhead": overhead_md, "maxwell_kv": maxwell_kv_md,
-              "sensitivities": sensitivities_md, "fit": fit_md}
+              "sensitivities": sensitivities_md, "fit": fit_md,
+              "contact": contact_md}
 
 
 def markdown(docs: dict) -> str:
