@@ -20,7 +20,6 @@ import pytest
 from runtime.study.sweep import (
     FAILED,
     FINISHED,
-    PENDING,
     StudyError,
     load_study,
     point_dir,
@@ -50,11 +49,28 @@ def _summary(out: Path, pid: str) -> dict:
 
 
 def _assert_table_complete(out: Path, study) -> dict[str, dict]:
-    """Every study point exactly once, in study order; returns rows by id."""
+    """Every study point exactly once (rows in the order the points returned), each row
+    saying what its summary says; returns rows by id."""
     ids = _table_ids(out)
-    assert ids == [p.id for p in study.points]
+    assert sorted(ids) == sorted(p.id for p in study.points)
     assert len(set(ids)) == len(ids)
-    return {r["point_id"]: r for r in read_table(out / "study.csv")}
+    return _assert_rows_match_summaries(out)
+
+
+def _assert_rows_match_summaries(out: Path) -> dict[str, dict]:
+    rows = {r["point_id"]: r for r in read_table(out / "study.csv")}
+    assert len(rows) == len(_table_ids(out))                       # no point twice
+    for pid, r in rows.items():
+        assert r["status"] == _summary(out, pid)["status"], pid
+    return rows
+
+
+def _wait_idle(client, timeout: float = 60.0) -> None:
+    """Until the cluster runs no task (a batch stopped by an interrupt finishes its
+    current point on the worker)."""
+    deadline = time.monotonic() + timeout
+    while any(client.processing().values()) and time.monotonic() < deadline:
+        time.sleep(0.05)
 
 
 @pytest.fixture(scope="module")
@@ -192,7 +208,6 @@ def test_restart_skips_finished_points(dask_run, study, client, tmp_path):
     shutil.rmtree(point_dir(out, gone))
     before = {p.id: _summary(out, p.id)["point"]["computed_at"]
               for p in study.points if p.id != gone}
-    rows = _assert_table_complete(out, study)
     report = run_study_dask(study, out, client=client, rerun_failed=False,
                             timeout=STUDY_TIMEOUT)
     assert report.computed == [gone]
@@ -219,13 +234,22 @@ def test_interrupted_study_leaves_consistent_table_and_resumes(client, study, tm
     with pytest.raises(KeyboardInterrupt):
         run_study_dask(study, out, client=client, progress=interrupt, timeout=STUDY_TIMEOUT)
     assert len(seen) == 1
-    rows = _assert_table_complete(out, study)
+    _wait_idle(client)
+    rows = _assert_rows_match_summaries(out)      # the returned points, each once
     assert rows[seen[0]]["status"] in (FINISHED, FAILED)
-    done = {pid for pid, r in rows.items() if r["status"] in (FINISHED, FAILED)}
-    assert all(r["status"] == PENDING for pid, r in rows.items() if pid not in done)
+    assert all(r["status"] in (FINISHED, FAILED) for r in rows.values())
+    done = set(rows)
+    progress = json.loads((out / "progress.json").read_text())
+    assert progress["running"] == 0 and progress["queued"] == 0
     assert not list(out.rglob(".*.tmp"))            # no half-written files
+    assert not (out / ".sweep-token").exists()      # the batches were told to stop
+    # a batch being run when the interrupt came finished its current point: on disk,
+    # its row comes with the restart
+    finished_before = {p.id for p in study.points
+                       if (point_dir(out, p.id) / "summary.json").exists()
+                       and _summary(out, p.id)["status"] == FINISHED}
+    assert {pid for pid in done if rows[pid]["status"] == FINISHED} <= finished_before
     report = run_study_dask(study, out, client=client, timeout=STUDY_TIMEOUT)
-    finished_before = {pid for pid in done if rows[pid]["status"] == FINISHED}
     assert not finished_before & set(report.computed)
     assert set(report.computed) | finished_before == {p.id for p in study.points}
     rows = _assert_table_complete(out, study)
