@@ -8,6 +8,7 @@ maxima, about 0.1-0.3 s per point) so the file stays well under its time budget.
 from __future__ import annotations
 
 import json
+import math
 import os
 import shutil
 import signal
@@ -17,20 +18,27 @@ from pathlib import Path
 
 import pytest
 
+from runtime.study.points import StudyPoint
 from runtime.study.sweep import (
     FAILED,
     FINISHED,
+    TOKEN_NAME,
     StudyError,
     load_study,
     point_dir,
     read_table,
+    run_batch,
     run_study_serial,
     study_from_dict,
 )
 
 distributed = pytest.importorskip("distributed")
 
-from runtime.study.sweep_dask import run_study_dask  # noqa: E402
+from runtime.study.sweep_dask import (  # noqa: E402
+    BatchPlanner,
+    run_study_dask,
+    task_seconds,
+)
 
 TINY = {"length": 0.1, "t_end": 0.4, "rtol": 1e-4}
 STUDY = {"name": "tiny", "scenario": "cantilever", "fixed": {**TINY, "n_elements": 5},
@@ -92,7 +100,10 @@ def study():
 @pytest.fixture(scope="module")
 def dask_run(client, study, tmp_path_factory):
     out = tmp_path_factory.mktemp("dask")
-    report = run_study_dask(study, out, client=client, timeout=STUDY_TIMEOUT)
+    links: list[str] = []
+    report = run_study_dask(study, out, client=client, timeout=STUDY_TIMEOUT,
+                            on_dashboard=links.append)
+    report.dashboard = links
     return out, report
 
 
@@ -169,8 +180,10 @@ def test_dask_results_equal_serial_runs(dask_run, study, tmp_path):
         assert (point_dir(out, p.id) / "series.npz").exists()
 
 
-def test_table_plots_and_failing_point(dask_run, study):
+def test_table_plots_and_failing_point(dask_run, study, client):
     out, report = dask_run
+    assert report.dashboard == [client.dashboard_link]
+    assert report.dashboard[0].startswith("http://")
     rows = _assert_table_complete(out, study)
     bad = [pid for pid in rows if BAD_ID_PART in pid]
     assert len(bad) == 1 and report.failed == bad
@@ -328,3 +341,104 @@ def test_cli_serial_and_errors(tmp_path, capsys):
     assert len(err.splitlines()) == 1 and "tua" in err
     assert _cli(["sweep", str(f), "--workers", "0"]) == 2
     assert _cli(["sweep", str(tmp_path / "missing.toml")]) == 2
+
+
+# ------------------------------------------------------------------ batches and the table
+
+
+def test_batches_sized_by_point_time_and_shrinking_to_the_end():
+    points = iter([(i, StudyPoint(f"p{i}", {})) for i in range(1000)])
+    plan = BatchPlanner(points, 1000)
+    assert len(plan.next(4)) == 1                      # no point time known yet
+    plan.observe(0.01)                                 # 10 ms points
+    assert plan.size(4) == int(task_seconds(4) / 0.01) == 50
+    plan.observe(1.0)                                  # mean 0.8 * 0.01 + 0.2 * 1.0
+    assert plan.size(4) == 2
+    plan.point_seconds = 1e-4                          # tiny: the guided bound rules
+    assert plan.size(4) == math.ceil(999 / 8)
+    sizes = []
+    while batch := plan.next(4):
+        sizes.append(len(batch))
+    assert sum(sizes) == 999 and sizes == sorted(sizes, reverse=True) and sizes[-1] == 1
+    plan.retry([(5, StudyPoint("p5", {})), (6, StudyPoint("p6", {}))])
+    assert [len(plan.next(4)) for _ in range(3)] == [1, 1, 0]
+    assert task_seconds(500) == 500 / 200 > task_seconds(16) == 0.5
+
+
+def _figures(summary):
+    """A summary without what differs between two runs of a point: where and when it
+    ran, and the wall times."""
+    if isinstance(summary, dict):
+        return {k: _figures(v) for k, v in summary.items()
+                if k != "point" and not k.endswith("wall_time_s")}
+    return summary
+
+
+def test_a_worker_without_the_folder_sends_files_and_a_retry_reruns_nothing(tmp_path):
+    s = study_from_dict({"fixed": {**TINY, "n_elements": 4, "t_end": 0.2},
+                         "grid": {"tau": [0.01, 0.02]}})
+    pts = [(p.id, p.params) for p in s.points]
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    (shared / TOKEN_NAME).write_text("abc")
+    direct = run_batch(s.problem, pts, s.param_columns, str(shared), "abc")
+    assert all(r.files is None for r in direct)
+    first = {pid: _summary(shared, pid) for pid, _ in pts}
+    # a stale token (the study stopped, or another folder of that name): files as bytes
+    sent = run_batch(s.problem, pts, s.param_columns, str(shared), "other")
+    assert all(set(r.files) == {"summary.json", "series.npz", "problem.toml"} for r in sent)
+    for a, b in zip(direct, sent, strict=True):
+        assert a.point_id == b.point_id and a.status == b.status == FINISHED
+        assert _figures(json.loads(b.files["summary.json"])) == _figures(first[a.point_id])
+        assert {k: v for k, v in a.row.items() if k != "wall_time_s"} == \
+            {k: v for k, v in b.row.items() if k != "wall_time_s"}
+    # a task run again (its worker died after writing) finds its points finished
+    again = run_batch(s.problem, pts, s.param_columns, str(shared), "abc")
+    assert [_summary(shared, pid) for pid, _ in pts] == list(first.values())
+    assert [r.row for r in again] == [r.row for r in direct]
+
+
+def test_a_batch_stops_when_the_token_goes(tmp_path, monkeypatch):
+    from runtime.study import sweep
+
+    s = study_from_dict({"fixed": {**TINY, "n_elements": 4, "t_end": 0.1},
+                         "grid": {"tau": [0.01, 0.02, 0.03]}})
+    (tmp_path / TOKEN_NAME).write_text("abc")
+    real = sweep.run_point_into
+
+    def run_then_stop(*a, **k):
+        summary = real(*a, **k)
+        (tmp_path / TOKEN_NAME).unlink()            # Ctrl-C on the client meanwhile
+        return summary
+
+    monkeypatch.setattr(sweep, "run_point_into", run_then_stop)
+    rows = run_batch(s.problem, [(p.id, p.params) for p in s.points], s.param_columns,
+                     str(tmp_path), "abc")
+    assert [r.point_id for r in rows] == [s.points[0].id]
+
+
+def test_study_csv_is_appended_not_rewritten(tmp_path):
+    """A restart with nothing to run leaves the table as it was (same file); one that
+    runs a point again drops that point's row once and appends the new one."""
+    s = study_from_dict({"fixed": {**TINY, "n_elements": 4, "t_end": 0.2},
+                         "grid": {"tau": [0.01, 0.02, 0.03]},
+                         "points": [{"tau": 0.02, "min_step": 0.2}]})     # fails
+    run_study_serial(s, tmp_path, plots=False)
+    table = tmp_path / "study.csv"
+    ino, text = table.stat().st_ino, table.read_text()
+    rows = _assert_table_complete(tmp_path, s)
+    assert sum(r["status"] == FAILED for r in rows.values()) == 1
+    report = run_study_serial(s, tmp_path, plots=False, rerun_failed=False)
+    assert report.computed == [] and table.stat().st_ino == ino and table.read_text() == text
+    # by default the failed point runs again: its old row goes, the new one comes last
+    report = run_study_serial(s, tmp_path, plots=False)
+    assert len(report.computed) == 1 and BAD_ID_PART in report.computed[0]
+    assert _table_ids(tmp_path)[-1] == report.computed[0]
+    _assert_table_complete(tmp_path, s)
+    # a table lost (or a row cut short by a crash) is rebuilt from the summaries
+    table.write_text(text[:-5])
+    run_study_serial(s, tmp_path, plots=False, rerun_failed=False)
+    _assert_table_complete(tmp_path, s)
+    table.unlink()
+    run_study_serial(s, tmp_path, plots=False, rerun_failed=False)
+    assert _assert_table_complete(tmp_path, s).keys() == rows.keys()
