@@ -1,15 +1,16 @@
 """``python -m bench [--quick] [--out DIR] [--only SECTION]``: every benchmark, JSON + Markdown.
 
 Writes ``DIR/integrators.json``, ``scaling.json``, ``codegen.json``, ``peers.json``,
-``kernels.json`` (+ ``kernels.md``), ``energy_audit.json``, ``modes.json``, ``maxwell.json``
-and ``README.md`` (all tables).
+``kernels.json`` (+ ``kernels.md``), ``energy_audit.json``, ``modes.json``, ``maxwell.json``,
+``sweeps.json`` (+ ``sweeps.md``) and ``README.md`` (all tables).
 Every JSON document records its date, platform, versions and command line (``meta``) and
 its targets with a verdict (``targets``: met / missed / not measured).
 ``--only SECTION`` (repeatable) reruns just those sections and rebuilds the README from
 the JSON of the others. ``--quick``: N = 25 only for the SUNDIALS comparison (IDAS and
 CVODES on kvrod's compiled kernels: no flat SX compile) and N = 25, 50 for scaling, 2 s
 simulated, SciPy BDF only; modes at N = 50 beside a 2 s simulation; the Maxwell rod at
-N = 20, 2 s; no codegen / PyElastica / kernel table / energy audit (a few minutes).
+N = 20, 2 s; no codegen / PyElastica / kernel table / energy audit / sweeps (a few
+minutes).
 
 Timings are medians over repeats (the machine has 2 cores shared with other jobs).
 """
@@ -25,6 +26,7 @@ from pathlib import Path
 from bench import codegen_timing, energy_audit, integrators, peers, report, scaling
 from bench import maxwell as maxwell_bench
 from bench import modes as modes_bench
+from bench import sweeps as sweeps_bench
 from bench.meta import metadata, target
 from runtime.io.results import jsonable
 
@@ -146,6 +148,10 @@ def run_all(quick: bool = False, out_dir: Path = Path("bench/results"),
     if "maxwell" in chosen:
         _log("== generalized Maxwell rods: kvrod vs SUNDIALS at matched accuracy")
         keep("maxwell", maxwell_bench.run(quick, log=_log))
+    if "sweeps" in chosen and not quick:
+        _log("== sweeps and start-up: whole commands side by side")
+        keep("sweeps", sweeps_bench.run(quick, log=_log))
+        _write(out_dir / "sweeps.md", "\n".join(sweeps_bench.markdown(docs["sweeps"])))
     if not quick:
         if "codegen" in chosen:
             _log("== derivation / generate / compile")

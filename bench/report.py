@@ -10,6 +10,7 @@ from bench.maxwell import QUICK as MAXWELL_QUICK
 from bench.maxwell import markdown as maxwell_md
 from bench.meta import targets_md
 from bench.modes import markdown as modes_md
+from bench.sweeps import markdown as sweeps_md
 
 
 def _f(v: Any, fmt: str = ".3f") -> str:
@@ -247,7 +248,7 @@ def kernels_md(doc: dict) -> list[str]:
 #: the README's sections, in order: document name -> Markdown lines
 SECTION_MD = {"integrators": integrators_md, "scaling": scaling_md, "codegen": codegen_md,
               "peers": peers_md, "kernels": kernels_md, "energy_audit": energy_audit_md,
-              "modes": modes_md, "maxwell": maxwell_md}
+              "modes": modes_md, "maxwell": maxwell_md, "sweeps": sweeps_md}
 
 
 def markdown(docs: dict) -> str:
