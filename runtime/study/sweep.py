@@ -60,9 +60,11 @@ a serial engine (:func:`run_study_serial`). It does not import Dask.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
+import signal
 import socket
 import threading
 import time
@@ -451,14 +453,17 @@ def run_point(problem: str, point_id: str, params: Mapping[str, Any]) -> PointOu
                         worker_lib_loads=_library_loads())
 
 
-def run_point_into(out: Path, problem: str, point_id: str,
-                   params: Mapping[str, Any]) -> dict:
+def run_point_into(out: Path, problem: str, point_id: str, params: Mapping[str, Any],
+                   interrupted: Callable[[], bool] | None = None) -> dict:
     """Run one point and write its folder ``DIR/points/<id>`` directly (summary.json
     last); returns the summary. Never raises but for Ctrl-C (nothing of this point is
-    written then). A series.npz of an earlier attempt is removed when this run has none."""
+    written then: also when ``interrupted()`` says a Ctrl-C came, whatever the run made
+    of it). A series.npz of an earlier attempt is removed when this run has none."""
     t0 = time.perf_counter()
     params = dict(params)
     run, status, message = _simulate(problem, params)
+    if interrupted is not None and interrupted():
+        raise KeyboardInterrupt
     d = point_dir(out, point_id)
     d.mkdir(parents=True, exist_ok=True)
     if run is None:
@@ -825,6 +830,32 @@ class StudyRecorder:
         return self.report
 
 
+@contextlib.contextmanager
+def ctrl_c_noticed() -> Iterator[Callable[[], bool]]:
+    """Remember a Ctrl-C (SIGINT) that comes while points run; yields ``interrupted()``.
+
+    Whatever the interrupted code makes of its KeyboardInterrupt, the study stops: an
+    exception while cleaning up can replace it (a ``ValueError`` of a half-written NPZ,
+    of a run's outputs cut short), and the point would be recorded as failed while the
+    study went on. Installed only in the main thread over a Python-level handler (the
+    default one raises KeyboardInterrupt; it still does)."""
+    previous = signal.getsignal(signal.SIGINT)
+    if threading.current_thread() is not threading.main_thread() or not callable(previous):
+        yield lambda: False
+        return
+    seen: list[int] = []
+
+    def remember(signum, frame):
+        seen.append(signum)
+        previous(signum, frame)
+
+    signal.signal(signal.SIGINT, remember)
+    try:
+        yield lambda: bool(seen)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
 def run_study_serial(study: Study, out: Path,
                      progress: Callable[[SweepProgress], object] | None = None,
                      rerun_failed: bool = True, plots: bool = True,
@@ -843,15 +874,22 @@ def run_study_serial(study: Study, out: Path,
     try:
         if on_start is not None:
             on_start(rec.progress)
-        for i, p in rec.todo():
-            rec.mark_running([(i, p)])
-            t = time.perf_counter()
-            summary = run_point_into(rec.out, study.problem, p.id, p.params)
-            pr = rec.record(PointResult(p.id, summary["status"],
-                                        table_row(study, p, summary),
-                                        time.perf_counter() - t))
-            if progress is not None:
-                progress(pr)
+        with ctrl_c_noticed() as interrupted:
+            for i, p in rec.todo():
+                rec.mark_running([(i, p)])
+                t = time.perf_counter()
+                try:
+                    summary = run_point_into(rec.out, study.problem, p.id, p.params,
+                                             interrupted)
+                except Exception:
+                    if interrupted():      # the Ctrl-C, not what cleaning up made of it
+                        raise KeyboardInterrupt from None
+                    raise
+                pr = rec.record(PointResult(p.id, summary["status"],
+                                            table_row(study, p, summary),
+                                            time.perf_counter() - t))
+                if progress is not None:
+                    progress(pr)
     finally:
         report = rec.close()
     report.wall_time_s = time.perf_counter() - t0

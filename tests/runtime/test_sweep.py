@@ -442,3 +442,37 @@ def test_study_csv_is_appended_not_rewritten(tmp_path):
     table.unlink()
     run_study_serial(s, tmp_path, plots=False, rerun_failed=False)
     assert _assert_table_complete(tmp_path, s).keys() == rows.keys()
+
+
+@pytest.mark.parametrize("then", ["returns", "raises"])
+def test_ctrl_c_stops_a_serial_study_whatever_the_point_made_of_it(tmp_path, monkeypatch, then):
+    """A Ctrl-C that the point's own code catches (a run's outputs cut short by it, a
+    half-written NPZ: a ValueError replaces the KeyboardInterrupt) still stops the study;
+    the interrupted point is not recorded (no failed row, no summary)."""
+    import signal
+
+    from runtime.study import sweep
+
+    s = study_from_dict({"fixed": {**TINY, "n_elements": 4, "t_end": 0.1},
+                         "grid": {"tau": [0.01, 0.02, 0.03]}})
+    real, calls = sweep._simulate, []
+
+    def swallowing(problem, params):
+        out = real(problem, params)
+        calls.append(params["tau"])
+        if len(calls) == 2:
+            try:
+                signal.raise_signal(signal.SIGINT)
+            except KeyboardInterrupt:
+                if then == "raises":
+                    raise ValueError("could not broadcast input array") from None
+        return out
+
+    monkeypatch.setattr(sweep, "_simulate", swallowing)
+    with pytest.raises(KeyboardInterrupt):
+        run_study_serial(s, tmp_path, plots=False)
+    assert calls == [0.01, 0.02]
+    rows = read_table(tmp_path / "study.csv")
+    assert [r["point_id"] for r in rows] == [s.points[0].id]
+    assert not (point_dir(tmp_path, s.points[1].id) / "summary.json").exists()
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
