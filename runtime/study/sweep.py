@@ -375,8 +375,8 @@ class PointResult:
     """What a worker hands back for one point: its table row (a few hundred bytes).
 
     ``files`` (the point's files as bytes, as in :class:`PointOutcome`) only when the
-    worker could not write the study folder itself; ``wall_time_s``: the worker's time
-    for the point, run and files together (s).
+    worker could not write the study folder itself; ``wall_time_s`` and ``cpu_s``: the
+    worker's wall and CPU time for the point, run and files together (s).
     """
 
     point_id: str
@@ -384,6 +384,7 @@ class PointResult:
     row: dict[str, Any]
     wall_time_s: float
     files: dict[str, bytes] | None = None
+    cpu_s: float = 0.0
 
 
 def _library_loads() -> int:
@@ -503,7 +504,7 @@ def run_batch(problem: str, points: Sequence[tuple[str, Mapping[str, Any]]],
     shared = _folder_shared(out, token)
     results = []
     for pid, params in points:
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         if shared:
             if results and not _folder_shared(out, token):
                 break
@@ -518,7 +519,8 @@ def run_batch(problem: str, points: Sequence[tuple[str, Mapping[str, Any]]],
             summary = json.loads(files["summary.json"])
         results.append(PointResult(pid, summary["status"],
                                    row_of(param_columns, pid, params, summary),
-                                   time.perf_counter() - t0, files))
+                                   time.perf_counter() - t0, files,
+                                   time.process_time() - c0))
     return results
 
 

@@ -10,7 +10,7 @@ first use compiles) the generated kernels into each worker process's cache once,
 worker starts (also on workers that join or are restarted later).
 
 What scales (issue 33): a task is a *batch* of points (:func:`runtime.study.sweep.run_batch`)
-sized from the points' measured times to last about :func:`task_seconds` (short points
+sized from the points' measured CPU times to last about :func:`task_seconds` (short points
 are batched, long ones go one per task), shrinking towards the end so that the workers
 finish together (guided self-scheduling: never more than a 1/(2 x slots) share of what
 is left). Tasks are made as workers free up, a few per worker slot ahead, never the
@@ -124,7 +124,10 @@ class BatchPlanner:
     ``points``: (position, point) pairs to run, made as asked for; ``n``: how many.
     The batch size is 1 until a point's time is known, then
     ``min(task_seconds / point time, what is left / (2 slots), MAX_BATCH)``, at least 1.
-    Points given back (:meth:`retry`) go first, one per task.
+    A point's time is the CPU time its worker spent on it: on a machine whose cores are
+    shared with other work the wall time stretches, the tasks would shrink and Dask's
+    cost per task (milliseconds of CPU in the scheduler and the worker) would grow with
+    their number. Points given back (:meth:`retry`) go first, one per task.
     """
 
     def __init__(self, points: Iterator[tuple[int, StudyPoint]], n: int) -> None:
@@ -268,7 +271,7 @@ class _Feeder:
         if future.status == "finished":
             back = {r.point_id for r in results}
             for r in results:
-                self.plan.observe(r.wall_time_s)
+                self.plan.observe(r.cpu_s or r.wall_time_s)
                 yield self.rec.record(r)
             # a batch stops early only when the token file went away: run the rest again
             self.plan.retry([item for item in batch if item[1].id not in back])

@@ -32,8 +32,8 @@ def test_a_large_serial_study_keeps_its_first_row_through_ctrl_c(tmp_path):
 
 
 def test_derived_efficiency_and_markdown():
-    worker = {"fixed_wall": 0.01, "point_wall": 0.02, "point_cpu": 0.02,
-              "simulate_wall": 0.01, "simulate_cpu": 0.01, "fixed_cpu": 0.01, "points": 5}
+    worker = {"fixed_cpu": 0.01, "fixed_wall": 0.05, "point_wall": 0.02, "point_cpu": 0.02,
+              "simulate_wall": 0.01, "simulate_cpu": 0.01, "points": 5}
     client = {"dask_cpu_per_point_on_worker": 0.001, "loop_per_point": 0.0004,
               "process_cpu_per_point": 0.0006}
     d = sw.derived(worker, client, cluster_start_s=1.0)
