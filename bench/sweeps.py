@@ -416,7 +416,7 @@ def markdown(doc: dict[str, Any]) -> list[str]:
     first = big["seconds_to_first_row"]
     feeds = d["workers_one_client_feeds"]
     end_load = (doc["meta"].get("load_average_at_end") or ["-"])[0]
-    out = ["## Sweeps and start-up (issue 33)", "",
+    out = ["## 9. Sweeps and start-up (issues 30 and 33)", "",
            f"Whole processes timed in turn (A B A B ..., medians; ratio = median of the "
            f"per-pair ratios); {doc['meta']['cpus']} CPUs shared with other jobs, load "
            f"average {doc['load_average_at_start'][0]} at the start and "

@@ -111,7 +111,11 @@ def _run_sweep(args, study, out: Path) -> int:
             from runtime.study.sweep_dask import run_study_dask
 
             def dashboard(link: str) -> None:
-                print(f"Dask dashboard: {link}", flush=True)
+                from importlib.util import find_spec
+
+                note = ("" if find_spec("bokeh") else
+                        " (its pages need bokeh: pip install -e '.[sweep]')")
+                print(f"Dask dashboard: {link}{note}", flush=True)
 
             try:
                 report = run_study_dask(study, out, scheduler=args.scheduler,

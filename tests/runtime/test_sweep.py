@@ -476,3 +476,14 @@ def test_ctrl_c_stops_a_serial_study_whatever_the_point_made_of_it(tmp_path, mon
     assert [r["point_id"] for r in rows] == [s.points[0].id]
     assert not (point_dir(tmp_path, s.points[1].id) / "summary.json").exists()
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_cli_on_a_local_cluster_prints_the_dashboard(tmp_path, capsys):
+    f = tmp_path / "study.toml"
+    f.write_text('name = "dash"\n[fixed]\nlength = 0.1\nt_end = 0.1\nrtol = 1e-4\n'
+                 "n_elements = 4\n[grid]\ntau = [0.01, 0.02]\n")
+    out = tmp_path / "out"
+    assert _cli(["sweep", str(f), "--workers", "1", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "Dask dashboard: http://" in text and "2 points run (0 failed)" in text
+    assert len(read_table(out / "study.csv")) == 2 and not (out / TOKEN_NAME).exists()
