@@ -287,12 +287,15 @@ def first_row(size: Size, root: Path, env: dict[str, str]) -> dict[str, Any]:
         f"[grid]\ntau = [{', '.join(f'{0.01 + 1e-6 * i:.6f}' for i in range(axis))}]\n"
         f"youngs_modulus = [{', '.join(f'{1e6 + i:.1f}' for i in range(axis))}]\n")
     out = root / "large"
+    err = root / "large.stderr"
     t0 = time.perf_counter()
-    p = subprocess.Popen(_kvrod("sweep", str(study), "--serial", "--yes", "--out", str(out)),
-                         env=env, cwd=root, stdout=subprocess.DEVNULL,
-                         stderr=subprocess.DEVNULL, start_new_session=True)
+    with open(err, "w") as err_file:
+        p = subprocess.Popen(
+            _kvrod("sweep", str(study), "--serial", "--yes", "--out", str(out)),
+            env={**env, "PYTHONFAULTHANDLER": "1"}, cwd=root, stdout=subprocess.DEVNULL,
+            stderr=err_file, start_new_session=True)
     table = out / "study.csv"
-    seconds = None
+    seconds, stuck = None, None
     try:
         while p.poll() is None and time.perf_counter() - t0 < 300:
             with contextlib.suppress(OSError):
@@ -304,13 +307,20 @@ def first_row(size: Size, root: Path, env: dict[str, str]) -> dict[str, Any]:
         with contextlib.suppress(ProcessLookupError):
             os.killpg(p.pid, signal.SIGINT)
         try:
-            rc = p.wait(timeout=120)
-        except subprocess.TimeoutExpired:
-            os.killpg(p.pid, signal.SIGKILL)
+            rc = p.wait(timeout=60)
+        except subprocess.TimeoutExpired:     # say where it was (faulthandler on SIGABRT)
+            with contextlib.suppress(OSError):
+                stuck = [ln.strip() for ln in Path(f"/proc/{p.pid}/status").read_text()
+                         .splitlines() if ln.startswith(("SigIgn", "SigBlk", "SigCgt"))]
+            os.kill(p.pid, signal.SIGABRT)
+            time.sleep(2.0)
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(p.pid, signal.SIGKILL)
             rc = p.wait()
+            stuck = (stuck or []) + err.read_text().splitlines()[-40:]
     rows = table.read_text().count("\n") - 1 if table.exists() else 0
     return {"points": axis * axis, "seconds_to_first_row": seconds, "exit_code": rc,
-            "rows_kept_after_ctrl_c": rows}
+            "rows_kept_after_ctrl_c": rows, "not_stopped_by_ctrl_c": stuck}
 
 
 def derived(worker: dict[str, Any], client: dict[str, Any], cluster_start_s: float,
