@@ -277,6 +277,21 @@ def client_cost(size: Size, root: Path, worker: dict[str, Any]) -> dict[str, Any
             "dask_cpu_per_point_on_worker": worker_cpu - worker["point_cpu"]}
 
 
+@contextlib.contextmanager
+def _sigint_inherited():
+    """Children started meanwhile take Ctrl-C: a bench started in the background of a
+    non-interactive shell (``python -m bench ... &``) has SIGINT ignored, and an ignored
+    signal stays ignored across exec (a caught one is reset to the default)."""
+    ignored = signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+    if ignored:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        if ignored:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def first_row(size: Size, root: Path, env: dict[str, str]) -> dict[str, Any]:
     """``kvrod sweep --serial --yes`` of a large grid: seconds to its first row, then
     Ctrl-C; the row is still there."""
@@ -289,7 +304,7 @@ def first_row(size: Size, root: Path, env: dict[str, str]) -> dict[str, Any]:
     out = root / "large"
     err = root / "large.stderr"
     t0 = time.perf_counter()
-    with open(err, "w") as err_file:
+    with open(err, "w") as err_file, _sigint_inherited():
         p = subprocess.Popen(
             _kvrod("sweep", str(study), "--serial", "--yes", "--out", str(out)),
             env={**env, "PYTHONFAULTHANDLER": "1"}, cwd=root, stdout=subprocess.DEVNULL,
