@@ -13,6 +13,7 @@ from bench.meta import targets_md
 from bench.modes import markdown as modes_md
 from bench.overhead import markdown as overhead_md
 from bench.sections import markdown as sections_md
+from bench.sweeps import markdown as sweeps_md
 
 
 def _f(v: Any, fmt: str = ".3f") -> str:
@@ -251,7 +252,8 @@ def kernels_md(doc: dict) -> list[str]:
 SECTION_MD = {"integrators": integrators_md, "scaling": scaling_md, "codegen": codegen_md,
               "peers": peers_md, "kernels": kernels_md, "energy_audit": energy_audit_md,
               "modes": modes_md, "maxwell": maxwell_md, "sections": sections_md,
-              "overhead": overhead_md, "maxwell_kv": maxwell_kv_md}
+              "overhead": overhead_md, "maxwell_kv": maxwell_kv_md,
+              "sweeps": sweeps_md}
 
 
 def markdown(docs: dict) -> str:

@@ -12,10 +12,6 @@ import math
 import sys
 from pathlib import Path
 
-from reports.analyses import compare_table, modes_table, run_modes, write_compare, write_modes
-from runtime.analysis.records import load_csv
-from runtime.io.folder import safe_name
-
 
 def _cli_error(message: str) -> Exception:
     from kvrod.errors import CliError
@@ -40,6 +36,8 @@ def _cmd_modes(args) -> int:
     if args.count > nq:
         raise _cli_error(f"kvrod modes: --count {args.count} exceeds the {nq} degrees of "
                          f"freedom of {problem.rod.elements} elements")
+    from runtime.io.folder import safe_name
+
     out = Path(args.out) if args.out else Path("results") / (
         f"modes-{safe_name(problem.name)}" + ("-deformed" if args.deformed else ""))
     from runtime.io.folder import results_folder
@@ -51,6 +49,8 @@ def _cmd_modes(args) -> int:
 
 
 def _modes_into(args, problem, out: Path) -> int:
+    from reports.analyses import modes_table, run_modes, write_modes
+
     target = None if args.near is None else 2 * math.pi * args.near
     res = run_modes(problem, args.count, args.deformed, target=target)
     modes = res["modes"]
@@ -151,6 +151,8 @@ def _cmd_calibrate(args) -> int:
                              f"allowed range: {lo:g} ... {hi:.3g} s for this rod (below: no "
                              "measurable damping; above: the viscous forces swamp the "
                              "inertia)")
+    from runtime.analysis.records import load_csv
+
     try:
         if args.mode == "signal":
             data = cal.validate_signal(*load_csv(args.data, ("t", "x")))
@@ -210,6 +212,7 @@ def _cmd_compare(args) -> int:
     if args.n_elements < 2:
         raise _cli_error(f"kvrod compare-damping: --n-elements must be >= 2, got "
                          f"{args.n_elements}")
+    from reports.analyses import compare_table, write_compare
     from runtime.io.folder import results_folder
     from runtime.study import compare_damping as cd
 

@@ -8,8 +8,6 @@ from pathlib import Path
 
 from kvrod.problem_args import add_problem_arguments, problem_from_args
 from kvrod.progress import progress_bar
-from runtime.io.folder import safe_name
-from runtime.io.runs import already_finished, run_and_write, static_and_write
 
 
 def _static_lines(st: dict) -> list[str]:
@@ -110,6 +108,9 @@ def _cmd_simulate(args) -> int:
     if args.resume and args.overwrite:
         raise CliError("kvrod simulate: --resume and --overwrite exclude each other")
     problem = problem_from_args(args, "simulate")
+    from runtime.io.folder import safe_name
+    from runtime.io.runs import already_finished, run_and_write
+
     if args.vtk is not None and problem.simulation.t_end / args.vtk > 100_000:
         raise CliError(f"kvrod simulate: --vtk = {args.vtk} would write "
                        f"{problem.simulation.t_end / args.vtk:.3g} frames (at most 100000; "
@@ -133,6 +134,9 @@ def _cmd_simulate(args) -> int:
 def _cmd_static(args) -> int:
     """`kvrod static PROBLEM --out DIR` (see :func:`static_and_write`)."""
     problem = problem_from_args(args, "static")
+    from runtime.io.folder import safe_name
+    from runtime.io.runs import static_and_write
+
     out = Path(args.out) if args.out else Path("results") / f"{safe_name(problem.name)}-static"
     summary, _, _ = static_and_write(problem, out, overwrite=args.overwrite)
     st = summary["static"]
