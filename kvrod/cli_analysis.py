@@ -102,9 +102,17 @@ def _assembly_modes(args, problem) -> int:
         raise _cli_error(f"kvrod modes: --count {args.count} exceeds the {nq} degrees of "
                          f"freedom of this assembly (its rods' free nodes and segments)")
     out = _modes_folder(args, problem)
+    from runtime.solvers.statics import StaticSolveError
+
     with results_folder(out, "modes", markers=("modes.json",), overwrite=args.overwrite,
                         names=("modes.json", "modes.npz", "mode_shapes_3d.png")):
-        res = run_assembly_modes(problem, args.count, args.deformed, amap=amap)
+        try:
+            res = run_assembly_modes(problem, args.count, args.deformed, amap=amap)
+        except StaticSolveError as exc:
+            raise _cli_error(f"kvrod modes: --deformed: no static equilibrium to linearise "
+                             f"about ({' '.join(str(exc).split())}); kvrod static "
+                             f"{args.problem} shows the load path, or drop --deformed"
+                             ) from None
         state = ("about its static equilibrium under the loads" if args.deformed
                  else "about its unloaded reference")
         print(f"{problem.name}: an assembly of {len(problem.rods)} rods "

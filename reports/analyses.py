@@ -115,8 +115,8 @@ def run_assembly_modes(problem, count: int = 10, deformed: bool = False,
     at t = 0- (:func:`runtime.simulate.assembly.static_equilibrium`), the loads' stiffness
     included (a hanging pendulum's gravity). ``static``: for ``deformed`` the
     equilibrium's ends, Newton iterations and joints' forces and moments."""
-    from runtime.analysis.system_modal import assembly_modes
     from runtime.analysis.modal import fix_sign
+    from runtime.analysis.system_modal import assembly_modes
     from runtime.io.assembly_results import static_joint_values
     from runtime.problem.assemble_system import build_system
     from runtime.simulate.assembly import static_ends, static_equilibrium
