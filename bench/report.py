@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from bench.assembly import markdown as assembly_md
 from bench.energy_audit import markdown as energy_audit_md
 from bench.maxwell import QUICK as MAXWELL_QUICK
 from bench.maxwell import markdown as maxwell_md
@@ -253,7 +254,7 @@ SECTION_MD = {"integrators": integrators_md, "scaling": scaling_md, "codegen": c
               "peers": peers_md, "kernels": kernels_md, "energy_audit": energy_audit_md,
               "modes": modes_md, "maxwell": maxwell_md, "sections": sections_md,
               "overhead": overhead_md, "maxwell_kv": maxwell_kv_md,
-              "sweeps": sweeps_md}
+              "sweeps": sweeps_md, "assembly": assembly_md}
 
 
 def markdown(docs: dict) -> str:
@@ -272,7 +273,8 @@ def markdown(docs: dict) -> str:
                   "on kvrod's compiled kernels (no flat SX compile), SciPy BDF only, no "
                   "codegen timing, PyElastica, kernel table or energy audit; modes at N = 50 "
                   f"only; the Maxwell rod at N = {MAXWELL_QUICK.N}, {MAXWELL_QUICK.T:g} s; "
-                  "sections on a 4-ply strip (about 2,000 elements), one round. "
+                  "sections on a 4-ply strip (about 2,000 elements), one round; assemblies at 2 s, "
+                  "one round. "
                   "Use the full run for the quoted figures.", ""]
     for name, section_md in SECTION_MD.items():
         if name in docs:
