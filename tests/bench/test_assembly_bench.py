@@ -1,6 +1,6 @@
 """The assembly bench section (``python -m bench --only assembly``, issue 31 item 3) at a
 tiny size: the problems it builds from the cantilever, the paired whole processes, the
-breakdown and its Markdown."""
+paired in-process rounds and its Markdown."""
 
 from __future__ import annotations
 
@@ -57,8 +57,16 @@ def test_the_sides_ran_in_pairs_and_the_target_has_a_verdict(tiny):
             c["median_command_ratio"] * sum(r["B"]["steps"]) / runs / r["A"]["steps"][0])
     for t in tiny["targets"]:
         assert t["verdict"] in ("met", "missed") and t["limit"] == ab.RATIO_MAX
-    b = tiny["breakdown"]["independent"]
-    assert b["assembly"]["counters"]["nstep"] > 0 and b["single"]["times"] == 2
+    for case in ("independent", "welded"):
+        ip = tiny["in_process"][case]
+        (r,) = ip["rounds"]
+        for side in ("A", "B"):
+            assert 0 < r[side]["static_s"] < r[side]["total_s"]
+            assert r[side]["run_s"] == pytest.approx(r[side]["total_s"] - r[side]["static_s"])
+        assert ip["steps_A"] == r["A"]["counters"]["nstep"] > 0
+        assert ip["median_same_steps_ratio"] == pytest.approx(
+            ip["median_ratio"] * ip["steps_B"] / ip["steps_A"])
+    assert tiny["in_process"]["independent"]["k_single"] == 2
 
 
 def test_markdown_has_both_rows(tiny):
@@ -66,6 +74,7 @@ def test_markdown_has_both_rows(tiny):
     assert md.startswith("## 13. Rod assemblies beside their rods run one by one")
     assert "| 2 cantilevers N = 4 in one assembly / 2 runs |" in md
     assert "| 2 welded rods of N = 4 / one rod of N = 8 |" in md
+    assert "| 2 cantilevers N = 4 / 2 runs |" in md
 
 
 def test_bad_sizes_are_refused():
