@@ -2,8 +2,9 @@
 
 Writes ``DIR/integrators.json``, ``scaling.json``, ``codegen.json``, ``peers.json``,
 ``kernels.json`` (+ ``kernels.md``), ``energy_audit.json``, ``modes.json``, ``maxwell.json``,
-``sections.json``, ``overhead.json``, ``maxwell_kv.json``, ``sensitivities.json`` (+
-``sensitivities.md``), ``fit.json``, ``contact.json`` and ``README.md`` (all tables).
+``sections.json``, ``overhead.json``, ``maxwell_kv.json``, ``sweeps.json`` (+ ``sweeps.md``),
+``assembly.json``, ``sensitivities.json`` (+ ``sensitivities.md``), ``fit.json``,
+``contact.json`` and ``README.md`` (all tables).
 Every JSON document records its date, platform, versions and command line (``meta``) and
 its targets with a verdict (``targets``: met / missed / not measured).
 ``--only SECTION`` (repeatable) reruns just those sections and rebuilds the README from
@@ -11,7 +12,8 @@ the JSON of the others. ``--quick``: N = 25 only for the SUNDIALS comparison (ID
 CVODES on kvrod's compiled kernels: no flat SX compile) and N = 25, 50 for scaling, 2 s
 simulated, SciPy BDF only; modes at N = 50 beside a 2 s simulation; the Maxwell rod at
 N = 20, 2 s; the section analysis on a 4-ply strip; the overhead section at 2 s, two rounds;
-no codegen / PyElastica / kernel table / energy audit (a few minutes).
+the assembly section at 2 s, one round;
+no codegen / PyElastica / kernel table / energy audit / sweeps (a few minutes).
 
 Timings are medians over repeats (the machine has 2 cores shared with other jobs).
 """
@@ -24,6 +26,7 @@ import sys
 import time
 from pathlib import Path
 
+from bench import assembly as assembly_bench
 from bench import codegen_timing, energy_audit, integrators, peers, report, scaling
 from bench import contact as contact_bench
 from bench import fit as fit_bench
@@ -33,6 +36,7 @@ from bench import modes as modes_bench
 from bench import overhead as overhead_bench
 from bench import sections as sections_bench
 from bench import sensitivities as sensitivities_bench
+from bench import sweeps as sweeps_bench
 from bench.meta import metadata, target
 from runtime.io.results import jsonable
 
@@ -171,9 +175,16 @@ def run_all(quick: bool = False, out_dir: Path = Path("bench/results"),
     if "fit" in chosen:
         _log("== kvrod fit: two parameters of the paper's cantilever from a 4 s record")
         keep("fit", fit_bench.run(quick, log=_log))
-    if "contact" in chosen:
+    if "contact" in chosen and not quick:
         _log("== contact: a cable falling onto a floor against the free swing")
         keep("contact", contact_bench.run(quick, log=_log))
+    if "sweeps" in chosen and not quick:
+        _log("== sweeps and start-up: whole commands side by side")
+        keep("sweeps", sweeps_bench.run(quick, log=_log))
+        _write(out_dir / "sweeps.md", "\n".join(sweeps_bench.markdown(docs["sweeps"])))
+    if "assembly" in chosen:
+        _log("== rod assemblies beside their rods run one by one")
+        keep("assembly", assembly_bench.run(quick, log=_log))
     if not quick:
         if "codegen" in chosen:
             _log("== derivation / generate / compile")

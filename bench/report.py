@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from bench.assembly import markdown as assembly_md
 from bench.contact import markdown as contact_md
 from bench.energy_audit import markdown as energy_audit_md
 from bench.fit import markdown as fit_md
@@ -16,6 +17,7 @@ from bench.modes import markdown as modes_md
 from bench.overhead import markdown as overhead_md
 from bench.sections import markdown as sections_md
 from bench.sensitivities import markdown as sensitivities_md
+from bench.sweeps import markdown as sweeps_md
 
 
 def _f(v: Any, fmt: str = ".3f") -> str:
@@ -255,8 +257,8 @@ SECTION_MD = {"integrators": integrators_md, "scaling": scaling_md, "codegen": c
               "peers": peers_md, "kernels": kernels_md, "energy_audit": energy_audit_md,
               "modes": modes_md, "maxwell": maxwell_md, "sections": sections_md,
               "overhead": overhead_md, "maxwell_kv": maxwell_kv_md,
-              "sensitivities": sensitivities_md, "fit": fit_md,
-              "contact": contact_md}
+              "sweeps": sweeps_md, "assembly": assembly_md,
+              "sensitivities": sensitivities_md, "fit": fit_md, "contact": contact_md}
 
 
 def markdown(docs: dict) -> str:
@@ -275,7 +277,8 @@ def markdown(docs: dict) -> str:
                   "on kvrod's compiled kernels (no flat SX compile), SciPy BDF only, no "
                   "codegen timing, PyElastica, kernel table or energy audit; modes at N = 50 "
                   f"only; the Maxwell rod at N = {MAXWELL_QUICK.N}, {MAXWELL_QUICK.T:g} s; "
-                  "sections on a 4-ply strip (about 2,000 elements), one round. "
+                  "sections on a 4-ply strip (about 2,000 elements), one round; assemblies at 2 s, "
+                  "one round. "
                   "Use the full run for the quoted figures.", ""]
     for name, section_md in SECTION_MD.items():
         if name in docs:

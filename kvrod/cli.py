@@ -342,6 +342,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     bad input, I/O and integrity errors, 130 for Ctrl-C, 143 for SIGTERM, 3 for a bug
     (an unexpected exception; ``KVROD_DEBUG=1`` re-raises it with its traceback).
     """
+    if list(sys.argv[1:] if argv is None else argv) == ["--version"]:
+        from runtime.version import version_text  # the one answer that needs no parser
+
+        print(version_text())
+        raise SystemExit(0)                          # as argparse's --version action does
     import os
     import signal
 

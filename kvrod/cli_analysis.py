@@ -12,10 +12,6 @@ import math
 import sys
 from pathlib import Path
 
-from reports.analyses import compare_table, modes_table, run_modes, write_compare, write_modes
-from runtime.analysis.records import load_csv
-from runtime.io.folder import safe_name
-
 
 def _cli_error(message: str) -> Exception:
     from kvrod.errors import CliError
@@ -42,13 +38,20 @@ def _cmd_modes(args) -> int:
             "version (they need the contact linearised with its sticking contacts held): "
             "without [[obstacles]] kvrod modes gives the free rod's modes; kvrod simulate "
             "gives the damped motion on the obstacles")
+    from runtime.io.assembly_results import is_assembly
+
+    if is_assembly(problem):
+        if getattr(args, "sensitivities", None):
+            raise _cli_error("kvrod modes: --sensitivities of an assembly's modes are not "
+                             "available in this version (a single rod's are; kvrod simulate "
+                             "and kvrod static give an assembly's sensitivities)")
+        return _assembly_modes(args, problem)
     sens = sensitivity_names(args, problem, "modes")
     nq = 6 * problem.rod.elements
     if args.count > nq:
         raise _cli_error(f"kvrod modes: --count {args.count} exceeds the {nq} degrees of "
                          f"freedom of {problem.rod.elements} elements")
-    out = Path(args.out) if args.out else Path("results") / (
-        f"modes-{safe_name(problem.name)}" + ("-deformed" if args.deformed else ""))
+    out = _modes_folder(args, problem)
     from runtime.io.folder import results_folder
 
     with results_folder(out, "modes", markers=("modes.json",), overwrite=args.overwrite,
@@ -58,6 +61,8 @@ def _cmd_modes(args) -> int:
 
 
 def _modes_into(args, problem, out: Path, sensitivities: list[str] | None = None) -> int:
+    from reports.analyses import modes_table, run_modes, write_modes
+
     target = None if args.near is None else 2 * math.pi * args.near
     res = run_modes(problem, args.count, args.deformed, target=target,
                     sensitivities=sensitivities)
@@ -74,6 +79,62 @@ def _modes_into(args, problem, out: Path, sensitivities: list[str] | None = None
             print(f"kvrod modes: warning: mode {m.index} ({m.family}): {m.doubt}",
                   file=sys.stderr)
     paths = write_modes(res, out, figures=args.plots)
+    print(f"wrote {out}/{', '.join(p.name for p in paths)}")
+    return 0
+
+
+def _modes_folder(args, problem) -> Path:
+    from runtime.io.folder import safe_name
+
+    return Path(args.out) if args.out else Path("results") / (
+        f"modes-{safe_name(problem.name)}" + ("-deformed" if args.deformed else ""))
+
+
+def _assembly_modes(args, problem) -> int:
+    """`kvrod modes ASSEMBLY`: the lowest --count modes of the whole assembly about its
+    reference or (--deformed) its static equilibrium; checked before the folder is
+    locked."""
+    from reports.analyses import (
+        assembly_modes_table,
+        assembly_reduced_size,
+        run_assembly_modes,
+        write_assembly_modes,
+    )
+    from runtime.io.folder import results_folder
+    from runtime.model import build
+    from runtime.problem.assemble_system import build_system
+
+    if args.near is not None:
+        raise _cli_error("kvrod modes: --near is for a single rod; an assembly's modes are "
+                         "its --count lowest")
+    build.require_generated()
+    amap = build_system(problem)
+    nq = assembly_reduced_size(amap)
+    if args.count > nq:
+        raise _cli_error(f"kvrod modes: --count {args.count} exceeds the {nq} degrees of "
+                         f"freedom of this assembly (its rods' free nodes and segments)")
+    out = _modes_folder(args, problem)
+    from runtime.solvers.statics import StaticSolveError
+
+    with results_folder(out, "modes", markers=("modes.json",), overwrite=args.overwrite,
+                        names=("modes.json", "modes.npz", "mode_shapes_3d.png")):
+        try:
+            res = run_assembly_modes(problem, args.count, args.deformed, amap=amap)
+        except StaticSolveError as exc:
+            raise _cli_error(f"kvrod modes: --deformed: no static equilibrium to linearise "
+                             f"about ({' '.join(str(exc).split())}); kvrod static "
+                             f"{args.problem} shows the load path, or drop --deformed"
+                             ) from None
+        state = ("about its static equilibrium under the loads" if args.deformed
+                 else "about its unloaded reference")
+        print(f"{problem.name}: an assembly of {len(problem.rods)} rods "
+              f"({', '.join(problem.rods)}), {len(problem.joints)} joints, "
+              f"{len(problem.bodies)} bodies; {state}")
+        if res["static"] is not None:
+            for k, v in res["static"]["ends"].items():
+                print(f"  static {k} [m]: {[round(x, 9) for x in v]}")
+        print(assembly_modes_table(res["modes"]))
+        paths = write_assembly_modes(res, out, figures=args.plots)
     print(f"wrote {out}/{', '.join(p.name for p in paths)}")
     return 0
 
@@ -159,6 +220,8 @@ def _cmd_calibrate(args) -> int:
                              f"allowed range: {lo:g} ... {hi:.3g} s for this rod (below: no "
                              "measurable damping; above: the viscous forces swamp the "
                              "inertia)")
+    from runtime.analysis.records import load_csv
+
     try:
         if args.mode == "signal":
             data = cal.validate_signal(*load_csv(args.data, ("t", "x")))
@@ -218,6 +281,7 @@ def _cmd_compare(args) -> int:
     if args.n_elements < 2:
         raise _cli_error(f"kvrod compare-damping: --n-elements must be >= 2, got "
                          f"{args.n_elements}")
+    from reports.analyses import compare_table, write_compare
     from runtime.io.folder import results_folder
     from runtime.study import compare_damping as cd
 
@@ -263,12 +327,14 @@ def add_commands(sub, parser_class) -> None:
     m.add_argument("--near", type=float, metavar="HZ",
                    help="the --count modes whose natural frequency is nearest HZ (Hz) "
                         "instead of the lowest (numbered within those shown; no continuum "
-                        "column)")
+                        "column; a single rod only)")
     m.add_argument("--deformed", action="store_true",
-                   help="linearise about the static state under the problem's loads")
+                   help="linearise about the static state under the problem's loads "
+                        "(an assembly's: its static equilibrium, joints and bodies "
+                        "included)")
     m.add_argument("--plots", action="store_true",
-                   help="also draw mode_shapes.png and mode_shapes_3d.png (or later: kvrod "
-                        "plot DIR)")
+                   help="also draw mode_shapes.png and mode_shapes_3d.png (an "
+                        "assembly: mode_shapes_3d.png; or later: kvrod plot DIR)")
     m.add_argument("--out", help="results folder (default results/modes-SCENARIO[-deformed])")
     m.add_argument("--overwrite", action="store_true",
                    help="replace a result already in --out (default: refuse)")

@@ -13,8 +13,6 @@ from kvrod.problem_args import (
     sensitivity_names,
 )
 from kvrod.progress import progress_bar
-from runtime.io.folder import safe_name
-from runtime.io.runs import already_finished, run_and_write, static_and_write
 
 
 def _static_lines(st: dict) -> list[str]:
@@ -121,6 +119,9 @@ def _cmd_simulate(args) -> int:
     if sens is not None and args.resume:
         raise CliError("kvrod simulate: --sensitivities with --resume: the sensitivities "
                        "are not kept in checkpoints; rerun with --overwrite")
+    from runtime.io.folder import safe_name
+    from runtime.io.runs import already_finished, run_and_write
+
     if args.vtk is not None and problem.simulation.t_end / args.vtk > 100_000:
         raise CliError(f"kvrod simulate: --vtk = {args.vtk} would write "
                        f"{problem.simulation.t_end / args.vtk:.3g} frames (at most 100000; "
@@ -146,6 +147,9 @@ def _cmd_static(args) -> int:
     """`kvrod static PROBLEM --out DIR` (see :func:`static_and_write`)."""
     problem = problem_from_args(args, "static")
     sens = sensitivity_names(args, problem, "static")
+    from runtime.io.folder import safe_name
+    from runtime.io.runs import static_and_write
+
     out = Path(args.out) if args.out else Path("results") / f"{safe_name(problem.name)}-static"
     summary, _, _ = static_and_write(problem, out, overwrite=args.overwrite,
                                      sensitivities=sens)

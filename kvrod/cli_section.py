@@ -10,9 +10,10 @@ from __future__ import annotations
 import math
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
+if TYPE_CHECKING:
+    import numpy as np
 
 _ROWS = ("T1", "T2", "T3", "M1", "M2", "M3")
 _COLS = ("Gamma1", "Gamma2", "Gamma3", "K1", "K2", "K3")
@@ -24,6 +25,8 @@ SHOWN_ZERO = 1e-10
 
 
 def _matrix(title: str, M: np.ndarray) -> list[str]:
+    import numpy as np
+
     d = np.sqrt(np.abs(np.outer(np.diag(M), np.diag(M))))
     lines = [title, "      " + "".join(f"{c:>12}" for c in _COLS)]
     for r, row, drow in zip(_ROWS, M, d, strict=True):
@@ -39,6 +42,8 @@ def _point(p: Any) -> str:
 
 def section_table(res: Any) -> str:
     """What `kvrod section` prints: the matrices, centres, inertia and the mesh."""
+    import numpy as np
+
     info = res.info
     kinds = ", ".join(f"{r['name']} ({r['material']}, {r['shape']['kind']})"
                       for r in info.get("regions", []))

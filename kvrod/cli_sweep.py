@@ -11,23 +11,43 @@ By default the points run on a LocalCluster with one worker process per core; wi
 from __future__ import annotations
 
 import sys
+import time
 from pathlib import Path
 
 
-def _progress_bar(total: int, skipped: int):
-    """A tqdm bar over the points to run; returns (callback, close)."""
-    from tqdm import tqdm
+class _ProgressBar:
+    """A tqdm bar over the points to run, made when the run knows how many (on a
+    terminal only; redrawn at most every 0.2 s, so a study of tiny points does not spend
+    its time drawing)."""
 
-    bar = tqdm(total=total - skipped, desc="points", unit="pt", dynamic_ncols=True)
-    bar.set_postfix_str(f"done 0, failed 0, skipped {skipped}")
+    def __init__(self) -> None:
+        self.bar = None
 
-    def update(pr) -> None:
-        bar.n = pr.done + pr.failed
-        bar.set_postfix_str(f"done {pr.done}, failed {pr.failed}, running {pr.running}, "
-                            f"queued {pr.queued}, skipped {pr.skipped}", refresh=False)
-        bar.refresh()
+    def start(self, pr) -> None:
+        if not sys.stderr.isatty():
+            return
+        from tqdm import tqdm
 
-    return update, bar.close
+        self.bar = tqdm(total=pr.total - pr.skipped, desc="points", unit="pt",
+                        dynamic_ncols=True, mininterval=0.2)
+        self.bar.set_postfix_str(f"done 0, failed 0, skipped {pr.skipped}", refresh=False)
+        self._drawn = 0.0
+
+    def update(self, pr) -> None:
+        if self.bar is None:
+            return
+        now = time.monotonic()
+        self.bar.n = pr.done + pr.failed
+        if now - self._drawn >= 0.2 or self.bar.n == self.bar.total:
+            self._drawn = now
+            self.bar.set_postfix_str(f"done {pr.done}, failed {pr.failed}, running "
+                                     f"{pr.running}, queued {pr.queued}, skipped "
+                                     f"{pr.skipped}", refresh=False)
+            self.bar.refresh()
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
 
 
 def _cmd_sweep(args) -> int:
@@ -40,7 +60,7 @@ def _cmd_sweep(args) -> int:
     import math
 
     from runtime.io import folder as F
-    from runtime.study.sweep import StudyError, load_study, points_to_run, run_study_serial
+    from runtime.study.sweep import StudyError, load_study
 
     try:
         study = load_study(args.study, max_points=math.inf if args.yes else None)
@@ -66,12 +86,12 @@ def _cmd_sweep(args) -> int:
         import runtime.study.sweep_dask  # noqa: F401
     with F.claim(out, "sweep", overwrite=args.overwrite,
                  names=("study.toml", "study.csv", "progress.json", "summary.png",
-                        "points")) as claimed:
+                        "points", ".sweep-token")) as claimed:
         claimed.keep()
-        return _run_sweep(args, study, out, points_to_run, run_study_serial)
+        return _run_sweep(args, study, out)
 
 
-def _run_sweep(args, study, out, points_to_run, run_study_serial) -> int:
+def _run_sweep(args, study, out: Path) -> int:
     from kvrod.errors import CliError
 
     n = len(study.points)
@@ -79,25 +99,34 @@ def _run_sweep(args, study, out, points_to_run, run_study_serial) -> int:
              f"scheduler {args.scheduler}" if args.scheduler else
              f"LocalCluster, {args.workers or 'one per core'} worker processes")
     print(f"study {study.name!r}: {n} points of problem {study.problem!r} on {where}; "
-          f"results in {out}")
-    todo = points_to_run(study, out, rerun_failed=not args.keep_failed)
-    progress, close = _progress_bar(n, n - len(todo))
+          f"results in {out}", flush=True)
+    bar = _ProgressBar()
     try:
         if args.serial:
-            report = run_study_serial(study, out, progress=progress,
+            from runtime.study.sweep import run_study_serial
+
+            report = run_study_serial(study, out, progress=bar.update, on_start=bar.start,
                                       rerun_failed=not args.keep_failed)
         else:
             from runtime.study.sweep_dask import run_study_dask
 
+            def dashboard(link: str) -> None:
+                from importlib.util import find_spec
+
+                note = ("" if find_spec("bokeh") else
+                        " (its pages need bokeh: pip install -e '.[sweep]')")
+                print(f"Dask dashboard: {link}{note}", flush=True)
+
             try:
                 report = run_study_dask(study, out, scheduler=args.scheduler,
-                                        n_workers=args.workers, progress=progress,
+                                        n_workers=args.workers, progress=bar.update,
+                                        on_start=bar.start, on_dashboard=dashboard,
                                         rerun_failed=not args.keep_failed)
             except (OSError, TimeoutError) as exc:      # unreachable scheduler, no workers
                 msg = " ".join(str(exc).split()) or type(exc).__name__
                 raise CliError(f"kvrod sweep: Dask: {msg}") from exc
     finally:
-        close()
+        bar.close()
     print(f"{len(report.computed)} points run ({len(report.failed)} failed), "
           f"{len(report.skipped)} already finished, in {report.wall_time_s:.1f} s "
           f"[{report.engine}]")

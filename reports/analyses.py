@@ -93,6 +93,95 @@ def run_modes(problem, count: int = 10, deformed: bool = False,
             "y_eq": y_eq, "static_tip": tip, "target": target, "sensitivities": sens}
 
 
+def assembly_modes_table(modes, shares: int = 3) -> str:
+    """The table `kvrod modes` prints for an assembly (one line per mode): the rods that
+    hold most of the mode's kinetic energy (at most ``shares``, each >= 5 %) last."""
+    head = (f"{'mode':>4} {'f [Hz]':>11} {'omega [rad/s]':>14} {'zeta [-]':>9} "
+            f"{'lambda [1/s]':>28}  kinetic energy in")
+    lines = [head, "-" * (len(head) + 12)]
+    for m in modes:
+        lam = m.eigenvalue
+        lam_s = (f"{lam.real:.4g} +- {abs(lam.imag):.4g}i" if lam.imag != 0
+                 else f"{lam.real:.4g}")
+        zeta = f"{m.zeta:9.5f}" if math.isfinite(m.zeta) else f"{'-':>9}"
+        top = sorted(m.rods.items(), key=lambda kv: -kv[1])
+        where = ", ".join(f"{n} {100 * f:.0f}%" for n, f in top[:shares] if f >= 0.05)
+        lines.append(f"{m.index:>4} {m.frequency_hz:11.5f} {m.omega:14.5f} {zeta} "
+                     f"{lam_s:>28}  {where or '-'}")
+    return "\n".join(lines)
+
+
+def assembly_reduced_size(amap) -> int:
+    """The number of unknowns (and so of modes) of an assembly's linearised problem."""
+    from runtime.model.system_statics import SystemStatics
+
+    return SystemStatics(amap.model).n_static
+
+
+def run_assembly_modes(problem, count: int = 10, deformed: bool = False,
+                       amap=None) -> dict:
+    """Modal analysis of an assembly; returns {"problem", "amap", "modes", "deformed",
+    "y_eq", "static"}.
+
+    About the reference (default): the loads scaled to zero (gravity on the bodies
+    included), so the rods' discretisation is the one of the loaded problem (a point
+    load's point keeps its node); deformed: about the static equilibrium under the loads
+    at t = 0- (:func:`runtime.simulate.assembly.static_equilibrium`), the loads' stiffness
+    included (a hanging pendulum's gravity). ``static``: for ``deformed`` the
+    equilibrium's ends, Newton iterations and joints' forces and moments."""
+    from runtime.analysis.modal import fix_sign
+    from runtime.analysis.system_modal import assembly_modes
+    from runtime.io.assembly_results import static_joint_values
+    from runtime.problem.assemble_system import build_system
+    from runtime.simulate.assembly import static_ends, static_equilibrium
+
+    amap = build_system(problem) if amap is None else amap
+    model = amap.model
+    static = None
+    if deformed:
+        st = static_equilibrium(problem, amap)
+        y_eq = st.y
+        joints = static_joint_values(amap, y_eq)
+        static = {"ends": static_ends(amap, y_eq), "newton_iterations": int(st.iterations),
+                  "joints": [{"index": k, "kind": jt.kind,
+                              "between": [jt.first.label, "ground" if jt.second is None
+                                          else jt.second.label], **joints[k]}
+                             for k, jt in enumerate(problem.joints)]}
+        with model.statics():
+            modes = assembly_modes(model, y_eq, count=count)
+    else:
+        with model.statics():
+            saved = model.load_scale
+            model.load_scale = 0.0
+            try:
+                y_eq = model.initial_state()
+                modes = assembly_modes(model, y_eq, count=count)
+            finally:
+                model.load_scale = saved
+    for m in modes:                       # one sign on every machine
+        m.shape = fix_sign(m.shape)
+    return {"problem": problem, "amap": amap, "modes": modes, "deformed": deformed,
+            "y_eq": y_eq, "static": static}
+
+
+def write_assembly_modes(res: dict, out: Path, figures: bool = True) -> list[Path]:
+    """The results of :func:`run_assembly_modes`: modes.json and modes.npz
+    (:mod:`runtime.io.assembly_modes`) and, read back from them, mode_shapes_3d.png (every
+    rod in 3-D) when ``figures``. Returns the paths in that order."""
+    from runtime.io.assembly_modes import read_assembly_modes, write_assembly_modes
+
+    out = Path(out)
+    paths = write_assembly_modes(out, res["problem"], res["amap"], res["modes"],
+                                 y_eq=res["y_eq"], deformed=res["deformed"],
+                                 static=res["static"])
+    if figures:
+        from runtime.io.assembly_plots import plot_assembly_mode_shapes
+
+        paths.append(plot_assembly_mode_shapes(read_assembly_modes(out),
+                                               out / "mode_shapes_3d.png"))
+    return paths
+
+
 def compare_table(result) -> str:
     """The table printed by `kvrod compare-damping` (plain text, one line per route)."""
     head = (f"{'case':<8} {'route':<11} {'tau_E [s]':>11} {'zeta meas.':>11} "

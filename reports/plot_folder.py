@@ -12,6 +12,10 @@ modes              modes.json (+ modes.npz)            mode_shapes.png, mode_sha
 sweep              study.toml                          summary.png (a point: DIR/points/ID)
 =================  ==================================  ======================================
 
+An assembly's run, static result or modes (summary.json or modes.json with an
+``"assembly"`` entry) get the same files with every rod and body in them, a run also
+joint_forces.png, its modes mode_shapes_3d.png only (:mod:`runtime.io.assembly_plots`).
+
 compare-damping, calibrate and calibrate --dma folders come with their figures and do
 not store the series behind them; a folder of such folders (reproduce, notes-*) holds no
 result itself. For those, and for anything else, :func:`plot_folder` raises
@@ -134,10 +138,7 @@ def _check(folder: Path, animate: str | None) -> str:
         why = animation_unavailable(animate)
         if why is not None:
             raise FolderError(f"{PREFIX}: --animate {animate}: {why}")
-        from runtime.io.results import read_npz
-
-        series = read_npz(folder / "series.npz", ("centreline",), hint=_AGAIN)
-        frames = series["centreline"].shape[0] if "centreline" in series else 0
+        frames = _centreline_frames(folder)
         if frames < 2:
             raise FolderError(f"{PREFIX}: --animate: the run in {where} kept no centreline "
                            "frames (simulation.centreline_frames = 0, or written before kvrod "
@@ -145,9 +146,51 @@ def _check(folder: Path, animate: str | None) -> str:
     return kind
 
 
+def _is_assembly(folder: Path) -> bool:
+    """summary.json of an assembly's result (an ``"assembly"`` entry)."""
+    return isinstance(_summary(folder).get("assembly"), dict)
+
+
+def _centreline_frames(folder: Path) -> int:
+    """The number of centreline frames of a run (an assembly's: every rod's fewest)."""
+    from runtime.io.results import read_npz
+
+    if not _is_assembly(folder):
+        series = read_npz(folder / "series.npz", ("centreline",), hint=_AGAIN)
+        return series["centreline"].shape[0] if "centreline" in series else 0
+    rods = _summary(folder)["assembly"].get("rods", [])
+    series = read_npz(folder / "series.npz", tuple(f"{r}/centreline" for r in rods),
+                      hint=_AGAIN)
+    return min((a.shape[0] for a in series.values()), default=0)
+
+
+def _plot_assembly_run(folder: Path, animate: str | None) -> Plotted:
+    from runtime.io.assembly_plots import (
+        animate_assembly,
+        load_assembly_run,
+        plot_assembly_run_folder,
+    )
+
+    try:
+        out = Plotted("run", plot_assembly_run_folder(folder))
+        run = load_assembly_run(folder)
+    except ValueError as exc:
+        raise FolderError(f"{PREFIX}: {exc}") from None
+    if run.frames == 0:
+        out.notes.append("no centreline.png: the run kept no centreline frames "
+                         "(simulation.centreline_frames = 0)")
+    if run.peaks_x.size < 2:
+        out.notes.append("no damping_ratio.png: fewer than two maxima (analysis.maxima)")
+    if animate is not None:
+        out.paths.append(animate_assembly(run, folder / f"centreline.{animate}"))
+    return out
+
+
 def _plot_run(folder: Path, animate: str | None) -> Plotted:
     from runtime.io.plots import LoadedRun, plot_run_folder
 
+    if _is_assembly(folder):
+        return _plot_assembly_run(folder, animate)
     out = Plotted("run", plot_run_folder(folder))
     run = LoadedRun(folder)
     if run.centreline.shape[0] == 0:
@@ -169,6 +212,13 @@ def _plot_static(folder: Path) -> Plotted:
     from runtime.io.results import DamagedFileError, read_npz
     from runtime.io.shapes import plot_static
 
+    if _is_assembly(folder):
+        from runtime.io.assembly_plots import plot_assembly_static_folder
+
+        try:
+            return Plotted("static", [plot_assembly_static_folder(folder)])
+        except ValueError as exc:
+            raise FolderError(f"{PREFIX}: {exc}") from None
     s = _summary(folder)
     path = folder / "static.npz"
     arrays = read_npz(path, ("positions", "reference"), hint=_AGAIN)
@@ -186,10 +236,33 @@ def _plot_static(folder: Path) -> Plotted:
     return Plotted("static", [plot_static(pos, ref, folder / "shape.png", title)])
 
 
+def _plot_assembly_modes(folder: Path) -> Plotted:
+    from runtime.io.assembly_modes import read_assembly_modes
+    from runtime.io.assembly_plots import plot_assembly_mode_shapes
+    from runtime.io.modes import ModesFileError
+    from runtime.io.shapes import MAX_MODES
+
+    try:
+        mf = read_assembly_modes(folder)
+    except ModesFileError as exc:
+        raise FolderError(f"{PREFIX}: {exc}") from None
+    out = Plotted("modes", [plot_assembly_mode_shapes(mf, folder / "mode_shapes_3d.png")])
+    if len(mf.modes) > MAX_MODES:
+        out.notes.append(f"the figure shows the first {MAX_MODES} of {len(mf.modes)} modes")
+    return out
+
+
 def _plot_modes(folder: Path) -> Plotted:
+    from runtime.io.assembly_modes import is_assembly_modes
     from runtime.io.modes import ModesFileError, read_modes
     from runtime.io.shapes import MAX_MODES, plot_mode_components, plot_mode_shapes_3d
 
+    try:
+        meta = json.loads((folder / "modes.json").read_text())
+    except (OSError, ValueError):
+        meta = {}
+    if is_assembly_modes(meta):
+        return _plot_assembly_modes(folder)
     try:
         mf = read_modes(folder)
     except ModesFileError as exc:

@@ -4,7 +4,8 @@ static` write for a problem with ``[rods.NAME]`` tables.
 series.npz (a run): ``t`` (n,), per rod ``NAME/start`` and ``NAME/end`` (3, n) end
 positions (m) and ``NAME/centreline`` (m, 3, N+1) node positions at ``centreline_t``,
 ``NAME/reference`` (3, N+1), per joint ``joint{k}/force`` and ``joint{k}/moment`` (3, n; N,
-N m: what the joint exerts on the rod of its first point, spatial, about that point), the
+N m: what the joint exerts on the rod of its first point, spatial, about that point), per
+body (file order) ``body{k}/centreline`` (m, 3) its mass centre at ``centreline_t``, the
 energies ``kinetic``, ``elastic``, ``dissipated``, ``external_work`` (J) and
 ``energy_balance_rel``, ``peaks_t``/``peaks_x``, ``y_static``, ``y_last``.
 static.npz (statics): ``y``, per rod ``NAME/positions`` (3, N+1), ``NAME/frames``
@@ -43,6 +44,8 @@ def write_assembly_run(out_dir: Path, res, extra: dict | None = None) -> dict:
         arrays[key] = v
     for name, v in res.centreline.items():
         arrays[f"{name}/centreline"] = v
+    for k, v in enumerate(res.body_centreline):
+        arrays[f"body{k}/centreline"] = v
     if model is not None:
         for k, name in enumerate(model.names):
             rod = model.rods[k]

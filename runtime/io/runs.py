@@ -222,6 +222,10 @@ def run_assembly_and_write(problem, out: Path, label: str, plots: bool = False,
     state = load_checkpoint(out, params) if resume else None
     build.require_generated()
     amap = build_system(problem)
+    if vtk_every is not None:
+        from runtime.io.assembly_vtk import check_rod_names
+
+        check_rod_names(amap.rod_names)
     if state is not None:
         import numpy as np
 
@@ -238,24 +242,32 @@ def run_assembly_and_write(problem, out: Path, label: str, plots: bool = False,
         claimed.keep()
 
         def on_checkpoint(st):
+            if series is not None:       # the frames so far survive a kill after this
+                series.write_collection()
             write_checkpoint(out, params, st)
             write_status(out, params, "running", st["t"])
 
+        series = None
+        if vtk_every is not None:
+            from runtime.io.assembly_vtk import AssemblyVtk
+
+            series = AssemblyVtk(out / "vtk", amap.model,
+                                 resume_from=t_start if state else None)
         cb, close = (progress(problem.simulation.t_end, label) if progress is not None
                      else (None, lambda: None))
         try:
             run = simulate_assembly(problem, progress=cb, checkpoint=on_checkpoint,
                                     checkpoint_every=checkpoint_every, resume=state,
-                                    amap=amap, sensitivity=sens_run)
+                                    amap=amap, sensitivity=sens_run,
+                                    snapshot_every=vtk_every,
+                                    snapshot_sink=series.add if series else None)
         except BaseException as exc:
             write_status(out, params, "failed", t_start, f"{type(exc).__name__}: {exc}")
             raise
         finally:
             close()
-        if vtk_every is not None and run.centreline_t.size:
-            from runtime.io.vtk import write_assembly_frames
-
-            write_assembly_frames(out / "vtk", run)
+            if series is not None:
+                series.close()
         extra = {"resumed_from_t": t_start} if state else None
         if sens_run is not None and sens_run.collected is not None:
             extra = {**(extra or {}), "sensitivities": sens_run.collected.summary()}
@@ -273,9 +285,9 @@ def run_assembly_and_write(problem, out: Path, label: str, plots: bool = False,
         if run.interrupt is not None:
             raise run.interrupt
         if plots and run.t.size > 1:
-            from runtime.io.plots import plot_assembly_run
+            from runtime.io.assembly_plots import plot_assembly_run_folder
 
-            plot_assembly_run(run, out)
+            plot_assembly_run_folder(out)
     return run, summary
 
 

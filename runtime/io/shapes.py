@@ -51,7 +51,7 @@ def _cube(points: np.ndarray) -> tuple[np.ndarray, float]:
     return (lo + hi) / 2, half * 1.05 if half > 0 else 1.0
 
 
-def _equal_axes_3d(ax, points: np.ndarray) -> None:
+def equal_axes_3d(ax, points: np.ndarray) -> None:
     """Equal scales on x, y, z: a cube of data around ``points`` in a cubic box."""
     c, h = _cube(points)
     ax.set_xlim(c[0] - h, c[0] + h)
@@ -74,7 +74,7 @@ def _plane(points: np.ndarray) -> tuple[int, int]:
     return int(a), int(b)
 
 
-def _projection(ax, points: np.ndarray) -> tuple[int, int]:
+def projection_axes(ax, points: np.ndarray) -> tuple[int, int]:
     """Equal-aspect 2-D axes on the plane of largest spread; returns its coordinates."""
     a, b = _plane(points)
     ax.set_aspect("equal", adjustable="datalim")
@@ -85,7 +85,8 @@ def _projection(ax, points: np.ndarray) -> tuple[int, int]:
     return a, b
 
 
-def _two_views(figsize=(10.5, 4.6)):
+def two_views(figsize=(10.5, 4.6)):
+    """A figure with a 3-D axes (left) and a 2-D axes for a projection (right)."""
     plt = pyplot()
     fig = plt.figure(figsize=figsize)
     ax3 = fig.add_subplot(1, 2, 1, projection="3d")
@@ -93,20 +94,21 @@ def _two_views(figsize=(10.5, 4.6)):
     return fig, ax3, ax2
 
 
-def _line3(ax, r: np.ndarray, *args, **kw):
+def line3(ax, r: np.ndarray, *args, **kw):
+    """``ax.plot`` of points r (3, n) on 3-D axes."""
     return ax.plot(r[0], r[1], r[2], *args, **kw)
 
 
 def figure_static(positions: np.ndarray, reference: np.ndarray, title: str = ""):
     """The static equilibrium (solid, nodes marked) and the stress-free reference
     (dashed grey), in 3-D and projected."""
-    fig, ax3, ax2 = _two_views()
+    fig, ax3, ax2 = two_views()
     pts = np.hstack([positions, reference])
-    _line3(ax3, reference, "--", color=GREY, lw=1.0, label="reference")
-    _line3(ax3, positions, "-", color="C0", lw=1.6, label="equilibrium")
-    _line3(ax3, positions[:, [0, -1]], "o", color="C0", ms=3)
-    _equal_axes_3d(ax3, pts)
-    a, b = _projection(ax2, pts)
+    line3(ax3, reference, "--", color=GREY, lw=1.0, label="reference")
+    line3(ax3, positions, "-", color="C0", lw=1.6, label="equilibrium")
+    line3(ax3, positions[:, [0, -1]], "o", color="C0", ms=3)
+    equal_axes_3d(ax3, pts)
+    a, b = projection_axes(ax2, pts)
     ax2.plot(reference[a], reference[b], "--", color=GREY, lw=1.0, label="reference")
     ax2.plot(positions[a], positions[b], ".-" if positions.shape[1] <= 61 else "-",
              color="C0", lw=1.6, ms=3, label="equilibrium")
@@ -141,13 +143,13 @@ def figure_run_centreline(t: np.ndarray, frames: np.ndarray, reference: np.ndarr
     t0, t1 = float(t[0]), float(t[-1])
     norm = Normalize(t0, t1 if t1 > t0 else t0 + 1.0)
     cmap = plt.get_cmap("viridis")
-    fig, ax3, ax2 = _two_views(figsize=(11.5, 4.6))
+    fig, ax3, ax2 = two_views(figsize=(11.5, 4.6))
     pts = np.hstack([reference, *frames[idx]])
     for i in idx:
-        _line3(ax3, frames[i], "-", color=cmap(norm(t[i])), lw=1.3)
-    _line3(ax3, reference, "--", color=GREY, lw=1.0, zorder=5)   # on top: visible at rest
-    _equal_axes_3d(ax3, pts)
-    a, b = _projection(ax2, pts)
+        line3(ax3, frames[i], "-", color=cmap(norm(t[i])), lw=1.3)
+    line3(ax3, reference, "--", color=GREY, lw=1.0, zorder=5)   # on top: visible at rest
+    equal_axes_3d(ax3, pts)
+    a, b = projection_axes(ax2, pts)
     for i in idx:
         ax2.plot(frames[i][a], frames[i][b], "-", color=cmap(norm(t[i])), lw=1.3)
     ax2.plot(reference[a], reference[b], "--", color=GREY, lw=1.0, label="reference",
@@ -229,9 +231,9 @@ def figure_mode_shapes_3d(mf, max_modes: int = MAX_MODES):
     for j in range(k):
         a, plus, minus = shapes[j]
         ax = fig.add_subplot(rows, cols, j + 1, projection="3d")
-        _line3(ax, eq, "--", color=GREY, lw=0.9)
-        _line3(ax, minus, "-", color="C0", lw=0.8, alpha=0.35)
-        _line3(ax, plus, ".-", color="C0", lw=1.4, ms=2)
+        line3(ax, eq, "--", color=GREY, lw=0.9)
+        line3(ax, minus, "-", color="C0", lw=0.8, alpha=0.35)
+        line3(ax, plus, ".-", color="C0", lw=1.4, ms=2)
         m = mf.modes[j]
         if m.get("family") == "torsion" and mf.equilibrium_frames is not None:
             rot = _rotate(mf.equilibrium_frames, a * mf.rotation[j])
@@ -239,8 +241,8 @@ def figure_mode_shapes_3d(mf, max_modes: int = MAX_MODES):
             for s in snapshot_indices(mids.shape[1], 9):
                 for frames, color in ((mf.equilibrium_frames, GREY), (rot, "C3")):
                     seg = np.column_stack([mids[:, s], mids[:, s] + tick * frames[s][:, 0]])
-                    _line3(ax, seg, "-", color=color, lw=1.0)
-        _equal_axes_3d(ax, pts)
+                    line3(ax, seg, "-", color=color, lw=1.0)
+        equal_axes_3d(ax, pts)
         ax.set_title(_mode_title(m), fontsize=8)
     meta = mf.meta
     about = "static equilibrium under the loads" if meta.get("deformed") else "reference"
@@ -318,7 +320,7 @@ def animation_unavailable(fmt: str) -> str | None:
     return None
 
 
-def _render_frames(fig, artists: Sequence, update, count: int):
+def render_frames(fig, artists: Sequence, update, count: int):
     """Yield the figure as RGBA arrays (h, w, 4) for ``count`` frames: the static parts
     drawn once, then per frame ``update(i)`` and only the ``artists`` redrawn over a copy
     of that background (matplotlib's blitting). A full redraw of the 3-D axes and their
@@ -338,7 +340,7 @@ def _render_frames(fig, artists: Sequence, update, count: int):
         yield np.array(canvas.buffer_rgba())
 
 
-def _write_gif(frames, path: Path, fps: int) -> None:
+def write_gif(frames, path: Path, fps: int) -> None:
     """GIF through Pillow (what matplotlib's PillowWriter does with its frames)."""
     from PIL import Image
 
@@ -352,7 +354,7 @@ def _write_gif(frames, path: Path, fps: int) -> None:
                    duration=int(1000 / fps), loop=0)
 
 
-def _write_mp4(frames, path: Path, fps: int) -> None:
+def write_mp4(frames, path: Path, fps: int) -> None:
     """H.264 MP4 through the ffmpeg command line (raw RGBA frames on its stdin, as
     matplotlib's FFMpegWriter sends them)."""
     import subprocess
@@ -394,13 +396,13 @@ def animate_run(t: np.ndarray, frames: np.ndarray, reference: np.ndarray, path: 
     if why is not None:
         raise ValueError(why)
     idx = snapshot_indices(frames.shape[0], MAX_ANIMATION_FRAMES)
-    fig, ax3, ax2 = _two_views(figsize=(9.0, 4.2))
+    fig, ax3, ax2 = two_views(figsize=(9.0, 4.2))
     fig.set_dpi(80)
     pts = np.hstack([reference, *frames[idx]])
-    _line3(ax3, reference, "--", color=GREY, lw=1.0)
-    line3, = _line3(ax3, frames[idx[0]], "-", color="C0", lw=1.6)
-    _equal_axes_3d(ax3, pts)
-    a, b = _projection(ax2, pts)
+    line3(ax3, reference, "--", color=GREY, lw=1.0)
+    curve3, = line3(ax3, frames[idx[0]], "-", color="C0", lw=1.6)
+    equal_axes_3d(ax3, pts)
+    a, b = projection_axes(ax2, pts)
     ax2.plot(reference[a], reference[b], "--", color=GREY, lw=1.0, label="reference")
     line2, = ax2.plot(frames[idx[0]][a], frames[idx[0]][b], "-", color="C0", lw=1.6,
                       label="centreline")
@@ -414,14 +416,14 @@ def animate_run(t: np.ndarray, frames: np.ndarray, reference: np.ndarray, path: 
 
     def update(i: int) -> None:
         r = frames[idx[i]]
-        line3.set_data_3d(r[0], r[1], r[2])
+        curve3.set_data_3d(r[0], r[1], r[2])
         line2.set_data(r[a], r[b])
         stamp.set_text(f"t = {float(t[idx[i]]):.4g} s")
 
     try:
-        rendered = _render_frames(fig, (line3, line2, stamp), update, idx.size)
+        rendered = render_frames(fig, (curve3, line2, stamp), update, idx.size)
         with atomic_path(path, suffix=path.suffix) as tmp:
-            (_write_gif if fmt == "gif" else _write_mp4)(rendered, tmp, fps)
+            (write_gif if fmt == "gif" else write_mp4)(rendered, tmp, fps)
     finally:
         pyplot().close(fig)
     return path

@@ -10,10 +10,14 @@ Per file: points = node positions (N+1); one line cell per segment (N); cell dat
 segments: directors a1, a2, a3 (frame), strains V, resultants F, dissipation rate 2D of the
 segment (W); point data at nodes: curvature/twist U and moments M of the joint at the node
 (zero where there is no joint), node velocity v, dissipation rate 2D of the joint (W).
+
+:class:`FrameSeries` is the series of any points with arrays (an assembly's bodies,
+:mod:`runtime.io.assembly_vtk`); :class:`VtkSeries` the rod's.
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterable
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
@@ -87,54 +91,45 @@ def _coupled_dissipation(model: RodModel, t: float, y: np.ndarray, w: np.ndarray
     return seg, jnt
 
 
-def write_vtp(path: Path, points: np.ndarray, cell_data: dict, point_data: dict) -> Path:
-    """One polyline (points (n, 3)) with its arrays, written atomically."""
-    pts = np.asarray(points, dtype=float)
+def write_vtp(path: Path, points: np.ndarray, cell_data: dict, point_data: dict,
+              cells: str = "line") -> Path:
+    """Points (n, 3) with their arrays, written atomically: ``cells="line"`` one polyline
+    through them (n - 1 line cells, a rod), ``"vertex"`` one vertex cell per point (n,
+    e.g. rigid bodies)."""
+    pts = np.asarray(points, dtype=float).reshape(-1, 3)
     n = pts.shape[0]
-    conn = " ".join(str(i) for j in range(n - 1) for i in (j, j + 1))
-    offs = " ".join(str(2 * (j + 1)) for j in range(n - 1))
+    if cells == "line":
+        conn = " ".join(str(i) for j in range(n - 1) for i in (j, j + 1))
+        offs = " ".join(str(2 * (j + 1)) for j in range(n - 1))
+        n_verts, n_lines, tag = 0, max(n - 1, 0), "Lines"
+    elif cells == "vertex":
+        conn = " ".join(str(j) for j in range(n))
+        offs = " ".join(str(j + 1) for j in range(n))
+        n_verts, n_lines, tag = n, 0, "Verts"
+    else:
+        raise ValueError(f"cells = {cells!r}: 'line' or 'vertex'")
     xml = [
         '<?xml version="1.0"?>',
         '<VTKFile type="PolyData" version="0.1" byte_order="LittleEndian">',
         "<PolyData>",
-        f'<Piece NumberOfPoints="{n}" NumberOfVerts="0" NumberOfLines="{n - 1}" '
+        f'<Piece NumberOfPoints="{n}" NumberOfVerts="{n_verts}" NumberOfLines="{n_lines}" '
         'NumberOfStrips="0" NumberOfPolys="0">',
         "<Points>", _array_xml("Points", pts), "</Points>",
         "<PointData>", *(_array_xml(k, v) for k, v in point_data.items()), "</PointData>",
         "<CellData>", *(_array_xml(k, v) for k, v in cell_data.items()), "</CellData>",
-        "<Lines>",
+        f"<{tag}>",
         f'<DataArray type="Int64" Name="connectivity" format="ascii">{conn}</DataArray>',
         f'<DataArray type="Int64" Name="offsets" format="ascii">{offs}</DataArray>',
-        "</Lines>", "</Piece>", "</PolyData>", "</VTKFile>",
+        f"</{tag}>", "</Piece>", "</PolyData>", "</VTKFile>",
     ]
     return write_text(Path(path), "\n".join(xml) + "\n")
 
 
-def write_points_vtp(path: Path, points: np.ndarray, point_data: dict) -> Path:
-    """Points (n, 3) as vertices with their arrays (ParaView: Glyph them), atomically."""
-    pts = np.asarray(points, dtype=float).reshape(-1, 3)
-    n = pts.shape[0]
-    xml = [
-        '<?xml version="1.0"?>',
-        '<VTKFile type="PolyData" version="0.1" byte_order="LittleEndian">',
-        "<PolyData>",
-        f'<Piece NumberOfPoints="{n}" NumberOfVerts="{n}" NumberOfLines="0" '
-        'NumberOfStrips="0" NumberOfPolys="0">',
-        "<Points>", _array_xml("Points", pts), "</Points>",
-        "<PointData>", *(_array_xml(k, v) for k, v in point_data.items()), "</PointData>",
-        "<Verts>",
-        '<DataArray type="Int64" Name="connectivity" format="ascii">'
-        f'{" ".join(str(i) for i in range(n))}</DataArray>',
-        '<DataArray type="Int64" Name="offsets" format="ascii">'
-        f'{" ".join(str(i + 1) for i in range(n))}</DataArray>',
-        "</Verts>", "</Piece>", "</PolyData>", "</VTKFile>",
-    ]
-    return write_text(Path(path), "\n".join(xml) + "\n")
-
-
-def _pvd_text(entries: list[tuple[float, str]]) -> str:
-    rows = [f'<DataSet timestep="{t:.9g}" group="" part="0" file="{name}"/>'
-            for t, name in entries]
+def pvd_text(entries: list[tuple[float, str]] | list[tuple[float, str, int]]) -> str:
+    """A .pvd collection of (time, file) or (time, file, part) entries (parts: blocks of
+    one dataset, e.g. an assembly's rods)."""
+    rows = [f'<DataSet timestep="{e[0]:.9g}" group="" part="{e[2] if len(e) > 2 else 0}" '
+            f'file="{e[1]}"/>' for e in entries]
     pvd = ['<?xml version="1.0"?>',
            '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
            "<Collection>", *rows, "</Collection>", "</VTKFile>"]
@@ -151,71 +146,84 @@ def read_pvd(path: Path) -> list[tuple[float, str]]:
     return entries
 
 
-class VtkSeries:
+class FrameSeries:
     """A ParaView time series written frame by frame (``stem_00000.vtp`` ... + ``stem.pvd``).
 
     Each frame is written when it is added and the collection file is rewritten atomically
     (every ``pvd_every`` frames and on :meth:`close`), so a run that stops keeps the frames
-    it produced. ``resume_from=t``: continue an earlier series in ``folder``: its frames
-    before ``t`` are kept (the resumed run adds the frame at ``t`` and those after it).
+    it produced. ``resume_from=t``: continue an earlier series in ``folder`` from its
+    checkpoint at ``t``: its frames up to ``t`` are kept (a run writes every frame up to a
+    checkpoint's time before that checkpoint, and the resumed run's snapshots start after
+    it), later ones (written after the checkpoint) are removed; only this stem's frames
+    (``stem_<digits>.vtp``) are touched, not those of a series whose stem begins with it.
     """
 
-    def __init__(self, folder: Path, model: RodModel, stem: str = "rod",
-                 resume_from: float | None = None, pvd_every: int = 20) -> None:
-        self.folder, self.model, self.stem = Path(folder), model, stem
+    def __init__(self, folder: Path, stem: str, resume_from: float | None = None,
+                 pvd_every: int = 20) -> None:
+        self.folder, self.stem = Path(folder), stem
         self.path = self.folder / f"{stem}.pvd"
         self.entries: list[tuple[float, str]] = []
         if resume_from is not None and self.path.exists():
-            tol = 1e-9 * max(1.0, abs(resume_from))
+            tol = 1e-9 * max(1.0, abs(resume_from))      # the .pvd's 9 digits
             self.entries = [(t, f) for t, f in read_pvd(self.path)
-                            if t < resume_from - tol and (self.folder / f).exists()]
+                            if t <= resume_from + tol and (self.folder / f).exists()]
             keep = {f for _, f in self.entries}
-            keep |= {f.replace(f"{stem}_", f"{stem}_contact_", 1) for f in keep}
-            for stale in self.folder.glob(f"{stem}_*.vtp"):  # frames after the checkpoint
-                if stale.name not in keep:
-                    stale.unlink()
+            mine = re.compile(re.escape(stem) + r"_\d+\.vtp\Z")
+            for stale in self.folder.glob("*.vtp"):
+                if mine.match(stale.name) and stale.name not in keep:
+                    stale.unlink()                   # frames after the checkpoint
         self._k = len(self.entries)
         self.pvd_every = max(1, int(pvd_every))
-        #: a rod touching obstacles: the contact points of each frame (quadrature points
-        #: within 3 delta of an obstacle) as ``{stem}_contact_*.vtp`` / ``.pvd``
-        self.contact = (None if getattr(model, "contact", None) is None else
-                        VtkSeries.__new__(VtkSeries))
-        if self.contact is not None:
-            c = self.contact
-            c.folder, c.model, c.stem = self.folder, None, f"{stem}_contact"
-            c.path = self.folder / f"{c.stem}.pvd"
-            c.entries = [(t, f.replace(f"{stem}_", f"{stem}_contact_", 1))
-                         for t, f in self.entries]
-            c._k, c.pvd_every, c.contact = self._k, self.pvd_every, None
+
+    def add_frame(self, t: float, points: np.ndarray, cell_data: dict, point_data: dict,
+                  cells: str = "line") -> str:
+        """Write one frame (:func:`write_vtp`) at time ``t``; returns its file name."""
+        name = f"{self.stem}_{self._k:05d}.vtp"
+        write_vtp(self.folder / name, points, cell_data, point_data, cells)
+        self._k += 1
+        self.entries.append((float(t), name))
+        if len(self.entries) % self.pvd_every == 0:
+            self.write_collection()
+        return name
+
+    def write_collection(self) -> Path:
+        """(Re)write ``stem.pvd`` with the frames so far (atomically)."""
+        return write_text(self.path, pvd_text(self.entries))
+
+    close = write_collection
+
+
+class VtkSeries(FrameSeries):
+    """The rod's ParaView time series (:class:`FrameSeries` of :func:`element_fields`:
+    ``stem_00000.vtp`` ... + ``stem.pvd``)."""
+
+    def __init__(self, folder: Path, model: RodModel, stem: str = "rod",
+                 resume_from: float | None = None, pvd_every: int = 20) -> None:
+        super().__init__(folder, stem, resume_from, pvd_every)
+        self.model = model
+        #: a rod touching obstacles: each frame's contact points (the centreline's
+        #: quadrature points within 3 delta of an obstacle: obstacle, segment, gap) as the
+        #: vertex series ``{stem}_contact``
+        self.contact = (FrameSeries(folder, f"{stem}_contact", resume_from, pvd_every)
+                        if getattr(model, "contact", None) is not None else None)
 
     def add(self, t: float, y: np.ndarray, yp: np.ndarray | None = None) -> None:
         """Write the frame of state ``y`` (rate ``yp``; None: at rest) at time ``t``."""
         cell, point = element_fields(self.model, float(t), np.ascontiguousarray(y),
                                      None if yp is None else np.ascontiguousarray(yp))
         pos = point.pop("position")
-        name = f"{self.stem}_{self._k:05d}.vtp"
-        write_vtp(self.folder / name, pos, cell, point)
-        self._k += 1
-        self.entries.append((float(t), name))
+        self.add_frame(t, pos, cell, point)
         if self.contact is not None:
-            self.contact.add_points(float(t), self.model.contact_points(float(t), y))
-        if len(self.entries) % self.pvd_every == 0:
-            self.write_collection()
-
-    def add_points(self, t: float, rows: np.ndarray) -> None:
-        """A frame of contact points (rows of ``RodModel.contact_points``: obstacle,
-        segment, x (3), gap)."""
-        name = f"{self.stem}_{self._k:05d}.vtp"
-        write_points_vtp(self.folder / name, rows[:, 2:5],
-                         {"obstacle": rows[:, 0], "segment": rows[:, 1], "gap": rows[:, 5]})
-        self._k += 1
-        self.entries.append((t, name))
+            rows = self.model.contact_points(float(t), np.ascontiguousarray(y))
+            self.contact.add_frame(t, rows[:, 2:5], {}, {"obstacle": rows[:, 0],
+                                                        "segment": rows[:, 1],
+                                                        "gap": rows[:, 5]}, cells="vertex")
 
     def write_collection(self) -> Path:
-        """(Re)write ``stem.pvd`` with the frames so far (atomically)."""
-        if getattr(self, "contact", None) is not None:
+        """(Re)write ``stem.pvd`` (and the contact points' collection) atomically."""
+        if self.contact is not None:
             self.contact.write_collection()
-        return write_text(self.path, _pvd_text(self.entries))
+        return super().write_collection()
 
     close = write_collection
 

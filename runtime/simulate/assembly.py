@@ -2,16 +2,18 @@
 
 The same run as a single rod's (:mod:`runtime.simulate.simulate`): the static equilibrium
 under the loads at ``t = 0-`` (or the reference at rest), consistent initial values, the
-run loop with the energy audit, output samples, maxima and centreline frames, on the
-assembly's :class:`~runtime.model.system.SystemModel`. Outputs name the rods: each rod's
-end positions (``NAME/start``, ``NAME/end``), node positions (``NAME/positions``), and
-every joint's force and moment on the rod of its first point, every body's position.
+run loop with the energy audit, output samples, maxima, centreline frames (with the
+bodies' mass centres) and full-state snapshots (VTK), on the assembly's
+:class:`~runtime.model.system.SystemModel`. Outputs name the rods: each rod's end
+positions (``NAME/start``, ``NAME/end``), node positions (``NAME/positions``), and every
+joint's force and moment on the rod of its first point, every body's position.
 """
 
 from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -29,6 +31,7 @@ from runtime.simulate.observers import (
     Maxima,
     Progress,
     Sampler,
+    Snapshots,
 )
 from runtime.simulate.simulate import ATOL_FLOOR, ATOL_FRACTION, ErrorControl
 from runtime.simulate.vibration_centre import VibrationCentre, inputs_constant
@@ -78,6 +81,10 @@ class AssemblyResult:
     centreline_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
     #: per rod: (m, 3, N+1) node positions at the centreline frame times
     centreline: dict[str, np.ndarray] = field(default_factory=dict)
+    #: per body (file order): (m, 3) mass-centre positions at the centreline frame times
+    body_centreline: list[np.ndarray] = field(default_factory=list)
+    #: ``(t, y, yp)`` every ``snapshot_every`` seconds when no sink took them
+    snapshots: list = field(default_factory=list)
 
     @property
     def model(self):
@@ -217,6 +224,27 @@ def body_state(model, body, y: np.ndarray) -> dict:
     c = phi + R @ np.asarray(body.offset, dtype=float)
     return {"position": [float(v) for v in c],
             "frame": [[float(v) for v in row] for row in R]}
+
+
+def body_pose_index(model, body) -> np.ndarray:
+    """The state indices (7,) of a body's node position (3) and its segment's quaternion
+    (4): what :func:`body_centres` needs."""
+    return np.concatenate([model.phi_index[body.rod][body.node],
+                           model.p_index[body.rod][body.segment - 1]])
+
+
+def body_centres(model, poses: np.ndarray) -> np.ndarray:
+    """Mass-centre positions (m, nb, 3) in m from poses (m, 7, nb) recorded at
+    :func:`body_pose_index`: node position + R(p) offset."""
+    poses = np.asarray(poses, dtype=float)
+    out = np.zeros((poses.shape[0], len(model.bodies), 3))
+    for j, body in enumerate(model.bodies):
+        e = np.asarray(body.offset, dtype=float)
+        for i in range(poses.shape[0]):
+            p = poses[i, 3:, j]
+            R = quat_rotation(p / np.linalg.norm(p)) if np.all(np.isfinite(p)) else np.eye(3)
+            out[i, j] = poses[i, :3, j] + R @ e
+    return out
 
 
 def static_ends(amap: AssemblyMap | None, y: np.ndarray) -> dict[str, list[float]]:
@@ -381,11 +409,19 @@ def error_control(problem, amap: AssemblyMap) -> ErrorControl:
 def simulate_assembly(problem, *, progress=None, checkpoint=None,
                       checkpoint_every: float = 1.0, resume: dict | None = None,
                       max_steps: int = 2_000_000, amap: AssemblyMap | None = None,
-                      sensitivity=None) -> AssemblyResult:
+                      sensitivity=None,
+                      snapshot_every: float | None = None,
+                      snapshot_sink: Callable[[float, np.ndarray, np.ndarray], object]
+                      | None = None) -> AssemblyResult:
     """Run an assembly problem (see the module docstring); never raises for a failed
     solve: the result says why and keeps what was computed. ``sensitivity``: forward
     sensitivities to carry (``runtime.simulate.assembly_sensitivity``), their channels in
-    ``sensitivity.collected``."""
+    ``sensitivity.collected``.
+
+    ``snapshot_every`` (s): the whole state and its rate every this many seconds, handed
+    to ``snapshot_sink(t, y, yp)`` as the run reaches them (for VTK:
+    :class:`runtime.io.assembly_vtk.AssemblyVtk`; default: kept in
+    ``result.snapshots``); a resumed run continues where the checkpoint's left off."""
     sim = problem.simulation
     res = AssemblyResult(problem=problem)
     wall0 = time.perf_counter()
@@ -411,11 +447,18 @@ def simulate_assembly(problem, *, progress=None, checkpoint=None,
         ix, iv = maxima_indices(amap, problem.analysis.maxima)
         maxima = Maxima(ix, iv, offset=float(model.reference[ix]), positive_only=False)
         observers.append(maxima)
-    centreline = None
+    if snapshot_every is not None:
+        observers.append(Snapshots(snapshot_every, snapshot_sink or (
+            lambda t, y, yp: res.snapshots.append((t, y, yp)))))
+    centreline = poses = None
     if sim.centreline_frames:
-        centreline = Centreline(np.linspace(0.0, sim.t_end, sim.centreline_frames),
-                                np.concatenate(model.phi_index))
+        t_frames = np.linspace(0.0, sim.t_end, sim.centreline_frames)
+        centreline = Centreline(t_frames, np.concatenate(model.phi_index))
         observers.append(centreline)
+        if model.bodies:
+            poses = Centreline(t_frames, np.stack([body_pose_index(model, b)
+                                                   for b in model.bodies]), key="body_poses")
+            observers.append(poses)
     if progress is not None:
         observers.append(Progress(progress))
     counters0: dict[str, int] = {}
@@ -479,6 +522,9 @@ def simulate_assembly(problem, *, progress=None, checkpoint=None,
             n_nodes = model.rods[k].N + 1
             res.centreline[name] = pos[:, :, k0:k0 + n_nodes]
             k0 += n_nodes
+    if poses is not None:
+        c = body_centres(model, poses.arrays()[1])
+        res.body_centreline = [c[:, j] for j in range(c.shape[1])]
     if maxima is not None and res.y_last is not None:
         res.maxima_t, res.maxima_x = np.array(maxima.t), np.array(maxima.x)
         _centre_maxima(res, problem, amap)

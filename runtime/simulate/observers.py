@@ -427,15 +427,19 @@ class Centreline:
 
     Only positions are kept (3 (N+1) numbers a frame), so a run stores a modest grid of
     them (``simulation.centreline_frames``) rather than full states. ``phi_index``
-    (N+1, 3): the state indices of the node positions.
+    (N+1, 3): the state indices of the node positions. Any other state indices (n, c)
+    are recorded the same way, (c, n) a frame (an assembly's bodies: node position and
+    quaternion); ``key`` names them in a checkpoint (one key per instance).
     """
 
     name = "centreline"
     sparse = True
 
-    def __init__(self, t_frames: np.ndarray, phi_index: np.ndarray) -> None:
+    def __init__(self, t_frames: np.ndarray, phi_index: np.ndarray,
+                 key: str = "centreline") -> None:
         self.t_frames = np.asarray(t_frames, dtype=float)
         self.idx = np.asarray(phi_index, dtype=int)
+        self.key = key
         self.k = 0
         self.rec: list[np.ndarray] = []
         #: the positions' sensitivities (k, 3, N+1) per frame, when the run has them
@@ -464,16 +468,16 @@ class Centreline:
     def arrays(self) -> tuple[np.ndarray, np.ndarray]:
         """``(t, positions)``: the frame times reached (m,) and positions (m, 3, N+1), m."""
         pos = (np.stack(self.rec) if self.rec
-               else np.zeros((0, 3, self.idx.shape[0])))
+               else np.zeros((0, self.idx.shape[1], self.idx.shape[0])))
         return self.t_frames[:self.k].copy(), pos
 
     def state(self) -> dict[str, Any]:
-        return {"centreline_k": self.k, "centreline_positions": self.arrays()[1]}
+        return {f"{self.key}_k": self.k, f"{self.key}_positions": self.arrays()[1]}
 
     def restore(self, st: dict[str, Any]) -> None:
-        self.k = int(st.get("centreline_k", 0))
-        pos = st.get("centreline_positions")
-        shape = (self.k, 3, self.idx.shape[0])
+        self.k = int(st.get(f"{self.key}_k", 0))
+        pos = st.get(f"{self.key}_positions")
+        shape = (self.k, self.idx.shape[1], self.idx.shape[0])
         # a checkpoint without frames (an older kvrod): the frames before it are unknown
         self.rec = list(np.asarray(pos, dtype=float).reshape(shape)
                         if pos is not None and np.size(pos) == math.prod(shape)

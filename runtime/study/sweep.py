@@ -1,4 +1,4 @@
-"""Parameter studies: study definition, per-point runs, the study table.
+"""Parameter studies: study definition, per-point runs, the serial engine.
 
 A study is a TOML file naming a problem, fixed parameters and the varied ones, either as
 a grid (Cartesian product, in the order the keys are written) or as an explicit list::
@@ -22,46 +22,53 @@ a grid (Cartesian product, in the order the keys are written) or as an explicit 
 (``scenario``, its earlier name, is accepted too). Parameter names are the short aliases
 of the command line (:data:`runtime.problem.schema.ALIASES`: ``tau``, ``tau_S``, ``n_elements``,
 ``youngs_modulus``, ``tip_force``, ...) or any dotted path of the problem file (e.g.
-``loads.0.time.start``); ``tau`` sets tau_S = tau_B = tau (the paper's convention). Every
-point is built through the problem schema when the study is loaded, so a bad name, type or
-value is a :class:`StudyError` naming the point before anything runs; a point whose run
-fails is recorded as failed and the others run.
+``loads.0.time.start``); ``tau`` sets tau_S = tau_B = tau (the paper's convention).
+
+Checked when the study is loaded, before anything runs or is written: every name, type
+and value, and each grid value in a point of the study (the axis's value with the first
+value of every other axis: as many checks as grid values, not as points, so a grid of
+40,000 or 10^9 points is loaded at once, never expanded: :mod:`runtime.study.points`),
+and every explicit point. A combination that only fails together with another axis's
+value is found when its point is reached: that point is recorded as failed with the
+message naming the parameter, and the others run. A point whose run fails is recorded
+as failed likewise.
 
 Results layout of a study folder ``DIR``::
 
     DIR/study.toml                       copy of the study file
     DIR/points/<point id>/summary.json   per point (status, message, figures, parameters)
     DIR/points/<point id>/series.npz     per point time series (when a run got that far)
+    DIR/points/<point id>/problem.toml   per point: the resolved problem
     DIR/progress.json                    live counts: done, failed, running, queued
-    DIR/study.csv                        one row per point: appended as points return,
-                                         rebuilt in study order from the summaries
+    DIR/study.csv                        one row per returned point, appended as points
+                                         return (:mod:`runtime.study.table`)
     DIR/summary.png                      damping ratios and periods against a varied parameter
 
 The point id is stable: a readable slug of the varied parameters plus a hash of all of
 the point's parameters, so the same point gets the same folder on every run, and a
 finished point (summary.json with status "finished" and the same parameters) is not run
-again. Every file is written atomically (temporary name, then rename).
+again. Every file is written atomically (temporary name, then rename), a point's
+summary.json last.
 
-This module holds everything except the distributed engine (``runtime.study.sweep_dask``): the
-study, the task function :func:`run_point` that workers execute (it takes a plain
-parameter dict and returns a picklable :class:`PointOutcome`), writing a point's folder,
-the table, the plots and a serial engine (:func:`run_study_serial`). It does not import
-Dask.
+This module holds everything except the distributed engine (``runtime.study.sweep_dask``):
+the study, the task functions that workers execute (:func:`run_batch`: a list of
+parameter dicts in, small :class:`PointResult` rows out, each point's folder written by
+the worker itself where it sees the study folder; :func:`run_point`: one point's files as
+bytes, for a worker that does not), the client's bookkeeping (:class:`StudyRecorder`) and
+a serial engine (:func:`run_study_serial`). It does not import Dask.
 """
 
 from __future__ import annotations
 
-import csv
-import hashlib
-import io
-import itertools
+import contextlib
 import json
 import math
 import os
-import re
+import signal
 import socket
+import threading
 import time
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
@@ -69,14 +76,41 @@ from typing import Any
 
 from runtime.io.atomic import write_bytes, write_text
 from runtime.io.results import write_json, write_run
+from runtime.study.plots import UNITS, write_plots
+from runtime.study.points import (
+    FAILED,
+    FINISHED,
+    PENDING,
+    RUNNING,
+    StudyPoint,
+    StudyPoints,
+    canonical_json,
+    merge,
+    point_id,
+)
+from runtime.study.table import (
+    FIGURE_COLUMNS,
+    TABLE_NAME,
+    TableAppender,
+    read_table,
+    row_of,
+    table_columns,
+    table_row,
+)
+
+__all__ = ["CONFIRM_FLAG", "FAILED", "FIGURE_COLUMNS", "FINISHED", "MAX_POINTS", "PENDING",
+           "RUNNING", "UNITS", "PointOutcome", "PointResult", "Study", "StudyError",
+           "StudyPoint", "StudyRecorder", "StudyReport", "SweepProgress", "base_problem",
+           "canonical_json", "check_point", "failure_outcome", "is_finished", "load_study",
+           "point_dir", "point_id", "read_summary", "read_table", "run_batch", "run_point",
+           "run_point_into", "run_study_serial", "study_from_dict", "table_row",
+           "write_plots", "write_point"]
 
 #: top-level keys of a study file
 STUDY_KEYS = ("name", "problem", "scenario", "fixed", "grid", "points")
 #: largest study run without confirmation, and the command-line flag that confirms
 MAX_POINTS = 10_000
 CONFIRM_FLAG = "--yes"
-#: status of a point that has no finished/failed summary yet
-PENDING, RUNNING, FINISHED, FAILED = "pending", "running", "finished", "failed"
 
 
 class StudyError(ValueError):
@@ -145,11 +179,23 @@ def base_problem(problem: str) -> Any:
     """The study's problem without overrides, read once per process and file version
     (a study's points, thousands of them, share it: the registry and the problem file
     are not read again for each; an edited file is read again)."""
+    try:
+        path = _problem_file(problem, os.getcwd())
+        st = path.stat()
+    except OSError:                      # moved or deleted since: resolve it again
+        _problem_file.cache_clear()
+        path = _problem_file(problem, os.getcwd())
+        st = path.stat()
+    return _base_problem(problem, str(path), st.st_mtime_ns, st.st_size)
+
+
+@lru_cache(maxsize=16)
+def _problem_file(problem: str, cwd: str) -> Path:
+    """The file of a problem name or path (a built-in name is looked up once per process,
+    not once per point)."""
     from runtime.problem.registry import problem_path
 
-    path = problem_path(problem).resolve()
-    st = path.stat()
-    return _base_problem(problem, str(path), st.st_mtime_ns, st.st_size)
+    return problem_path(problem).resolve()
 
 
 @lru_cache(maxsize=16)
@@ -172,56 +218,49 @@ def check_point(problem: Any, params: Mapping[str, Any], where: str) -> None:
         raise StudyError(f"{where}: {exc}") from None
 
 
-def canonical_json(params: Mapping[str, Any]) -> str:
-    """The parameters as sorted, compact JSON (floats in shortest round-trip form)."""
-    return json.dumps(dict(params), sort_keys=True, separators=(",", ":"))
-
-
-def _slug_value(v: Any) -> str:
-    s = f"{v:g}" if isinstance(v, float) else str(v)
-    return re.sub(r"[^A-Za-z0-9.+-]", "_", s)
-
-
-def point_id(params: Mapping[str, Any], varied: Sequence[str]) -> str:
-    """Stable folder name: slug of the varied parameters (sorted by name, so reordering
-    the study file keeps the ids) + 10 hex digits of the sha256 of all parameters."""
-    digest = hashlib.sha256(canonical_json(params).encode()).hexdigest()[:10]
-    slug = "_".join(f"{k}={_slug_value(params[k])}" for k in sorted(varied) if k in params)
-    slug = slug[:80].rstrip("_")
-    return f"{slug}-{digest}" if slug else digest
-
-
-@dataclass(frozen=True)
-class StudyPoint:
-    """One simulation of a study: its stable id and its full parameter set (fixed + varied)."""
-
-    id: str
-    params: dict[str, Any]
-
-
 @dataclass(frozen=True)
 class Study:
     """A parameter study: problem (file or built-in name), fixed parameters, varied names
     and the points.
 
-    ``points`` are unique by id (a point listed twice runs once) and ordered as written:
-    the grid's Cartesian product first (last key fastest), then the explicit points.
+    ``points`` (:class:`runtime.study.points.StudyPoints`) are unique by id (a point
+    listed twice runs once) and ordered as written: the grid's Cartesian product first
+    (last key fastest), then the explicit points; each is made when asked for.
     """
 
     name: str
     problem: str
     fixed: dict[str, Any]
     varied: tuple[str, ...]
-    points: tuple[StudyPoint, ...]
+    points: StudyPoints
     source: str = ""          # the TOML text the study was read from (copied to DIR)
 
     @property
     def param_columns(self) -> tuple[str, ...]:
         """Parameter columns of the table: varied ones first, then the fixed ones."""
-        cols = list(self.varied)
-        for p in self.points:
-            cols += [k for k in p.params if k not in cols]
-        return tuple(cols)
+        return (*self.varied, *(k for k in self.fixed if k not in self.varied))
+
+
+def _viscosity_clash(fixed: Mapping[str, Any], keys: Iterable[str]) -> None:
+    """Would tau_B keep the fixed tau, or not? Say it instead of guessing."""
+    keys = set(keys)
+    for a, b in ((("tau",), ("tau_S", "tau_B")), (("tau_S", "tau_B"), ("tau",))):
+        fa = [k for k in a if k in fixed]
+        pb = [k for k in b if k in keys]
+        if fa and pb:
+            raise StudyError(f"{fa[0]} is fixed but {pb[0]} varies: give the viscosity "
+                             "one way, either tau or tau_S/tau_B, in [fixed] and the "
+                             "points alike")
+
+
+def _axis(name: str, values: list[Any]) -> list[Any]:
+    """A grid axis's values, each checked and coerced once, repeats removed (a point
+    listed twice runs once)."""
+    distinct: dict[str, Any] = {}
+    for v in values:
+        c = _check_params({name: v}, "[grid]")[name]
+        distinct.setdefault(canonical_json({"v": c}), c)
+    return list(distinct.values())
 
 
 def study_from_dict(data: Mapping[str, Any], name: str = "study", source: str = "",
@@ -229,7 +268,8 @@ def study_from_dict(data: Mapping[str, Any], name: str = "study", source: str = 
     """Build a :class:`Study` from the parsed TOML (see the module docstring).
 
     ``max_points``: largest study accepted (default :data:`MAX_POINTS`; pass ``math.inf``
-    once the user confirmed a larger one).
+    once the user confirmed a larger one). The work is that of the axes and the listed
+    points, never of the grid's product.
     """
     max_points = MAX_POINTS if max_points is None else max_points
     unknown = sorted(set(data) - set(STUDY_KEYS))
@@ -257,40 +297,43 @@ def study_from_dict(data: Mapping[str, Any], name: str = "study", source: str = 
         raise StudyError(f"the study has {n_points} points, more than {max_points} (the "
                          f"grid {' x '.join(str(len(v)) for v in grid.values())}); confirm "
                          f"with {CONFIRM_FLAG} to run it anyway")
-    grid_c = {k: [_check_params({k: v}, "[grid]")[k] for v in vals] for k, vals in grid.items()}
-    _check_params({k: v[0] for k, v in grid_c.items()}, "[grid]")  # unknown names, tau clash
-    raw_points: list[dict[str, Any]] = []
-    if grid_c:
-        for combo in itertools.product(*grid_c.values()):
-            raw_points.append(dict(zip(grid_c, combo, strict=True)))
-    for i, p in enumerate(listed):
-        raw_points.append(_check_params(p, f"points[{i}]"))
-    if not raw_points:
+    axes = {k: _axis(k, vals) for k, vals in grid.items()}
+    _check_params({k: v[0] for k, v in axes.items()}, "[grid]")  # unknown names, tau clash
+    own = [_check_params(p, f"points[{i}]") for i, p in enumerate(listed)]
+    if not axes and not own:
         raise StudyError("the study has no points: give a [grid] or [[points]]")
-    varied: list[str] = list(grid_c)
-    for p in raw_points:
+    varied: list[str] = list(axes)
+    for p in own:
         varied += [k for k in p if k not in varied]
     try:
         base = base_problem(problem)        # the registry and the file: once per study
     except ValueError as exc:                # the problem file itself is bad
         raise StudyError(f"problem {problem!r}: {exc}") from None
-    points: dict[str, StudyPoint] = {}
-    for p in raw_points:
-        for a, b in ((("tau",), ("tau_S", "tau_B")), (("tau_S", "tau_B"), ("tau",))):
-            fa = [k for k in a if k in fixed]
-            pb = [k for k in b if k in p]
-            if fa and pb:     # would tau_B keep the fixed tau, or not? say it instead
-                raise StudyError(f"{fa[0]} is fixed but {pb[0]} varies: give the viscosity "
-                                 "one way, either tau or tau_S/tau_B, in [fixed] and the "
-                                 "points alike")
-        params = {**{k: v for k, v in fixed.items() if k not in p}, **p}
-        _check_params(params, "point")
-        pid = point_id(params, varied)
-        if pid not in points:   # every value checked by the problem schema before any run
-            check_point(base, params, f"point {pid}")
-        points.setdefault(pid, StudyPoint(pid, params))
+    grid_points = StudyPoints(fixed, axes, [], varied)
+    if axes:                                 # every grid value once, in a point of the grid
+        _viscosity_clash(fixed, axes)
+        first = grid_points.params_at(0)
+        _check_params(first, "point")
+        checked: set[str] = set()
+        for k, vals in axes.items():
+            for v in vals:
+                p = grid_points.make({**first, k: v})
+                if p.id not in checked:
+                    checked.add(p.id)
+                    check_point(base, p.params, f"point {p.id}")
+    kept: list[dict[str, Any]] = []
+    seen: set[str] = set()
+    for p in own:                            # every listed point, unless it is a grid point
+        _viscosity_clash(fixed, p)
+        params = _check_params(merge(fixed, p), "point")
+        key = canonical_json(params)
+        if key in seen or grid_points.find(params) is not None:
+            continue
+        seen.add(key)
+        check_point(base, params, f"point {point_id(params, varied)}")
+        kept.append(p)
     return Study(name=name, problem=problem, fixed=fixed, varied=tuple(varied),
-                 points=tuple(points.values()), source=source)
+                 points=StudyPoints(fixed, axes, kept, varied), source=source)
 
 
 def load_study(path: str | os.PathLike, max_points: int | float | None = None) -> Study:
@@ -308,7 +351,7 @@ def load_study(path: str | os.PathLike, max_points: int | float | None = None) -
 
 
 # --------------------------------------------------------------------------------------
-# the task: parameters in, outcome out (runs on a worker; ships no compiled objects)
+# the tasks: parameters in, small rows out (run on a worker; ship no compiled objects)
 # --------------------------------------------------------------------------------------
 
 
@@ -316,9 +359,9 @@ def load_study(path: str | os.PathLike, max_points: int | float | None = None) -
 class PointOutcome:
     """What :func:`run_point` returns: plain, picklable data.
 
-    ``files`` maps file names of the point's folder (summary.json, series.npz) to their
-    bytes, written by :func:`runtime.io.results.write_run` on the worker; the client stores
-    them unchanged (so workers need no file system shared with the client).
+    ``files`` maps file names of the point's folder (summary.json, series.npz,
+    problem.toml) to their bytes, written by :func:`runtime.io.results.write_run` on the
+    worker; the client stores them unchanged (:func:`write_point`).
     """
 
     point_id: str
@@ -330,6 +373,23 @@ class PointOutcome:
     host: str = ""
     pid: int = 0
     worker_lib_loads: int = -1       # compiled-library loads in this process so far
+
+
+@dataclass
+class PointResult:
+    """What a worker hands back for one point: its table row (a few hundred bytes).
+
+    ``files`` (the point's files as bytes, as in :class:`PointOutcome`) only when the
+    worker could not write the study folder itself; ``wall_time_s`` and ``cpu_s``: the
+    worker's wall and CPU time for the point, run and files together (s).
+    """
+
+    point_id: str
+    status: str
+    row: dict[str, Any]
+    wall_time_s: float
+    files: dict[str, bytes] | None = None
+    cpu_s: float = 0.0
 
 
 def _library_loads() -> int:
@@ -346,18 +406,8 @@ def _point_meta(problem: str, point_id: str, params: Mapping[str, Any],
             "wall_time_s": wall_time_s}
 
 
-def run_point(problem: str, point_id: str, params: Mapping[str, Any]) -> PointOutcome:
-    """Run one point; never raises (an exception becomes status "failed" + its message).
-
-    This is the function workers execute: a parameter dict in, a :class:`PointOutcome`
-    (the bytes of summary.json and series.npz) out. The summary carries ``point`` =
-    {id, problem, parameters, host, pid, computed_at, wall_time_s}, which the resume
-    check compares against the study.
-    """
-    import tempfile
-
-    t0 = time.perf_counter()
-    params = dict(params)
+def _simulate(problem: str, params: dict[str, Any]) -> tuple[Any, str, str]:
+    """(run or None, status, message) of one point; never raises but for Ctrl-C."""
     run = None
     try:
         from runtime.problem.registry import load_problem
@@ -366,25 +416,117 @@ def run_point(problem: str, point_id: str, params: Mapping[str, Any]) -> PointOu
         run = simulate(load_problem(base_problem(problem), params))
         if run.interrupt is not None:      # Ctrl-C stops the study, it is no failed point
             raise run.interrupt
-        status, message = run.status, run.message
+        return run, run.status, run.message
     except Exception as exc:  # noqa: BLE001 - a failing point must not stop the study
-        status, message = FAILED, f"{type(exc).__name__}: {exc}"
-    wall = time.perf_counter() - t0
+        return run, FAILED, f"{type(exc).__name__}: {exc}"
+
+
+def _write_point_files(d: Path, problem: str, point_id: str, params: dict[str, Any],
+                       run: Any, status: str, message: str, wall: float) -> dict:
+    """The point's files into folder ``d`` (summary.json last); returns the summary."""
     meta = _point_meta(problem, point_id, params, wall)
+    if run is not None:
+        return write_run(d, run, extra={"point": meta})
+    summary = {"status": status, "message": message, "parameters": params,
+               "wall_time_s": wall, "point": meta}
+    write_json(d / "summary.json", summary)
+    return summary
+
+
+def run_point(problem: str, point_id: str, params: Mapping[str, Any]) -> PointOutcome:
+    """Run one point; never raises (an exception becomes status "failed" + its message).
+
+    A parameter dict in, a :class:`PointOutcome` (the bytes of the point's files) out:
+    what a worker that cannot write the study folder returns. The summary carries
+    ``point`` = {id, problem, parameters, host, pid, computed_at, wall_time_s}, which the
+    resume check compares against the study.
+    """
+    import tempfile
+
+    t0 = time.perf_counter()
+    params = dict(params)
+    run, status, message = _simulate(problem, params)
+    wall = time.perf_counter() - t0
     files: dict[str, bytes] = {}
     with tempfile.TemporaryDirectory(prefix="kvrod-point-") as tmp:
-        if run is not None:
-            summary = write_run(Path(tmp), run, extra={"point": meta})
-            status = summary["status"]
-        else:
-            write_json(Path(tmp) / "summary.json",
-                       {"status": status, "message": message, "parameters": params,
-                        "wall_time_s": wall, "point": meta})
+        summary = _write_point_files(Path(tmp), problem, point_id, params, run, status,
+                                     message, wall)
         for f in sorted(Path(tmp).iterdir()):
             files[f.name] = f.read_bytes()
-    return PointOutcome(point_id=point_id, params=params, status=status, message=message,
-                        files=files, wall_time_s=wall, host=meta["host"], pid=meta["pid"],
+    return PointOutcome(point_id=point_id, params=params, status=summary["status"],
+                        message=message, files=files, wall_time_s=wall,
+                        host=socket.gethostname(), pid=os.getpid(),
                         worker_lib_loads=_library_loads())
+
+
+def run_point_into(out: Path, problem: str, point_id: str, params: Mapping[str, Any],
+                   interrupted: Callable[[], bool] | None = None) -> dict:
+    """Run one point and write its folder ``DIR/points/<id>`` directly (summary.json
+    last); returns the summary. Never raises but for Ctrl-C (nothing of this point is
+    written then: also when ``interrupted()`` says a Ctrl-C came, whatever the run made
+    of it). A series.npz of an earlier attempt is removed when this run has none."""
+    t0 = time.perf_counter()
+    params = dict(params)
+    run, status, message = _simulate(problem, params)
+    if interrupted is not None and interrupted():
+        raise KeyboardInterrupt
+    d = point_dir(out, point_id)
+    d.mkdir(parents=True, exist_ok=True)
+    if run is None:
+        (d / "series.npz").unlink(missing_ok=True)
+    return _write_point_files(d, problem, point_id, params, run, status, message,
+                              time.perf_counter() - t0)
+
+
+#: the study folder's token file: the client writes a fresh token into it when a run
+#: starts and removes it when the run ends; a worker that reads the same token there
+#: writes points into the folder itself, and stops a batch when the token is gone
+TOKEN_NAME = ".sweep-token"
+
+
+def _folder_shared(out: str | None, token: str | None) -> bool:
+    if out is None or token is None:
+        return False
+    try:
+        return (Path(out) / TOKEN_NAME).read_text() == token
+    except (OSError, UnicodeDecodeError):
+        return False
+
+
+def run_batch(problem: str, points: Sequence[tuple[str, Mapping[str, Any]]],
+              param_columns: Sequence[str], out: str | None = None,
+              token: str | None = None) -> list[PointResult]:
+    """Run points one after another; the worker's task.
+
+    ``points``: (id, parameters) pairs. Where this process sees the study folder ``out``
+    (its :data:`TOKEN_NAME` file holds ``token``), each point's folder is written here
+    and only its table row (:func:`runtime.study.table.row_of`) is returned; a point
+    already finished there (a retried task) is not run again. Otherwise the rows come
+    with the files as bytes (:func:`run_point`) for the client to write. The batch stops
+    early, returning the rows so far, when the token file no longer holds ``token`` (the
+    study was stopped).
+    """
+    shared = _folder_shared(out, token)
+    results = []
+    for pid, params in points:
+        t0, c0 = time.perf_counter(), time.process_time()
+        if shared:
+            if results and not _folder_shared(out, token):
+                break
+            folder = Path(out)
+            summary = _finished_summary(folder, pid, params)
+            if summary is None:
+                summary = run_point_into(folder, problem, pid, params)
+            files = None
+        else:
+            outcome = run_point(problem, pid, params)
+            files = outcome.files
+            summary = json.loads(files["summary.json"])
+        results.append(PointResult(pid, summary["status"],
+                                   row_of(param_columns, pid, params, summary),
+                                   time.perf_counter() - t0, files,
+                                   time.process_time() - c0))
+    return results
 
 
 # --------------------------------------------------------------------------------------
@@ -397,17 +539,29 @@ def point_dir(out: Path, pid: str) -> Path:
     return Path(out) / "points" / pid
 
 
-def read_summary(out: Path, point: StudyPoint) -> dict | None:
-    """The point's summary.json if it exists, is readable and belongs to these parameters."""
-    path = point_dir(out, point.id) / "summary.json"
+def _read_summary(path: Path) -> dict | None:
     try:
         s = json.loads(path.read_text())
     except (OSError, ValueError):
         return None
-    meta = s.get("point", {}) if isinstance(s, dict) else {}
-    if meta.get("parameters") != json.loads(canonical_json(point.params)):
-        return None
-    return s
+    return s if isinstance(s, dict) else None
+
+
+def _same_parameters(summary: Mapping[str, Any], params: Mapping[str, Any]) -> bool:
+    meta = summary.get("point", {})
+    return isinstance(meta, dict) and \
+        meta.get("parameters") == json.loads(canonical_json(params))
+
+
+def read_summary(out: Path, point: StudyPoint) -> dict | None:
+    """The point's summary.json if it exists, is readable and belongs to these parameters."""
+    s = _read_summary(point_dir(out, point.id) / "summary.json")
+    return s if s is not None and _same_parameters(s, point.params) else None
+
+
+def _finished_summary(out: Path, pid: str, params: Mapping[str, Any]) -> dict | None:
+    s = _read_summary(point_dir(out, pid) / "summary.json")
+    return s if is_finished(s) and _same_parameters(s, params) else None
 
 
 def is_finished(summary: Mapping[str, Any] | None) -> bool:
@@ -430,17 +584,6 @@ def write_point(out: Path, outcome: PointOutcome) -> dict:
     return json.loads(outcome.files["summary.json"])
 
 
-def points_to_run(study: Study, out: Path, rerun_failed: bool = True) -> list[StudyPoint]:
-    """Points without a finished summary in ``out`` (and without a failed one, if not
-    rerun_failed): what a (re)started study will run."""
-    todo = []
-    for p in study.points:
-        s = read_summary(out, p)
-        if not (is_finished(s) or (s is not None and not rerun_failed)):
-            todo.append(p)
-    return todo
-
-
 def failure_outcome(problem: str, point: StudyPoint, message: str) -> PointOutcome:
     """Outcome recorded by the client when a task could not run (e.g. workers died)."""
     meta = _point_meta(problem, point.id, point.params, 0.0)
@@ -452,181 +595,32 @@ def failure_outcome(problem: str, point: StudyPoint, message: str) -> PointOutco
 
 
 # --------------------------------------------------------------------------------------
-# the table and plots
-# --------------------------------------------------------------------------------------
-
-FIGURE_COLUMNS = ("status", "message", "zeta_first", "zeta_last", "n_peaks", "period_mean",
-                  "static_tip_x", "static_tip_z", "energy_balance_max_rel", "zeta_linear",
-                  "tau_E", "wall_time_s")
-
-
-def table_row(study: Study, point: StudyPoint, summary: Mapping[str, Any] | None,
-              status: str | None = None) -> dict[str, Any]:
-    """One table row: id, the point's parameters, status, message and key figures."""
-    row: dict[str, Any] = {"point_id": point.id}
-    row.update({k: point.params.get(k, "") for k in study.param_columns})
-    s = summary or {}
-    z = s.get("damping_ratios") or []
-    per = s.get("periods") or []
-    tip = (s.get("static") or {}).get("tip") or []
-    row.update({
-        "status": status or s.get("status", PENDING),
-        "message": " ".join(str(s.get("message", "")).split()),
-        "zeta_first": z[0] if z else "",
-        "zeta_last": z[-1] if z else "",
-        "n_peaks": len(s.get("peaks") or []) if summary else "",
-        "period_mean": sum(per) / len(per) if per else "",
-        "static_tip_x": tip[0] if len(tip) == 3 else "",
-        "static_tip_z": tip[2] if len(tip) == 3 else "",
-        "energy_balance_max_rel": s.get("energy_balance_max_rel", "")
-        if s.get("energy_balance_max_rel") is not None else "",
-        "zeta_linear": (s.get("linear_prediction") or {}).get("zeta_1", ""),
-        "tau_E": s.get("tau_E", ""),
-        "wall_time_s": s.get("wall_time_s", "") if summary else "",
-    })
-    return row
-
-
-def _atomic_text(path: Path, text: str) -> Path:
-    return write_text(path, text)
-
-
-def write_table(out: Path, study: Study, rows: Mapping[str, Mapping[str, Any]]) -> Path:
-    """Write ``DIR/study.csv`` atomically, one row per study point in study order."""
-    cols = ["point_id", *study.param_columns, *FIGURE_COLUMNS]
-    buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
-    w.writeheader()
-    for p in study.points:
-        row = rows.get(p.id) or table_row(study, p, None)
-        w.writerow({c: (repr(v) if isinstance(v, float) else v) for c, v in row.items()})
-    return _atomic_text(Path(out) / "study.csv", buf.getvalue())
-
-
-class TableAppender:
-    """``study.csv`` written incrementally while a study runs: the header, then one row per
-    point as it returns (appended and flushed: O(1) per point, not a rewrite of the table).
-    A crash leaves a valid CSV of the points returned so far."""
-
-    def __init__(self, path: Path, study: Study) -> None:
-        self.cols = ["point_id", *study.param_columns, *FIGURE_COLUMNS]
-        path.parent.mkdir(parents=True, exist_ok=True)
-        self._f = open(path, "w", newline="")
-        self._w = csv.DictWriter(self._f, fieldnames=self.cols, lineterminator="\n")
-        self._w.writeheader()
-        self._f.flush()
-
-    def append(self, row: Mapping[str, Any]) -> None:
-        self._w.writerow({c: (repr(v) if isinstance(v, float) else v) for c, v in row.items()})
-        self._f.flush()
-
-    def close(self) -> None:
-        if not self._f.closed:
-            self._f.close()
-
-
-def read_table(path: Path) -> list[dict[str, str]]:
-    """The rows of a study.csv (strings, as written)."""
-    with open(path, newline="") as f:
-        return list(csv.DictReader(f))
-
-
-def rebuild_table(out: Path, study: Study,
-                  running: Iterable[str] = ()) -> dict[str, dict[str, Any]]:
-    """Rows of every point from its summary.json (``running`` ids are marked running)."""
-    running = set(running)
-    rows = {}
-    for p in study.points:
-        s = read_summary(out, p)
-        st = RUNNING if p.id in running and not is_finished(s) else None
-        rows[p.id] = table_row(study, p, s, status=st)
-    write_table(out, study, rows)
-    return rows
-
-
-#: units of the parameters, for axis labels
-UNITS = {"tau": "s", "tau_S": "s", "tau_B": "s", "length": "m", "width": "m", "height": "m",
-         "density": "kg/m^3", "youngs_modulus": "Pa", "poisson_ratio": "-", "tip_force": "N",
-         "n_elements": "-", "t_end": "s", "rtol": "-", "atol": "-", "load_steps": "-",
-         "output_step": "s"}
-
-
-def _plot_axis(study: Study) -> str | None:
-    numeric = [k for k in study.varied
-               if all(isinstance(p.params.get(k), (int, float)) for p in study.points)]
-    for k in ("tau", "tau_S", "tau_B"):
-        if k in numeric:
-            return k
-    return numeric[0] if numeric else None
-
-
-def write_plots(out: Path, study: Study, rows: Mapping[str, Mapping[str, Any]]) -> Path | None:
-    """``DIR/summary.png``: first/last damping ratio and mean period against the first
-    varied parameter (tau if varied), one line per combination of the other varied ones.
-    Returns None when there is nothing to plot yet."""
-    x = _plot_axis(study)
-    if x is None:
-        return None
-    others = [k for k in study.varied if k != x]
-    groups: dict[tuple, list[tuple[float, Mapping[str, Any]]]] = {}
-    for p in study.points:
-        row = rows.get(p.id)
-        if row is None or row.get("status") != FINISHED or row.get("zeta_first") == "":
-            continue
-        key = tuple(p.params.get(k) for k in others)
-        groups.setdefault(key, []).append((float(p.params[x]), row))
-    if not groups:
-        return None
-    from runtime.io.figures import pyplot, save
-
-    plt = pyplot()
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.5))
-    for key, pts in groups.items():
-        pts.sort(key=lambda t: t[0])
-        xs = [t[0] for t in pts]
-        label = ", ".join(f"{k}={_slug_value(v)}" for k, v in zip(others, key, strict=True))
-        line, = ax1.plot(xs, [t[1]["zeta_first"] for t in pts], "o-",
-                         label=f"first {label}".strip())
-        ax1.plot(xs, [t[1]["zeta_last"] for t in pts], "s--", color=line.get_color(),
-                 label=f"last {label}".strip())
-        per = [(a, r["period_mean"]) for a, r in pts if r.get("period_mean") != ""]
-        if per:
-            ax2.plot([a for a, _ in per], [b for _, b in per], "o-", color=line.get_color(),
-                     label=label or None)
-    xlabel = f"{x} [{UNITS.get(x, '-')}]"
-    ax1.set_xlabel(xlabel)
-    ax1.set_ylabel("damping ratio zeta [-] (first and last cycle)")
-    ax2.set_xlabel(xlabel)
-    ax2.set_ylabel("mean period of the tip maxima [s]")
-    ax1.legend(fontsize=7)
-    if others:
-        ax2.legend(fontsize=7)
-    fig.suptitle(f"study {study.name}: {sum(len(v) for v in groups.values())} finished points")
-    return save(fig, Path(out) / "summary.png", dpi=120, bbox_inches="tight")
-
-
-# --------------------------------------------------------------------------------------
 # engine-independent bookkeeping
 # --------------------------------------------------------------------------------------
 
 
 @dataclass
 class SweepProgress:
-    """Counts reported to a progress callback after every finished point."""
+    """Counts reported to a progress callback after every returned point."""
 
     total: int              # points in the study
     skipped: int            # finished before this run (not rerun)
     done: int = 0           # finished in this run
     failed: int = 0         # failed in this run
     running: int = 0        # executing now (in-flight points, at most the worker slots)
-    queued: int = 0         # submitted, waiting for a free worker
+    queued: int = 0         # to run, waiting for a free worker
     last: str = ""          # id of the point that just returned
     last_status: str = ""
 
 
 @dataclass
 class StudyReport:
-    """What a study run did; ``computed`` lists the points run in this invocation."""
+    """What a study run did; ``computed`` lists the points run in this invocation.
+
+    ``tasks``: tasks submitted (a task runs a batch of points); ``client_seconds``: the
+    time the client spent on its own work (submitting, taking results, writing rows,
+    progress), not waiting for workers (s).
+    """
 
     out: Path
     total: int
@@ -635,6 +629,8 @@ class StudyReport:
     failed: list[str] = field(default_factory=list)
     wall_time_s: float = 0.0
     engine: str = ""
+    tasks: int = 0
+    client_seconds: float = 0.0
 
     @property
     def ok(self) -> bool:
@@ -642,11 +638,66 @@ class StudyReport:
         return not self.failed and len(self.skipped) + len(self.computed) == self.total
 
 
-class StudyRecorder:
-    """Client-side bookkeeping shared by the engines: resume scan, writes, table, plots.
+class ProgressFile:
+    """``DIR/progress.json`` kept current by a thread: the latest counts, written at most
+    every ``interval`` s and once more on :meth:`close`.
 
-    ``plot_interval`` (s) throttles the plot refresh while points finish; the table is
-    rewritten (atomically) after every point, the plots at least at the end.
+    Replacing a file (write, then rename over the old one) can take milliseconds (a
+    journaling file system flushes the new data first: 4 ms a write on the machine of
+    bench/results/sweeps.md); the loop that records points only hands over a dict. An
+    error of a write (a full disk) is raised by the next :meth:`update` or :meth:`close`.
+    """
+
+    def __init__(self, path: Path, interval: float = 0.5) -> None:
+        self.path, self.interval = Path(path), interval
+        self._data: dict[str, Any] | None = None
+        self._error: BaseException | None = None
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="kvrod-progress", daemon=True)
+        self._thread.start()
+
+    def update(self, data: dict[str, Any]) -> None:
+        """The counts to write next."""
+        self._raise()
+        with self._lock:
+            self._data = data
+
+    def _raise(self) -> None:
+        if self._error is not None:
+            error, self._error = self._error, None
+            raise error
+
+    def _flush(self) -> None:
+        with self._lock:
+            data, self._data = self._data, None
+        if data is not None:
+            write_json(self.path, data)
+
+    def _run(self) -> None:
+        while not self._stop.wait(self.interval):
+            try:
+                self._flush()
+            except OSError as exc:
+                self._error = exc
+
+    def close(self, data: dict[str, Any] | None = None) -> None:
+        """Stop the thread and write ``data`` (else what is pending) now."""
+        self._stop.set()
+        self._thread.join()
+        if data is not None:
+            self._data = data
+        self._raise()
+        self._flush()
+
+
+class StudyRecorder:
+    """Client-side bookkeeping shared by the engines: resume scan, table, progress, plots.
+
+    The resume scan reads the summaries in ``DIR/points`` (the folders there, not the
+    study's points: a study of 10^9 points with 100 done reads 100 files). The points to
+    run come from :meth:`todo`, made one by one. ``plot_interval`` (s) throttles the plot
+    refresh while points return; the table grows by a row per returned point.
     """
 
     def __init__(self, study: Study, out: Path, rerun_failed: bool = True,
@@ -654,113 +705,201 @@ class StudyRecorder:
         self.study, self.out = study, Path(out)
         self.plots, self.plot_interval = plots, plot_interval
         self._last_plot = time.monotonic()   # first refresh after plot_interval
+        self.started_at = time.time()
         self.out.mkdir(parents=True, exist_ok=True)
         if study.source:
-            _atomic_text(self.out / "study.toml", study.source)
-        self.rows: dict[str, dict[str, Any]] = {}
-        self.todo: list[StudyPoint] = []
+            write_text(self.out / "study.toml", study.source)
         self.report = StudyReport(out=self.out, total=len(study.points))
-        for p in study.points:
-            s = read_summary(self.out, p)
-            if is_finished(s) or (s is not None and not rerun_failed):
-                self.report.skipped.append(p.id)
-                if s is not None and not is_finished(s):
-                    self.report.failed.append(p.id)
-            else:
-                self.todo.append(p)
-                s = None
+        #: table rows of the points returned (and of those kept from earlier runs), and
+        #: their positions in the study (the plots draw them in study order)
+        self.rows: dict[str, dict[str, Any]] = {}
+        self.order: dict[str, int] = {}
+        for i, p, s in self._scan(rerun_failed):
+            self.report.skipped.append(p.id)
+            if not is_finished(s):
+                self.report.failed.append(p.id)
             self.rows[p.id] = table_row(study, p, s)
-        self.progress = SweepProgress(total=len(study.points), skipped=len(self.report.skipped))
+            self.order[p.id] = i
+        self._keep = set(self.rows)
+        self.n_todo = len(study.points) - len(self._keep)
+        self.progress = SweepProgress(total=len(study.points), skipped=len(self._keep))
         #: worker threads executing points (None: unknown, all in-flight count as running)
         self.slots: int | None = None
-        # study.csv grows by one row per returned point (rows of earlier runs first); the
-        # final table in study order is written by close()
-        self._table = TableAppender(self.out / "study.csv", study)
-        self._last_progress = -1e9
-        for p in study.points:
-            if p.id in self.report.skipped:
-                self._table.append(self.rows[p.id])
+        self.in_flight: dict[str, tuple[int, StudyPoint]] = {}
+        self._returned = 0
+        self._table = TableAppender(self.out / TABLE_NAME,
+                                    table_columns(study.param_columns), self.rows)
+        self._progress_file = ProgressFile(self.out / "progress.json")
 
-    def mark_running(self, ids: Iterable[str]) -> None:
-        """Count submitted points as running (progress.json shows them at once)."""
-        for pid in ids:
-            self.rows[pid]["status"] = RUNNING
-        self._count_in_flight()
-        self._write_progress(force=True)
+    def _scan(self, rerun_failed: bool) -> list[tuple[int, StudyPoint, dict]]:
+        """(position, point, summary) of the points in DIR/points that are not run again,
+        in study order."""
+        folder = self.out / "points"
+        try:
+            names = os.listdir(folder)
+        except OSError:
+            return []
+        found = []
+        for name in names:
+            s = _read_summary(folder / name / "summary.json")
+            if s is None or not (is_finished(s) or not rerun_failed):
+                continue
+            meta = s.get("point")
+            params = meta.get("parameters") if isinstance(meta, dict) else None
+            if not isinstance(params, dict):
+                continue
+            i = self.study.points.find(params)
+            if i is None:
+                continue
+            p = self.study.points[i]
+            if p.id == name:
+                found.append((i, p, s))
+        found.sort(key=lambda t: t[0])
+        return found
 
-    def _write_progress(self, force: bool = False) -> None:
-        """DIR/progress.json: the live counts (throttled to one write per 0.5 s)."""
-        now = time.monotonic()
-        if not force and now - self._last_progress < 0.5:
-            return
-        self._last_progress = now
+    def todo(self) -> Iterator[tuple[int, StudyPoint]]:
+        """(position, point) of every point to run, in study order, made as asked for."""
+        for i, p in enumerate(self.study.points):
+            if p.id not in self._keep:
+                yield i, p
+
+    def mark_running(self, points: Iterable[tuple[int, StudyPoint]]) -> None:
+        """Count submitted points as in flight."""
+        for i, p in points:
+            self.in_flight[p.id] = (i, p)
+        self._count()
+        self._progress_file.update(self._counts())
+
+    def _count(self) -> None:
         pr = self.progress
-        write_json(self.out / "progress.json",
-                   {"total": pr.total, "skipped": pr.skipped, "done": pr.done,
-                    "failed": pr.failed, "running": pr.running, "queued": pr.queued,
-                    "last": pr.last, "last_status": pr.last_status})
+        n = len(self.in_flight)
+        pr.running = n if not self.slots else min(n, self.slots)
+        pr.queued = max(0, self.n_todo - self._returned - pr.running)
 
-    def _count_in_flight(self) -> None:
-        inflight = sum(r["status"] == RUNNING for r in self.rows.values())
+    def _counts(self) -> dict[str, Any]:
+        """What DIR/progress.json holds: the live counts."""
         pr = self.progress
-        pr.running = inflight if not self.slots else min(inflight, self.slots)
-        pr.queued = inflight - pr.running
+        return {"total": pr.total, "skipped": pr.skipped, "done": pr.done,
+                "failed": pr.failed, "running": pr.running, "queued": pr.queued,
+                "last": pr.last, "last_status": pr.last_status}
 
-    def record(self, outcome: PointOutcome) -> SweepProgress:
-        """Write a returned point, update the table (and, throttled, the plots)."""
-        point = next(p for p in self.study.points if p.id == outcome.point_id)
-        summary = write_point(self.out, outcome)
-        self.rows[point.id] = table_row(self.study, point, summary)
-        self._table.append(self.rows[point.id])
+    def _add(self, i: int, point: StudyPoint, status: str, row: dict[str, Any]) -> None:
+        self.rows[point.id] = row
+        self.order[point.id] = i
+        self._table.append([row])
         self.report.computed.append(point.id)
+        self._returned += 1
         pr = self.progress
-        if summary["status"] == FINISHED:
+        if status == FINISHED:
             pr.done += 1
         else:
             pr.failed += 1
             self.report.failed.append(point.id)
-        self._count_in_flight()
-        pr.last, pr.last_status = point.id, summary["status"]
-        self._write_progress()
+        pr.last, pr.last_status = point.id, status
+
+    def record(self, result: PointResult) -> SweepProgress:
+        """A returned point: its files (when the worker sent them), its row, the counts,
+        progress.json and (throttled) the plots."""
+        i, point = self.in_flight.pop(result.point_id)
+        if result.files is not None:
+            write_point(self.out, PointOutcome(point.id, point.params, result.status, "",
+                                               result.files))
+        self._add(i, point, result.status, result.row)
+        self._count()
+        self._progress_file.update(self._counts())
         now = time.monotonic()
         if self.plots and now - self._last_plot >= self.plot_interval:
             self._last_plot = now
-            write_plots(self.out, self.study, self.rows)
-        return pr
+            self._plot()
+        return self.progress
+
+    def _plot(self) -> None:
+        write_plots(self.out, self.study,
+                    {pid: self.rows[pid] for pid in sorted(self.rows, key=self.order.get)})
 
     def close(self) -> StudyReport:
-        """Final table (rebuilt from the summaries on disk, in study order) and plots."""
-        self._table.close()
-        for row in self.rows.values():
-            if row.get("status") == RUNNING:
-                row["status"] = PENDING
-        self._count_in_flight()
-        self._write_progress(force=True)
-        self.rows = rebuild_table(self.out, self.study)
+        """End of a run (also an interrupted one): rows of in-flight points whose summary
+        a worker wrote in this run are added, then progress.json and the plots."""
+        try:
+            for i, p in list(self.in_flight.values()):
+                s = read_summary(self.out, p)
+                computed = (s or {}).get("point", {}).get("computed_at")
+                if isinstance(computed, (int, float)) and computed >= self.started_at:
+                    self._add(i, p, s.get("status", FAILED), table_row(self.study, p, s))
+        finally:
+            self.in_flight.clear()
+            self._table.close()
+            self._count()
+            self.progress.queued = 0
+            self._progress_file.close(self._counts())
         if self.plots:
-            write_plots(self.out, self.study, self.rows)
+            self._plot()
         return self.report
+
+
+@contextlib.contextmanager
+def ctrl_c_noticed() -> Iterator[Callable[[], bool]]:
+    """Remember a Ctrl-C (SIGINT) that comes while points run; yields ``interrupted()``.
+
+    Whatever the interrupted code makes of its KeyboardInterrupt, the study stops: an
+    exception while cleaning up can replace it (a ``ValueError`` of a half-written NPZ,
+    of a run's outputs cut short), and the point would be recorded as failed while the
+    study went on. Installed only in the main thread over a Python-level handler (the
+    default one raises KeyboardInterrupt; it still does)."""
+    previous = signal.getsignal(signal.SIGINT)
+    if threading.current_thread() is not threading.main_thread() or not callable(previous):
+        yield lambda: False
+        return
+    seen: list[int] = []
+
+    def remember(signum, frame):
+        seen.append(signum)
+        previous(signum, frame)
+
+    signal.signal(signal.SIGINT, remember)
+    try:
+        yield lambda: bool(seen)
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def run_study_serial(study: Study, out: Path,
                      progress: Callable[[SweepProgress], object] | None = None,
-                     rerun_failed: bool = True, plots: bool = True) -> StudyReport:
+                     rerun_failed: bool = True, plots: bool = True,
+                     on_start: Callable[[SweepProgress], object] | None = None
+                     ) -> StudyReport:
     """Run the study's points one after another in this process (no Dask).
 
     The reference the distributed engine is checked against, and the baseline of the
-    speed-up measurement.
+    speed-up measurement. ``on_start(SweepProgress)`` is called once the resume scan is
+    done (the counts of points to run and skipped), ``progress`` after every point.
+    Ctrl-C stops the point being run (nothing of it is written); the others stay.
     """
     t0 = time.perf_counter()
     rec = StudyRecorder(study, out, rerun_failed=rerun_failed, plots=plots)
     rec.slots = 1
     try:
-        for p in rec.todo:
-            rec.mark_running([p.id])
-            pr = rec.record(run_point(study.problem, p.id, p.params))
-            if progress is not None:
-                progress(pr)
+        if on_start is not None:
+            on_start(rec.progress)
+        with ctrl_c_noticed() as interrupted:
+            for i, p in rec.todo():
+                rec.mark_running([(i, p)])
+                t = time.perf_counter()
+                try:
+                    summary = run_point_into(rec.out, study.problem, p.id, p.params,
+                                             interrupted)
+                except Exception:
+                    if interrupted():      # the Ctrl-C, not what cleaning up made of it
+                        raise KeyboardInterrupt from None
+                    raise
+                pr = rec.record(PointResult(p.id, summary["status"],
+                                            table_row(study, p, summary),
+                                            time.perf_counter() - t))
+                if progress is not None:
+                    progress(pr)
     finally:
         report = rec.close()
     report.wall_time_s = time.perf_counter() - t0
     report.engine = "serial"
+    report.tasks = len(report.computed)
     return report

@@ -7,23 +7,35 @@ per core is started (nothing to set up); with ``scheduler="tcp://host:8786"`` a
 
 Compiled code never travels: :class:`KvrodWorkerSetup`, a worker plugin, loads (and on
 first use compiles) the generated kernels into each worker process's cache once, when the
-worker starts (also on workers that join or are restarted later). Tasks ship a parameter
-dict to :func:`runtime.study.sweep.run_point` and get back a
-:class:`runtime.study.sweep.PointOutcome`;
-the client writes the point folders, so workers need no shared file system.
+worker starts (also on workers that join or are restarted later).
 
-A worker that dies mid-task loses nothing: the scheduler reschedules its tasks on the
-other workers; a task that kills workers repeatedly (``distributed.scheduler.allowed-
-failures``) comes back as an error and is recorded as a failed point. Every point is
-written once by the client as its result arrives, and the table is rebuilt from the
-per-point summaries at the end, so it holds every point exactly once.
+What scales (issue 33): a task is a *batch* of points (:func:`runtime.study.sweep.run_batch`)
+sized from the points' measured CPU times to last about :func:`task_seconds` (short points
+are batched, long ones go one per task), shrinking towards the end so that the workers
+finish together (guided self-scheduling: never more than a 1/(2 x slots) share of what
+is left). Tasks are made as workers free up, a few per worker slot ahead, never the
+whole study at once: a study of 10^9 points starts at once and holds memory of its
+in-flight batches only. A worker that sees the study folder (the client's token file
+there, :data:`runtime.study.sweep.TOKEN_NAME`) writes each point's folder itself and
+returns only the table rows; one that does not (no shared file system) returns the files
+as bytes for the client to write. The client appends rows to ``study.csv`` and counts.
+
+A worker that dies mid-task loses nothing: the scheduler reschedules its task on the
+other workers (points the dead worker had finished are found finished and not run
+again); a batch that fails as a whole (e.g. a point that kills its worker repeatedly,
+``distributed.scheduler.allowed-failures``) is split into single-point tasks, so only
+the culprit is recorded as a failed point. Ctrl-C (or any error) cancels the queued
+tasks and removes the token file, so a batch being run stops after its current point;
+rows of points written meanwhile are added to the table when the run closes.
 """
 
 from __future__ import annotations
 
 import asyncio
+import collections
 import contextlib
 import logging
+import math
 import os
 import signal
 import threading
@@ -34,15 +46,39 @@ from pathlib import Path
 
 from distributed import Client, LocalCluster, WorkerPlugin, as_completed
 
+from runtime.io.atomic import write_text
+from runtime.study.points import StudyPoint
 from runtime.study.sweep import (
-    PointOutcome,
+    TOKEN_NAME,
+    PointResult,
     Study,
     StudyRecorder,
     StudyReport,
     SweepProgress,
     failure_outcome,
-    run_point,
+    run_batch,
+    table_row,
+    write_point,
 )
+
+#: a task's target duration (s) on a small cluster; larger clusters get longer tasks so
+#: that the scheduler handles at most :data:`TASKS_PER_SECOND` of them
+TASK_SECONDS = 0.5
+TASKS_PER_SECOND = 200.0
+#: most points in one task, and tasks kept submitted per worker slot
+MAX_BATCH = 1000
+AHEAD = 2
+#: Dask settings of the LocalCluster a sweep starts: its processes' housekeeping at
+#: rest (measured, 2-worker cluster: 80 ms of CPU a second with Dask's defaults, 15 ms
+#: with these), which on a machine whose cores all run points is taken from the points.
+#: No statistical profiler in the workers (a stack sample every 10 ms: the dashboard's
+#: profile page stays empty), the event loop's latency check every second instead of
+#: every 20 ms, system and worker-memory monitors every 2 s and 1 s (instead of 0.5 s and
+#: 0.1 s). Clusters started otherwise keep their own settings (docs/sweeps.md).
+LOCAL_CLUSTER_CONFIG = {"distributed.worker.profile.enabled": False,
+                        "distributed.admin.tick.interval": "1s",
+                        "distributed.admin.system-monitor.interval": "2s",
+                        "distributed.worker.memory.monitor-interval": "1s"}
 
 
 def warm_up() -> dict:
@@ -76,17 +112,59 @@ class KvrodWorkerSetup(WorkerPlugin):
         await loop.run_in_executor(None, warm_up)
 
 
-def _outcome(study: Study, point, future) -> PointOutcome:
-    """The task's PointOutcome, or a failed one when the task errored (e.g. KilledWorker)."""
-    if future.status == "finished":
-        outcome = future.result()
-        if isinstance(outcome, PointOutcome):
-            return outcome
-        return failure_outcome(study.problem, point, f"unexpected task result {outcome!r}")
-    if future.status == "error":
-        exc = future.exception()
-        return failure_outcome(study.problem, point, f"task error: {type(exc).__name__}: {exc}")
-    return failure_outcome(study.problem, point, f"task {future.status}")
+def task_seconds(slots: int) -> float:
+    """Target duration of one task (s) for ``slots`` worker threads: TASK_SECONDS, longer
+    on a cluster whose workers would otherwise return more than TASKS_PER_SECOND tasks."""
+    return max(TASK_SECONDS, slots / TASKS_PER_SECOND)
+
+
+class BatchPlanner:
+    """Hands out the points to run in batches (see the module docstring).
+
+    ``points``: (position, point) pairs to run, made as asked for; ``n``: how many.
+    The batch size is 1 until a point's time is known, then
+    ``min(task_seconds / point time, what is left / (2 slots), MAX_BATCH)``, at least 1.
+    A point's time is the CPU time its worker spent on it: on a machine whose cores are
+    shared with other work the wall time stretches, the tasks would shrink and Dask's
+    cost per task (milliseconds of CPU in the scheduler and the worker) would grow with
+    their number. Points given back (:meth:`retry`) go first, one per task.
+    """
+
+    def __init__(self, points: Iterator[tuple[int, StudyPoint]], n: int) -> None:
+        self._points = points
+        self.left = n                 # points not handed out yet (retries not counted)
+        self._retry: collections.deque[tuple[int, StudyPoint]] = collections.deque()
+        self.point_seconds: float | None = None   # running mean of the points' times
+
+    def observe(self, seconds: float) -> None:
+        """A point's measured time (s) on a worker."""
+        a = self.point_seconds
+        self.point_seconds = seconds if a is None else 0.8 * a + 0.2 * seconds
+
+    def size(self, slots: int) -> int:
+        """Points in the next batch."""
+        if self.point_seconds is None:
+            return 1
+        by_time = task_seconds(slots) / max(self.point_seconds, 1e-6)
+        guided = math.ceil(self.left / (2 * max(slots, 1)))
+        return max(1, min(int(by_time), guided, MAX_BATCH))
+
+    def retry(self, points: list[tuple[int, StudyPoint]]) -> None:
+        """Points of a batch that did not come back: run again, one per task."""
+        self._retry.extend(points)
+
+    def next(self, slots: int) -> list[tuple[int, StudyPoint]]:
+        """The next batch ([] when every point has been handed out)."""
+        if self._retry:
+            return [self._retry.popleft()]
+        batch = []
+        for _ in range(self.size(slots)):
+            item = next(self._points, None)
+            if item is None:
+                break
+            batch.append(item)
+        self.left -= len(batch)
+        return batch
 
 
 def default_workers() -> int:
@@ -115,7 +193,9 @@ def start_local_cluster(n_workers: int | None = None) -> LocalCluster:
     ports) that leave Ctrl-C to this process."""
     # silence_logs: the workers log a warning for every task cancelled by an interrupted
     # study; keep their logs to errors
-    with _children_ignore_sigint():
+    import dask
+
+    with _children_ignore_sigint(), dask.config.set(LOCAL_CLUSTER_CONFIG):
         return LocalCluster(n_workers=n_workers or default_workers(), threads_per_worker=1,
                             processes=True, dashboard_address=":0", scheduler_port=0,
                             silence_logs=logging.ERROR)
@@ -135,35 +215,124 @@ def _quiet_distributed() -> Iterator[None]:
             lg.setLevel(lv)
 
 
+def dashboard_link(client: Client) -> str | None:
+    """The address of the Dask dashboard of ``client``'s scheduler, or None."""
+    try:
+        return client.dashboard_link or None
+    except (AttributeError, KeyError, ValueError):
+        return None
+
+
+class _Feeder:
+    """The client's loop state: tasks in flight, their points, the time it works."""
+
+    def __init__(self, client: Client, study: Study, rec: StudyRecorder, token: str,
+                 timeout: float | None) -> None:
+        self.client, self.study, self.rec, self.token = client, study, rec, token
+        self.plan = BatchPlanner(rec.todo(), rec.n_todo)
+        self.batches: dict[str, list[tuple[int, StudyPoint]]] = {}
+        # with_results: the results come over while the client records the previous ones
+        self.done = as_completed(loop=client.loop, timeout=timeout, with_results=True,
+                                 raise_errors=False)
+        self.slots = 1
+        self._slots_at = -math.inf
+        self._out = str(rec.out.resolve())
+        self._tag = uuid.uuid4().hex[:8]
+        self.tasks = 0
+
+    def refresh_slots(self) -> None:
+        """Worker threads now (workers join and leave); asked at most every 5 s (a
+        round trip to the scheduler)."""
+        now = time.monotonic()
+        if now - self._slots_at >= 5.0:
+            self._slots_at = now
+            self.slots = max(1, sum(self.client.nthreads().values()))
+            self.rec.slots = self.slots
+
+    def fill(self) -> None:
+        """Submit batches until AHEAD per worker slot are in flight."""
+        self.refresh_slots()
+        while len(self.batches) < AHEAD * self.slots:
+            batch = self.plan.next(self.slots)
+            if not batch:
+                return
+            self.tasks += 1
+            f = self.client.submit(
+                run_batch, self.study.problem, [(p.id, p.params) for _, p in batch],
+                self.study.param_columns, self._out, self.token,
+                key=f"kvrod-batch-{self._tag}-{self.tasks}", pure=False)
+            self.batches[f.key] = batch
+            self.done.add(f)
+            self.rec.mark_running(batch)
+
+    def take(self, future, results) -> Iterator[SweepProgress]:
+        """Record the points of a returned task (progress after each)."""
+        batch = self.batches.pop(future.key)
+        if future.status == "finished":
+            back = {r.point_id for r in results}
+            for r in results:
+                self.plan.observe(r.cpu_s or r.wall_time_s)
+                yield self.rec.record(r)
+            # a batch stops early only when the token file went away: run the rest again
+            self.plan.retry([item for item in batch if item[1].id not in back])
+        elif len(batch) > 1:           # split: only the culprit should fail
+            self.plan.retry(batch)
+        else:
+            exc = future.exception() if future.status == "error" else None
+            msg = (f"task error: {type(exc).__name__}: {exc}" if exc is not None
+                   else f"task {future.status}")
+            yield self.rec.record(_failed(self.study, self.rec.out, batch[0][1], msg))
+        future.release()
+
+    def cancel(self) -> None:
+        with _quiet_distributed():
+            for f in list(self.done.futures):
+                if not f.done():
+                    f.cancel()
+
+
+def _failed(study: Study, out: Path, point: StudyPoint, message: str) -> PointResult:
+    """A point whose task could not run: a failed summary, written by the client."""
+    outcome = failure_outcome(study.problem, point, message)
+    summary = write_point(out, outcome)
+    return PointResult(point.id, summary["status"], table_row(study, point, summary), 0.0)
+
+
 def run_study_dask(study: Study, out: Path, *, client: Client | None = None,
                    scheduler: str | None = None, n_workers: int | None = None,
                    progress: Callable[[SweepProgress], object] | None = None,
                    rerun_failed: bool = True, plots: bool = True,
                    plot_interval: float = 10.0, connect_timeout: float = 30.0,
-                   wait_timeout: float = 300.0,
-                   timeout: float | None = None) -> StudyReport:
+                   wait_timeout: float = 300.0, timeout: float | None = None,
+                   on_start: Callable[[SweepProgress], object] | None = None,
+                   on_dashboard: Callable[[str], object] | None = None) -> StudyReport:
     """Run a study on Dask; returns the :class:`runtime.study.sweep.StudyReport`.
 
     client: an existing Client (tests); else scheduler: address of an existing scheduler
     (n_workers, if given, is the number of workers to wait for); else a LocalCluster with
     n_workers processes (default one per core) is started and closed at the end.
-    progress(SweepProgress) is called after every returned point. Finished points in
-    ``out`` are skipped; failed ones are run again unless rerun_failed is False.
+    ``on_start(SweepProgress)`` is called once the resume scan is done,
+    ``on_dashboard(link)`` with the Dask dashboard's address once connected, and
+    ``progress(SweepProgress)`` after every returned point. Finished points in ``out``
+    are skipped; failed ones are run again unless rerun_failed is False.
     connect_timeout (s) bounds connecting to a scheduler, wait_timeout (s) waiting for
-    n_workers of its workers;
-    timeout (s), if given, bounds the whole study (TimeoutError).
-    On KeyboardInterrupt (or any error) the outstanding tasks are cancelled and the table
-    is rebuilt from the per-point summaries before the exception propagates.
+    n_workers of its workers; timeout (s), if given, bounds the whole study
+    (TimeoutError). On KeyboardInterrupt (or any error) the outstanding tasks are
+    cancelled, running batches stop after their current point, and the table gets the
+    rows of the points written before the exception propagates.
     """
     t0 = time.perf_counter()
     rec = StudyRecorder(study, out, rerun_failed=rerun_failed, plots=plots,
                         plot_interval=plot_interval)
     own_cluster = own_client = None
     engine = "dask (no points to run)"
-    futures = []
+    token_file = rec.out / TOKEN_NAME
+    feeder: _Feeder | None = None
     interrupted = False
     try:
-        if rec.todo:
+        if on_start is not None:
+            on_start(rec.progress)
+        if rec.n_todo:
             if client is None:
                 if scheduler is not None:
                     engine = f"dask scheduler {scheduler}"
@@ -171,41 +340,48 @@ def run_study_dask(study: Study, out: Path, *, client: Client | None = None,
                     if n_workers:
                         client.wait_for_workers(n_workers, timeout=wait_timeout)
                 else:
+                    import dask
+
                     own_cluster = start_local_cluster(n_workers)
                     engine = f"dask LocalCluster ({len(own_cluster.workers)} workers)"
-                    client = own_client = Client(own_cluster)
+                    with dask.config.set(LOCAL_CLUSTER_CONFIG):
+                        client = own_client = Client(own_cluster)
             else:
                 engine = f"dask client {client.scheduler.address}"
+            link = dashboard_link(client)
+            if on_dashboard is not None and link:
+                on_dashboard(link)
             client.register_plugin(KvrodWorkerSetup())
-            rec.slots = sum(client.nthreads().values()) or None
-            tag = uuid.uuid4().hex[:8]
-            by_key = {}
-            for p in rec.todo:
-                f = client.submit(run_point, study.problem, p.id, p.params,
-                                  key=f"kvrod-point-{p.id}-{tag}", pure=False)
-                by_key[f.key] = p
-                futures.append(f)
-            rec.mark_running(p.id for p in rec.todo)
-            for f in as_completed(futures, timeout=timeout):
-                outcome = _outcome(study, by_key[f.key], f)
-                f.release()
-                pr = rec.record(outcome)
-                if progress is not None:
-                    progress(pr)
+            token = uuid.uuid4().hex
+            write_text(token_file, token)
+            feeder = _Feeder(client, study, rec, token, timeout)
+            busy = time.perf_counter()
+            feeder.fill()
+            while feeder.batches:
+                rec.report.client_seconds += time.perf_counter() - busy
+                ready = feeder.done.next_batch(block=True)
+                busy = time.perf_counter()
+                for future, result in ready:
+                    for pr in feeder.take(future, result):
+                        if progress is not None:
+                            progress(pr)
+                feeder.fill()
+            rec.report.client_seconds += time.perf_counter() - busy
     except BaseException:
         interrupted = True
-        with _quiet_distributed():
-            for f in futures:
-                if not f.done():
-                    f.cancel()
+        if feeder is not None:
+            feeder.cancel()
         raise
     finally:
-        report = rec.close()
+        with contextlib.suppress(OSError):
+            token_file.unlink(missing_ok=True)       # running batches stop
         with _quiet_distributed() if interrupted else contextlib.nullcontext():
             if own_client is not None:
                 own_client.close()
             if own_cluster is not None:
                 own_cluster.close()
+        report = rec.close()
     report.wall_time_s = time.perf_counter() - t0
     report.engine = engine
+    report.tasks = feeder.tasks if feeder is not None else 0
     return report

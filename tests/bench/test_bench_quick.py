@@ -35,7 +35,7 @@ def test_quick_writes_the_documents(quick_run):
 
 
 @pytest.mark.parametrize("name", ["integrators", "scaling", "modes", "maxwell", "sections",
-                                  "maxwell_kv", "sensitivities", "fit"])
+                                  "maxwell_kv", "assembly", "sensitivities", "fit"])
 def test_json_has_metadata_and_verdicts(quick_run, name):
     out, _ = quick_run
     doc = json.loads((out / f"{name}.json").read_text())

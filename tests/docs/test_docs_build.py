@@ -20,8 +20,8 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-TUTORIALS = ("cantilever", "problem_in_python", "consistent_vs_naive", "damped_modes",
-             "calibration", "fit", "your_section")
+TUTORIALS = ("cantilever", "problem_in_python", "assemblies", "consistent_vs_naive",
+             "damped_modes", "calibration", "fit", "your_section")
 
 pytest.importorskip("sphinx", reason="the docs extra is not installed")
 pytest.importorskip("myst_nb", reason="the docs extra is not installed")

@@ -8,6 +8,7 @@ maxima, about 0.1-0.3 s per point) so the file stays well under its time budget.
 from __future__ import annotations
 
 import json
+import math
 import os
 import shutil
 import signal
@@ -17,21 +18,27 @@ from pathlib import Path
 
 import pytest
 
+from runtime.study.points import StudyPoint
 from runtime.study.sweep import (
     FAILED,
     FINISHED,
-    PENDING,
+    TOKEN_NAME,
     StudyError,
     load_study,
     point_dir,
     read_table,
+    run_batch,
     run_study_serial,
     study_from_dict,
 )
 
 distributed = pytest.importorskip("distributed")
 
-from runtime.study.sweep_dask import run_study_dask  # noqa: E402
+from runtime.study.sweep_dask import (  # noqa: E402
+    BatchPlanner,
+    run_study_dask,
+    task_seconds,
+)
 
 TINY = {"length": 0.1, "t_end": 0.4, "rtol": 1e-4}
 STUDY = {"name": "tiny", "scenario": "cantilever", "fixed": {**TINY, "n_elements": 5},
@@ -50,11 +57,28 @@ def _summary(out: Path, pid: str) -> dict:
 
 
 def _assert_table_complete(out: Path, study) -> dict[str, dict]:
-    """Every study point exactly once, in study order; returns rows by id."""
+    """Every study point exactly once (rows in the order the points returned), each row
+    saying what its summary says; returns rows by id."""
     ids = _table_ids(out)
-    assert ids == [p.id for p in study.points]
+    assert sorted(ids) == sorted(p.id for p in study.points)
     assert len(set(ids)) == len(ids)
-    return {r["point_id"]: r for r in read_table(out / "study.csv")}
+    return _assert_rows_match_summaries(out)
+
+
+def _assert_rows_match_summaries(out: Path) -> dict[str, dict]:
+    rows = {r["point_id"]: r for r in read_table(out / "study.csv")}
+    assert len(rows) == len(_table_ids(out))                       # no point twice
+    for pid, r in rows.items():
+        assert r["status"] == _summary(out, pid)["status"], pid
+    return rows
+
+
+def _wait_idle(client, timeout: float = 60.0) -> None:
+    """Until the cluster runs no task (a batch stopped by an interrupt finishes its
+    current point on the worker)."""
+    deadline = time.monotonic() + timeout
+    while any(client.processing().values()) and time.monotonic() < deadline:
+        time.sleep(0.05)
 
 
 @pytest.fixture(scope="module")
@@ -76,7 +100,10 @@ def study():
 @pytest.fixture(scope="module")
 def dask_run(client, study, tmp_path_factory):
     out = tmp_path_factory.mktemp("dask")
-    report = run_study_dask(study, out, client=client, timeout=STUDY_TIMEOUT)
+    links: list[str] = []
+    report = run_study_dask(study, out, client=client, timeout=STUDY_TIMEOUT,
+                            on_dashboard=links.append)
+    report.dashboard = links
     return out, report
 
 
@@ -153,8 +180,10 @@ def test_dask_results_equal_serial_runs(dask_run, study, tmp_path):
         assert (point_dir(out, p.id) / "series.npz").exists()
 
 
-def test_table_plots_and_failing_point(dask_run, study):
+def test_table_plots_and_failing_point(dask_run, study, client):
     out, report = dask_run
+    assert report.dashboard == [client.dashboard_link]
+    assert report.dashboard[0].startswith("http://")
     rows = _assert_table_complete(out, study)
     bad = [pid for pid in rows if BAD_ID_PART in pid]
     assert len(bad) == 1 and report.failed == bad
@@ -192,7 +221,6 @@ def test_restart_skips_finished_points(dask_run, study, client, tmp_path):
     shutil.rmtree(point_dir(out, gone))
     before = {p.id: _summary(out, p.id)["point"]["computed_at"]
               for p in study.points if p.id != gone}
-    rows = _assert_table_complete(out, study)
     report = run_study_dask(study, out, client=client, rerun_failed=False,
                             timeout=STUDY_TIMEOUT)
     assert report.computed == [gone]
@@ -219,13 +247,22 @@ def test_interrupted_study_leaves_consistent_table_and_resumes(client, study, tm
     with pytest.raises(KeyboardInterrupt):
         run_study_dask(study, out, client=client, progress=interrupt, timeout=STUDY_TIMEOUT)
     assert len(seen) == 1
-    rows = _assert_table_complete(out, study)
+    _wait_idle(client)
+    rows = _assert_rows_match_summaries(out)      # the returned points, each once
     assert rows[seen[0]]["status"] in (FINISHED, FAILED)
-    done = {pid for pid, r in rows.items() if r["status"] in (FINISHED, FAILED)}
-    assert all(r["status"] == PENDING for pid, r in rows.items() if pid not in done)
+    assert all(r["status"] in (FINISHED, FAILED) for r in rows.values())
+    done = set(rows)
+    progress = json.loads((out / "progress.json").read_text())
+    assert progress["running"] == 0 and progress["queued"] == 0
     assert not list(out.rglob(".*.tmp"))            # no half-written files
+    assert not (out / ".sweep-token").exists()      # the batches were told to stop
+    # a batch being run when the interrupt came finished its current point: on disk,
+    # its row comes with the restart
+    finished_before = {p.id for p in study.points
+                       if (point_dir(out, p.id) / "summary.json").exists()
+                       and _summary(out, p.id)["status"] == FINISHED}
+    assert {pid for pid in done if rows[pid]["status"] == FINISHED} <= finished_before
     report = run_study_dask(study, out, client=client, timeout=STUDY_TIMEOUT)
-    finished_before = {pid for pid in done if rows[pid]["status"] == FINISHED}
     assert not finished_before & set(report.computed)
     assert set(report.computed) | finished_before == {p.id for p in study.points}
     rows = _assert_table_complete(out, study)
@@ -304,3 +341,149 @@ def test_cli_serial_and_errors(tmp_path, capsys):
     assert len(err.splitlines()) == 1 and "tua" in err
     assert _cli(["sweep", str(f), "--workers", "0"]) == 2
     assert _cli(["sweep", str(tmp_path / "missing.toml")]) == 2
+
+
+# ------------------------------------------------------------------ batches and the table
+
+
+def test_batches_sized_by_point_time_and_shrinking_to_the_end():
+    points = iter([(i, StudyPoint(f"p{i}", {})) for i in range(1000)])
+    plan = BatchPlanner(points, 1000)
+    assert len(plan.next(4)) == 1                      # no point time known yet
+    plan.observe(0.01)                                 # 10 ms points
+    assert plan.size(4) == int(task_seconds(4) / 0.01) == 50
+    plan.observe(1.0)                                  # mean 0.8 * 0.01 + 0.2 * 1.0
+    assert plan.size(4) == 2
+    plan.point_seconds = 1e-4                          # tiny: the guided bound rules
+    assert plan.size(4) == math.ceil(999 / 8)
+    sizes = []
+    while batch := plan.next(4):
+        sizes.append(len(batch))
+    assert sum(sizes) == 999 and sizes == sorted(sizes, reverse=True) and sizes[-1] == 1
+    plan.retry([(5, StudyPoint("p5", {})), (6, StudyPoint("p6", {}))])
+    assert [len(plan.next(4)) for _ in range(3)] == [1, 1, 0]
+    assert task_seconds(500) == 500 / 200 > task_seconds(16) == 0.5
+
+
+def _figures(summary):
+    """A summary without what differs between two runs of a point: where and when it
+    ran, and the wall times."""
+    if isinstance(summary, dict):
+        return {k: _figures(v) for k, v in summary.items()
+                if k != "point" and not k.endswith("wall_time_s")}
+    return summary
+
+
+def test_a_worker_without_the_folder_sends_files_and_a_retry_reruns_nothing(tmp_path):
+    s = study_from_dict({"fixed": {**TINY, "n_elements": 4, "t_end": 0.2},
+                         "grid": {"tau": [0.01, 0.02]}})
+    pts = [(p.id, p.params) for p in s.points]
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    (shared / TOKEN_NAME).write_text("abc")
+    direct = run_batch(s.problem, pts, s.param_columns, str(shared), "abc")
+    assert all(r.files is None for r in direct)
+    first = {pid: _summary(shared, pid) for pid, _ in pts}
+    # a stale token (the study stopped, or another folder of that name): files as bytes
+    sent = run_batch(s.problem, pts, s.param_columns, str(shared), "other")
+    assert all(set(r.files) == {"summary.json", "series.npz", "problem.toml"} for r in sent)
+    for a, b in zip(direct, sent, strict=True):
+        assert a.point_id == b.point_id and a.status == b.status == FINISHED
+        assert _figures(json.loads(b.files["summary.json"])) == _figures(first[a.point_id])
+        assert {k: v for k, v in a.row.items() if k != "wall_time_s"} == \
+            {k: v for k, v in b.row.items() if k != "wall_time_s"}
+    # a task run again (its worker died after writing) finds its points finished
+    again = run_batch(s.problem, pts, s.param_columns, str(shared), "abc")
+    assert [_summary(shared, pid) for pid, _ in pts] == list(first.values())
+    assert [r.row for r in again] == [r.row for r in direct]
+
+
+def test_a_batch_stops_when_the_token_goes(tmp_path, monkeypatch):
+    from runtime.study import sweep
+
+    s = study_from_dict({"fixed": {**TINY, "n_elements": 4, "t_end": 0.1},
+                         "grid": {"tau": [0.01, 0.02, 0.03]}})
+    (tmp_path / TOKEN_NAME).write_text("abc")
+    real = sweep.run_point_into
+
+    def run_then_stop(*a, **k):
+        summary = real(*a, **k)
+        (tmp_path / TOKEN_NAME).unlink()            # Ctrl-C on the client meanwhile
+        return summary
+
+    monkeypatch.setattr(sweep, "run_point_into", run_then_stop)
+    rows = run_batch(s.problem, [(p.id, p.params) for p in s.points], s.param_columns,
+                     str(tmp_path), "abc")
+    assert [r.point_id for r in rows] == [s.points[0].id]
+
+
+def test_study_csv_is_appended_not_rewritten(tmp_path):
+    """A restart with nothing to run leaves the table as it was (same file); one that
+    runs a point again drops that point's row once and appends the new one."""
+    s = study_from_dict({"fixed": {**TINY, "n_elements": 4, "t_end": 0.2},
+                         "grid": {"tau": [0.01, 0.02, 0.03]},
+                         "points": [{"tau": 0.02, "min_step": 0.2}]})     # fails
+    run_study_serial(s, tmp_path, plots=False)
+    table = tmp_path / "study.csv"
+    ino, text = table.stat().st_ino, table.read_text()
+    rows = _assert_table_complete(tmp_path, s)
+    assert sum(r["status"] == FAILED for r in rows.values()) == 1
+    report = run_study_serial(s, tmp_path, plots=False, rerun_failed=False)
+    assert report.computed == [] and table.stat().st_ino == ino and table.read_text() == text
+    # by default the failed point runs again: its old row goes, the new one comes last
+    report = run_study_serial(s, tmp_path, plots=False)
+    assert len(report.computed) == 1 and BAD_ID_PART in report.computed[0]
+    assert _table_ids(tmp_path)[-1] == report.computed[0]
+    _assert_table_complete(tmp_path, s)
+    # a table lost (or a row cut short by a crash) is rebuilt from the summaries
+    table.write_text(text[:-5])
+    run_study_serial(s, tmp_path, plots=False, rerun_failed=False)
+    _assert_table_complete(tmp_path, s)
+    table.unlink()
+    run_study_serial(s, tmp_path, plots=False, rerun_failed=False)
+    assert _assert_table_complete(tmp_path, s).keys() == rows.keys()
+
+
+@pytest.mark.parametrize("then", ["returns", "raises"])
+def test_ctrl_c_stops_a_serial_study_whatever_the_point_made_of_it(tmp_path, monkeypatch, then):
+    """A Ctrl-C that the point's own code catches (a run's outputs cut short by it, a
+    half-written NPZ: a ValueError replaces the KeyboardInterrupt) still stops the study;
+    the interrupted point is not recorded (no failed row, no summary)."""
+    import signal
+
+    from runtime.study import sweep
+
+    s = study_from_dict({"fixed": {**TINY, "n_elements": 4, "t_end": 0.1},
+                         "grid": {"tau": [0.01, 0.02, 0.03]}})
+    real, calls = sweep._simulate, []
+
+    def swallowing(problem, params):
+        out = real(problem, params)
+        calls.append(params["tau"])
+        if len(calls) == 2:
+            try:
+                signal.raise_signal(signal.SIGINT)
+            except KeyboardInterrupt:
+                if then == "raises":
+                    raise ValueError("could not broadcast input array") from None
+        return out
+
+    monkeypatch.setattr(sweep, "_simulate", swallowing)
+    with pytest.raises(KeyboardInterrupt):
+        run_study_serial(s, tmp_path, plots=False)
+    assert calls == [0.01, 0.02]
+    rows = read_table(tmp_path / "study.csv")
+    assert [r["point_id"] for r in rows] == [s.points[0].id]
+    assert not (point_dir(tmp_path, s.points[1].id) / "summary.json").exists()
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_cli_on_a_local_cluster_prints_the_dashboard(tmp_path, capsys):
+    f = tmp_path / "study.toml"
+    f.write_text('name = "dash"\n[fixed]\nlength = 0.1\nt_end = 0.1\nrtol = 1e-4\n'
+                 "n_elements = 4\n[grid]\ntau = [0.01, 0.02]\n")
+    out = tmp_path / "out"
+    assert _cli(["sweep", str(f), "--workers", "1", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "Dask dashboard: http://" in text and "2 points run (0 failed)" in text
+    assert len(read_table(out / "study.csv")) == 2 and not (out / TOKEN_NAME).exists()
