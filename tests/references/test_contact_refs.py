@@ -15,6 +15,7 @@ from references.contact import (
     bend_entry_force,
     capstan_profile,
     capstan_ratio,
+    capstan_ratio_rod,
     draped_cable,
     draped_cable_max_overhang,
     flat_drop,
@@ -194,6 +195,45 @@ def test_capstan_against_polygon(mu, wrap):
     assert T[1] / T[0] == pytest.approx(capstan_ratio(mu, wrap))
     np.testing.assert_allclose(p, T / 0.1)
     assert capstan_ratio(0.0, 5.0) == 1.0
+
+
+def _rigid_links_on_drum(mu: float, wrap: float, R: float, r: float, n: int) -> float:
+    """T_load/T_hold of n rigid links (chords of the centreline's circle of radius R + r,
+    their midpoints on it) slipping on the drum: on each link the pressure P at its
+    midpoint's surface point (r inside the centreline, on the drum), the friction mu P
+    there toward the held end, the internal forces at its ends; the bending moment the
+    same at both ends (the rod stress free as wrapped). Force and moment balance of each
+    link in turn, from the held end (its force along the first tangent, no shear)."""
+    rho, dth = R + r, wrap / n
+    d = 2.0 * rho * math.tan(dth / 2)
+
+    def cross(a, b):
+        return a[0] * b[1] - a[1] * b[0]
+
+    N = np.array([0.0, 1.0])                      # T_hold = 1 along the tangent at 0
+    for i in range(n):
+        th = (i + 0.5) * dth
+        e_r, t = np.array([-math.cos(th), math.sin(th)]), np.array([math.sin(th), math.cos(th)])
+        # moments about the midpoint: d/2 t x (N_next + N) + (-r e_r) x (-mu P t) = 0 with
+        # N_next = N - P (e_r - mu t) (forces)
+        P = -d * cross(t, N) / (cross(e_r, t) * (d / 2 + r * mu))
+        N = N - P * (e_r - mu * t)
+    return float(N @ np.array([math.sin(wrap), math.cos(wrap)]))
+
+
+@pytest.mark.parametrize("mu, wrap, R, r", [(0.3, math.pi, 0.1, 0.001), (0.5, 2.0, 0.1, 0.02),
+                                            (0.1, 6 * math.pi, 0.05, 0.01)])
+def test_capstan_of_a_rod_against_rigid_links(mu, wrap, R, r):
+    """The rod's capstan ratio against the chain of rigid links (n -> inf, O(1/n^2))."""
+    a, b = (_rigid_links_on_drum(mu, wrap, R, r, n) for n in (1000, 2000))
+    assert (4 * b - a) / 3 == pytest.approx(capstan_ratio_rod(mu, wrap, drum_radius=R,
+                                                              rod_radius=r), rel=1e-8)
+    assert capstan_ratio_rod(mu, wrap, drum_radius=R, rod_radius=0.0) == pytest.approx(
+        capstan_ratio(mu, wrap), rel=1e-15)
+    assert capstan_ratio_rod(0.0, wrap, drum_radius=R, rod_radius=r) == 1.0
+    # the example's wire (r/R = 0.01) over half a turn: 1.1 % below the membrane's
+    assert capstan_ratio_rod(0.3, math.pi, drum_radius=0.1, rod_radius=0.001) == \
+        pytest.approx(0.98903 * capstan_ratio(0.3, math.pi), rel=1e-5)
 
 
 # ---------------------------------------------------------------------------- flat drop

@@ -215,6 +215,38 @@ int kvrod_contact_values(const kvrod_rod* rod, const double* y, double* out) {
   return 0;
 }
 
+/* the contact forces on the held end nodes: their rows are the end condition's, so the
+   residual leaves these forces to the supports, which take them: each support's reaction
+   (e + NDIAG_E, per held end its force then its moment) loses them (R = m a - f - F_int -
+   f_contact), and the boundary power e[4] (R . v of the held node) with them */
+static int support_forces(const kvrod_rod* rod, const double* y, cwork* W, double* e) {
+  const kvrod_contact* C = rod->contact;
+  cseg g;
+  double Q[NCNTQ], glb;
+  int yes;
+  for (int o = 0; o < C->nobs; ++o) {
+    const int kind = C->kind[o];
+    if (kind < 0 || kind >= KV_NKINDS) return -4;
+    for (int end = 0; end < 2; ++end) {
+      seg_of(rod, o, end == 0 ? 1 : rod->N, &g);
+      if (g.free_ab[end]) continue;
+      if (in_reach(kind, &g, y, W, &yes, &glb)) return -3;
+      if (!yes) continue;
+      args_of(&g, y, W);
+      W->res[0] = Q;
+      if (kForces[kind](W->arg, W->res, W->iw, W->w, 0)) return -3;
+      const double* f = Q + (end == 0 ? CNTQ_F_A : CNTQ_F_B);
+      const double* v = y + g.idx[2 + end];
+      double* R = e + NDIAG_E + 6 * end;
+      for (int k = 0; k < 3; ++k) {
+        R[k] -= f[k];
+        e[4] -= f[k] * v[k];
+      }
+    }
+  }
+  return 0;
+}
+
 int kvrod_contact_energies(const kvrod_rod* rod, const double* y, double* e) {
   if (!active(rod)) return 0;
   cwork W;
@@ -226,7 +258,7 @@ int kvrod_contact_energies(const kvrod_rod* rod, const double* y, double* e) {
     e[2] += v[7];
     e[3] += v[9];
   }
-  return 0;
+  return support_forces(rod, y, &W, e);
 }
 
 /* q <- q + h/2 (0, w) * q (the obstacle's orientation a short time h later, first order;

@@ -52,7 +52,10 @@ int kvrod_contact_residual(const kvrod_rod* rod, const double* y, double* res);
    (kvrod_jacobian_band_cells' storage) */
 int kvrod_contact_jacobian(const kvrod_rod* rod, const double* y, double cy, int ldab,
                            double* ab, int col0, int s0, int s1);
-/* e[1] += E, e[2] += P_diss, e[3] += P_obs (kvrod_diagnostics' first scalars) */
+/* e[1] += E, e[2] += P_diss, e[3] += P_obs (kvrod_diagnostics' first scalars); the
+   contact forces on the held end nodes (which the residual leaves to the supports) taken
+   by the supports: subtracted from their reactions (e + NDIAG_E) and, times the held
+   node's velocity, from the boundary power e[4] */
 int kvrod_contact_energies(const kvrod_rod* rod, const double* y, double* e);
 /* out (nobs x NCV) <- the values above */
 int kvrod_contact_values(const kvrod_rod* rod, const double* y, double* out);
