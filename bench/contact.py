@@ -34,7 +34,7 @@ from bench.meta import target, targets_md
 
 N_FULL, T_FULL = 200, 2.0
 N_QUICK, T_QUICK = 50, 0.5
-PAIRS = 5
+PAIRS = 3
 #: issue 32: the fall at most this many times the free swing, whole processes
 RATIO_MAX = 3.0
 TIMEOUT = 900.0
