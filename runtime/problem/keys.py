@@ -549,7 +549,8 @@ CONTACT_INTRO = (
     "off a table changes by about 2 (h/2a)^3 of its lift height, a its lifted length), "
     "a restitution of 0.1 (a rod dropped flat rebounds to 1 % of its drop height and rests "
     "within about half a second), a smoothing length "
-    "`penetration` of 1 % of the contact radius, a slip velocity of 1e-4 m/s (a rod held "
+    "`penetration` of the rod's own weight's (q/k, at most 0.2 % of the contact radius: a "
+    "rod laid on a floor starts and rests at zero gap), a slip velocity of 1e-4 m/s (a rod held "
     "by static friction creeps below 0.1 mm/s). A rod may not start inside an obstacle "
     "by more than the penetration. `[contact]` without obstacles and without self = true "
     "is refused (it would change nothing). In an assembly both stay at the top and act "
@@ -615,7 +616,8 @@ CONTACT_KEYS: tuple[Key, ...] = (
     _k("contact", "friction", "-", "0", "0 ... 100", "the Coulomb coefficient of the "
        "rods' contact with each other and themselves (self = true; an obstacle has its "
        "own friction)", invalid=-0.5),
-    _k("contact", "penetration", "m", "1 % of the smallest contact radius", "> 0, at "
+    _k("contact", "penetration", "m", "rho A g / k (at most 0.2 % of the smallest contact "
+       "radius)", "> 0, at "
        "most the contact radius", "the smoothing length of the law (the normal force "
        "rises from zero to the linear penalty over a gap band this wide) and the "
        "tolerance of the check that no rod starts inside an obstacle", invalid=0.0),
