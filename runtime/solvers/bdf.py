@@ -8,7 +8,8 @@ corrector solves ``F(t_n, y_pred + e, y'_pred + cj e) = 0`` for the correction `
 by simplified Newton with the iteration matrix ``J = dF/dy + cj dF/dy'`` (cj = alpha_s/h),
 factorised by LAPACK's banded LU and reused across iterations and steps.  The local
 error test, the order and step selection, and the failure handling follow IDA's
-heuristics and constants.
+heuristics and constants, with one addition: after an error-test failure at order k the
+step does not grow for k + 1 accepted steps (docs/design.md, section 4).
 
 Units: ``t`` and ``h`` are in the problem's time unit (s for the rod); ``y`` is (n,).
 """
