@@ -8,8 +8,7 @@ corrector solves ``F(t_n, y_pred + e, y'_pred + cj e) = 0`` for the correction `
 by simplified Newton with the iteration matrix ``J = dF/dy + cj dF/dy'`` (cj = alpha_s/h),
 factorised by LAPACK's banded LU and reused across iterations and steps.  The local
 error test, the order and step selection, and the failure handling follow IDA's
-heuristics and constants, with one addition: after an error-test failure at order k the
-step does not grow for k + 1 accepted steps (docs/design.md, section 4).
+heuristics and constants.
 
 Units: ``t`` and ``h`` are in the problem's time unit (s for the rod); ``y`` is (n,).
 """
@@ -316,8 +315,6 @@ class BDF:
         self._hused = 0.0
         self._ns = 0
         self._phase = 0
-        #: accepted steps left before h may grow again after an error-test failure
-        self._hold = 0
         self._cj = 0.0
         self._cjold = 0.0
         self._cjlast = 0.0
@@ -554,7 +551,7 @@ class BDF:
         self._y[:] = y
         self._yp[:] = yp
         self._kk, self._kused, self._knew = 1, 0, 1
-        self._hused, self._ns, self._phase, self._hold = 0.0, 0, 0, 0
+        self._hused, self._ns, self._phase = 0.0, 0, 0
         self._cjold = self._cjlast = 0.0
         self._cjratio, self._ss, self._oldnrm, self._rr = 1.0, 20.0, 0.0, 1.0
         self._have_lu = False
@@ -915,9 +912,6 @@ class BDF:
             else:
                 self._kk = 1
                 self._rr = 0.25
-            # h does not grow again before the order selection, which needs kk + 1 steps
-            # at one step size (ns), has seen the new step (see _complete_step)
-            self._hold = self._kk + 1
             if nef >= self.max_error_fails:
                 self._raise_failure(f"the local error test failed {nef} times in a row")
         self._hh *= self._rr
@@ -996,11 +990,7 @@ class BDF:
                     err_knew = err_k
                 hnew = self._hh
                 rr = (2.0 * err_knew + 1e-4) ** (-1.0 / (self._kk + 1))
-                grow = rr >= 2.0
-                if self._hold > 0:      # no growth yet after an error-test failure
-                    self._hold -= 1
-                    grow = False
-                if grow:
+                if rr >= 2.0:
                     hnew = 2.0 * self._hh
                     tmp = abs(hnew) * self._hmax_inv
                     if tmp > 1.0:

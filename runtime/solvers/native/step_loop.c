@@ -95,8 +95,6 @@ typedef struct {
     /* IDA's state */
     double psi[KV_NH], alpha[KV_NH], beta[KV_NH], sigma[KV_NH], gamma[KV_NH];
     int kk, kused, knew, ns, phase, have_lu;
-    int hold;                   /* accepted steps before h may grow again after an
-                                   error-test failure (bdf.py: _hold) */
     double hh, hused, cj, cjold, cjlast, cjratio, ss, oldnrm, rr;
     double t, t_old;
     int started;                /* an accepted step exists (t_old valid) */
@@ -928,7 +926,6 @@ static int handle_failure(kv_ida *S, int nflag, int ncf, int nef, double err_k,
             S->kk = 1;
             S->rr = 0.25;
         }
-        S->hold = S->kk + 1;    /* no growth before the order selection saw the new h */
         if (nef >= S->max_error_fails) { S->fail_count = nef; return KV_FAIL_ERR; }
     }
     S->hh *= S->rr;
@@ -995,12 +992,7 @@ static void complete_step(kv_ida *S, double tnew, double err_k, double err_km1)
             else err_knew = err_k;
             double hnew = S->hh;
             double rr = pow(2.0 * err_knew + 1e-4, -1.0 / (S->kk + 1));
-            int grow = rr >= 2.0;
-            if (S->hold > 0) {          /* no growth yet after an error-test failure */
-                S->hold--;
-                grow = 0;
-            }
-            if (grow) {
+            if (rr >= 2.0) {
                 hnew = 2.0 * S->hh;
                 double tmp = fabs(hnew) * S->hmax_inv;
                 if (tmp > 1.0) hnew /= tmp;

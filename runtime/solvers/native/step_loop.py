@@ -100,7 +100,7 @@ class CoreStruct(ctypes.Structure):
         + _fields(_I, "max_order", "maxcor", "max_conv_fails", "max_error_fails")
         + _fields(_D * NH, "stab_hmin")
         + _fields(_D * NH, "psi", "alpha", "beta", "sigma", "gamma")
-        + _fields(_I, "kk", "kused", "knew", "ns", "phase", "have_lu", "hold")
+        + _fields(_I, "kk", "kused", "knew", "ns", "phase", "have_lu")
         + _fields(_D, "hh", "hused", "cj", "cjold", "cjlast", "cjratio", "ss", "oldnrm",
                   "rr", "t", "t_old")
         + _fields(_I, "started")
@@ -326,7 +326,7 @@ class CoreLink:
 
     # -- state between Python and C ----------------------------------------------------
     _SCALARS = ("kk", "kused", "knew", "ns", "phase", "hh", "hused", "cj", "cjold",
-                "cjlast", "cjratio", "ss", "oldnrm", "rr", "hold")
+                "cjlast", "cjratio", "ss", "oldnrm", "rr")
     _COUNTERS = ("nstep", "nfev", "njev", "nlu", "nni", "netf", "ncfn")
     _SENS_COUNTERS = ("nfevS", "nniS", "ncfnS", "netfS", "nsetupS")
 
