@@ -65,7 +65,7 @@ ASSEMBLY_HEADERS = ("rod_assembly.h", "rod_index.h", "rod_contact.h", "system.h"
 #: use); the rod library calls it through kvrod_contact's function pointers
 CONTACT_SOURCES = ("rod_contact_kernels.c",)
 CONTACT_HEADERS = ("rod_contact_kernels.h", "rod_layout.h")
-CONTACT_NATIVE_SOURCES = ("rod_contact.c",)
+CONTACT_NATIVE_SOURCES = ("rod_contact.c", "rod_self_contact.c")
 CONTACT_NATIVE_HEADERS = ("rod_assembly.h", "rod_index.h", "rod_contact.h")
 
 
@@ -268,6 +268,8 @@ def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
     lib.kvrod_n_state.argtypes = [i, i]
     lib.kvrod_energies_contact.argtypes = [p, i, p, p, p, p]
     lib.kvrod_energies_contact.restype = i
+    lib.kvrod_jacobian_system.argtypes = [p, d, p, p, d, p]
+    lib.kvrod_jacobian_system.restype = i
     # an assembly of rods (runtime/model/native/system.h)
     lib.kvsys_residual.argtypes = [p, d, p, p, p]
     lib.kvsys_jacobian.argtypes = [p, d, p, p, d, p]
@@ -320,6 +322,10 @@ def _declare_contact(lib: ctypes.CDLL) -> ctypes.CDLL:
         getattr(lib, name).restype = i
     lib.kvrod_contact_max_step.argtypes = [p, p]
     lib.kvrod_contact_max_step.restype = d
+    lib.kvrod_self_values.argtypes = [p, p, p]
+    lib.kvrod_self_values.restype = i
+    lib.kvrod_self_couplings.argtypes = [p, p]
+    lib.kvrod_self_couplings.restype = i
     return lib
 
 
