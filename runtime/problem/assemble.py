@@ -343,7 +343,8 @@ def contact_arrays(problem: Problem, h: np.ndarray) -> ContactArrays:
     self_contact = None
     if law.self_contact:
         seg = np.zeros((N, L.N_CNT))
-        for name, v in (("k", law.stiffness), ("delta", law.penetration), ("c", law.damping),
+        for name, v in (("k", law.stiffness), ("delta", law.self_penetration),
+                        ("c", law.damping),
                         ("mu", law.friction), ("v_s", law.slip_velocity),
                         ("r", law.radius), ("h", h)):
             seg[:, L.CNT_OFFSETS[name]] = v

@@ -587,7 +587,12 @@ class ContactLaw:
     ``damping`` (N,) N s/m^2: the normal damping per length of each segment, ``2 zeta
     sqrt(stiffness rhoA)`` (zeta: ``damping_ratio``, rhoA: the segment's mass per length,
     kg/m; :func:`normal_damping`). ``slip_velocity`` (m/s), ``restitution``,
-    ``self_contact`` and ``friction`` (its Coulomb coefficient) as given."""
+    ``self_contact`` and ``friction`` (its Coulomb coefficient) as given.
+    ``self_penetration`` (m): delta of the rod's contact with itself: the given
+    ``penetration``, else ``PENETRATION_FRACTION`` of the smallest contact radius (the
+    weight rule of :func:`default_penetration` is about a rod laid on a floor; between
+    the rod's own strands it would make delta nanometres and the steps that resolve
+    every touch as short)."""
 
     radius: np.ndarray
     penetration: float
@@ -598,6 +603,7 @@ class ContactLaw:
     restitution: float
     self_contact: bool
     friction: float
+    self_penetration: float = 0.0
 
 
 def normal_damping(stiffness: Any, damping_ratio: float, mass_per_length: Any) -> Any:
@@ -655,5 +661,8 @@ def contact_law(radius: np.ndarray, contact: Contact, EI_min: float, h_min: floa
     c = np.asarray(normal_damping(k, zeta, rhoA), dtype=float)
     for a in (radius, c):
         a.setflags(write=False)
+    self_delta = (contact.penetration if contact.penetration is not None
+                  else PENETRATION_FRACTION * float(np.min(radius)))
     return ContactLaw(radius, delta, float(k), c, zeta, contact.slip_velocity,
-                      contact.restitution, contact.self_contact, contact.friction)
+                      contact.restitution, contact.self_contact, contact.friction,
+                      self_delta)
