@@ -581,7 +581,7 @@ class RodModel:
         return self._blocks
 
     def system_jacobian(self, t: float, y: np.ndarray, yp: np.ndarray, cj: float) -> None:
-        """J = dF/dy + cj dF/dy' into :attr:`blocks` (self-contact only)."""
+        """J = dF/dy + cj dF/dy' into the coupled block ``blocks`` (self-contact only)."""
         self._time(t)
         self.blocks  # noqa: B018
         rc = self._lib.kvrod_jacobian_system(self._struct_ptr(), t, _ptr(y, self.n),

@@ -320,7 +320,7 @@ def contact_arrays(problem: Problem, h: np.ndarray) -> ContactArrays:
     segment's normal damping, the obstacle's friction, the slip velocity, the segment's
     contact radius and length ``h`` (N,), m); with ``contact.self`` the same per segment
     for the rod's contact with itself
-    (:class:`~runtime.model.contact.SelfContactArrays`, with the rods' friction)."""
+    (``runtime.model.contact.SelfContactArrays``, with the rods' friction)."""
     from generated import rod_layout as L
 
     law = problem.contact_law()
