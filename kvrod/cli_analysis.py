@@ -36,6 +36,19 @@ def _cmd_modes(args) -> int:
     if args.near is not None and not (math.isfinite(args.near) and args.near >= 0):
         raise _cli_error(f"kvrod modes: --near must be a frequency >= 0 Hz, got {args.near}")
     problem = problem_from_args(args, "modes")
+    if getattr(problem, "obstacles", ()):
+        raise _cli_error(
+            "kvrod modes: modes about a contact equilibrium are not available in this "
+            "version (they need the contact linearised with its sticking contacts held): "
+            "without [[obstacles]] kvrod modes gives the free rod's modes; kvrod simulate "
+            "gives the damped motion on the obstacles")
+    contact = getattr(problem, "contact", None)
+    if contact is not None and contact.self_contact:
+        raise _cli_error(
+            "kvrod modes: contact.self = true: modes about a self-contact equilibrium are "
+            "not available in this version (they need the contact linearised with its "
+            "sticking contacts held): with contact.self = false kvrod modes gives the "
+            "free rod's modes; kvrod simulate gives the damped motion")
     nq = 6 * problem.rod.elements
     if args.count > nq:
         raise _cli_error(f"kvrod modes: --count {args.count} exceeds the {nq} degrees of "

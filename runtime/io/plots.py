@@ -178,6 +178,36 @@ def plot_ends(run, path: Path) -> Path:
     return _save(figure_ends(run), path)
 
 
+def figure_contact(t: np.ndarray, obstacles: Sequence[dict], kinds: Sequence[str]):
+    """Per obstacle the force it exerts on the rod (components and magnitude, N) and the
+    smallest gap (m; below zero: penetration) over time."""
+    plt = _plt()
+    fig, (ax, axg) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    for k, (o, kind) in enumerate(zip(obstacles, kinds, strict=True)):
+        f = np.asarray(o["force"])
+        ax.plot(t, np.linalg.norm(f, axis=0), color=f"C{k}", lw=1.2,
+                label=f"|F| obstacle {k} ({kind})")
+        for c, comp in enumerate("xyz"):
+            if np.any(f[c]):
+                ax.plot(t, f[c], color=f"C{k}", lw=0.6, ls=(":", "--", "-.")[c],
+                        label=f"F{comp} obstacle {k}")
+        axg.plot(t, o["gap_min"], color=f"C{k}", lw=1.0, label=f"obstacle {k}")
+    ax.set_ylabel("force on the rod [N]")
+    axg.set_ylabel("smallest gap [m]")
+    axg.axhline(0, color="0.6", lw=0.5)
+    axg.set_xlabel("time t [s]")
+    for a in (ax, axg):
+        if a.get_legend_handles_labels()[0]:
+            a.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    return fig
+
+
+def plot_contact(t: np.ndarray, obstacles: Sequence[dict], kinds: Sequence[str],
+                 path: Path) -> Path:
+    """:func:`figure_contact` as PNG."""
+    return _save(figure_contact(t, obstacles, kinds), path)
+
+
 def _zeta_prediction(run) -> float:
     lp = run.problem.linear_prediction() if hasattr(run, "problem") else None
     return lp["zeta_1"] if lp else math.nan
@@ -191,6 +221,9 @@ def plot_run(run, out: Path) -> list[Path]:
     if getattr(run, "peaks_x", np.zeros(0)).size >= 2:
         paths.append(plot_damping_vs_amplitude([run], ["run"], [_zeta_prediction(run)],
                                                out / "damping_ratio.png"))
+    if getattr(run, "obstacles", None):
+        paths.append(plot_contact(run.t, run.obstacles,
+                                  [o.kind for o in run.problem.obstacles], out / "contact.png"))
     frames = getattr(run, "centreline", np.zeros((0, 3, 0)))
     if frames.shape[0] and run.model is not None:
         from runtime.io.shapes import plot_run_centreline
@@ -242,6 +275,7 @@ def plot_run_folder(out: Path) -> list[Path]:
     out = Path(out)
     run = LoadedRun(out)
     zlin, name = math.nan, out.name
+    s: dict = {}
     try:
         s = json.loads((out / "summary.json").read_text())
         lp = s.get("linear_prediction")
@@ -258,7 +292,28 @@ def plot_run_folder(out: Path) -> list[Path]:
 
         paths.append(plot_run_centreline(run.centreline_t, run.centreline, run.reference,
                                          out / "centreline.png", title=name))
+    obstacles = _loaded_obstacles(out / "series.npz", run.t.size)
+    if obstacles:
+        listed = s.get("obstacles") if isinstance(s, dict) else None
+        kinds = [str(o.get("kind", "?")) if isinstance(o, dict) else "?"
+                 for o in (listed if isinstance(listed, list) else [])]
+        kinds = (kinds + ["?"] * len(obstacles))[:len(obstacles)]
+        paths.append(plot_contact(run.t, obstacles, kinds, out / "contact.png"))
     return paths
+
+
+def _loaded_obstacles(path: Path, nt: int) -> list[dict]:
+    """The per obstacle ``force`` and ``gap_min`` of a run's series.npz (none: [])."""
+    out = []
+    with np.load(path) as z:
+        k = 0
+        while f"obstacle{k}_force" in z.files and f"obstacle{k}_gap_min" in z.files:
+            f, g = np.asarray(z[f"obstacle{k}_force"]), np.asarray(z[f"obstacle{k}_gap_min"])
+            if f.shape != (3, nt) or g.shape != (nt,):
+                break
+            out.append({"force": f, "gap_min": g})
+            k += 1
+    return out
 
 
 def plot_dma(fit, path: Path) -> Path:

@@ -110,6 +110,28 @@ def write_vtp(path: Path, points: np.ndarray, cell_data: dict, point_data: dict)
     return write_text(Path(path), "\n".join(xml) + "\n")
 
 
+def write_points_vtp(path: Path, points: np.ndarray, point_data: dict) -> Path:
+    """Points (n, 3) as vertices with their arrays (ParaView: Glyph them), atomically."""
+    pts = np.asarray(points, dtype=float).reshape(-1, 3)
+    n = pts.shape[0]
+    xml = [
+        '<?xml version="1.0"?>',
+        '<VTKFile type="PolyData" version="0.1" byte_order="LittleEndian">',
+        "<PolyData>",
+        f'<Piece NumberOfPoints="{n}" NumberOfVerts="{n}" NumberOfLines="0" '
+        'NumberOfStrips="0" NumberOfPolys="0">',
+        "<Points>", _array_xml("Points", pts), "</Points>",
+        "<PointData>", *(_array_xml(k, v) for k, v in point_data.items()), "</PointData>",
+        "<Verts>",
+        '<DataArray type="Int64" Name="connectivity" format="ascii">'
+        f'{" ".join(str(i) for i in range(n))}</DataArray>',
+        '<DataArray type="Int64" Name="offsets" format="ascii">'
+        f'{" ".join(str(i + 1) for i in range(n))}</DataArray>',
+        "</Verts>", "</Piece>", "</PolyData>", "</VTKFile>",
+    ]
+    return write_text(Path(path), "\n".join(xml) + "\n")
+
+
 def _pvd_text(entries: list[tuple[float, str]]) -> str:
     rows = [f'<DataSet timestep="{t:.9g}" group="" part="0" file="{name}"/>'
             for t, name in entries]
@@ -148,11 +170,23 @@ class VtkSeries:
             self.entries = [(t, f) for t, f in read_pvd(self.path)
                             if t < resume_from - tol and (self.folder / f).exists()]
             keep = {f for _, f in self.entries}
+            keep |= {f.replace(f"{stem}_", f"{stem}_contact_", 1) for f in keep}
             for stale in self.folder.glob(f"{stem}_*.vtp"):  # frames after the checkpoint
                 if stale.name not in keep:
                     stale.unlink()
         self._k = len(self.entries)
         self.pvd_every = max(1, int(pvd_every))
+        #: a rod touching obstacles: the contact points of each frame (quadrature points
+        #: within 3 delta of an obstacle) as ``{stem}_contact_*.vtp`` / ``.pvd``
+        self.contact = (None if getattr(model, "contact", None) is None else
+                        VtkSeries.__new__(VtkSeries))
+        if self.contact is not None:
+            c = self.contact
+            c.folder, c.model, c.stem = self.folder, None, f"{stem}_contact"
+            c.path = self.folder / f"{c.stem}.pvd"
+            c.entries = [(t, f.replace(f"{stem}_", f"{stem}_contact_", 1))
+                         for t, f in self.entries]
+            c._k, c.pvd_every, c.contact = self._k, self.pvd_every, None
 
     def add(self, t: float, y: np.ndarray, yp: np.ndarray | None = None) -> None:
         """Write the frame of state ``y`` (rate ``yp``; None: at rest) at time ``t``."""
@@ -163,11 +197,24 @@ class VtkSeries:
         write_vtp(self.folder / name, pos, cell, point)
         self._k += 1
         self.entries.append((float(t), name))
+        if self.contact is not None:
+            self.contact.add_points(float(t), self.model.contact_points(float(t), y))
         if len(self.entries) % self.pvd_every == 0:
             self.write_collection()
 
+    def add_points(self, t: float, rows: np.ndarray) -> None:
+        """A frame of contact points (rows of ``RodModel.contact_points``: obstacle,
+        segment, x (3), gap)."""
+        name = f"{self.stem}_{self._k:05d}.vtp"
+        write_points_vtp(self.folder / name, rows[:, 2:5],
+                         {"obstacle": rows[:, 0], "segment": rows[:, 1], "gap": rows[:, 5]})
+        self._k += 1
+        self.entries.append((t, name))
+
     def write_collection(self) -> Path:
         """(Re)write ``stem.pvd`` with the frames so far (atomically)."""
+        if getattr(self, "contact", None) is not None:
+            self.contact.write_collection()
         return write_text(self.path, _pvd_text(self.entries))
 
     close = write_collection

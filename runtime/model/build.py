@@ -275,6 +275,8 @@ def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
     lib.kvsys_jacobian.argtypes = [p, d, p, p, d, p]
     lib.kvsys_energies.argtypes = [p, i, p, p, p, p]
     lib.kvsys_link_values.argtypes = [p, i, p, p, p]
+    lib.kvsys_max_step.argtypes = [p, d, p, p]
+    lib.kvsys_max_step.restype = d
     for name in ("kvsys_residual", "kvsys_jacobian", "kvsys_energies", "kvsys_link_values"):
         getattr(lib, name).restype = i
     return lib

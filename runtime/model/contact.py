@@ -72,7 +72,8 @@ class ContactStruct(ctypes.Structure):
                 ("cnt", ctypes.c_void_p), ("step_fraction", ctypes.c_double),
                 ("residual", ctypes.c_void_p), ("jacobian", ctypes.c_void_p),
                 ("energies", ctypes.c_void_p), ("values", ctypes.c_void_p),
-                ("self", ctypes.c_void_p), ("couplings", ctypes.c_void_p)]
+                ("max_step", ctypes.c_void_p), ("self", ctypes.c_void_p),
+                ("couplings", ctypes.c_void_p)]
 
     def bind(self, lib: ctypes.CDLL) -> None:
         """Point at the contact library's functions (``build.load_contact_library``)."""
@@ -81,6 +82,7 @@ class ContactStruct(ctypes.Structure):
         self.jacobian = addr(lib.kvrod_contact_jacobian)
         self.energies = addr(lib.kvrod_contact_energies)
         self.values = addr(lib.kvrod_contact_values)
+        self.max_step = addr(lib.kvrod_contact_max_step)
         self.couplings = addr(lib.kvrod_self_couplings)
 
 

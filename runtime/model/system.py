@@ -132,6 +132,9 @@ class SystemModel:
         if not rods:
             raise ValueError("an assembly needs at least one rod")
         self.rods = list(rods)
+        #: the step bound of rods touching obstacles (BDF's state_max_step), None without
+        self.state_max_step = (self._contact_max_step
+                               if any(r.contact is not None for r in self.rods) else None)
         self.names = list(names)
         self.holds, self.links, self.bodies = list(holds), list(links), list(bodies)
         self._gravity = gravity
@@ -703,7 +706,16 @@ class SystemModel:
                      keep=self, drive_constant=not self.time_dependent,
                      n_energies=self.n_energies)
         k.system_jacobian = addr(lib.kvsys_jacobian)
+        if self.state_max_step is not None:
+            k.max_step = addr(lib.kvsys_max_step)
         return k
+
+    def _contact_max_step(self, t: float, y: np.ndarray) -> float:
+        """The largest next step (s) that moves no segment of any rod toward an obstacle
+        by more than its share of the gap (the rods' ``kvrod_contact_max_step``)."""
+        self.at(t)
+        y = np.ascontiguousarray(y, dtype=float)
+        return float(self._lib.kvsys_max_step(self._ptr(), t, y.ctypes.data, None))
 
 
 def _condensation_blocks(rod: RodModel, held: set[int]) -> list[tuple[int, int, int, int, int]]:

@@ -332,14 +332,10 @@ def contact_arrays(problem: Problem, h: np.ndarray) -> ContactArrays:
         obs.append(par)
     cnt = np.zeros((len(kinds), N, L.N_CNT))
     for k, o in enumerate(problem.obstacles):
-        col = lambda name, k=k: cnt[k, :, L.CNT_OFFSETS[name]]  # noqa: E731
-        col("k")[:] = law.stiffness
-        col("delta")[:] = law.penetration
-        col("c")[:] = law.damping
-        col("mu")[:] = o.friction
-        col("v_s")[:] = law.slip_velocity
-        col("r")[:] = law.radius
-        col("h")[:] = h
+        for name, value in (("k", law.stiffness), ("delta", law.penetration),
+                            ("c", law.damping), ("mu", o.friction),
+                            ("v_s", law.slip_velocity), ("r", law.radius), ("h", h)):
+            cnt[k, :, L.CNT_OFFSETS[name]] = value
     self_contact = None
     if law.self_contact:
         seg = np.zeros((N, L.N_CNT))

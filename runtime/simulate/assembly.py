@@ -271,8 +271,17 @@ def static_equilibrium(problem, amap: AssemblyMap, t: float = 0.0,
                 # Newton finishes
                 y0 = pseudo_transient(st, y0)
                 first = 1.0
-            res = solve_static(st, y0, load_steps=problem.statics.load_steps,
-                               first_load=first)
+            try:
+                res = solve_static(st, y0, load_steps=problem.statics.load_steps,
+                                   first_load=first)
+            except StaticSolveError as exc:
+                if any(r.contact is not None for r in model.rods):
+                    exc.args = (f"{exc.args[0]}; statics of an assembly on obstacles is "
+                                "load stepping only in this version (a single rod on "
+                                "obstacles settles by pseudo-transient continuation): "
+                                "simulate it to rest instead (simulation.initial = "
+                                "\"reference\")",) + exc.args[1:]
+                raise
     return AssemblyStatic(res.y.copy(), res.total_iterations, list(res.iterations),
                           time.perf_counter() - wall0)
 

@@ -184,8 +184,10 @@ static int diag_of(int kind, const cseg* g, const double* y, cwork* W, cdiag* d)
 }
 
 /* obstacle o's NCV values (rod_contact.h) into v */
+/* exact_gap: the smallest gap evaluated also on segments out of reach whose bound lies
+   below the smallest so far (the values' g_min; the energies need no gap) */
 static int obstacle_values(const kvrod_rod* rod, int o, const double* y, cwork* W,
-                           double* v) {
+                           double* v, int exact_gap) {
   const int kind = rod->contact->kind[o];
   cseg g;
   cdiag d;
@@ -198,7 +200,14 @@ static int obstacle_values(const kvrod_rod* rod, int o, const double* y, cwork* 
     seg_of(rod, o, s, &g);
     if (in_reach(kind, &g, y, W, &yes, &glb)) return -3;
     if (!yes) {
-      if (glb < v[10]) v[10] = glb;
+      if (glb < v[10]) {
+        if (exact_gap) {
+          if (diag_of(kind, &g, y, W, &d)) return -3;
+          if (d.g_min < v[10]) v[10] = d.g_min;
+        } else {
+          v[10] = glb;
+        }
+      }
       continue;
     }
     if (diag_of(kind, &g, y, W, &d)) return -3;
@@ -214,7 +223,7 @@ int kvrod_contact_values(const kvrod_rod* rod, const double* y, double* out) {
   if (!active(rod)) return 0;
   cwork W;
   for (int o = 0; o < rod->contact->nobs; ++o) {
-    const int rc = obstacle_values(rod, o, y, &W, out + (size_t)o * NCV);
+    const int rc = obstacle_values(rod, o, y, &W, out + (size_t)o * NCV, 1);
     if (rc) return rc;
   }
   return 0;
@@ -225,7 +234,7 @@ int kvrod_contact_energies(const kvrod_rod* rod, const double* y, double* e) {
   cwork W;
   double v[NCV];
   for (int o = 0; active(rod) && o < rod->contact->nobs; ++o) {
-    const int rc = obstacle_values(rod, o, y, &W, v);
+    const int rc = obstacle_values(rod, o, y, &W, v, 0);
     if (rc) return rc;
     e[1] += v[6];
     e[2] += v[7];

@@ -24,7 +24,7 @@ enum { KV_PLANE = 0, KV_SPHERE = 1, KV_CYLINDER = 2, KV_PIPE = 3, KV_NKINDS = 4 
    about the obstacle's point c) the obstacle exerts on the rod (spatial), the contact
    energy E (J), the dissipated power P_diss (W: damping and friction), its friction part
    P_fric (W), the power of the obstacle's motion on the rod P_obs (W), the smallest gap
-   g_min (m; over the segments evaluated, else their lower bounds) and the number of
+   g_min (m; of the quadrature points of all segments) and the number of
    segments in reach (bound below CONTACT_CUTOFF delta) */
 #define NCV 12
 
@@ -76,6 +76,7 @@ struct kvrod_contact_s {
                   int col0, int s0, int s1);
   int (*energies)(const kvrod_rod* rod, const double* y, double* e);
   int (*values)(const kvrod_rod* rod, const double* y, double* out);
+  double (*max_step)(const kvrod_rod* rod, const double* y);
   kvrod_self* self;      /* self-contact (NULL: off) */
   int (*couplings)(const kvrod_rod* rod, const double* y);
 };

@@ -11,6 +11,7 @@
 #include "rod_kernels.h"
 #include "rod_layout.h"
 #include "rod_assembly.h"
+#include "rod_contact.h"
 #include "system.h"
 
 typedef struct {
@@ -196,6 +197,22 @@ int kvsys_link_values(const kvsys* s, int k, const double* y, double* Q, double*
    hold's free momentum row (3: the force the support or the tie exerts on that node's
    rod, inertia included), every link's force on node a and moment on side a (6, spatial:
    f_a and R(p_a1) T_a1 + R(p_a2) T_a2); NaN where not computed. */
+/* the step loop's kv_maxstep_fn of an assembly: the smallest of its rods' contact step
+   bounds (kvrod_contact_max_step; HUGE_VAL when no rod touches anything) */
+double kvsys_max_step(const void* ctx, double t, const double* y, const double* yp) {
+  (void) t; (void) yp;
+  const kvsys* s = (const kvsys*) ctx;
+  double h = HUGE_VAL;
+  for (int r = 0; r < s->nrod; ++r) {
+    const kvrod_rod* rod = s->rod[r];
+    if (rod->contact == NULL || rod->contact->nobs == 0 || rod->contact->max_step == NULL)
+      continue;
+    const double hr = rod->contact->max_step(rod, y + s->off[r]);
+    if (hr < h) h = hr;
+  }
+  return h;
+}
+
 int kvsys_energies(const kvsys* s, int m, const double* ts, const double* ys,
                    const double* yps, double* out) {
   sys_work W;

@@ -74,6 +74,7 @@ typedef struct {
 int kvsys_residual(const kvsys* s, double t, const double* y, const double* yp, double* res);
 int kvsys_jacobian(const kvsys* s, double t, const double* y, const double* yp, double cj,
                    void* blocks);
+double kvsys_max_step(const void* ctx, double t, const double* y, const double* yp);
 int kvsys_energies(const kvsys* s, int m, const double* ts, const double* ys,
                    const double* yps, double* out);
 int kvsys_link_values(const kvsys* s, int k, const double* y, double* Q, double* diag);
