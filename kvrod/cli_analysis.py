@@ -38,6 +38,13 @@ def _cmd_modes(args) -> int:
             "version (they need the contact linearised with its sticking contacts held): "
             "without [[obstacles]] kvrod modes gives the free rod's modes; kvrod simulate "
             "gives the damped motion on the obstacles")
+    contact = getattr(problem, "contact", None)
+    if contact is not None and contact.self_contact:
+        raise _cli_error(
+            "kvrod modes: contact.self = true: modes about a self-contact equilibrium are "
+            "not available in this version (they need the contact linearised with its "
+            "sticking contacts held): with contact.self = false kvrod modes gives the "
+            "free rod's modes; kvrod simulate gives the damped motion")
     from runtime.io.assembly_results import is_assembly
 
     if is_assembly(problem):

@@ -64,7 +64,7 @@ NATIVE_DIR = Path(__file__).resolve().parent / "native"
 #: use); the rod library calls it through kvrod_contact's function pointers
 CONTACT_SOURCES = ("rod_contact_kernels.c",)
 CONTACT_HEADERS = ("rod_contact_kernels.h", "rod_layout.h")
-CONTACT_NATIVE_SOURCES = ("rod_contact.c",)
+CONTACT_NATIVE_SOURCES = ("rod_contact.c", "rod_self_contact.c")
 CONTACT_NATIVE_HEADERS = ("rod_assembly.h", "rod_access.h", "rod_contact.h")
 ASSEMBLY_SOURCES = ("rod_assembly.c", "rod_tangent.c", "system.c", "system_tangent.c")
 ASSEMBLY_HEADERS = ("rod_assembly.h", "rod_access.h", "rod_contact.h", "rod_tangent.h",
@@ -275,6 +275,8 @@ def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
     lib.kvrod_residual_tangent.restype = i
     lib.kvrod_sens_residual.argtypes = [p, d, p, p, i, p, p, p]
     lib.kvrod_sens_residual.restype = i
+    lib.kvrod_jacobian_system.argtypes = [p, d, p, p, d, p]
+    lib.kvrod_jacobian_system.restype = i
     # an assembly of rods (runtime/model/native/system.h)
     lib.kvsys_residual.argtypes = [p, d, p, p, p]
     lib.kvsys_jacobian.argtypes = [p, d, p, p, d, p]
@@ -333,6 +335,10 @@ def _declare_contact(lib: ctypes.CDLL) -> ctypes.CDLL:
         getattr(lib, name).restype = i
     lib.kvrod_contact_max_step.argtypes = [p, p]
     lib.kvrod_contact_max_step.restype = d
+    lib.kvrod_self_values.argtypes = [p, p, p]
+    lib.kvrod_self_values.restype = i
+    lib.kvrod_self_couplings.argtypes = [p, p]
+    lib.kvrod_self_couplings.restype = i
     return lib
 
 

@@ -11,7 +11,8 @@
 * ``cnt`` (nobs, N, N_CNT): the contact law of each segment with each obstacle
   (``CNT_PARAMS``: k, delta, c, mu, v_s, r, h);
 * ``step_fraction``: the step bound (a step moves no segment toward an obstacle by more
-  than this fraction of its gap plus delta).
+  than this fraction of its gap plus delta);
+* ``self_contact``: the rod's contact with itself (:class:`SelfContactArrays`; None: off).
 
 Like :class:`~runtime.model.arrays.RodArrays` the arrays are modified in place only (the
 compiled code keeps their addresses). The problem layer fills them
@@ -21,6 +22,7 @@ compiled code keeps their addresses). The problem layer fills them
 from __future__ import annotations
 
 import ctypes
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,6 +42,29 @@ MIN_FORCE_SCALE = 1e-12
 STEP_FRACTION = 0.5
 
 
+#: values of the compiled ``kvrod_self_values`` (rod_contact.h, NSV)
+SELF_VALUE_NAMES: tuple[str, ...] = ("energy", "dissipation", "friction_dissipation",
+                                     "gap_min", "pairs")
+#: segments i < j closer along the rod than ``SELF_NEAR (r_i + r_j)`` of reference arc
+#: length are never paired: a rod bent to its tightest (curvature 1/r) keeps stretches
+#: closer than pi r along it within 2 r of each other (docs/design.md, section 14)
+SELF_NEAR = math.pi / 2
+#: pairs in reach the work arrays hold, per segment
+SELF_PAIRS_PER_SEGMENT = 64
+
+
+class SelfStruct(ctypes.Structure):
+    """``kvrod_self`` of runtime/model/native/rod_contact.h."""
+
+    _fields_ = [("seg", ctypes.c_void_p), ("s0", ctypes.c_void_p), ("near", ctypes.c_double),
+                ("key", ctypes.c_void_p), ("pairs", ctypes.c_void_p),
+                ("paircap", ctypes.c_int), ("ab", ctypes.c_void_p), ("ldab", ctypes.c_int),
+                ("m2", ctypes.c_void_p), ("m2cap", ctypes.c_int), ("nz2cap", ctypes.c_int),
+                ("srow2", ctypes.c_void_p), ("er2", ctypes.c_void_p), ("ec2", ctypes.c_void_p),
+                ("ev2", ctypes.c_void_p), ("rowslot", ctypes.c_void_p),
+                ("rowfill", ctypes.c_void_p), ("dropped", ctypes.c_int)]
+
+
 class ContactStruct(ctypes.Structure):
     """``kvrod_contact`` of runtime/model/native/rod_contact.h."""
 
@@ -47,7 +72,8 @@ class ContactStruct(ctypes.Structure):
                 ("cnt", ctypes.c_void_p), ("step_fraction", ctypes.c_double),
                 ("residual", ctypes.c_void_p), ("jacobian", ctypes.c_void_p),
                 ("energies", ctypes.c_void_p), ("values", ctypes.c_void_p),
-                ("max_step", ctypes.c_void_p)]
+                ("max_step", ctypes.c_void_p), ("self", ctypes.c_void_p),
+                ("couplings", ctypes.c_void_p)]
 
     def bind(self, lib: ctypes.CDLL) -> None:
         """Point at the contact library's functions (``build.load_contact_library``)."""
@@ -57,6 +83,64 @@ class ContactStruct(ctypes.Structure):
         self.energies = addr(lib.kvrod_contact_energies)
         self.values = addr(lib.kvrod_contact_values)
         self.max_step = addr(lib.kvrod_contact_max_step)
+        self.couplings = addr(lib.kvrod_self_couplings)
+
+
+class SelfContactArrays:
+    """The contact of a rod with itself (``kvrod_self``): ``seg`` (N, N_CNT) each
+    segment's law in the ``CNT_PARAMS`` layout (k, delta, c: its normal damping per length
+    on a rigid obstacle, mu: the rods' friction, v_s, r, h: its reference length; a pair
+    takes the smaller k, delta and mu and ``c_1 c_2 / sqrt(c_1^2 + c_2^2)``, the damping of
+    the pair's reduced mass), ``s0`` (N + 1) the reference arc length of the nodes (from
+    h). The Jacobian's entries between a pair's two segments go to the dynamic couplings
+    of the rod's coupled band block (:meth:`attach`)."""
+
+    def __init__(self, seg: np.ndarray, near: float = SELF_NEAR) -> None:
+        self.seg = np.ascontiguousarray(seg, dtype=np.float64)
+        if self.seg.ndim != 2 or self.seg.shape[1] != L.N_CNT or self.seg.shape[0] < 1:
+            raise ValueError(f"self-contact law of shape {self.seg.shape}; expected "
+                             f"(N, {L.N_CNT})")
+        N = self.seg.shape[0]
+        self.s0 = np.concatenate([[0.0], np.cumsum(self.seg[:, L.CNT_OFFSETS["h"]])])
+        self.near = float(near)
+        self._key = np.zeros(3 * N + 1)
+        self._pairs = np.zeros(2 * SELF_PAIRS_PER_SEGMENT * N, dtype=np.int32)
+        s = self._struct = SelfStruct()
+        s.seg, s.s0, s.near = self.seg.ctypes.data, self.s0.ctypes.data, self.near
+        s.key, s.pairs = self._key.ctypes.data, self._pairs.ctypes.data
+        s.paircap = SELF_PAIRS_PER_SEGMENT * N
+        self.blocks = None
+
+    @property
+    def N(self) -> int:
+        return int(self.seg.shape[0])
+
+    def attach(self, blocks, n: int) -> None:
+        """Write the Jacobian into ``blocks`` (a ``CoupledBlocks`` of one block, the rod's
+        n unknowns, with dynamic coupling capacity)."""
+        s = self._struct
+        self.blocks = blocks
+        self._rowslot = np.full(max(n, 1), -1, dtype=np.int32)
+        self._rowfill = np.zeros(max(blocks.m2cap, 1), dtype=np.int32)
+        s.ab, s.ldab = blocks.ab[0].ctypes.data, int(blocks.ldab[0])
+        s.m2 = blocks.m2_address
+        s.m2cap, s.nz2cap = blocks.m2cap, blocks.nz2cap
+        s.srow2, s.er2 = blocks.srow2.ctypes.data, blocks.er2.ctypes.data
+        s.ec2, s.ev2 = blocks.ec2.ctypes.data, blocks.ev2.ctypes.data
+        s.rowslot, s.rowfill = self._rowslot.ctypes.data, self._rowfill.ctypes.data
+
+    @property
+    def dropped(self) -> int:
+        """Pairs whose couplings did not fit the capacity at the last Jacobian (their
+        forces are in the residual; Newton then converges more slowly)."""
+        return int(self._struct.dropped)
+
+    @property
+    def struct_address(self) -> int:
+        return ctypes.addressof(self._struct)
+
+    def copy(self) -> SelfContactArrays:
+        return SelfContactArrays(self.seg.copy(), self.near)
 
 
 @dataclass(eq=False)
@@ -67,6 +151,7 @@ class ContactArrays:
     obs: np.ndarray
     cnt: np.ndarray
     step_fraction: float = STEP_FRACTION
+    self_contact: SelfContactArrays | None = None
 
     def __post_init__(self) -> None:
         self.kind = np.ascontiguousarray(self.kind, dtype=np.int32)
@@ -82,10 +167,17 @@ class ContactArrays:
             raise ValueError(f"contact kinds {self.kind.tolist()} outside 0..{len(KINDS) - 1}")
         self._struct = ContactStruct(n, self.kind.ctypes.data, self.obs.ctypes.data,
                                      self.cnt.ctypes.data, float(self.step_fraction))
+        if self.self_contact is not None:
+            self._struct.self = self.self_contact.struct_address
 
     @property
     def n_obstacles(self) -> int:
         return int(self.kind.size)
+
+    @property
+    def active(self) -> bool:
+        """Whether the rod touches anything: an obstacle, or itself."""
+        return self.n_obstacles > 0 or self.self_contact is not None
 
     @property
     def N(self) -> int:
@@ -120,15 +212,21 @@ class ContactArrays:
         and the rod would have no equilibrium; scaled, the reference is one and the path
         ends on the full law at 1)."""
         base = getattr(self, "_base", None)
+        sc = self.self_contact
+        kk, kc = L.CNT_OFFSETS["k"], L.CNT_OFFSETS["c"]
         if base is None:
             if scale == 1.0:
                 return
-            base = self._base = (self.cnt_field("k").copy(), self.cnt_field("c").copy())
+            base = self._base = (self.cnt_field("k").copy(), self.cnt_field("c").copy(),
+                                 None if sc is None else sc.seg[:, [kk, kc]].copy())
         # the kernels take k > 0 (the law's tail is k delta softplus(-g/delta)): load
         # factor 0 keeps a push of 1e-12 of the law's, far below any residual test
         scale = max(float(scale), MIN_FORCE_SCALE)
         self.cnt_field("k")[:] = scale * base[0]
         self.cnt_field("c")[:] = scale * base[1]
+        if sc is not None:
+            sc.seg[:, kk] = scale * base[2][:, 0]
+            sc.seg[:, kc] = scale * base[2][:, 1]
 
     def bind(self, lib: ctypes.CDLL) -> None:
         """Let the compiled rod reach the contact library's functions (``lib``:
@@ -144,11 +242,12 @@ class ContactArrays:
 
     def copy(self) -> ContactArrays:
         out = ContactArrays(self.kind.copy(), self.obs.copy(), self.cnt.copy(),
-                            self.step_fraction)
+                            self.step_fraction,
+                            None if self.self_contact is None else self.self_contact.copy())
         if getattr(self, "lib", None) is not None:
             out.bind(self.lib)
         return out
 
 
-__all__ = ["KINDS", "N_VALUES", "STEP_FRACTION", "VALUE_NAMES", "ContactArrays",
-           "ContactStruct"]
+__all__ = ["KINDS", "N_VALUES", "SELF_NEAR", "SELF_VALUE_NAMES", "STEP_FRACTION",
+           "VALUE_NAMES", "ContactArrays", "ContactStruct", "SelfContactArrays", "SelfStruct"]

@@ -27,8 +27,14 @@ from generated import rod_layout as L
 from runtime.errors import GeneratedCodeError, ParameterError
 from runtime.model import build
 from runtime.model.arrays import RodArrays
-from runtime.model.contact import N_VALUES, VALUE_NAMES
+from runtime.model.contact import N_VALUES, SELF_VALUE_NAMES, VALUE_NAMES
 from runtime.model.quaternion import end_quaternion, quat_mul, quat_rotation
+
+#: the self-contact couplings' capacity: at most this many doubles of the Woodbury
+#: columns Z (rows x n; beyond, a rod's pairs are left out of the Jacobian) and the
+#: entries per coupling row (19 per pair a row's segment is in: 32 pairs)
+SELF_COUPLING_DOUBLES = 1 << 23
+SELF_COUPLING_ENTRIES_PER_ROW = 19 * 32
 
 
 class Drive(Protocol):
@@ -124,14 +130,21 @@ class RodModel:
         self._lib = lib
         #: the rigid obstacles the rod touches (runtime.model.contact; None: none)
         self.contact = arrays.contact if (arrays.contact is not None
-                                          and arrays.contact.n_obstacles) else None
+                                          and arrays.contact.active) else None
+        #: the rod's contact with itself (runtime.model.contact; None: off)
+        self.self_contact = None if self.contact is None else self.contact.self_contact
         if self.contact is not None:
             if lib is None:
-                raise GeneratedCodeError("contact with obstacles runs on the compiled "
-                                         "backend only (a C compiler is needed: see the "
-                                         "warning above)")
+                raise GeneratedCodeError("contact runs on the compiled backend only (a C "
+                                         "compiler is needed: see the warning above)")
             self._clib = build.load_contact_library()
             self.contact.bind(self._clib)
+        self._blocks = None
+        if self.self_contact is not None:
+            # a self-contact pair couples two segments far apart along the rod: its
+            # Jacobian leaves the band, and the Newton system is the rod's band block
+            # with the pairs as dynamic couplings (runtime/solvers/native/blocks.c)
+            self.newton_system = self._self_contact_newton_system
         #: the state's bound on the next step (contact; the BDF reads it), None without
         self.state_max_step = None if self.contact is None else self._contact_max_step
         self._struct = arrays.struct(self.kl, self.ku)
@@ -662,7 +675,80 @@ class RodModel:
                         n_energies=self.n_energies)
         if self.contact is not None:
             kern.max_step = address(self._clib.kvrod_max_step)
+        if self.self_contact is not None:
+            self.blocks  # noqa: B018 (attached before the first Jacobian)
+            kern.system_jacobian = address(lib.kvrod_jacobian_system)
         return kern
+
+    # -- self-contact: the coupled band block (runtime/solvers/native/blocks.py) --------------
+    @property
+    def blocks(self):
+        """The rod's Newton matrix with self-contact: one band block (condensed as the
+        rod's own Newton system is, where it can be) and the self-contact pairs' entries
+        between their segments as dynamic coupling rows (``CoupledBlocks``; None without
+        self-contact). Capacity: every momentum row of the rod, within
+        ``SELF_COUPLING_DOUBLES`` of Z (pairs beyond it are left out of the Jacobian,
+        not of the residual)."""
+        if self.self_contact is None:
+            return None
+        if self._blocks is None:
+            from runtime.solvers.native.blocks import Block, CoupledBlocks
+            from runtime.solvers.native.condensed import CondensedNewton
+
+            cond = CondensedNewton.build(self, self.n, self.kl, self.ku, self.ldab)
+            rows = min(6 * self.N + 3, max(SELF_COUPLING_DOUBLES // max(self.n, 1), 36))
+            cb = CoupledBlocks([Block(0, self.n, self.kl, self.ku, cond)], {},
+                               dynamic_rows=rows,
+                               dynamic_entries=rows * SELF_COUPLING_ENTRIES_PER_ROW)
+            self.self_contact.attach(cb, self.n)
+            self._blocks = cb
+        return self._blocks
+
+    def system_jacobian(self, t: float, y: np.ndarray, yp: np.ndarray, cj: float) -> None:
+        """J = dF/dy + cj dF/dy' into the coupled block ``blocks`` (self-contact only)."""
+        self._time(t)
+        self.blocks  # noqa: B018
+        rc = self._lib.kvrod_jacobian_system(self._struct_ptr(), t, _ptr(y, self.n),
+                                             _ptr(yp, self.n), cj, None)
+        if rc:
+            raise GeneratedCodeError(f"kvrod_jacobian_system failed (code {rc})")
+
+    def _self_contact_newton_system(self):
+        """The integrator's Newton system with self-contact: the coupled block."""
+        from runtime.solvers.newton import BlocksSystem
+
+        return BlocksSystem(self)
+
+    def _self_couplings(self, t: float, y: np.ndarray) -> sp.csc_matrix:
+        """dF/dy's self-contact entries between the segments of each pair (CSC)."""
+        import ctypes
+
+        import scipy.sparse as sp
+
+        cb = self.blocks
+        self._time(t)
+        rc = self._clib.kvrod_self_couplings(self._struct_ptr(), _ptr(y, self.n))
+        if rc:
+            raise GeneratedCodeError(f"kvrod_self_couplings failed (code {rc})")
+        m = int(ctypes.c_int.from_address(cb.m2_address).value)
+        nz = int(cb.er2[m])
+        rows = np.repeat(cb.srow2[:m], np.diff(cb.er2[:m + 1]))
+        return sp.csc_matrix((cb.ev2[:nz].copy(), (rows, cb.ec2[:nz].copy())),
+                             shape=(self.n, self.n))
+
+    def self_contact_values(self, t: float, y: np.ndarray) -> dict[str, float]:
+        """The self-contact's energy (J), dissipated power (W) and its friction part,
+        the smallest gap between paired segments' surfaces (m; inf: no pair in reach) and
+        the number of pairs in reach (``contact.SELF_VALUE_NAMES``)."""
+        if self.self_contact is None:
+            raise ValueError("the rod has no self-contact (contact.self = false)")
+        self._time(t)
+        out = np.zeros(len(SELF_VALUE_NAMES))
+        rc = self._clib.kvrod_self_values(self._struct_ptr(), _ptr(y, self.n),
+                                          out.ctypes.data)
+        if rc:
+            raise GeneratedCodeError(f"kvrod_self_values failed (code {rc})")
+        return dict(zip(SELF_VALUE_NAMES, out.tolist(), strict=True))
 
     def _struct_ptr(self):
         import ctypes
@@ -728,12 +814,20 @@ class RodModel:
             for name in ("m_dead",):
                 a.segment_load(name)[:] = rng.uniform(0.5, 1.5, a.segment_load(name).shape)
             a.set_param("load_scale", 1.0)
+            # self-contact's pairs within a segment have the segment's own entries; at
+            # random states the pair search would only cost
+            struct = None if self.contact is None else self.contact._struct
+            self_ptr = None if struct is None else struct.self
+            if struct is not None:
+                struct.self = None
             try:
                 for _ in range(2):
                     y = self.reference + 0.1 * rng.standard_normal(self.n)
                     self.jacobian_band2(0.0, y, rng.standard_normal(self.n), 1.0, 1.0, ab)
                     acc[self.kl:] += np.abs(ab[self.kl:])
             finally:
+                if struct is not None:
+                    struct.self = self_ptr
                 for name in ("par", "seg", "jnt", "nload", "sload"):
                     getattr(a, name)[...] = getattr(saved, name)
                 self._key, self._steady = driven
@@ -757,6 +851,10 @@ class RodModel:
         ab = self._ab
         self.jacobian_band2(t, y, yp, cy, cj, ab)
         pat.data = ab.ravel(order="F")[self._pattern_flat].copy()
+        if self.self_contact is not None and cy != 0.0:
+            # the pairs' entries within a segment are in the band (its pattern: the
+            # segment's own forces'), those between the segments are the couplings
+            return (pat + cy * self._self_couplings(t, y)).tocsc()
         return pat
 
     def jacobian_sparse(self, t: float, y: np.ndarray, yp: np.ndarray,

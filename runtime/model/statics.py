@@ -98,6 +98,17 @@ class RodStatics:
         self.constrain = self._constrain if moving else None
         #: the gauge holding free rigid motions (:meth:`hold_rigid_motions`), or None
         self.gauge: StaticGauge | None = None
+        if m.self_contact is not None:
+            # self-contact couples segments far apart: the static Jacobian is not banded,
+            # solve_static factorises it sparse (static_factor)
+            self.static_factor = self._static_factor_sparse
+
+    def _static_factor_sparse(self, y: np.ndarray):
+        """SuperLU factors of :meth:`jacobian_csr` (fixed columns and gauge included)
+        with the ``info``/``solve`` face of ``BandLU`` (self-contact only)."""
+        from runtime.model.system_statics import _SparseLU
+
+        return _SparseLU(self.jacobian_csr(y))
 
     def rigid_motions(self, y: np.ndarray):
         """The rigid motions the supports leave free at state y
@@ -168,7 +179,10 @@ class RodStatics:
         y0 = self.at_rest(y)
         ab = np.zeros((m.ldab, m.n), order="F")
         m.jacobian_band2(self.time, y0, m._zeros, 1.0, 0.0, ab)
-        Jd = m.band_to_csc(ab, m.kl, m.ku).tocsr()[self.static_rows]
+        Jd = m.band_to_csc(ab, m.kl, m.ku)
+        if m.self_contact is not None:      # the pairs' entries between their segments
+            Jd = Jd + m._self_couplings(self.time, y0)
+        Jd = Jd.tocsr()[self.static_rows]
         J = (Jd @ self.tangent(y0)).tocsr()
         keep = sp.diags(self._rowmask.astype(float))
         if self._fixed_matrix is None:

@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from runtime.model.arrays import RodArrays, coupled_arrays
-from runtime.model.contact import ContactArrays
+from runtime.model.contact import ContactArrays, SelfContactArrays
 from runtime.model.quaternion import (
     cayley_curvature,
     quat_exp,
@@ -275,7 +275,7 @@ def reference_arrays(problem: Problem) -> tuple[RodArrays, np.ndarray, np.ndarra
     a.set_param("p_end", p_end)
     if "K6" in mats:          # coupled sections: the coupled kernels (docs/design.md, 10)
         a = coupled_arrays(a, mats["K6"], mats["V6"], mats["rhoJ"], mats["mass_centre"])
-    if problem.obstacles:
+    if problem.has_contact:
         a.contact = contact_arrays(problem, h)
     B = a.branches
     y = np.zeros(L.n_state(N, B))         # at rest, stress free: internal strains 0
@@ -318,7 +318,9 @@ def contact_arrays(problem: Problem, h: np.ndarray) -> ContactArrays:
     obstacle its kernel and parameters (:func:`obstacle_parameters`; the pose of t = 0),
     per obstacle and segment the law of :meth:`Problem.contact_law` (k, delta, the
     segment's normal damping, the obstacle's friction, the slip velocity, the segment's
-    contact radius and length ``h`` (N,), m)."""
+    contact radius and length ``h`` (N,), m); with ``contact.self`` the same per segment
+    for the rod's contact with itself
+    (``runtime.model.contact.SelfContactArrays``, with the rods' friction)."""
     from generated import rod_layout as L
 
     law = problem.contact_law()
@@ -334,7 +336,18 @@ def contact_arrays(problem: Problem, h: np.ndarray) -> ContactArrays:
                             ("c", law.damping), ("mu", o.friction),
                             ("v_s", law.slip_velocity), ("r", law.radius), ("h", h)):
             cnt[k, :, L.CNT_OFFSETS[name]] = value
-    arrays = ContactArrays(np.array(kinds), np.array(obs), cnt)
+    self_contact = None
+    if law.self_contact:
+        seg = np.zeros((N, L.N_CNT))
+        for name, v in (("k", law.stiffness), ("delta", law.self_penetration),
+                        ("c", law.damping),
+                        ("mu", law.friction), ("v_s", law.slip_velocity),
+                        ("r", law.radius), ("h", h)):
+            seg[:, L.CNT_OFFSETS[name]] = v
+        self_contact = SelfContactArrays(seg)
+    arrays = ContactArrays(np.array(kinds, dtype=np.int32).reshape(-1),
+                           np.array(obs, dtype=float).reshape(-1, L.N_OBS), cnt,
+                           self_contact=self_contact)
     for k, o in enumerate(problem.obstacles):
         c, q, v, w = o.pose(0.0)
         arrays.set_pose(k, c, q, v, w)

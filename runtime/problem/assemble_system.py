@@ -154,6 +154,12 @@ def build_system(assembly, backend: str = "auto") -> AssemblyMap:
     """The :class:`SystemModel` of an assembly problem (see the module docstring)."""
     from runtime.errors import ParameterError
 
+    contact = getattr(assembly, "contact", None)
+    if contact is not None and contact.self_contact:
+        raise ParameterError("contact.self", True, "false in an assembly: contact between "
+                             "its rods (and of each rod with itself) is not available in "
+                             "this version; a single rod's self-contact is (kvrod "
+                             "simulate)")
     names = list(assembly.rods)
     rods = [build_model(assembly.rods[n], backend=backend) for n in names]
     y_ref = [r.reference for r in rods]

@@ -467,7 +467,8 @@ ASSEMBLY_KEYS: tuple[Key, ...] = (
        invalid={"kind": "plane"}),
     _k("", "contact", "-", "defaults", "the [contact] table of a single rod; its radius "
        "may be a table {NAME = r} of radii per rod", "the contact law of every rod; self = "
-       "true: the rods' contact with each other and themselves", invalid={"self": "yes"}),
+       "true: the rods' contact with each other and themselves (refused when an "
+       "assembly runs, in this version)", invalid={"self": "yes"}),
     # -- [rods.NAME] --------------------------------------------------------------------
     _k("rods.NAME", "rod", "-", "required", "the [rod] table of a single rod (length, "
        "elements, geometry)", "the rod's length, elements and reference geometry; "
@@ -610,8 +611,9 @@ CONTACT_KEYS: tuple[Key, ...] = (
        "required for other sections", "> 0; in an assembly also a table {NAME = r} "
        "(rods not named: their section's)", "the rod's contact radius: the round "
        "envelope about the centreline the contact sees", invalid=-0.01),
-    _k("contact", "self", "-", "false", "true, false", "contact of the rods with "
-       "each other (in an assembly) and of a rod with itself (a plectoneme)",
+    _k("contact", "self", "-", "false", "true, false", "contact of a rod with "
+       "itself (a plectoneme); of the rods of an assembly with each other: refused when "
+       "it runs, in this version",
        invalid="yes"),
     _k("contact", "friction", "-", "0", "0 ... 100", "the Coulomb coefficient of the "
        "rods' contact with each other and themselves (self = true; an obstacle has its "

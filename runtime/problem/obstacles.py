@@ -418,7 +418,7 @@ class Contact:
     normal force goes from zero to the linear penalty over a gap band of that width) and
     the tolerance of the check that no rod starts inside an obstacle; None: the penetration
     under the rod's own weight, at most 0.2 % of its smallest contact radius
-    (:func:`default_penetration`). ``slip_velocity`` (m/s): the friction's
+    (``default_penetration``). ``slip_velocity`` (m/s): the friction's
     regularization (full Coulomb friction above it; a rod held by static friction creeps
     at about slip_velocity f_t / (mu f_n)). ``restitution``: the coefficient of
     restitution e in (0, 1] of a node's mass on the contact spring, whose damping ratio
@@ -587,7 +587,12 @@ class ContactLaw:
     ``damping`` (N,) N s/m^2: the normal damping per length of each segment, ``2 zeta
     sqrt(stiffness rhoA)`` (zeta: ``damping_ratio``, rhoA: the segment's mass per length,
     kg/m; :func:`normal_damping`). ``slip_velocity`` (m/s), ``restitution``,
-    ``self_contact`` and ``friction`` (its Coulomb coefficient) as given."""
+    ``self_contact`` and ``friction`` (its Coulomb coefficient) as given.
+    ``self_penetration`` (m): delta of the rod's contact with itself: the given
+    ``penetration``, else ``PENETRATION_FRACTION`` of the smallest contact radius (the
+    weight rule of ``default_penetration`` is about a rod laid on a floor; between
+    the rod's own strands it would make delta nanometres and the steps that resolve
+    every touch as short)."""
 
     radius: np.ndarray
     penetration: float
@@ -598,6 +603,7 @@ class ContactLaw:
     restitution: float
     self_contact: bool
     friction: float
+    self_penetration: float = 0.0
 
 
 def normal_damping(stiffness: Any, damping_ratio: float, mass_per_length: Any) -> Any:
@@ -644,7 +650,7 @@ def contact_law(radius: np.ndarray, contact: Contact, EI_min: float, h_min: floa
     """The law of one rod: ``radius`` (N,) its segments' contact radii (m), ``EI_min``
     (N m^2) its softest bending stiffness, ``h_min`` (m) its shortest element, ``rhoA``
     (N,) kg/m its segments' masses per length, ``gravity`` (m/s^2) the magnitude of the
-    problem's gravity (0: none; :func:`default_penetration` then takes standard gravity)."""
+    problem's gravity (0: none; ``default_penetration`` then takes standard gravity)."""
     gravity = gravity if gravity > 0.0 else STANDARD_GRAVITY
     radius = np.asarray(radius, dtype=float)
     k = contact.stiffness if contact.stiffness is not None else default_stiffness(EI_min,
@@ -655,5 +661,8 @@ def contact_law(radius: np.ndarray, contact: Contact, EI_min: float, h_min: floa
     c = np.asarray(normal_damping(k, zeta, rhoA), dtype=float)
     for a in (radius, c):
         a.setflags(write=False)
+    self_delta = (contact.penetration if contact.penetration is not None
+                  else PENETRATION_FRACTION * float(np.min(radius)))
     return ContactLaw(radius, delta, float(k), c, zeta, contact.slip_velocity,
-                      contact.restitution, contact.self_contact, contact.friction)
+                      contact.restitution, contact.self_contact, contact.friction,
+                      self_delta)

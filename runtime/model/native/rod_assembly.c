@@ -738,7 +738,7 @@ static int jacobian_cells_own(const kvrod_rod* rod, const double* y, const doubl
    (rod_contact.h; segment i is part of element i: it reaches the columns of cells i-1 and
    i, as the segment's internal forces do) */
 static int has_contact(const kvrod_rod* rod) {
-  return rod->contact && rod->contact->nobs > 0;
+  return rod->contact && (rod->contact->nobs > 0 || rod->contact->self);
 }
 
 int kvrod_residual(const kvrod_rod* rod, double t, const double* y, const double* yp,
@@ -760,6 +760,18 @@ int kvrod_jacobian_band_cells(const kvrod_rod* rod, double t, const double* y,
 int kvrod_jacobian_band(const kvrod_rod* rod, double t, const double* y, const double* yp,
                         double cy, double cj, int ldab, double* ab) {
   return kvrod_jacobian_band_cells(rod, t, y, yp, cy, cj, ldab, ab, 0, 0, rod->N);
+}
+
+int kvrod_jacobian_system(const void* ctx, double t, const double* y, const double* yp,
+                          double cj, void* blocks) {
+  (void) blocks;
+  const kvrod_rod* rod = (const kvrod_rod*) ctx;
+  if (!rod->contact || !rod->contact->self || !rod->contact->couplings) return -4;
+  const kvrod_self* S = rod->contact->self;
+  const int n = kvrod_n_state(rod->N, rod->nb);
+  memset(S->ab, 0, sizeof(double) * (size_t) S->ldab * (size_t) n);
+  const int rc = kvrod_jacobian_band(rod, t, y, yp, 1.0, cj, S->ldab, S->ab);
+  return rc ? rc : rod->contact->couplings(rod, y);
 }
 
 /* the stored energy and twice the dissipation rate of the relaxation terms of one

@@ -83,7 +83,7 @@ static int in_reach(int kind, const cseg* g, const double* y, cwork* W, int* yes
   return 0;
 }
 
-int kvrod_contact_residual(const kvrod_rod* rod, const double* y, double* res) {
+static int obstacle_residual(const kvrod_rod* rod, const double* y, double* res) {
   if (!active(rod)) return 0;
   const kvrod_contact* C = rod->contact;
   cwork W;
@@ -110,8 +110,14 @@ int kvrod_contact_residual(const kvrod_rod* rod, const double* y, double* res) {
   return 0;
 }
 
-int kvrod_contact_jacobian(const kvrod_rod* rod, const double* y, double cy, int ldab,
-                           double* ab, int col0, int s0, int s1) {
+int kvrod_contact_residual(const kvrod_rod* rod, const double* y, double* res) {
+  if (!rod->contact) return 0;
+  const int rc = obstacle_residual(rod, y, res);
+  return rc || !rod->contact->self ? rc : kvrod_self_residual(rod, y, res);
+}
+
+static int obstacle_jacobian(const kvrod_rod* rod, const double* y, double cy, int ldab,
+                             double* ab, int col0, int s0, int s1) {
   if (!active(rod) || cy == 0.0) return 0;
   const kvrod_contact* C = rod->contact;
   const int kl = rod->kl, ku = rod->ku;
@@ -153,6 +159,14 @@ int kvrod_contact_jacobian(const kvrod_rod* rod, const double* y, double cy, int
     }
   }
   return 0;
+}
+
+int kvrod_contact_jacobian(const kvrod_rod* rod, const double* y, double cy, int ldab,
+                           double* ab, int col0, int s0, int s1) {
+  if (!rod->contact) return 0;
+  const int rc = obstacle_jacobian(rod, y, cy, ldab, ab, col0, s0, s1);
+  return rc || !rod->contact->self || cy == 0.0
+             ? rc : kvrod_self_jacobian(rod, y, cy, ldab, ab, col0, s0, s1);
 }
 
 /* segment s's diagnostics with obstacle o: E, P_diss, F_obs (3), M_obs (3), P_obs, g_min,
@@ -248,15 +262,22 @@ static int support_forces(const kvrod_rod* rod, const double* y, cwork* W, doubl
 }
 
 int kvrod_contact_energies(const kvrod_rod* rod, const double* y, double* e) {
-  if (!active(rod)) return 0;
+  if (!rod->contact) return 0;
   cwork W;
   double v[NCV];
-  for (int o = 0; o < rod->contact->nobs; ++o) {
+  for (int o = 0; active(rod) && o < rod->contact->nobs; ++o) {
     const int rc = obstacle_values(rod, o, y, &W, v, 0);
     if (rc) return rc;
     e[1] += v[6];
     e[2] += v[7];
     e[3] += v[9];
+  }
+  if (rod->contact->self) {
+    double sv[NSV];
+    const int rc = kvrod_self_values(rod, y, sv);
+    if (rc) return rc;
+    e[1] += sv[0];
+    e[2] += sv[1];
   }
   return support_forces(rod, y, &W, e);
 }

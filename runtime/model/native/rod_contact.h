@@ -28,6 +28,39 @@ enum { KV_PLANE = 0, KV_SPHERE = 1, KV_CYLINDER = 2, KV_PIPE = 3, KV_NKINDS = 4 
    segments in reach (bound below CONTACT_CUTOFF delta) */
 #define NCV 12
 
+/* self-contact of a rod (contact.self; rod_self_contact.c): the pairs of its segments
+   that are not near each other along it, found by a sweep over the segments' bounding
+   spheres along the axis in which the midpoints spread most, each pair's forces from the
+   generated rod_contact_pair kernels. Per segment its law in the CNT layout (k, delta, c,
+   mu, v_s, r, h: c the normal damping per length of the segment on a rigid obstacle,
+   2 zeta sqrt(k rhoA); a pair takes c_1 c_2 / sqrt(c_1^2 + c_2^2) = 2 zeta sqrt(k m), m
+   the reduced mass per length). The arrays marked work are scratch the caller owns. */
+typedef struct {
+  const double* seg;     /* N x NCNT: segment s at row s - 1 */
+  const double* s0;      /* N + 1: the reference arc length of each node (m) */
+  double near;           /* segments i < j with s0[j-1] - s0[i] < near (r_i + r_j) are not
+                            paired (pi/2: a rod bent to its tightest keeps stretches
+                            closer than pi r along it within 2 r) */
+  double* key;           /* work, 3 N + 1 */
+  int* pairs;            /* work, 2 paircap: the pairs in reach (i < j, 1-based) */
+  int paircap;
+  /* the Jacobian's entries between the two segments of a pair lie outside the rod's band
+     (or outside its cells): kvrod_self_couplings writes them as the dynamic coupling rows
+     of the rod's coupled band block (runtime/solvers/native/blocks.c: m2, srow2, er2,
+     ec2, ev2, at most m2cap rows, nz2cap entries); the band is ab (ldab x n) */
+  double* ab;
+  int ldab;
+  int* m2;
+  int m2cap, nz2cap;
+  int* srow2;
+  int* er2;
+  int* ec2;
+  double* ev2;
+  int* rowslot;          /* work, n: -1 */
+  int* rowfill;          /* work, m2cap */
+  int dropped;           /* pairs whose couplings did not fit at the last Jacobian */
+} kvrod_self;
+
 struct kvrod_contact_s {
   int nobs;
   const int* kind;       /* nobs kernel kinds */
@@ -44,6 +77,8 @@ struct kvrod_contact_s {
   int (*energies)(const kvrod_rod* rod, const double* y, double* e);
   int (*values)(const kvrod_rod* rod, const double* y, double* out);
   double (*max_step)(const kvrod_rod* rod, const double* y);
+  kvrod_self* self;      /* self-contact (NULL: off) */
+  int (*couplings)(const kvrod_rod* rod, const double* y);
 };
 
 /* res[rows] -= Q of every segment in reach of an obstacle */
@@ -68,6 +103,26 @@ double kvrod_max_step(const void* ctx, double t, const double* y, const double* 
 /* the quadrature points of the segments in reach, at most cap rows of 6: obstacle,
    segment, x (3), gap (m); returns the number of rows there are (> cap: truncated) */
 int kvrod_contact_points(const kvrod_rod* rod, const double* y, double* out, int cap);
+/* the self-contact pairs' Jacobian entries between their two segments (the entries
+   within a segment are kvrod_contact_jacobian's) into the dynamic coupling rows of
+   kvrod_self: -dQ/dy; rows with the same global row merged; returns 0, -3 when a kernel
+   fails (pairs beyond the capacity are left out of the couplings: counted in dropped) */
+int kvrod_self_couplings(const kvrod_rod* rod, const double* y);
+/* the self-contact parts of kvrod_contact_residual and kvrod_contact_jacobian (the
+   entries within each segment of a pair whose segment lies in s0..s1) */
+int kvrod_self_residual(const kvrod_rod* rod, const double* y, double* res);
+int kvrod_self_jacobian(const kvrod_rod* rod, const double* y, double cy, int ldab,
+                        double* ab, int col0, int s0, int s1);
+/* self-contact energies: e[1] += E, e[2] += P_diss over the pairs in reach; v (NSV) the
+   pairs' values (rod_self_contact.c) */
+#define NSV 5
+int kvrod_self_values(const kvrod_rod* rod, const double* y, double* v);
+/* (rod library, rod_assembly.c) the Newton matrix of a rod with self-contact into its
+   coupled band block: the band (kvrod_jacobian_band with cy = 1) and the couplings; the
+   step loop's kv_sysjac_fn (ctx: the kvrod_rod; blocks unused: kvrod_self points into
+   them) */
+int kvrod_jacobian_system(const void* ctx, double t, const double* y, const double* yp,
+                          double cj, void* blocks);
 /* (rod library, rod_assembly.c) kvrod_energies with the per obstacle values after each
    state's NDIAG scalars (stride NDIAG + NCV nobs) */
 int kvrod_energies_contact(const kvrod_rod* rod, int m, const double* ts, const double* ys,

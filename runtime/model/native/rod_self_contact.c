@@ -1,0 +1,352 @@
+/*
+ * Self-contact of a rod (contact.self; issue 32): the loops around the generated pair
+ * kernels rod_contact_pair, _jac, _diagnostics and _bound (derive/contact_pair.py), in
+ * the contact library beside rod_contact.c. rod_contact.h says what kvrod_self holds.
+ *
+ * Broad phase, each time forces, a Jacobian or energies are asked for (a pair list kept
+ * from the last Jacobian would miss pairs that came into reach since): every segment's
+ * bounding sphere about its midpoint, radius R = h/2 + r + CONTACT_CUTOFF delta/2,
+ * projected on the axis in which the midpoints spread most, sorted, swept (a pair in
+ * reach has its spheres overlapping: the bound kernel is the midpoints' distance minus
+ * the half lengths and radii); the pairs found are checked with the bound kernel
+ * (CONTACT_CUTOFF delta, as the obstacles' segments) and sorted (i, j) so that every
+ * evaluation sums in the same order. Cost O(N log N) plus the pairs near each other.
+ * Pairs of segments near along the rod are never paired (kvrod_self.near).
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "rod_contact_kernels.h"
+#include "rod_layout.h"
+#include "rod_assembly.h"
+#include "rod_access.h"
+#include "rod_contact.h"
+
+typedef struct {
+  const double* arg[16];
+  double* res[8];
+  casadi_int iw[8];
+  double w[64];
+} pwork;
+
+/* segment s's law (CNT layout) */
+static const double* sseg(const kvrod_self* S, int s) {
+  return S->seg + (size_t)(s - 1) * NCNT;
+}
+
+/* the pair's parameters (PAIR layout) from its segments' laws */
+static void pair_params(const double* a, const double* b, double* par) {
+  const double ca = a[CNT_C], cb = b[CNT_C];
+  par[PAIR_K] = fmin(a[CNT_K], b[CNT_K]);
+  par[PAIR_DELTA] = fmin(a[CNT_DELTA], b[CNT_DELTA]);
+  par[PAIR_C] = (ca > 0.0 && cb > 0.0) ? ca * cb / sqrt(ca * ca + cb * cb) : 0.0;
+  par[PAIR_MU] = fmin(a[CNT_MU], b[CNT_MU]);
+  par[PAIR_V_S] = fmax(a[CNT_V_S], b[CNT_V_S]);
+  par[PAIR_R_1] = a[CNT_R];
+  par[PAIR_R_2] = b[CNT_R];
+  par[PAIR_L_X] = a[CNT_R] + b[CNT_R];
+}
+
+/* a pair's state indices in kernel order: phi_a, phi_b, v_a, v_b, p_1, Omega_1, phi_c,
+   phi_d, v_c, v_d, p_2, Omega_2; free[4]: whether nodes a, b, c, d have momentum rows */
+typedef struct {
+  int i, j, idx[12], free_[4];
+  double par[NPAIR];
+} cpair;
+
+static void pair_of(const kvrod_rod* rod, const kvrod_self* S, int i, int j, cpair* P) {
+  const int seg[2] = {i, j};
+  P->i = i; P->j = j;
+  for (int q = 0; q < 2; ++q) {
+    const int s = seg[q];
+    int* ix = P->idx + 6 * q;
+    ix[0] = i_phi(rod, s - 1); ix[1] = i_phi(rod, s);
+    ix[2] = i_v(rod, s - 1); ix[3] = i_v(rod, s);
+    ix[4] = i_p(rod, s); ix[5] = i_om(rod, s);
+    P->free_[2 * q] = !(node_held(rod, s - 1) > 0.5);
+    P->free_[2 * q + 1] = !(node_held(rod, s) > 0.5);
+  }
+  pair_params(sseg(S, i), sseg(S, j), P->par);
+}
+
+static void pair_args(const cpair* P, const double* y, pwork* W) {
+  for (int k = 0; k < 12; ++k) W->arg[k] = y + P->idx[k];
+  W->arg[12] = P->par;
+}
+
+/* the residual rows of the pair's forces Q (f_a, f_b, T_1, f_c, f_d, T_2; -1: a held
+   node's) */
+static void pair_rows(const cpair* P, int* rows) {
+  for (int k = 0; k < 3; ++k) {
+    rows[PAIRQ_F_A + k] = P->free_[0] ? P->idx[2] + k : -1;
+    rows[PAIRQ_F_B + k] = P->free_[1] ? P->idx[3] + k : -1;
+    rows[PAIRQ_T_1 + k] = P->idx[5] + k;
+    rows[PAIRQ_F_C + k] = P->free_[2] ? P->idx[8] + k : -1;
+    rows[PAIRQ_F_D + k] = P->free_[3] ? P->idx[9] + k : -1;
+    rows[PAIRQ_T_2 + k] = P->idx[11] + k;
+  }
+}
+
+/* the state indices of the Jacobian's columns (PAIR_JAC_COLUMNS) and which segment
+   (0: i, 1: j) each belongs to */
+static void pair_cols(const cpair* P, int* cols, int* owner) {
+  for (int k = 0; k < 3; ++k) {
+    cols[PAIRJ_PHI_A + k] = P->idx[0] + k;
+    cols[PAIRJ_PHI_B + k] = P->idx[1] + k;
+    cols[PAIRJ_PHI_C + k] = P->idx[6] + k;
+    cols[PAIRJ_PHI_D + k] = P->idx[7] + k;
+    cols[PAIRJ_V_A + k] = P->idx[2] + k;
+    cols[PAIRJ_V_B + k] = P->idx[3] + k;
+    cols[PAIRJ_OMEGA_1 + k] = P->idx[5] + k;
+    cols[PAIRJ_V_C + k] = P->idx[8] + k;
+    cols[PAIRJ_V_D + k] = P->idx[9] + k;
+    cols[PAIRJ_OMEGA_2 + k] = P->idx[11] + k;
+  }
+  for (int k = 0; k < 4; ++k) {
+    cols[PAIRJ_P_1 + k] = P->idx[4] + k;
+    cols[PAIRJ_P_2 + k] = P->idx[10] + k;
+  }
+  for (int c = 0; c < NPAIRJ; ++c)
+    owner[c] = (c >= PAIRJ_PHI_C && c < PAIRJ_V_A) || c >= PAIRJ_V_C;
+}
+
+typedef struct {
+  double lo;
+  int s;
+} skey;
+
+static int by_lo(const void* a, const void* b) {
+  const double x = ((const skey*)a)->lo, z = ((const skey*)b)->lo;
+  if (x < z) return -1;
+  if (x > z) return 1;
+  return ((const skey*)a)->s - ((const skey*)b)->s;
+}
+
+static int by_pair(const void* a, const void* b) {
+  const int* p = (const int*)a;
+  const int* q = (const int*)b;
+  return p[0] != q[0] ? p[0] - q[0] : p[1] - q[1];
+}
+
+/* the pairs in reach into S->pairs; returns their number, -3 (a kernel failed) or -5
+   (more than paircap) */
+static int find_pairs(const kvrod_rod* rod, const double* y, pwork* W) {
+  const kvrod_self* S = rod->contact->self;
+  const int N = rod->N;
+  /* midpoints' spread: the sweep's axis */
+  double mean[3] = {0, 0, 0}, var[3] = {0, 0, 0};
+  for (int s = 1; s <= N; ++s) {
+    const double* a = y + i_phi(rod, s - 1);
+    const double* b = y + i_phi(rod, s);
+    for (int k = 0; k < 3; ++k) mean[k] += 0.5 * (a[k] + b[k]) / N;
+  }
+  for (int s = 1; s <= N; ++s) {
+    const double* a = y + i_phi(rod, s - 1);
+    const double* b = y + i_phi(rod, s);
+    for (int k = 0; k < 3; ++k) {
+      const double d = 0.5 * (a[k] + b[k]) - mean[k];
+      var[k] += d * d;
+    }
+  }
+  const int ax = var[0] >= var[1] ? (var[0] >= var[2] ? 0 : 2) : (var[1] >= var[2] ? 1 : 2);
+  /* work: N keys (lo, s) to sort (2 doubles each), then R per segment (R[s], s = 1..N) */
+  skey* keys = (skey*)S->key;
+  double* R = S->key + 2 * (size_t)N;
+  for (int s = 1; s <= N; ++s) {
+    const double* a = y + i_phi(rod, s - 1);
+    const double* b = y + i_phi(rod, s);
+    const double* g = sseg(S, s);
+    double d2 = 0.0;
+    for (int k = 0; k < 3; ++k) d2 += (b[k] - a[k]) * (b[k] - a[k]);
+    R[s] = 0.5 * sqrt(d2) + g[CNT_R] + 0.5 * CONTACT_CUTOFF * g[CNT_DELTA];
+    keys[s - 1].lo = 0.5 * (a[ax] + b[ax]) - R[s];
+    keys[s - 1].s = s;
+  }
+  qsort(keys, (size_t)N, sizeof(skey), by_lo);
+  int np = 0;
+  for (int u = 0; u < N; ++u) {
+    const int si = keys[u].s;
+    const double* a = y + i_phi(rod, si - 1);
+    const double* b = y + i_phi(rod, si);
+    const double hi = keys[u].lo + 2.0 * R[si];
+    for (int w = u + 1; w < N && keys[w].lo <= hi; ++w) {
+      const int sj = keys[w].s;
+      const int i = si < sj ? si : sj, j = si < sj ? sj : si;
+      const double* gi = sseg(S, i);
+      const double* gj = sseg(S, j);
+      if (j == i + 1 || S->s0[j - 1] - S->s0[i] < S->near * (gi[CNT_R] + gj[CNT_R]))
+        continue;
+      const double* c = y + i_phi(rod, sj - 1);
+      const double* d = y + i_phi(rod, sj);
+      double m2 = 0.0;
+      for (int k = 0; k < 3; ++k) {
+        const double dm = 0.5 * (c[k] + d[k] - a[k] - b[k]);
+        m2 += dm * dm;
+      }
+      const double rr = R[si] + R[sj];
+      if (m2 > rr * rr) continue;
+      double par[NPAIR], glb;
+      pair_params(gi, gj, par);
+      W->arg[0] = y + i_phi(rod, i - 1); W->arg[1] = y + i_phi(rod, i);
+      W->arg[2] = y + i_phi(rod, j - 1); W->arg[3] = y + i_phi(rod, j);
+      W->arg[4] = par;
+      W->res[0] = &glb;
+      if (rod_contact_pair_bound(W->arg, W->res, W->iw, W->w, 0)) return -3;
+      if (!(glb <= CONTACT_CUTOFF * par[PAIR_DELTA])) continue;
+      if (np >= S->paircap) return -5;
+      S->pairs[2 * np] = i;
+      S->pairs[2 * np + 1] = j;
+      ++np;
+    }
+  }
+  qsort(S->pairs, (size_t)np, 2 * sizeof(int), by_pair);
+  return np;
+}
+
+int kvrod_self_residual(const kvrod_rod* rod, const double* y, double* res) {
+  const kvrod_self* S = rod->contact->self;
+  pwork W;
+  cpair P;
+  double Q[NPAIRQ];
+  int rows[NPAIRQ];
+  const int np = find_pairs(rod, y, &W);
+  if (np < 0) return np;
+  for (int q = 0; q < np; ++q) {
+    pair_of(rod, S, S->pairs[2 * q], S->pairs[2 * q + 1], &P);
+    pair_args(&P, y, &W);
+    W.res[0] = Q;
+    if (rod_contact_pair(W.arg, W.res, W.iw, W.w, 0)) return -3;
+    pair_rows(&P, rows);
+    for (int r = 0; r < NPAIRQ; ++r)
+      if (rows[r] >= 0) res[rows[r]] -= Q[r];
+  }
+  return 0;
+}
+
+int kvrod_self_jacobian(const kvrod_rod* rod, const double* y, double cy, int ldab,
+                        double* ab, int col0, int s0, int s1) {
+  const kvrod_self* S = rod->contact->self;
+  const int kl = rod->kl, ku = rod->ku;
+  pwork W;
+  cpair P;
+  double J[NPAIRQ * NPAIRJ];
+  int rows[NPAIRQ], cols[NPAIRJ], owner[NPAIRJ];
+  const int np = find_pairs(rod, y, &W);
+  if (np < 0) return np;
+  for (int q = 0; q < np; ++q) {
+    const int i = S->pairs[2 * q], j = S->pairs[2 * q + 1];
+    const int in_i = i >= s0 && i <= s1, in_j = j >= s0 && j <= s1;
+    if (!in_i && !in_j) continue;
+    pair_of(rod, S, i, j, &P);
+    pair_args(&P, y, &W);
+    W.res[0] = J;
+    if (rod_contact_pair_jac(W.arg, W.res, W.iw, W.w, 0)) return -3;
+    pair_rows(&P, rows);
+    pair_cols(&P, cols, owner);
+    /* within segment i (rows 0..8, its columns) and within segment j (rows 9..17) */
+    for (int c = 0; c < NPAIRJ; ++c) {
+      const int o = owner[c];
+      if (o ? !in_j : !in_i) continue;
+      const int cc = cols[c];
+      double* col = ab + (size_t)(cc - col0) * (size_t)ldab + (size_t)(kl + ku - cc);
+      for (int r = 9 * o; r < 9 * o + 9; ++r)
+        if (rows[r] >= 0) col[rows[r]] -= cy * J[r + NPAIRQ * c];
+    }
+  }
+  return 0;
+}
+
+int kvrod_self_couplings(const kvrod_rod* rod, const double* y) {
+  kvrod_self* S = rod->contact->self;
+  pwork W;
+  cpair P;
+  double J[NPAIRQ * NPAIRJ];
+  int rows[NPAIRQ], cols[NPAIRJ], owner[NPAIRJ];
+  *S->m2 = 0;
+  S->er2[0] = 0;
+  S->dropped = 0;
+  if (S->m2cap <= 0) return 0;
+  const int np = find_pairs(rod, y, &W);
+  if (np < 0) return np;
+  /* pass 1: the rows (merged by global row) and their entry counts, pairs taken in order
+     while both fit */
+  int m = 0, nz = 0, last = np;
+  for (int q = 0; q < np; ++q) {
+    pair_of(rod, S, S->pairs[2 * q], S->pairs[2 * q + 1], &P);
+    pair_rows(&P, rows);
+    int newrows = 0;
+    for (int r = 0; r < NPAIRQ; ++r)
+      if (rows[r] >= 0 && S->rowslot[rows[r]] < 0) ++newrows;
+    int add = 0;
+    for (int r = 0; r < NPAIRQ; ++r) add += rows[r] >= 0 ? NPAIRJ / 2 : 0;
+    if (m + newrows > S->m2cap || nz + add > S->nz2cap) { last = q; break; }
+    for (int r = 0; r < NPAIRQ; ++r) {
+      if (rows[r] < 0) continue;
+      if (S->rowslot[rows[r]] < 0) {
+        S->rowslot[rows[r]] = m;
+        S->srow2[m] = rows[r];
+        S->rowfill[m] = 0;
+        ++m;
+      }
+    }
+    /* row r of segment o meets the other segment's columns: 19 of them */
+    for (int r = 0; r < NPAIRQ; ++r)
+      if (rows[r] >= 0) S->rowfill[S->rowslot[rows[r]]] += NPAIRJ / 2;
+    nz += add;
+  }
+  S->dropped = np - last;
+  /* CSR offsets; rowfill becomes each row's cursor */
+  S->er2[0] = 0;
+  for (int t = 0; t < m; ++t) {
+    S->er2[t + 1] = S->er2[t] + S->rowfill[t];
+    S->rowfill[t] = S->er2[t];
+  }
+  /* pass 2: the entries */
+  for (int q = 0; q < last; ++q) {
+    pair_of(rod, S, S->pairs[2 * q], S->pairs[2 * q + 1], &P);
+    pair_args(&P, y, &W);
+    W.res[0] = J;
+    if (rod_contact_pair_jac(W.arg, W.res, W.iw, W.w, 0)) {
+      for (int t = 0; t < m; ++t) S->rowslot[S->srow2[t]] = -1;
+      return -3;
+    }
+    pair_rows(&P, rows);
+    pair_cols(&P, cols, owner);
+    for (int r = 0; r < NPAIRQ; ++r) {
+      if (rows[r] < 0) continue;
+      const int o = r >= 9;
+      int* cur = S->rowfill + S->rowslot[rows[r]];
+      for (int c = 0; c < NPAIRJ; ++c) {
+        if (owner[c] == o) continue;
+        S->ec2[*cur] = cols[c];
+        S->ev2[*cur] = -J[r + NPAIRQ * c];
+        ++*cur;
+      }
+    }
+  }
+  for (int t = 0; t < m; ++t) S->rowslot[S->srow2[t]] = -1;
+  *S->m2 = m;
+  return 0;
+}
+
+int kvrod_self_values(const kvrod_rod* rod, const double* y, double* v) {
+  const kvrod_self* S = rod->contact->self;
+  pwork W;
+  cpair P;
+  double E, Pd, g, Pf, st[2], Wc, F[3];
+  memset(v, 0, sizeof(double) * NSV);
+  v[3] = HUGE_VAL;
+  const int np = find_pairs(rod, y, &W);
+  if (np < 0) return np;
+  for (int q = 0; q < np; ++q) {
+    pair_of(rod, S, S->pairs[2 * q], S->pairs[2 * q + 1], &P);
+    pair_args(&P, y, &W);
+    W.res[0] = &E; W.res[1] = &Pd; W.res[2] = &g; W.res[3] = &Pf;
+    W.res[4] = st; W.res[5] = &Wc; W.res[6] = F;
+    if (rod_contact_pair_diagnostics(W.arg, W.res, W.iw, W.w, 0)) return -3;
+    v[0] += E; v[1] += Pd; v[2] += Pf;
+    if (g < v[3]) v[3] = g;
+  }
+  v[4] = np;
+  return 0;
+}
