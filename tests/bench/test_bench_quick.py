@@ -12,6 +12,10 @@ import pytest
 pytest.importorskip("casadi")
 
 REQUIRED_META = ("date", "platform", "python", "numpy", "scipy", "casadi", "command")
+#: the sections run here; maxwell, maxwell_kv, sections, assembly and sweeps have test
+#: modules of their own that run them at smaller sizes still (running them twice cost the
+#: suite minutes)
+QUICK_SECTIONS = ("integrators", "scaling", "modes", "sensitivities", "fit")
 
 
 @pytest.fixture(scope="module")
@@ -21,7 +25,7 @@ def quick_run(tmp_path_factory):
     from bench.__main__ import run_all
 
     out = tmp_path_factory.mktemp("bench_quick")
-    docs = run_all(quick=True, out_dir=out)
+    docs = run_all(quick=True, out_dir=out, only=QUICK_SECTIONS)
     return out, docs
 
 
@@ -34,8 +38,7 @@ def test_quick_writes_the_documents(quick_run):
     assert "us/step" in readme
 
 
-@pytest.mark.parametrize("name", ["integrators", "scaling", "modes", "maxwell", "sections",
-                                  "maxwell_kv", "assembly", "sensitivities", "fit"])
+@pytest.mark.parametrize("name", QUICK_SECTIONS)
 def test_json_has_metadata_and_verdicts(quick_run, name):
     out, _ = quick_run
     doc = json.loads((out / f"{name}.json").read_text())

@@ -41,21 +41,36 @@ def test_compiles_into_content_keyed_cache(fresh_build):
     assert not list(fresh_build.glob("*.tmp"))
 
 
+#: a one-function library: the cache's rules (content key, atomic publication, the hash
+#: sidecar) are the same for every LibrarySpec, and compiling the rod library three more
+#: times would cost minutes of the suite
+TINY_C = "int kvrod_n_state(int N, int nb) { return 6 * N + 3 * nb; }\n"
+
+
+def tiny_spec(gdir: Path):
+    gdir.mkdir(parents=True, exist_ok=True)
+    (gdir / "tiny.c").write_text(TINY_C)
+    return build.LibrarySpec("kvrod_tiny", "a test library", ("tiny.c",), (), (), ())
+
+
 @needs_cc
 def test_concurrent_first_use_does_not_corrupt_the_cache(tmp_path):
+    tiny_spec(tmp_path / "src")
     code = "\n".join([
         f"import sys; sys.path.insert(0, {str(ROOT)!r})",
         "import ctypes, pathlib",
         "from runtime import native",
         "from runtime.model import build",
-        f"p = build.compile_library(native.find_compiler(), "
-        f"outdir=pathlib.Path({str(tmp_path)!r}))",
-        "ctypes.CDLL(str(p)).kvrod_n_state",
+        f"g = pathlib.Path({str(tmp_path / 'src')!r})",
+        'spec = build.LibrarySpec("kvrod_tiny", "a test library", ("tiny.c",), (), (), ())',
+        f"p = build.compile_library(native.find_compiler(), gdir=g, "
+        f"outdir=pathlib.Path({str(tmp_path / 'out')!r}), spec=spec)",
+        "assert ctypes.CDLL(str(p)).kvrod_n_state(2, 1) == 15",
     ])
     procs = [subprocess.Popen([sys.executable, "-c", code]) for _ in range(3)]
     assert all(p.wait(timeout=120) == 0 for p in procs)
-    assert len(list(tmp_path.glob("kvrod_rod_*.so"))) == 1
-    assert not list(tmp_path.glob("*.tmp"))
+    assert len(list((tmp_path / "out").glob("kvrod_tiny_*.so"))) == 1
+    assert not list((tmp_path / "out").glob("*.tmp"))
 
 
 def test_manifest_mismatch_tells_the_user_to_regenerate(tmp_path):
@@ -119,10 +134,20 @@ def test_manifest_problems_are_errors_naming_the_file(tmp_path, damage):
     assert "kvrod generate" in msg
 
 
-def test_fallback_without_compiler_warns_once_and_gives_same_numbers(fresh_build, monkeypatch):
+@pytest.fixture
+def cache_cleared_after():
+    """The library caches dropped after the test (and after monkeypatch restored the
+    environment: requested before it, torn down after it)."""
+    yield
+    build.clear_cache()
+
+
+def test_fallback_without_compiler_warns_once_and_gives_same_numbers(cache_cleared_after,
+                                                                    monkeypatch, tmp_path):
     ref = None
     if native.find_compiler() is not None:
-        ref = rod_model(3)
+        ref = rod_model(3)                  # compiled in the suite's own cache
+    monkeypatch.setenv("KVROD_CACHE_DIR", str(tmp_path / "cache"))
     monkeypatch.setenv("KVROD_NO_COMPILER", "1")
     build.clear_cache()
     with warnings.catch_warnings(record=True) as rec:
@@ -145,22 +170,18 @@ def test_fallback_without_compiler_warns_once_and_gives_same_numbers(fresh_build
 def test_tampered_library_is_rebuilt_not_loaded(tmp_path):
     """A cached library whose bytes no longer match the hash recorded at build time is
     compiled again (issue 6, item 4)."""
-    from runtime import native
-    from runtime.model import build
-
     compiler = native.find_compiler()
     if compiler is None:
-        import pytest
-
         pytest.skip("no C compiler")
-    lib = build.compile_library(compiler, outdir=tmp_path)
+    spec, gdir, out = tiny_spec(tmp_path / "src"), tmp_path / "src", tmp_path / "out"
+    lib = build.compile_library(compiler, gdir=gdir, outdir=out, spec=spec)
     good = lib.read_bytes()
     lib.write_bytes(good[:-64] + b"\0" * 64)           # corrupt it in place
-    again = build.compile_library(compiler, outdir=tmp_path)
+    again = build.compile_library(compiler, gdir=gdir, outdir=out, spec=spec)
     assert again == lib and again.read_bytes() == good
-    (tmp_path / (lib.name + ".sha256")).unlink()       # no record of its hash: rebuilt too
+    (out / (lib.name + ".sha256")).unlink()            # no record of its hash: rebuilt too
     mtime = lib.stat().st_mtime_ns
-    build.compile_library(compiler, outdir=tmp_path)
+    build.compile_library(compiler, gdir=gdir, outdir=out, spec=spec)
     assert lib.stat().st_mtime_ns != mtime
 
 
