@@ -20,16 +20,12 @@ one pair, no warm-up (a smoke run, not a measurement).
 from __future__ import annotations
 
 import os
-import resource
 import statistics
-import subprocess
-import sys
 import tempfile
-import time
 from pathlib import Path
 from typing import Any
 
-from bench.maxwell_kv import machine
+from bench.maxwell_kv import machine, timed_process
 from bench.meta import target, targets_md
 
 N_FULL, T_FULL = 200, 2.0
@@ -72,19 +68,7 @@ def _write(path: Path, mapping: dict) -> Path:
 def whole_process(file: Path, out: Path) -> tuple[float, float, int, str]:
     """One ``kvrod simulate`` process: (wall s, CPU s of the child, exit code, last
     stderr line)."""
-    cmd = [sys.executable, "-m", "kvrod.cli", "simulate", str(file), "--out", str(out),
-           "--overwrite"]
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t0 = time.perf_counter()
-    try:
-        p = subprocess.run(cmd, capture_output=True, text=True, timeout=TIMEOUT)
-        rc, err = p.returncode, (p.stderr.strip().splitlines() or [""])[-1]
-    except subprocess.TimeoutExpired:
-        rc, err = -1, f"timed out after {TIMEOUT:g} s"
-    wall = time.perf_counter() - t0
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    return wall, cpu, rc, err
+    return timed_process(["simulate", str(file), "--out", str(out), "--overwrite"], TIMEOUT)
 
 
 def _summary(out: Path) -> dict[str, Any]:

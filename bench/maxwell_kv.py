@@ -74,15 +74,22 @@ def whole_process(problem: str, out: Path, overrides: tuple[str, ...] = ()
                   ) -> tuple[float, float, int, str]:
     """One ``kvrod simulate`` process: (wall s, CPU s of the child, exit code, last
     stderr line)."""
-    cmd = [sys.executable, "-m", "kvrod.cli", "simulate", _file(problem), *overrides,
-           "--out", str(out), "--overwrite"]
+    return timed_process(["simulate", _file(problem), *overrides, "--out", str(out),
+                          "--overwrite"])
+
+
+def timed_process(args: list[str], timeout: float = TIMEOUT
+                  ) -> tuple[float, float, int, str]:
+    """One ``python -m kvrod.cli ARGS`` process: (wall s, CPU s of the child, exit code,
+    last stderr line; -1 and a note when it ran past ``timeout`` s)."""
+    cmd = [sys.executable, "-m", "kvrod.cli", *args]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     try:
-        p = subprocess.run(cmd, capture_output=True, text=True, timeout=TIMEOUT)
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
         rc, err = p.returncode, (p.stderr.strip().splitlines() or [""])[-1]
     except subprocess.TimeoutExpired:
-        rc, err = -1, f"timed out after {TIMEOUT:g} s"
+        rc, err = -1, f"timed out after {timeout:g} s"
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
