@@ -11,6 +11,28 @@ from pathlib import Path
 import numpy as np
 
 
+def csv_rows(path: Path, error: type[ValueError] = ValueError, encoding: str = "utf-8"
+             ) -> list[tuple[int, list[str]]]:
+    """(file line, cells) of the rows of a CSV file that hold something, '#' comment lines
+    skipped; a one-line ``error`` naming the file when it is missing, a directory, not
+    UTF-8 text, not a readable CSV table or unreadable (an empty result is the caller's
+    to refuse)."""
+    if not path.is_file():
+        raise error(f"data file {str(path)!r} "
+                    + ("is a directory, not a CSV file" if path.is_dir() else "does not exist"))
+    try:
+        with path.open(newline="", encoding=encoding) as fh:
+            return [(i, r) for i, r in enumerate(csv.reader(fh), 1)
+                    if r and not r[0].lstrip().startswith("#") and any(c.strip() for c in r)]
+    except UnicodeDecodeError as exc:
+        raise error(f"data file {str(path)!r} is not UTF-8 text ({exc.reason} at byte "
+                    f"{exc.start}): save it as a plain CSV") from None
+    except csv.Error as exc:
+        raise error(f"data file {str(path)!r} is not a readable CSV table ({exc})") from None
+    except OSError as exc:
+        raise error(f"data file {str(path)!r} cannot be read ({exc.strerror})") from None
+
+
 def load_csv(path: str | Path, columns: Sequence[str]) -> list[np.ndarray]:
     """Read the named columns (case-insensitive header names) of a CSV file as floats.
 
@@ -19,22 +41,9 @@ def load_csv(path: str | Path, columns: Sequence[str]) -> list[np.ndarray]:
     an asked column is refused naming the file's line and the column (never skipped).
     """
     path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"data file {str(path)!r} "
-                         + ("is a directory, not a CSV file" if path.is_dir()
-                            else "does not exist"))
-    try:
-        with path.open(newline="", encoding="utf-8") as fh:
-            numbered = [(i, r) for i, r in enumerate(csv.reader(fh), 1)
-                        if r and not r[0].lstrip().startswith("#")
-                        and any(c.strip() for c in r)]
-        lines = [i for i, _ in numbered]
-        rows = [r for _, r in numbered]
-    except UnicodeDecodeError as exc:
-        raise ValueError(f"data file {str(path)!r} is not UTF-8 text ({exc.reason} at byte "
-                         f"{exc.start}): save it as a plain CSV") from None
-    except OSError as exc:
-        raise ValueError(f"data file {str(path)!r} cannot be read ({exc.strerror})") from None
+    numbered = csv_rows(path)
+    lines = [i for i, _ in numbered]
+    rows = [r for _, r in numbered]
     if not rows:
         raise ValueError(f"data file {str(path)!r} is empty")
     header = [c.strip().lower() for c in rows[0]]

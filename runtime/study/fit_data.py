@@ -29,13 +29,14 @@ changes it), arc lengths outside the rod, too few data for the parameters.
 
 from __future__ import annotations
 
-import csv
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from runtime.analysis.records import csv_rows
 
 #: the kinds of data and the model each is compared with
 KINDS = {"series": "simulate", "shape": "static", "modes": "modes"}
@@ -148,22 +149,7 @@ def shape_channels(rod_names: Sequence[str] | None) -> dict[str, tuple[str, int]
 def _rows(path: Path) -> tuple[list[str], list[list[str]], list[int]]:
     """(header, body rows, file line of each body row) of a CSV file; comments and blank
     lines skipped."""
-    if not path.is_file():
-        raise DataError(f"data file {str(path)!r} "
-                        + ("is a directory, not a CSV file" if path.is_dir()
-                           else "does not exist"))
-    try:
-        with path.open(newline="", encoding="utf-8-sig") as fh:
-            numbered = [(i, r) for i, r in enumerate(csv.reader(fh), 1)
-                        if r and not r[0].lstrip().startswith("#")
-                        and any(c.strip() for c in r)]
-    except UnicodeDecodeError as exc:
-        raise DataError(f"data file {str(path)!r} is not UTF-8 text ({exc.reason} at byte "
-                        f"{exc.start}): save it as a plain CSV") from None
-    except csv.Error as exc:
-        raise DataError(f"data file {str(path)!r} is not a readable CSV table ({exc})") from None
-    except OSError as exc:
-        raise DataError(f"data file {str(path)!r} cannot be read ({exc.strerror})") from None
+    numbered = csv_rows(path, DataError, encoding="utf-8-sig")
     if not numbered:
         raise DataError(f"data file {str(path)!r} is empty")
     header = [c.strip() for c in numbered[0][1]]
