@@ -323,8 +323,13 @@ def figure_assembly_centreline(run: AssemblyRun, count: int = RUN_SNAPSHOTS):
 
 def plot_assembly_run_folder(folder: Path) -> list[Path]:
     """ends.png, energy.png, joint_forces.png (with joints), centreline.png (with frames),
-    damping_ratio.png (two maxima or more) of an assembly's run folder."""
-    from runtime.io.plots import figure_energy, plot_damping_vs_amplitude
+    damping_ratio.png (two maxima or more), contact.png (on obstacles) of an assembly's
+    run folder."""
+    from runtime.io.plots import (
+        figure_energy,
+        plot_contact_of_folder,
+        plot_damping_vs_amplitude,
+    )
 
     folder = Path(folder)
     run = load_assembly_run(folder)
@@ -340,7 +345,8 @@ def plot_assembly_run_folder(folder: Path) -> list[Path]:
     if run.peaks_x.size >= 2:
         paths.append(plot_damping_vs_amplitude([run], ["run"], [math.nan],
                                                folder / "damping_ratio.png"))
-    return paths
+    contact = plot_contact_of_folder(folder, run.t, _summary(folder))
+    return paths + ([contact] if contact is not None else [])
 
 
 def plot_assembly_static_folder(folder: Path) -> Path:

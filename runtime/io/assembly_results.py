@@ -7,13 +7,18 @@ positions (m) and ``NAME/centreline`` (m, 3, N+1) node positions at ``centreline
 N m: what the joint exerts on the rod of its first point, spatial, about that point), per
 body (file order) ``body{k}/centreline`` (m, 3) its mass centre at ``centreline_t``, the
 energies ``kinetic``, ``elastic``, ``dissipated``, ``external_work`` (J) and
-``energy_balance_rel``, ``peaks_t``/``peaks_x``, ``y_static``, ``y_last``.
+``energy_balance_rel``, ``peaks_t``/``peaks_x``, ``y_static``, ``y_last``, and per
+obstacle k the values of ``runtime.model.contact.obstacle_series`` summed over the rods:
+``obstacle{k}_force``, ``_moment`` (3, n), ``_energy``, ``_dissipation``,
+``_friction_dissipation``, ``_power``, ``_gap_min``, ``_segments`` (n,), as a single rod's.
 static.npz (statics): ``y``, per rod ``NAME/positions`` (3, N+1), ``NAME/frames``
 (N, 3, 3), ``NAME/reference`` (3, N+1), per joint ``joint{k}/force``, ``joint{k}/moment``
-(3,). summary.json has, at its top level, ``"joints"``: a list in file order with each
-joint's ``force`` and ``moment`` (statics: 3-vectors; a run: the final value and the
-largest with its time, like the supports' reactions) and ``"bodies"``: each body's
-mass-centre position and frame.
+(3,), per obstacle ``obstacle{k}_force``, ``obstacle{k}_moment`` (3,; N, N m about its
+point, on the rods). summary.json has, at its top level, ``"joints"``: a list in file
+order with each joint's ``force`` and ``moment`` (statics: 3-vectors; a run: the final value and the
+largest with its time, like the supports' reactions), ``"bodies"``: each body's
+mass-centre position and frame, and on obstacles ``"obstacles"`` (each one's force,
+moment and smallest gap, as a single rod's).
 """
 
 from __future__ import annotations
@@ -53,6 +58,8 @@ def write_assembly_run(out_dir: Path, res, extra: dict | None = None) -> dict:
     for k, j in enumerate(res.joint_series() if res.t.size else []):
         arrays[f"joint{k}/force"] = j["force"]
         arrays[f"joint{k}/moment"] = j["moment"]
+    for k, o in enumerate(res.obstacle_series()):
+        arrays.update({f"obstacle{k}_{what}": v for what, v in o.items()})
     audit = res.audit()
     write_npz(out_dir / "series.npz", t=res.t, kinetic=res.kinetic, elastic=res.elastic,
               dissipated=res.dissipated, external_work=res.external_work,
@@ -76,6 +83,21 @@ def static_joint_values(amap, y: np.ndarray) -> list[dict[str, list[float]]]:
     return [{"force": [float(v) for v in j["force"][:, 0]],
              "moment": [float(v) for v in j["moment"][:, 0]]}
             for j in joint_forces(amap, extras)]
+
+
+def static_obstacle_values(amap, y: np.ndarray, obstacles) -> list[dict]:
+    """Per obstacle (file order; ``obstacles`` the problem's) at the equilibrium y: the
+    force and moment it exerts on the rods, the smallest gap and the segments in reach
+    (:func:`runtime.simulate.simulate.static_obstacle_summary`)."""
+    from runtime.simulate.simulate import static_obstacle_summary
+
+    model = amap.model
+    if not model.n_obstacles:
+        return []
+    with model.statics():
+        e = model.energy_values(0.0, y)
+    first = model.extras_layout()["obstacle:0"].start
+    return static_obstacle_summary(obstacles, e[first:])
 
 
 def static_assembly_and_write(problem, out: Path, overwrite: bool = False,
@@ -118,6 +140,7 @@ def static_assembly_and_write(problem, out: Path, overwrite: bool = False,
             status, message, y, its, per = ("failed", f"static solve failed: {exc}", exc.y,
                                             sum(exc.iterations), list(exc.iterations))
         joints = static_joint_values(amap, y)
+        obstacles = static_obstacle_values(amap, y, problem.obstacles)
         summary = {"status": status, "message": message, "problem": problem.name,
                    "parameters": params,
                    "assembly": {"rods": list(problem.rods), "joints": len(problem.joints),
@@ -131,6 +154,7 @@ def static_assembly_and_write(problem, out: Path, overwrite: bool = False,
                               for k, jt in enumerate(problem.joints)],
                    "bodies": {b.name: body_state(model, body, y)
                               for b, body in zip(problem.bodies, model.bodies, strict=True)},
+                   **({"obstacles": obstacles} if obstacles else {}),
                    "backend": "c"}
         arrays: dict[str, np.ndarray] = {"y": y}
         for k, name in enumerate(model.names):
@@ -142,6 +166,9 @@ def static_assembly_and_write(problem, out: Path, overwrite: bool = False,
         for k, j in enumerate(joints):
             arrays[f"joint{k}/force"] = np.array(j["force"])
             arrays[f"joint{k}/moment"] = np.array(j["moment"])
+        for k, o in enumerate(obstacles):
+            arrays[f"obstacle{k}_force"] = np.array(o["force"])
+            arrays[f"obstacle{k}_moment"] = np.array(o["moment"])
         write_npz(out / "static.npz", **arrays)
         if sens_run is not None and status == "finished":
             from runtime.io.runs import write_sensitivities

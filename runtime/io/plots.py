@@ -292,14 +292,22 @@ def plot_run_folder(out: Path) -> list[Path]:
 
         paths.append(plot_run_centreline(run.centreline_t, run.centreline, run.reference,
                                          out / "centreline.png", title=name))
-    obstacles = _loaded_obstacles(out / "series.npz", run.t.size)
-    if obstacles:
-        listed = s.get("obstacles") if isinstance(s, dict) else None
-        kinds = [str(o.get("kind", "?")) if isinstance(o, dict) else "?"
-                 for o in (listed if isinstance(listed, list) else [])]
-        kinds = (kinds + ["?"] * len(obstacles))[:len(obstacles)]
-        paths.append(plot_contact(run.t, obstacles, kinds, out / "contact.png"))
-    return paths
+    contact = plot_contact_of_folder(out, run.t, s)
+    return paths + ([contact] if contact is not None else [])
+
+
+def plot_contact_of_folder(out: Path, t: np.ndarray, summary) -> Path | None:
+    """contact.png of a run folder (a single rod's or an assembly's) whose series.npz has
+    per obstacle values on the output grid ``t``; ``summary`` (summary.json) names the
+    obstacles' kinds. None without obstacles."""
+    obstacles = _loaded_obstacles(Path(out) / "series.npz", t.size)
+    if not obstacles:
+        return None
+    listed = summary.get("obstacles") if isinstance(summary, dict) else None
+    kinds = [str(o.get("kind", "?")) if isinstance(o, dict) else "?"
+             for o in (listed if isinstance(listed, list) else [])]
+    kinds = (kinds + ["?"] * len(obstacles))[:len(obstacles)]
+    return plot_contact(t, obstacles, kinds, Path(out) / "contact.png")
 
 
 def _loaded_obstacles(path: Path, nt: int) -> list[dict]:

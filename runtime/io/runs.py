@@ -313,7 +313,9 @@ def static_and_write(problem, out: Path, overwrite: bool = False,
     ``positions`` (3, N+1) and segment ``frames`` (N, 3, 3; columns d1, d2, d3) of the
     equilibrium and of the ``reference``, the segment ``quaternions`` (4, N), the end
     frames ``start_frame``, ``end_frame`` (3, 3) and, per held end, the support's
-    ``start_reaction_force`` / ``_moment`` (N, N m about the node; also in summary.json);
+    ``start_reaction_force`` / ``_moment`` (N, N m about the node; also in summary.json),
+    per obstacle ``obstacle{k}_force`` / ``_moment`` (N, N m about its point, on the rod;
+    summary.json's ``obstacles`` also has the smallest gap and the segments in reach);
     problem.toml; with ``sensitivities`` (parameter names, validated before anything is
     written) also ``sensitivities.npz`` (the derivatives of static.npz's ``y`` and
     ``positions`` and of the summary's ``tip`` and ``start``, by the implicit function
@@ -322,13 +324,19 @@ def static_and_write(problem, out: Path, overwrite: bool = False,
     "failed") and writes no sensitivities."""
     import time
 
+    import numpy as np
+
     from runtime.io.assembly_results import is_assembly, static_assembly_and_write
     from runtime.io.folder import RUN_FILES, results_folder
     from runtime.io.results import jsonable, write_json, write_npz, write_problem
     from runtime.model import build
     from runtime.model.statics import largest_displacement
     from runtime.problem.assemble import build_model
-    from runtime.simulate.simulate import load_path_table, static_equilibrium
+    from runtime.simulate.simulate import (
+        load_path_table,
+        static_equilibrium,
+        static_obstacle_summary,
+    )
     from runtime.solvers.statics import StaticSolveError
 
     sens_run = None
@@ -364,6 +372,7 @@ def static_and_write(problem, out: Path, overwrite: bool = False,
         with model.statics():
             reactions = model.reactions(0.0, y)
             ends = model.end_frames(0.0, y)
+            contact = model.contact_values(0.0, y)
         both_held = problem.start.held and problem.end.held
         summary = {"status": status, "message": message, "problem": problem.name,
                    "parameters": params,
@@ -377,8 +386,12 @@ def static_and_write(problem, out: Path, overwrite: bool = False,
                               "newton_iterations_per_load_step": per,
                               "path": path,
                               "wall_time_s": time.perf_counter() - wall0},
+                   **({"obstacles": static_obstacle_summary(problem.obstacles, contact)}
+                      if problem.obstacles else {}),
                    "backend": model.backend}
         extra = {f"{end}_frame": f for end, f in ends.items()}
+        for k, o in enumerate(summary.get("obstacles", ())):
+            extra.update({f"obstacle{k}_{w}": np.array(o[w]) for w in ("force", "moment")})
         for end, r in reactions.items():
             extra.update({f"{end}_reaction_{w}": v for w, v in r.items()})
         write_npz(out / "static.npz", y=y, positions=pos, quaternions=model.quaternions(y),

@@ -36,6 +36,25 @@ VALUE_NAMES: tuple[str, ...] = ("force_x", "force_y", "force_z", "moment_x", "mo
                                 "moment_z", "energy", "dissipation", "friction_dissipation",
                                 "obstacle_power", "gap_min", "segments")
 N_VALUES = len(VALUE_NAMES)
+
+
+def obstacle_series(values: np.ndarray) -> list[dict[str, np.ndarray]]:
+    """Per obstacle, the rows ``VALUE_NAMES`` of ``values`` (``N_VALUES`` rows per obstacle,
+    in file order; any trailing shape: one state or a series) by name: ``force`` and
+    ``moment`` (3, ...; N, N m about the obstacle's point, on the rods, spatial),
+    ``energy`` (J), ``dissipation`` and ``friction_dissipation`` (W), ``power`` (W, the
+    obstacle's motion on the rods), ``gap_min`` (m) and ``segments``."""
+    values = np.asarray(values)
+    out = []
+    for k in range(values.shape[0] // N_VALUES):
+        block = values[k * N_VALUES:(k + 1) * N_VALUES]
+        d = {"force": block[0:3], "moment": block[3:6]}
+        d.update({name: block[j] for j, name in enumerate(VALUE_NAMES) if j >= 6})
+        d["power"] = d.pop("obstacle_power")
+        out.append(d)
+    return out
+
+
 #: the smallest share of its forces statics gives the contact (load factor 0)
 MIN_FORCE_SCALE = 1e-12
 #: the default step bound: half the gap plus delta per step at the approach speed

@@ -35,6 +35,7 @@ import numpy as np
 from generated import rod_layout as L
 from runtime.errors import GeneratedCodeError
 from runtime.model import build
+from runtime.model.contact import N_VALUES, VALUE_NAMES
 from runtime.model.rod import RodModel
 
 
@@ -186,7 +187,11 @@ class SystemModel:
         self._static = False
         self._load_scale = 1.0
         self._t = math.nan
-        self.nextra = 12 * len(self.rods) + 3 * len(self.holds) + 6 * len(self.links)
+        #: obstacles the rods touch (every rod with contact sees all of the problem's)
+        self.n_obstacles = max((r.contact.n_obstacles for r in self.rods
+                                if r.contact is not None), default=0)
+        self.nextra = (12 * len(self.rods) + 3 * len(self.holds) + 6 * len(self.links)
+                       + N_VALUES * self.n_obstacles)
         self._sdirs = None            # parameter directions (runtime/model/system_sensitivity)
         self._csys_sens = None
         self.at(0.0)
@@ -717,7 +722,8 @@ class SystemModel:
     def energy_values(self, t: float, y: np.ndarray, yp: np.ndarray | None = None
                       ) -> np.ndarray:
         """The values of one state: T, W, 2D, P_ext, P_bc, then the extras (the rods'
-        supports, the holds' free rows, the links' force and moment on side a)."""
+        supports, the holds' free rows, the links' force and moment on side a, each
+        obstacle's ``runtime.model.contact.VALUE_NAMES`` summed over the rods)."""
         p = self._ptr()
         self.at(t)
         yp = self._zeros if yp is None else yp
@@ -749,6 +755,8 @@ class SystemModel:
             out += [f"hold{i}_force_{c}" for c in "xyz"]
         for i in range(len(self.links)):
             out += [f"link{i}_{w}_{c}" for w in ("force", "moment") for c in "xyz"]
+        for i in range(self.n_obstacles):
+            out += [f"obstacle{i}_{v}" for v in VALUE_NAMES]
         return tuple(out)
 
     def energy_floor(self) -> float:
@@ -767,6 +775,9 @@ class SystemModel:
         for i in range(len(self.links)):
             out[f"link:{i}"] = slice(k, k + 6)
             k += 6
+        for i in range(self.n_obstacles):
+            out[f"obstacle:{i}"] = slice(k, k + N_VALUES)
+            k += N_VALUES
         return out
 
     def c_kernels(self):

@@ -22,6 +22,7 @@ import numpy as np
 from runtime.analysis.audit import audit_run, significant_maxima
 from runtime.analysis.decay import beat_warning, damping_ratios, log_decrements, periods
 from runtime.errors import IllPosedError
+from runtime.model.contact import obstacle_series
 from runtime.model.quaternion import quat_rotation
 from runtime.model.system_statics import SystemStatics
 from runtime.problem.assemble_system import AssemblyMap, build_system, frames_of
@@ -33,7 +34,12 @@ from runtime.simulate.observers import (
     Sampler,
     Snapshots,
 )
-from runtime.simulate.simulate import ATOL_FLOOR, ATOL_FRACTION, ErrorControl
+from runtime.simulate.simulate import (
+    ATOL_FLOOR,
+    ATOL_FRACTION,
+    ErrorControl,
+    obstacle_summary,
+)
 from runtime.simulate.vibration_centre import VibrationCentre, inputs_constant
 from runtime.solvers.driver import run_loop
 from runtime.solvers.initial import consistent_initial
@@ -101,9 +107,20 @@ class AssemblyResult:
         of its first point (N, N m about that point, spatial)."""
         return joint_forces(self.amap, self.extras)
 
+    def obstacle_series(self) -> list[dict[str, np.ndarray]]:
+        """Per obstacle (file order): its values on the output grid, summed over the rods
+        (:func:`runtime.model.contact.obstacle_series`: ``force``, ``moment`` (3, n; N,
+        N m about its point, on the rods, spatial), ``energy``, ``dissipation``,
+        ``friction_dissipation``, ``power``, ``gap_min``, ``segments`` (n,))."""
+        model = self.model
+        if model is None or not model.n_obstacles or self.extras.shape[0] == 0:
+            return []
+        first = model.extras_layout()["obstacle:0"].start - 5     # obstacles come last
+        return obstacle_series(self.extras[first:])
+
     def summary(self) -> dict:
         """JSON-ready summary: status, static result, maxima and decrements, energy audit,
-        joints, bodies, warnings, counters."""
+        joints, bodies, obstacles, warnings, counters."""
         p = self.problem
         warnings: list[str] = []
         pk: dict = {"peaks": [{"t": float(a), "x": float(b)}
@@ -167,6 +184,8 @@ class AssemblyResult:
                              "scale_J": audit.scale, "note": audit.reason},
             "joints": joints,
             "bodies": bodies,
+            **({"obstacles": obstacle_summary(p.obstacles, self.t, self.obstacle_series())}
+               if p.obstacles else {}),
             "ends": {k: [float(x) for x in v[:, -1]] for k, v in self.ends.items()
                      if v.shape[1]},
             "warnings": warnings,

@@ -344,26 +344,8 @@ class SimulationResult:
 
 
     def obstacle_summary(self) -> list[dict]:
-        """Per obstacle (file order): its kind, the force and moment it exerts on the rod
-        at the last output time and their largest magnitudes (with their times), the
-        smallest gap (m; negative: the deepest penetration) and its time, all on the
-        output grid: an impact shorter than ``simulation.output_step`` can fall between
-        two samples (the energy audit integrates the contact's work and dissipation over
-        every step)."""
-        out = []
-        for o, v in zip(self.problem.obstacles, self.obstacles, strict=False):
-            e: dict = {"index": o.index, "kind": o.kind}
-            if self.t.size:
-                for what in ("force", "moment"):
-                    mag = np.linalg.norm(v[what], axis=0)
-                    k = int(np.argmax(mag))
-                    e[what] = {"final": [float(x) for x in v[what][:, -1]],
-                               "max_norm": float(mag[k]), "t_of_max": float(self.t[k])}
-                g = v["gap_min"]
-                k = int(np.argmin(g))
-                e["gap_min"] = {"value": float(g[k]), "t": float(self.t[k])}
-            out.append(e)
-        return out
+        """Per obstacle: :func:`obstacle_summary` of this run."""
+        return obstacle_summary(self.problem.obstacles, self.t, self.obstacles)
 
     def reaction_summary(self) -> dict:
         """Per held end: the support's force and moment at the last output time and their
@@ -388,16 +370,47 @@ class SimulationResult:
 def _obstacle_series(model: RodModel, extras: np.ndarray) -> list[dict[str, np.ndarray]]:
     """The sampled per obstacle contact values (rows of ``extras`` after the reactions,
     ``model.contact_value_names()``) as :attr:`SimulationResult.obstacles`."""
-    from runtime.model.contact import N_VALUES, VALUE_NAMES
+    from runtime.model.contact import obstacle_series
 
+    return obstacle_series(extras[:len(model.contact_value_names())])
+
+
+def obstacle_summary(obstacles, t: np.ndarray, series: list[dict[str, np.ndarray]]
+                     ) -> list[dict]:
+    """Per obstacle (file order; ``obstacles`` the problem's): its kind, the force and
+    moment it exerts on the rods at the last output time and their largest magnitudes
+    (with their times), the smallest gap (m; negative: the deepest penetration) and its
+    time, all on the output grid ``t`` (``series``: the samples by
+    :func:`runtime.model.contact.obstacle_series`). An impact shorter than
+    ``simulation.output_step`` can fall between two samples (the energy audit integrates
+    the contact's work and dissipation over every step)."""
     out = []
-    for k in range(len(model.contact_value_names()) // N_VALUES):
-        block = extras[k * N_VALUES:(k + 1) * N_VALUES]
-        d = {"force": block[0:3], "moment": block[3:6]}
-        d.update({name: block[j] for j, name in enumerate(VALUE_NAMES) if j >= 6})
-        d["power"] = d.pop("obstacle_power")
-        out.append(d)
+    for o, v in zip(obstacles, series, strict=False):
+        e: dict = {"index": o.index, "kind": o.kind}
+        if t.size:
+            for what in ("force", "moment"):
+                mag = np.linalg.norm(v[what], axis=0)
+                k = int(np.argmax(mag))
+                e[what] = {"final": [float(x) for x in v[what][:, -1]],
+                           "max_norm": float(mag[k]), "t_of_max": float(t[k])}
+            g = v["gap_min"]
+            k = int(np.argmin(g))
+            e["gap_min"] = {"value": float(g[k]), "t": float(t[k])}
+        out.append(e)
     return out
+
+
+def static_obstacle_summary(obstacles, values: np.ndarray) -> list[dict]:
+    """Per obstacle (file order) at an equilibrium: its kind, the force (N) and moment
+    (N m, about its point) it exerts on the rods, the smallest gap (m) and the segments in
+    reach; ``values`` the flat ``VALUE_NAMES`` rows of every obstacle."""
+    from runtime.model.contact import obstacle_series
+
+    return [{"index": o.index, "kind": o.kind,
+             "force": [float(x) for x in v["force"]],
+             "moment": [float(x) for x in v["moment"]],
+             "gap_min": float(v["gap_min"]), "segments": int(v["segments"])}
+            for o, v in zip(obstacles, obstacle_series(np.ravel(values)), strict=True)]
 
 
 def _reference_value(res: SimulationResult, which: str) -> float:

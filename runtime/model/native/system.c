@@ -196,7 +196,8 @@ int kvsys_link_values(const kvsys* s, int k, const double* y, double* Q, double*
    energies only) the extras: every rod's 12 support values (kvrod_diagnostics), every
    hold's free momentum row (3: the force the support or the tie exerts on that node's
    rod, inertia included), every link's force on node a and moment on side a (6, spatial:
-   f_a and R(p_a1) T_a1 + R(p_a2) T_a2); NaN where not computed. */
+   f_a and R(p_a1) T_a1 + R(p_a2) T_a2), then, on obstacles, each obstacle's NCV values
+   (obstacle_values below; nextra says how many); NaN where not computed. */
 /* the step loop's kv_maxstep_fn of an assembly: the smallest of its rods' contact step
    bounds (kvrod_contact_max_step; HUGE_VAL when no rod touches anything) */
 double kvsys_max_step(const void* ctx, double t, const double* y, const double* yp) {
@@ -211,6 +212,25 @@ double kvsys_max_step(const void* ctx, double t, const double* y, const double* 
     if (hr < h) h = hr;
   }
   return h;
+}
+
+/* the per obstacle values (rod_contact.h, NCV: force, moment about the obstacle's point,
+   energy, dissipation, its friction part, the obstacle's power, the smallest gap, the
+   segments in reach) of the whole assembly into v (nv = NCV nobs): sums over the rods
+   that touch obstacles, the smallest gap of any rod (every such rod sees all nobs) */
+static int obstacle_values(const kvsys* s, const double* y, double* v, int nv) {
+  const int nobs = nv / NCV;
+  double w[NCV * nobs];
+  for (int q = 0; q < nv; ++q) v[q] = (q % NCV == 10) ? HUGE_VAL : 0.0;
+  for (int r = 0; r < s->nrod; ++r) {
+    const kvrod_rod* rod = s->rod[r];
+    if (rod->contact == NULL || rod->contact->nobs != nobs || rod->contact->values == NULL)
+      continue;
+    if (rod->contact->values(rod, y + s->off[r], w)) return -3;
+    for (int q = 0; q < nv; ++q)
+      v[q] = (q % NCV == 10) ? fmin(v[q], w[q]) : v[q] + w[q];
+  }
+  return 0;
 }
 
 int kvsys_energies(const kvsys* s, int m, const double* ts, const double* ys,
@@ -272,6 +292,8 @@ int kvsys_energies(const kvsys* s, int m, const double* ts, const double* ys,
       }
       for (int q = 0; q < 3; ++q) { o[x + 6 * l + q] = Q[q]; o[x + 6 * l + 3 + q] = M[q]; }
     }
+    x += 6 * s->nlink;
+    if (x < nen && obstacle_values(s, y, o + x, nen - x)) return -3;
   }
   return 0;
 }
