@@ -389,6 +389,7 @@ int kvrod_contact_error_weights(const kvrod_rod* rod, const double* y, double rt
   const double rate = C->tolerance_rate;
   cwork W;
   cseg g;
+  int touching = 0;
   for (int o = 0; o < C->nobs; ++o) {
     const int kind = C->kind[o];
     if (kind < 0 || kind >= KV_NKINDS) return -4;
@@ -400,16 +401,21 @@ int kvrod_contact_error_weights(const kvrod_rod* rod, const double* y, double rt
       double band = g.cnt[CNT_H];
       if (g.cnt[CNT_R] > band) band = g.cnt[CNT_R];
       if (g0 > band) continue;
+      touching = 1;
       /* the nodes' velocities at the positions' tolerance times the contact's rate */
       for (int e = 0; e < 2; ++e)
         for (int k = 0; k < 3; ++k)
           loosen(w, g.idx[2 + e] + k, y, rtol, atol, rate * atol[g.idx[e] + k]);
-      /* the segment's angular velocity at the rotation's */
-      double ap = atol[g.idx[4]];
-      for (int k = 1; k < 4; ++k)
-        if (atol[g.idx[4] + k] < ap) ap = atol[g.idx[4] + k];
-      for (int k = 0; k < 3; ++k) loosen(w, g.idx[5] + k, y, rtol, atol, rate * ap);
     }
+  }
+  /* a rod near an obstacle: every segment's angular velocity at its rotation's tolerance
+     times the contact's rate (the bending waves the contact sends along the rod) */
+  for (int s = 1; touching && s <= rod->N; ++s) {
+    const int ip = i_p(rod, s), io = i_om(rod, s);
+    double ap = atol[ip];
+    for (int k = 1; k < 4; ++k)
+      if (atol[ip + k] < ap) ap = atol[ip + k];
+    for (int k = 0; k < 3; ++k) loosen(w, io + k, y, rtol, atol, rate * ap);
   }
   return 0;
 }
