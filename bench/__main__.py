@@ -4,7 +4,7 @@ Writes ``DIR/integrators.json``, ``scaling.json``, ``codegen.json``, ``peers.jso
 ``kernels.json`` (+ ``kernels.md``), ``energy_audit.json``, ``modes.json``, ``maxwell.json``,
 ``sections.json``, ``overhead.json``, ``maxwell_kv.json``, ``sweeps.json`` (+ ``sweeps.md``),
 ``assembly.json``, ``sensitivities.json`` (+ ``sensitivities.md``), ``fit.json``,
-``contact.json`` and ``README.md`` (all tables).
+``contact.json``, ``contact.md`` and ``README.md`` (all tables).
 Every JSON document records its date, platform, versions and command line (``meta``) and
 its targets with a verdict (``targets``: met / missed / not measured).
 ``--only SECTION`` (repeatable) reruns just those sections and rebuilds the README from
@@ -178,6 +178,7 @@ def run_all(quick: bool = False, out_dir: Path = Path("bench/results"),
     if "contact" in chosen and not quick:
         _log("== contact: a cable falling onto a floor against the free swing")
         keep("contact", contact_bench.run(quick, log=_log))
+        _write(out_dir / "contact.md", "\n".join(contact_bench.markdown(docs["contact"])))
     if "sweeps" in chosen and not quick:
         _log("== sweeps and start-up: whole commands side by side")
         keep("sweeps", sweeps_bench.run(quick, log=_log))

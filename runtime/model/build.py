@@ -335,6 +335,8 @@ def _declare_contact(lib: ctypes.CDLL) -> ctypes.CDLL:
         getattr(lib, name).restype = i
     lib.kvrod_contact_max_step.argtypes = [p, p]
     lib.kvrod_contact_max_step.restype = d
+    lib.kvrod_contact_error_weights.argtypes = [p, p, d, p, p]
+    lib.kvrod_contact_error_weights.restype = i
     lib.kvrod_self_values.argtypes = [p, p, p]
     lib.kvrod_self_values.restype = i
     lib.kvrod_self_couplings.argtypes = [p, p]

@@ -12,7 +12,10 @@
   (``CNT_PARAMS``: k, delta, c, mu, v_s, r, h);
 * ``step_fraction``: the step bound (a step moves no segment toward an obstacle by more
   than this fraction of its gap plus delta);
-* ``self_contact``: the rod's contact with itself (:class:`SelfContactArrays`; None: off).
+* ``self_contact``: the rod's contact with itself (:class:`SelfContactArrays`; None: off);
+* ``tolerance_rate``: the contact's rate ``sqrt(k / rho A)`` (1/s) by which the error
+  test's velocity tolerances near an obstacle follow the positions' (0: off; see
+  ``kvrod_contact_error_weights`` in rod_contact.h and docs/design.md, section 14).
 
 Like :class:`~runtime.model.arrays.RodArrays` the arrays are modified in place only (the
 compiled code keeps their addresses). The problem layer fills them
@@ -92,7 +95,8 @@ class ContactStruct(ctypes.Structure):
                 ("residual", ctypes.c_void_p), ("jacobian", ctypes.c_void_p),
                 ("energies", ctypes.c_void_p), ("values", ctypes.c_void_p),
                 ("max_step", ctypes.c_void_p), ("self", ctypes.c_void_p),
-                ("couplings", ctypes.c_void_p)]
+                ("couplings", ctypes.c_void_p), ("tolerance_rate", ctypes.c_double),
+                ("energies_values", ctypes.c_void_p)]
 
     def bind(self, lib: ctypes.CDLL) -> None:
         """Point at the contact library's functions (``build.load_contact_library``)."""
@@ -103,6 +107,7 @@ class ContactStruct(ctypes.Structure):
         self.values = addr(lib.kvrod_contact_values)
         self.max_step = addr(lib.kvrod_contact_max_step)
         self.couplings = addr(lib.kvrod_self_couplings)
+        self.energies_values = addr(lib.kvrod_contact_energies_values)
 
 
 class SelfContactArrays:
@@ -171,6 +176,7 @@ class ContactArrays:
     cnt: np.ndarray
     step_fraction: float = STEP_FRACTION
     self_contact: SelfContactArrays | None = None
+    tolerance_rate: float = 0.0
 
     def __post_init__(self) -> None:
         self.kind = np.ascontiguousarray(self.kind, dtype=np.int32)
@@ -188,6 +194,9 @@ class ContactArrays:
                                      self.cnt.ctypes.data, float(self.step_fraction))
         if self.self_contact is not None:
             self._struct.self = self.self_contact.struct_address
+        if not (math.isfinite(self.tolerance_rate) and self.tolerance_rate >= 0.0):
+            raise ValueError(f"tolerance_rate = {self.tolerance_rate}: finite, >= 0 (1/s)")
+        self._struct.tolerance_rate = float(self.tolerance_rate)
 
     @property
     def n_obstacles(self) -> int:
@@ -262,7 +271,8 @@ class ContactArrays:
     def copy(self) -> ContactArrays:
         out = ContactArrays(self.kind.copy(), self.obs.copy(), self.cnt.copy(),
                             self.step_fraction,
-                            None if self.self_contact is None else self.self_contact.copy())
+                            None if self.self_contact is None else self.self_contact.copy(),
+                            self.tolerance_rate)
         if getattr(self, "lib", None) is not None:
             out.bind(self.lib)
         return out

@@ -147,6 +147,12 @@ class RodModel:
             self.newton_system = self._self_contact_newton_system
         #: the state's bound on the next step (contact; the BDF reads it), None without
         self.state_max_step = None if self.contact is None else self._contact_max_step
+        #: the error test's weights near obstacles (contact; the BDF applies them), None
+        #: without: a rod without obstacles keeps its tolerances everywhere
+        self.state_error_weights = (self._contact_error_weights
+                                    if self.contact is not None
+                                    and self.contact.n_obstacles > 0
+                                    and self.contact.tolerance_rate > 0.0 else None)
         self._struct = arrays.struct(self.kl, self.ku)
         self._sp = None
         self._casadi = None
@@ -675,6 +681,8 @@ class RodModel:
                         n_energies=self.n_energies)
         if self.contact is not None:
             kern.max_step = address(self._clib.kvrod_max_step)
+        if self.state_error_weights is not None:
+            kern.error_weights = address(self._clib.kvrod_error_weights)
         if self.self_contact is not None:
             self.blocks  # noqa: B018 (attached before the first Jacobian)
             kern.system_jacobian = address(lib.kvrod_jacobian_system)
@@ -901,6 +909,17 @@ class RodModel:
         ``step_fraction`` of its gap plus delta (inf: no bound)."""
         self._time(t)
         return float(self._clib.kvrod_contact_max_step(self._struct_ptr(), _ptr(y, self.n)))
+
+    def _contact_error_weights(self, y: np.ndarray, rtol: float, atol: np.ndarray,
+                               w: np.ndarray) -> None:
+        """The error test's weights ``w`` (``1/(rtol |y| + atol)``, changed in place) near
+        obstacles: the velocities of segments within their length of an obstacle at the
+        positions' tolerance times the contact's rate (``kvrod_contact_error_weights``)."""
+        rc = self._clib.kvrod_contact_error_weights(self._struct_ptr(), _ptr(y, self.n),
+                                                    float(rtol), _ptr(atol, self.n),
+                                                    _ptr(w, self.n))
+        if rc:
+            raise RuntimeError(f"kvrod_contact_error_weights failed ({rc})")
 
     def contact_values(self, t: float, y: np.ndarray) -> np.ndarray:
         """(nobs, N_VALUES): per obstacle the force (N) and moment (N m, about its point)

@@ -318,7 +318,9 @@ def contact_arrays(problem: Problem, h: np.ndarray) -> ContactArrays:
     obstacle its kernel and parameters (:func:`obstacle_parameters`; the pose of t = 0),
     per obstacle and segment the law of :meth:`Problem.contact_law` (k, delta, the
     segment's normal damping, the obstacle's friction, the slip velocity, the segment's
-    contact radius and length ``h`` (N,), m); with ``contact.self`` the same per segment
+    contact radius and length ``h`` (N,), m), the contact's rate ``sqrt(k / rho A)``
+    (the slowest segment's) for the error test's tolerances near obstacles; with
+    ``contact.self`` the same per segment
     for the rod's contact with itself
     (``runtime.model.contact.SelfContactArrays``, with the rods' friction)."""
     from generated import rod_layout as L
@@ -345,9 +347,15 @@ def contact_arrays(problem: Problem, h: np.ndarray) -> ContactArrays:
                         ("r", law.radius), ("h", h)):
             seg[:, L.CNT_OFFSETS[name]] = v
         self_contact = SelfContactArrays(seg)
+    # the contact's rate sqrt(k / rho A), the slowest over the segments: the error
+    # test's velocity tolerances near an obstacle (rod_contact.h)
+    rate = 0.0
+    if kinds:
+        rhoA = np.asarray(problem.segment_matrices()["rhoA"], dtype=float)
+        rate = float(np.min(np.sqrt(np.broadcast_to(law.stiffness, rhoA.shape) / rhoA)))
     arrays = ContactArrays(np.array(kinds, dtype=np.int32).reshape(-1),
                            np.array(obs, dtype=float).reshape(-1, L.N_OBS), cnt,
-                           self_contact=self_contact)
+                           self_contact=self_contact, tolerance_rate=rate)
     for k, o in enumerate(problem.obstacles):
         c, q, v, w = o.pose(0.0)
         arrays.set_pose(k, c, q, v, w)

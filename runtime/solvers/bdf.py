@@ -285,7 +285,12 @@ class BDF:
                                  "with at least one True")
         if self.suppress_alg:
             mask = mask & diff
-        masked = self.suppress_alg or error_mask is not None
+        #: the state's change of the error test's weights (contact: looser velocity
+        #: tolerances near obstacles; the problem's ``state_error_weights(y, rtol, atol,
+        #: w)``, changing w in place), None without; applied whenever the weights are
+        self._state_error_weights = getattr(problem, "state_error_weights", None)
+        masked = (self.suppress_alg or error_mask is not None
+                  or self._state_error_weights is not None)
         self._errmask = mask.astype(float) if masked else None
         self._ewt_err = np.empty(n) if masked else self._ewt
         self._ab = band_storage(n, self.kl, self.ku)
@@ -632,6 +637,8 @@ class BDF:
         np.reciprocal(ewt, out=ewt)
         if self._errmask is not None:
             np.multiply(ewt, self._errmask, out=self._ewt_err)
+        if self._state_error_weights is not None:
+            self._state_error_weights(self._y, self.rtol, self.atol, self._ewt_err)
 
     def _hmin(self) -> float:
         return max(self.min_step, _EPS16 * abs(self.t), 1e-300)

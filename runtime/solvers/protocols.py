@@ -183,7 +183,12 @@ class CKernels:
 
     ``max_step`` (optional, 0 if none): ``double f(ctx, t, y, yp)``, the largest next step
     the state allows (contact: ``kvrod_max_step``); the loop applies it after every
-    accepted step as the BDF's ``_state_max_step`` does."""
+    accepted step as the BDF's ``_state_max_step`` does.
+
+    ``error_weights`` (optional, 0 if none): ``int f(ctx, y, rtol, atol, w)``, the state's
+    change of the error test's weights ``w = 1/(rtol |y| + atol)`` in place (contact:
+    ``kvrod_error_weights``); the loop applies it after every accepted step as the BDF's
+    ``_state_error_weights`` does; a negative return fails the run."""
 
     def __init__(self, residual: int, jacobian: int, energies: int, ctx: int,
                  drive=None, keep: Any = None, jacobian_cells: int = 0,
@@ -199,3 +204,4 @@ class CKernels:
         self.keep = keep
         self.system_jacobian = 0
         self.max_step = 0
+        self.error_weights = 0

@@ -1053,11 +1053,18 @@ int kvrod_energies_contact(const kvrod_rod* rod, int m, const double* ts, const 
   const size_t n = (size_t) kvrod_n_state(rod->N, rod->nb);
   const int nobs = has_contact(rod) ? rod->contact->nobs : 0;
   const size_t stride = (size_t)NDIAG + (size_t)NCV * (size_t)nobs;
+  work_t W;
   for (int k = 0; k < m; ++k) {
     double* o = out + (size_t)k * stride;
-    const int rc = kvrod_energies(rod, 1, ts + k, ys + (size_t)k * n, yps + (size_t)k * n, o);
-    if (rc) return rc;
-    if (nobs && rod->contact->values(rod, ys + (size_t)k * n, o + NDIAG)) return -3;
+    const double* y = ys + (size_t)k * n;
+    if (!nobs) {
+      const int rc = kvrod_energies(rod, 1, ts + k, y, yps + (size_t)k * n, o);
+      if (rc) return rc;
+      continue;
+    }
+    /* kvrod_energies' sums with the obstacles' values from the same pass */
+    if (energies_one(rod, y, yps + (size_t)k * n, o, 0, &W)) return -3;
+    if (rod->contact->energies_values(rod, y, o, o + NDIAG)) return -3;
   }
   return 0;
 }

@@ -196,18 +196,13 @@ static int obstacle_values(const kvrod_rod* rod, int o, const double* y, cwork* 
   if (kind < 0 || kind >= KV_NKINDS) return -4;
   memset(v, 0, sizeof(double) * NCV);
   v[10] = HUGE_VAL;
+  int far = 0;
   for (int s = 1; s <= rod->N; ++s) {
     seg_of(rod, o, s, &g);
     if (in_reach(kind, &g, y, W, &yes, &glb)) return -3;
     if (!yes) {
-      if (glb < v[10]) {
-        if (exact_gap) {
-          if (diag_of(kind, &g, y, W, &d)) return -3;
-          if (d.g_min < v[10]) v[10] = d.g_min;
-        } else {
-          v[10] = glb;
-        }
-      }
+      far = 1;
+      if (!exact_gap && glb < v[10]) v[10] = glb;
       continue;
     }
     if (diag_of(kind, &g, y, W, &d)) return -3;
@@ -215,6 +210,16 @@ static int obstacle_values(const kvrod_rod* rod, int o, const double* y, cwork* 
     v[6] += d.E; v[7] += d.P_diss; v[8] += d.P_fric; v[9] += d.P_obs;
     if (d.g_min < v[10]) v[10] = d.g_min;
     v[11] += 1.0;
+  }
+  /* the exact smallest gap of the segments out of reach: only those whose bound is below
+     the smallest gap so far can hold it (the bound is below the gap), so with a segment
+     in reach hardly any is evaluated */
+  for (int s = 1; exact_gap && far && s <= rod->N; ++s) {
+    seg_of(rod, o, s, &g);
+    if (in_reach(kind, &g, y, W, &yes, &glb)) return -3;
+    if (yes || !(glb < v[10])) continue;
+    if (diag_of(kind, &g, y, W, &d)) return -3;
+    if (d.g_min < v[10]) v[10] = d.g_min;
   }
   return 0;
 }
@@ -261,16 +266,19 @@ static int support_forces(const kvrod_rod* rod, const double* y, cwork* W, doubl
   return 0;
 }
 
-int kvrod_contact_energies(const kvrod_rod* rod, const double* y, double* e) {
+/* kvrod_contact_energies, and with out (not NULL) kvrod_contact_values in the same pass
+   (the energies' terms do not depend on how the smallest gap is found) */
+static int energies_values(const kvrod_rod* rod, const double* y, double* e, double* out) {
   if (!rod->contact) return 0;
   cwork W;
   double v[NCV];
   for (int o = 0; active(rod) && o < rod->contact->nobs; ++o) {
-    const int rc = obstacle_values(rod, o, y, &W, v, 0);
+    double* vo = out ? out + (size_t)o * NCV : v;
+    const int rc = obstacle_values(rod, o, y, &W, vo, out != 0);
     if (rc) return rc;
-    e[1] += v[6];
-    e[2] += v[7];
-    e[3] += v[9];
+    e[1] += vo[6];
+    e[2] += vo[7];
+    e[3] += vo[9];
   }
   if (rod->contact->self) {
     double sv[NSV];
@@ -280,6 +288,15 @@ int kvrod_contact_energies(const kvrod_rod* rod, const double* y, double* e) {
     e[2] += sv[1];
   }
   return support_forces(rod, y, &W, e);
+}
+
+int kvrod_contact_energies(const kvrod_rod* rod, const double* y, double* e) {
+  return energies_values(rod, y, e, 0);
+}
+
+int kvrod_contact_energies_values(const kvrod_rod* rod, const double* y, double* e,
+                                  double* out) {
+  return energies_values(rod, y, e, out);
 }
 
 /* q <- q + h/2 (0, w) * q (the obstacle's orientation a short time h later, first order;
@@ -354,6 +371,58 @@ double kvrod_contact_max_step(const kvrod_rod* rod, const double* y) {
 double kvrod_max_step(const void* ctx, double t, const double* y, const double* yp) {
   (void) t; (void) yp;
   return kvrod_contact_max_step((const kvrod_rod*) ctx, y);
+}
+
+/* the weight 1/(rtol |y_q| + max(atol_q, a)) of an unknown the error test controls
+   (w_q = 0: left out, stays out) */
+static void loosen(double* w, int q, const double* y, double rtol, const double* atol,
+                   double a) {
+  if (w[q] == 0.0) return;
+  const double tol = atol[q] > a ? atol[q] : a;
+  w[q] = 1.0 / (rtol * fabs(y[q]) + tol);
+}
+
+int kvrod_contact_error_weights(const kvrod_rod* rod, const double* y, double rtol,
+                                const double* atol, double* w) {
+  if (!active(rod) || !(rod->contact->tolerance_rate > 0.0)) return 0;
+  const kvrod_contact* C = rod->contact;
+  const double rate = C->tolerance_rate;
+  cwork W;
+  cseg g;
+  int touching = 0;
+  for (int o = 0; o < C->nobs; ++o) {
+    const int kind = C->kind[o];
+    if (kind < 0 || kind >= KV_NKINDS) return -4;
+    const double* obs = C->obs + (size_t)o * NOBS;
+    for (int s = 1; s <= rod->N; ++s) {
+      seg_of(rod, o, s, &g);
+      double g0;
+      if (bound_of(kind, y + g.idx[0], y + g.idx[1], obs, g.cnt, &W, &g0)) return -3;
+      double band = g.cnt[CNT_H];
+      if (g.cnt[CNT_R] > band) band = g.cnt[CNT_R];
+      if (g0 > band) continue;
+      touching = 1;
+      /* the nodes' velocities at the positions' tolerance times the contact's rate */
+      for (int e = 0; e < 2; ++e)
+        for (int k = 0; k < 3; ++k)
+          loosen(w, g.idx[2 + e] + k, y, rtol, atol, rate * atol[g.idx[e] + k]);
+    }
+  }
+  /* a rod near an obstacle: every segment's angular velocity at its rotation's tolerance
+     times the contact's rate (the bending waves the contact sends along the rod) */
+  for (int s = 1; touching && s <= rod->N; ++s) {
+    const int ip = i_p(rod, s), io = i_om(rod, s);
+    double ap = atol[ip];
+    for (int k = 1; k < 4; ++k)
+      if (atol[ip + k] < ap) ap = atol[ip + k];
+    for (int k = 0; k < 3; ++k) loosen(w, io + k, y, rtol, atol, rate * ap);
+  }
+  return 0;
+}
+
+int kvrod_error_weights(const void* ctx, const double* y, double rtol, const double* atol,
+                        double* w) {
+  return kvrod_contact_error_weights((const kvrod_rod*) ctx, y, rtol, atol, w);
 }
 
 int kvrod_contact_points(const kvrod_rod* rod, const double* y, double* out, int cap) {

@@ -79,6 +79,10 @@ struct kvrod_contact_s {
   double (*max_step)(const kvrod_rod* rod, const double* y);
   kvrod_self* self;      /* self-contact (NULL: off) */
   int (*couplings)(const kvrod_rod* rod, const double* y);
+  /* the error test's tolerances near an obstacle (kvrod_contact_error_weights): the
+     contact's rate sqrt(k / rho A) (1/s; 0: the run's own tolerances everywhere) */
+  double tolerance_rate;
+  int (*energies_values)(const kvrod_rod* rod, const double* y, double* e, double* out);
 };
 
 /* res[rows] -= Q of every segment in reach of an obstacle */
@@ -94,12 +98,27 @@ int kvrod_contact_jacobian(const kvrod_rod* rod, const double* y, double cy, int
 int kvrod_contact_energies(const kvrod_rod* rod, const double* y, double* e);
 /* out (nobs x NCV) <- the values above */
 int kvrod_contact_values(const kvrod_rod* rod, const double* y, double* out);
+/* kvrod_contact_energies and kvrod_contact_values in one pass over the segments (the
+   same values, bit for bit: what kvrod_energies_contact calls) */
+int kvrod_contact_energies_values(const kvrod_rod* rod, const double* y, double* e,
+                                  double* out);
 /* the largest step (s) that moves no segment toward an obstacle by more than
    step_fraction (max(gap, 0) + delta) at the segments' and obstacles' current velocities
    (HUGE_VAL: no bound) */
 double kvrod_contact_max_step(const kvrod_rod* rod, const double* y);
 /* the same as the step loop's kv_maxstep_fn (ctx: the kvrod_rod) */
 double kvrod_max_step(const void* ctx, double t, const double* y, const double* yp);
+/* the error test's weights near obstacles: for every segment whose gap bound is within
+   its length (or its contact radius, the larger) of an obstacle, the absolute tolerance
+   of its nodes' velocities becomes at least tolerance_rate times their positions' and
+   that of its angular velocity tolerance_rate times its rotation's; w = 1/(rtol |y| +
+   atol) of the step loop's error test, changed in place (entries 0 stay 0). Returns 0,
+   -3 when a kernel fails, -4 for an unknown kind */
+int kvrod_contact_error_weights(const kvrod_rod* rod, const double* y, double rtol,
+                                const double* atol, double* w);
+/* the same as the step loop's kv_errw_fn (ctx: the kvrod_rod) */
+int kvrod_error_weights(const void* ctx, const double* y, double rtol, const double* atol,
+                        double* w);
 /* the quadrature points of the segments in reach, at most cap rows of 6: obstacle,
    segment, x (3), gap (m); returns the number of rows there are (> cap: truncated) */
 int kvrod_contact_points(const kvrod_rod* rod, const double* y, double* out, int cap);

@@ -47,6 +47,11 @@ typedef int (*kv_sysjac_fn)(const void *ctx, double t, const double *y, const do
 /* the largest next step the problem's state allows (s; HUGE_VAL: none), e.g. contact:
    no segment moves toward an obstacle by more than a fraction of its gap */
 typedef double (*kv_maxstep_fn)(const void *ctx, double t, const double *y, const double *yp);
+/* the state's error weights (contact: looser velocity tolerances near obstacles): w =
+   1/(rtol |y| + atol) of the error test changed in place after every accepted step;
+   0, or a negative code (a kernel failed) */
+typedef int (*kv_errw_fn)(const void *ctx, const double *y, double rtol, const double *atol,
+                          double *w);
 
 #define KV_MAXORD 5
 #define KV_NH (KV_MAXORD + 2)
@@ -187,6 +192,9 @@ typedef struct {
     double s_cj;
     long long s_stamp, lu_stamp;
     int s_have_lu;
+    /* NULL, or the state's change of the error test's weights (ewt_err, then a separate
+       array), applied after every accepted step (bdf.py: BDF._state_error_weights) */
+    kv_errw_fn errw;
 } kv_ida;
 
 enum { SEC_RES, SEC_JAC, SEC_LU, SEC_NEWTON, SEC_EN, SEC_DRIVE };
@@ -933,7 +941,8 @@ static int handle_failure(kv_ida *S, int nflag, int ncf, int nef, double err_k,
     return 0;
 }
 
-static void complete_step(kv_ida *S, double tnew, double err_k, double err_km1)
+/* 0, or -1 when the state's error weights failed (the step is accepted) */
+static int complete_step(kv_ida *S, double tnew, double err_k, double err_km1)
 {
     const int n = S->n;
     int mo = S->max_order;      /* lowered where the step is below an order's stability bound */
@@ -1023,6 +1032,7 @@ static void complete_step(kv_ida *S, double tnew, double err_k, double err_km1)
     }
     if (S->errmask)
         for (int q = 0; q < n; ++q) S->ewt_err[q] = ewt[q] * S->errmask[q];
+    const int errw_rc = S->errw ? S->errw(S->ctx, S->y, rtol, atol, S->ewt_err) : 0;
     if (S->nsens) sens_complete(S, ku);
     S->t_old = S->t;
     S->t = tnew;
@@ -1033,6 +1043,7 @@ static void complete_step(kv_ida *S, double tnew, double err_k, double err_km1)
         if (hb < hm) hb = hm;
         if (fabs(S->hh) > hb) S->hh = S->direction * hb;
     }
+    return errw_rc < 0 ? -1 : 0;
 }
 
 /* one accepted step (bdf.py's _step_impl); 0 or a KV_FAIL_ / KV_CALLBACK / KV_NONFINITE */
@@ -1086,7 +1097,7 @@ static int step(kv_run *R)
             if (S->nsens) sens_rescale_first(S, S->rr);
         }
     }
-    complete_step(S, tnew, err[0], err[1]);
+    if (complete_step(S, tnew, err[0], err[1])) return KV_CALLBACK;
     return 0;
 }
 

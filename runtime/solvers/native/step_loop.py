@@ -138,6 +138,7 @@ class CoreStruct(ctypes.Structure):
         + _fields(_D, "s_cj")
         + _fields(_L, "s_stamp", "lu_stamp")
         + _fields(_I, "s_have_lu")
+        + _fields(_P, "errw")
     )
     #: names of the entries of ``sec`` (seconds per part when ``timing`` is set)
     SECTIONS = ("residual", "jacobian", "lu", "newton_solve_update", "energies", "drive")
@@ -173,6 +174,7 @@ class CoreLink:
             s.res, s.jac, s.en, s.ctx = kern.residual, kern.jacobian, kern.energies, kern.ctx
             s.nen = kern.n_energies
             s.maxstep = kern.max_step or None
+            s.errw = kern.error_weights or None
             self._keep.append(kern.keep)
             self.has_energies = bool(kern.energies)
             if kern.drive is not None and not kern.drive_constant:
