@@ -35,7 +35,8 @@ import numpy as np
 from generated import rod_layout as L
 from runtime.errors import GeneratedCodeError
 from runtime.model import build
-from runtime.model.rod import RodModel
+from runtime.model.contact import SelfContactArrays
+from runtime.model.rod import SELF_COUPLING_DOUBLES, SELF_COUPLING_ENTRIES_PER_ROW, RodModel
 
 
 @dataclass(frozen=True)
@@ -102,7 +103,8 @@ class SysStruct(ctypes.Structure):
                 ("nev", _I), ("nlink", _I), ("lidx", _P), ("lrow", _P), ("lpar", _P),
                 ("lconst", _P), ("ldst", _P), ("nbody", _I), ("bidx", _P), ("brow", _P),
                 ("bpar", _P), ("bdst", _P), ("gravity", _D * 3), ("nextra", _I),
-                ("scratch", _P)]
+                ("scratch", _P), ("pairs", _P), ("pair_residual", _P),
+                ("pair_jacobian", _P), ("pair_couplings", _P), ("pair_values", _P)]
 
 
 #: the link kernel's inputs in order (name, size): its Jacobian's columns follow them
@@ -122,16 +124,27 @@ class SystemModel:
     rods: the rods' models (built as single rods; a rod whose node is held or tied by
     the system is built free there); names: their names; holds, links, bodies: the
     couplings; gravity: ``gravity(t, left, scale)`` the scaled gravity (m/s^2) on the
-    bodies at time t (the rods' own loads are in their drives).
+    bodies at time t (the rods' own loads are in their drives); pairs: the contact
+    between the rods' segments and of each rod with itself (``contact.self``;
+    :class:`~runtime.model.contact.SelfContactArrays` over every rod's segments in
+    order; None: none; the rods themselves then carry no self-contact).
     """
 
     def __init__(self, rods: Sequence[RodModel], names: Sequence[str],
                  holds: Sequence[Hold] = (), links: Sequence[Link] = (),
                  bodies: Sequence[Body] = (),
-                 gravity: Callable[[float, bool, float], np.ndarray] | None = None) -> None:
+                 gravity: Callable[[float, bool, float], np.ndarray] | None = None,
+                 pairs: SelfContactArrays | None = None) -> None:
         if not rods:
             raise ValueError("an assembly needs at least one rod")
+        if pairs is not None and any(r.self_contact is not None for r in rods):
+            raise ValueError("an assembly's contact between its rods takes every rod's "
+                             "self-contact: build the rods without it")
         self.rods = list(rods)
+        #: the contact between the rods' segments (None: off)
+        self.pairs = pairs
+        self._pair_scale = 1.0
+        self._plib = None if pairs is None else build.load_contact_library()
         #: the step bound of rods touching obstacles (BDF's state_max_step), None without
         self.state_max_step = (self._contact_max_step
                                if any(r.contact is not None for r in self.rods) else None)
@@ -225,6 +238,13 @@ class SystemModel:
         """Drive every rod and the bodies' gravity to time ``t``."""
         for r in self.rods:
             r.at(t)
+        if self.pairs is not None:
+            # statics takes the pairs' contact up with the load factor, as a rod's drive
+            # does its obstacles' (runtime.problem.assemble.ProblemDrive)
+            scale = self._load_scale if self._static else 1.0
+            if scale != self._pair_scale:
+                self.pairs.set_force_scale(scale)
+                self._pair_scale = scale
         if t != self._t and self._struct is not None:
             self._set_gravity(t)
         self._t = t
@@ -400,7 +420,17 @@ class SystemModel:
                                    _condensation_blocks(rod, held),
                                    cells=rod.condensation_cells(), pattern=patterns[k])
             blocks.append(Block(int(off[k]), rod.n, rod.kl, rod.ku, cond))
-        cb = self._blocks = CoupledBlocks(blocks, {r: sorted(c) for r, c in coupling.items()})
+        rows = entries = 0
+        if self.pairs is not None:
+            # the pairs' entries between two segments: dynamic couplings, at most every
+            # momentum row of every rod within SELF_COUPLING_DOUBLES of Z (as a single
+            # rod's self-contact; pairs beyond stay in the residual only)
+            biggest = max(r.n for r in rods)
+            rows = min(sum(6 * r.N + 3 for r in rods),
+                       max(SELF_COUPLING_DOUBLES // max(biggest, 1), 36))
+            entries = rows * SELF_COUPLING_ENTRIES_PER_ROW
+        cb = self._blocks = CoupledBlocks(blocks, {r: sorted(c) for r, c in coupling.items()},
+                                          dynamic_rows=rows, dynamic_entries=entries)
         dest = cb.destination
         s = SysStruct()
         keep = self._keep
@@ -480,6 +510,14 @@ class SystemModel:
         s.bdst = ptr(arr(bdst or [0], np.int64))
         s.nextra = self.nextra
         s.scratch = self._scratch.ctypes.data
+        if self.pairs is not None:
+            self.pairs.attach_system(self, cb)
+            addr = lambda fn: ctypes.cast(fn, ctypes.c_void_p).value  # noqa: E731
+            s.pairs = self.pairs.struct_address
+            s.pair_residual = addr(self._plib.kvsys_pairs_residual)
+            s.pair_jacobian = addr(self._plib.kvsys_pairs_jacobian)
+            s.pair_couplings = addr(self._plib.kvsys_pairs_couplings)
+            s.pair_values = addr(self._plib.kvsys_pairs_values)
         self._struct = s
         self._t = math.nan
 
@@ -674,7 +712,15 @@ class SystemModel:
         rows, cols, flat = self._coo_pattern()
         vals = self._blocks.buffer[flat]
         nz = vals != 0.0
-        return sp.csc_matrix((vals[nz], (rows[nz], cols[nz])), shape=(self.n, self.n))
+        rows, cols, vals = rows[nz], cols[nz], vals[nz]
+        if self.pairs is not None:            # the pairs' couplings (dynamic rows)
+            cb = self._blocks
+            m = int(ctypes.c_int.from_address(cb.m2_address).value)
+            k = int(cb.er2[m])
+            rows = np.concatenate([rows, np.repeat(cb.srow2[:m], np.diff(cb.er2[:m + 1]))])
+            cols = np.concatenate([cols, cb.ec2[:k]])
+            vals = np.concatenate([vals, cb.ev2[:k]])
+        return sp.csc_matrix((vals, (rows, cols)), shape=(self.n, self.n))
 
     def _coo_pattern(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(rows, cols, flat index into the blocks' buffer) of every entry J may hold:

@@ -12,6 +12,11 @@
  * (CONTACT_CUTOFF delta, as the obstacles' segments) and sorted (i, j) so that every
  * evaluation sums in the same order. Cost O(N log N) plus the pairs near each other.
  * Pairs of segments near along the rod are never paired (kvrod_self.near).
+ *
+ * The same loops serve the contact between the rods of an assembly (kvsys_pairs_*,
+ * called by system.c): the segments of all its rods in one sweep (global segments
+ * numbered rod after rod), the pairs' state indices in the system's state, the entries
+ * within a segment into that rod's band of the system's Jacobian buffer.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -29,9 +34,59 @@ typedef struct {
   double w[64];
 } pwork;
 
-/* segment s's law (CNT layout) */
-static const double* sseg(const kvrod_self* S, int s) {
-  return S->seg + (size_t)(s - 1) * NCNT;
+/* the rods the pairs run over: a single rod (nrod 1, offset 0) or an assembly's */
+typedef struct {
+  const kvrod_self* S;
+  int nrod, ntot;                 /* rods, segments of all of them */
+  const kvrod_rod* const* rods;
+  const int* off;                 /* per rod its first state index */
+  const int* sg0;
+  const kvrod_rod* one[1];        /* a single rod's storage for the above */
+  int off1[1], sg1[2];
+} sview;
+
+static void view_of_rod(const kvrod_rod* rod, sview* V) {
+  V->S = rod->contact->self;
+  V->nrod = 1;
+  V->ntot = rod->N;
+  V->one[0] = rod;
+  V->off1[0] = 0;
+  V->sg1[0] = 0; V->sg1[1] = rod->N;
+  V->rods = V->one; V->off = V->off1; V->sg0 = V->sg1;
+}
+
+static void view_of_system(const kvrod_self* S, sview* V) {
+  V->S = S;
+  V->nrod = S->nrod;
+  V->ntot = S->sg0[S->nrod];
+  V->rods = S->rods; V->off = S->off; V->sg0 = S->sg0;
+}
+
+/* global segment G (1-based) -> its rod (returned) and local segment *s */
+static int seg_rod(const sview* V, int G, int* s) {
+  int r = 0;
+  while (r + 1 < V->nrod && G > V->sg0[r + 1]) ++r;
+  *s = G - V->sg0[r];
+  return r;
+}
+
+/* the position of segment G's start (end = 0) or end node (end = 1) in y */
+static const double* seg_node(const sview* V, int G, int end, const double* y) {
+  int s;
+  const int r = seg_rod(V, G, &s);
+  return y + V->off[r] + i_phi(V->rods[r], s - 1 + end);
+}
+
+/* segment G's law (CNT layout) */
+static const double* sseg(const kvrod_self* S, int G) {
+  return S->seg + (size_t)(G - 1) * NCNT;
+}
+
+/* the reference arc length of segment G's start (end = 0) or end node (m) */
+static double seg_s0(const sview* V, int G, int end) {
+  int s;
+  const int r = seg_rod(V, G, &s);
+  return V->S->s0[V->sg0[r] + r + s - 1 + end];
 }
 
 /* the pair's parameters (PAIR layout) from its segments' laws */
@@ -47,26 +102,32 @@ static void pair_params(const double* a, const double* b, double* par) {
   par[PAIR_L_X] = a[CNT_R] + b[CNT_R];
 }
 
-/* a pair's state indices in kernel order: phi_a, phi_b, v_a, v_b, p_1, Omega_1, phi_c,
-   phi_d, v_c, v_d, p_2, Omega_2; free[4]: whether nodes a, b, c, d have momentum rows */
+/* a pair's state indices (in the view's state) in kernel order: phi_a, phi_b, v_a, v_b,
+   p_1, Omega_1, phi_c, phi_d, v_c, v_d, p_2, Omega_2; free[4]: whether nodes a, b, c, d
+   have momentum rows (not held by their rod's own end condition); rod[2] the segments'
+   rods */
 typedef struct {
-  int i, j, idx[12], free_[4];
+  int i, j, idx[12], free_[4], rod[2];
   double par[NPAIR];
 } cpair;
 
-static void pair_of(const kvrod_rod* rod, const kvrod_self* S, int i, int j, cpair* P) {
+static void pair_of(const sview* V, int i, int j, cpair* P) {
   const int seg[2] = {i, j};
   P->i = i; P->j = j;
   for (int q = 0; q < 2; ++q) {
-    const int s = seg[q];
+    int s;
+    const int r = seg_rod(V, seg[q], &s);
+    const kvrod_rod* rod = V->rods[r];
+    const int o = V->off[r];
     int* ix = P->idx + 6 * q;
-    ix[0] = i_phi(rod, s - 1); ix[1] = i_phi(rod, s);
-    ix[2] = i_v(rod, s - 1); ix[3] = i_v(rod, s);
-    ix[4] = i_p(rod, s); ix[5] = i_om(rod, s);
+    ix[0] = o + i_phi(rod, s - 1); ix[1] = o + i_phi(rod, s);
+    ix[2] = o + i_v(rod, s - 1); ix[3] = o + i_v(rod, s);
+    ix[4] = o + i_p(rod, s); ix[5] = o + i_om(rod, s);
     P->free_[2 * q] = !(node_held(rod, s - 1) > 0.5);
     P->free_[2 * q + 1] = !(node_held(rod, s) > 0.5);
+    P->rod[q] = r;
   }
-  pair_params(sseg(S, i), sseg(S, j), P->par);
+  pair_params(sseg(V->S, i), sseg(V->S, j), P->par);
 }
 
 static void pair_args(const cpair* P, const double* y, pwork* W) {
@@ -128,21 +189,21 @@ static int by_pair(const void* a, const void* b) {
   return p[0] != q[0] ? p[0] - q[0] : p[1] - q[1];
 }
 
-/* the pairs in reach into S->pairs; returns their number, -3 (a kernel failed) or -5
-   (more than paircap) */
-static int find_pairs(const kvrod_rod* rod, const double* y, pwork* W) {
-  const kvrod_self* S = rod->contact->self;
-  const int N = rod->N;
+/* the pairs in reach into S->pairs (global segments i < j); returns their number, -3 (a
+   kernel failed) or -5 (more than paircap) */
+static int find_pairs(const sview* V, const double* y, pwork* W) {
+  const kvrod_self* S = V->S;
+  const int N = V->ntot;
   /* midpoints' spread: the sweep's axis */
   double mean[3] = {0, 0, 0}, var[3] = {0, 0, 0};
   for (int s = 1; s <= N; ++s) {
-    const double* a = y + i_phi(rod, s - 1);
-    const double* b = y + i_phi(rod, s);
+    const double* a = seg_node(V, s, 0, y);
+    const double* b = seg_node(V, s, 1, y);
     for (int k = 0; k < 3; ++k) mean[k] += 0.5 * (a[k] + b[k]) / N;
   }
   for (int s = 1; s <= N; ++s) {
-    const double* a = y + i_phi(rod, s - 1);
-    const double* b = y + i_phi(rod, s);
+    const double* a = seg_node(V, s, 0, y);
+    const double* b = seg_node(V, s, 1, y);
     for (int k = 0; k < 3; ++k) {
       const double d = 0.5 * (a[k] + b[k]) - mean[k];
       var[k] += d * d;
@@ -153,8 +214,8 @@ static int find_pairs(const kvrod_rod* rod, const double* y, pwork* W) {
   skey* keys = (skey*)S->key;
   double* R = S->key + 2 * (size_t)N;
   for (int s = 1; s <= N; ++s) {
-    const double* a = y + i_phi(rod, s - 1);
-    const double* b = y + i_phi(rod, s);
+    const double* a = seg_node(V, s, 0, y);
+    const double* b = seg_node(V, s, 1, y);
     const double* g = sseg(S, s);
     double d2 = 0.0;
     for (int k = 0; k < 3; ++k) d2 += (b[k] - a[k]) * (b[k] - a[k]);
@@ -166,18 +227,21 @@ static int find_pairs(const kvrod_rod* rod, const double* y, pwork* W) {
   int np = 0;
   for (int u = 0; u < N; ++u) {
     const int si = keys[u].s;
-    const double* a = y + i_phi(rod, si - 1);
-    const double* b = y + i_phi(rod, si);
+    const double* a = seg_node(V, si, 0, y);
+    const double* b = seg_node(V, si, 1, y);
     const double hi = keys[u].lo + 2.0 * R[si];
     for (int w = u + 1; w < N && keys[w].lo <= hi; ++w) {
       const int sj = keys[w].s;
       const int i = si < sj ? si : sj, j = si < sj ? sj : si;
       const double* gi = sseg(S, i);
       const double* gj = sseg(S, j);
-      if (j == i + 1 || S->s0[j - 1] - S->s0[i] < S->near * (gi[CNT_R] + gj[CNT_R]))
+      int li, lj;
+      if (seg_rod(V, i, &li) == seg_rod(V, j, &lj)   /* near along one rod */
+          && (j == i + 1 || seg_s0(V, j, 0) - seg_s0(V, i, 1)
+                                < S->near * (gi[CNT_R] + gj[CNT_R])))
         continue;
-      const double* c = y + i_phi(rod, sj - 1);
-      const double* d = y + i_phi(rod, sj);
+      const double* c = seg_node(V, sj, 0, y);
+      const double* d = seg_node(V, sj, 1, y);
       double m2 = 0.0;
       for (int k = 0; k < 3; ++k) {
         const double dm = 0.5 * (c[k] + d[k] - a[k] - b[k]);
@@ -187,8 +251,8 @@ static int find_pairs(const kvrod_rod* rod, const double* y, pwork* W) {
       if (m2 > rr * rr) continue;
       double par[NPAIR], glb;
       pair_params(gi, gj, par);
-      W->arg[0] = y + i_phi(rod, i - 1); W->arg[1] = y + i_phi(rod, i);
-      W->arg[2] = y + i_phi(rod, j - 1); W->arg[3] = y + i_phi(rod, j);
+      W->arg[0] = seg_node(V, i, 0, y); W->arg[1] = seg_node(V, i, 1, y);
+      W->arg[2] = seg_node(V, j, 0, y); W->arg[3] = seg_node(V, j, 1, y);
       W->arg[4] = par;
       W->res[0] = &glb;
       if (rod_contact_pair_bound(W->arg, W->res, W->iw, W->w, 0)) return -3;
@@ -203,16 +267,16 @@ static int find_pairs(const kvrod_rod* rod, const double* y, pwork* W) {
   return np;
 }
 
-int kvrod_self_residual(const kvrod_rod* rod, const double* y, double* res) {
-  const kvrod_self* S = rod->contact->self;
+static int pairs_residual(const sview* V, const double* y, double* res) {
+  const kvrod_self* S = V->S;
   pwork W;
   cpair P;
   double Q[NPAIRQ];
   int rows[NPAIRQ];
-  const int np = find_pairs(rod, y, &W);
+  const int np = find_pairs(V, y, &W);
   if (np < 0) return np;
   for (int q = 0; q < np; ++q) {
-    pair_of(rod, S, S->pairs[2 * q], S->pairs[2 * q + 1], &P);
+    pair_of(V, S->pairs[2 * q], S->pairs[2 * q + 1], &P);
     pair_args(&P, y, &W);
     W.res[0] = Q;
     if (rod_contact_pair(W.arg, W.res, W.iw, W.w, 0)) return -3;
@@ -223,21 +287,39 @@ int kvrod_self_residual(const kvrod_rod* rod, const double* y, double* res) {
   return 0;
 }
 
-int kvrod_self_jacobian(const kvrod_rod* rod, const double* y, double cy, int ldab,
-                        double* ab, int col0, int s0, int s1) {
-  const kvrod_self* S = rod->contact->self;
-  const int kl = rod->kl, ku = rod->ku;
+int kvrod_self_residual(const kvrod_rod* rod, const double* y, double* res) {
+  sview V;
+  view_of_rod(rod, &V);
+  return pairs_residual(&V, y, res);
+}
+
+int kvsys_pairs_residual(const kvrod_self* S, const double* y, double* res) {
+  sview V;
+  view_of_system(S, &V);
+  return pairs_residual(&V, y, res);
+}
+
+/* where the entries within each segment go: per segment (0: i, 1: j) of a pair, its
+   rod's band storage ab (columns from col0, state indices from o: an entry (row, col)
+   of the view's state is (row - o, col - o) of the band), or NULL: not written */
+typedef struct {
+  double* ab[2];
+  int ldab[2], col0[2], o[2], kl[2], ku[2];
+} bands;
+
+static int pairs_band(const sview* V, const double* y, double cy,
+                      int (*dest)(const sview*, const cpair*, void*, bands*), void* ctx) {
+  const kvrod_self* S = V->S;
   pwork W;
   cpair P;
+  bands B;
   double J[NPAIRQ * NPAIRJ];
   int rows[NPAIRQ], cols[NPAIRJ], owner[NPAIRJ];
-  const int np = find_pairs(rod, y, &W);
+  const int np = find_pairs(V, y, &W);
   if (np < 0) return np;
   for (int q = 0; q < np; ++q) {
-    const int i = S->pairs[2 * q], j = S->pairs[2 * q + 1];
-    const int in_i = i >= s0 && i <= s1, in_j = j >= s0 && j <= s1;
-    if (!in_i && !in_j) continue;
-    pair_of(rod, S, i, j, &P);
+    pair_of(V, S->pairs[2 * q], S->pairs[2 * q + 1], &P);
+    if (!dest(V, &P, ctx, &B)) continue;
     pair_args(&P, y, &W);
     W.res[0] = J;
     if (rod_contact_pair_jac(W.arg, W.res, W.iw, W.w, 0)) return -3;
@@ -246,18 +328,75 @@ int kvrod_self_jacobian(const kvrod_rod* rod, const double* y, double cy, int ld
     /* within segment i (rows 0..8, its columns) and within segment j (rows 9..17) */
     for (int c = 0; c < NPAIRJ; ++c) {
       const int o = owner[c];
-      if (o ? !in_j : !in_i) continue;
-      const int cc = cols[c];
-      double* col = ab + (size_t)(cc - col0) * (size_t)ldab + (size_t)(kl + ku - cc);
+      if (!B.ab[o]) continue;
+      const int cc = cols[c] - B.o[o];
+      double* col = B.ab[o] + (size_t)(cc - B.col0[o]) * (size_t)B.ldab[o]
+                    + (size_t)(B.kl[o] + B.ku[o] - cc);
       for (int r = 9 * o; r < 9 * o + 9; ++r)
-        if (rows[r] >= 0) col[rows[r]] -= cy * J[r + NPAIRQ * c];
+        if (rows[r] >= 0) col[rows[r] - B.o[o]] -= cy * J[r + NPAIRQ * c];
     }
   }
   return 0;
 }
 
-int kvrod_self_couplings(const kvrod_rod* rod, const double* y) {
-  kvrod_self* S = rod->contact->self;
+/* a single rod's band (cells s0..s1 in ab from column col0) */
+typedef struct {
+  double* ab;
+  int ldab, col0, s0, s1;
+} rod_band;
+
+static int rod_dest(const sview* V, const cpair* P, void* ctx, bands* B) {
+  const rod_band* R = (const rod_band*)ctx;
+  const kvrod_rod* rod = V->rods[0];
+  const int seg[2] = {P->i, P->j};
+  int any = 0;
+  for (int q = 0; q < 2; ++q) {
+    const int in = seg[q] >= R->s0 && seg[q] <= R->s1;
+    B->ab[q] = in ? R->ab : NULL;
+    B->ldab[q] = R->ldab; B->col0[q] = R->col0; B->o[q] = 0;
+    B->kl[q] = rod->kl; B->ku[q] = rod->ku;
+    any |= in;
+  }
+  return any;
+}
+
+int kvrod_self_jacobian(const kvrod_rod* rod, const double* y, double cy, int ldab,
+                        double* ab, int col0, int s0, int s1) {
+  sview V;
+  view_of_rod(rod, &V);
+  rod_band R = {ab, ldab, col0, s0, s1};
+  return pairs_band(&V, y, cy, rod_dest, &R);
+}
+
+/* an assembly: each segment's rod's band in the system's Jacobian buffer */
+static int sys_dest(const sview* V, const cpair* P, void* ctx, bands* B) {
+  (void) ctx;
+  const kvrod_self* S = V->S;
+  for (int q = 0; q < 2; ++q) {
+    const int r = P->rod[q];
+    B->ab[q] = S->J + S->ab_start[r];
+    B->ldab[q] = S->ldabs[r]; B->col0[q] = 0; B->o[q] = V->off[r];
+    B->kl[q] = V->rods[r]->kl; B->ku[q] = V->rods[r]->ku;
+  }
+  return 1;
+}
+
+int kvsys_pairs_jacobian(const kvrod_self* S, const double* y) {
+  sview V;
+  view_of_system(S, &V);
+  return pairs_band(&V, y, 1.0, sys_dest, NULL);
+}
+
+/* the pair's rows in the couplings: pair_rows through S->rowmap */
+static void coupling_rows(const kvrod_self* S, const cpair* P, int* rows) {
+  pair_rows(P, rows);
+  if (!S->rowmap) return;
+  for (int r = 0; r < NPAIRQ; ++r)
+    if (rows[r] >= 0) rows[r] = S->rowmap[rows[r]];
+}
+
+static int pairs_couplings(const sview* V, const double* y) {
+  kvrod_self* S = (kvrod_self*)V->S;
   pwork W;
   cpair P;
   double J[NPAIRQ * NPAIRJ];
@@ -266,14 +405,14 @@ int kvrod_self_couplings(const kvrod_rod* rod, const double* y) {
   S->er2[0] = 0;
   S->dropped = 0;
   if (S->m2cap <= 0) return 0;
-  const int np = find_pairs(rod, y, &W);
+  const int np = find_pairs(V, y, &W);
   if (np < 0) return np;
   /* pass 1: the rows (merged by global row) and their entry counts, pairs taken in order
      while both fit */
   int m = 0, nz = 0, last = np;
   for (int q = 0; q < np; ++q) {
-    pair_of(rod, S, S->pairs[2 * q], S->pairs[2 * q + 1], &P);
-    pair_rows(&P, rows);
+    pair_of(V, S->pairs[2 * q], S->pairs[2 * q + 1], &P);
+    coupling_rows(S, &P, rows);
     int newrows = 0;
     for (int r = 0; r < NPAIRQ; ++r)
       if (rows[r] >= 0 && S->rowslot[rows[r]] < 0) ++newrows;
@@ -303,14 +442,14 @@ int kvrod_self_couplings(const kvrod_rod* rod, const double* y) {
   }
   /* pass 2: the entries */
   for (int q = 0; q < last; ++q) {
-    pair_of(rod, S, S->pairs[2 * q], S->pairs[2 * q + 1], &P);
+    pair_of(V, S->pairs[2 * q], S->pairs[2 * q + 1], &P);
     pair_args(&P, y, &W);
     W.res[0] = J;
     if (rod_contact_pair_jac(W.arg, W.res, W.iw, W.w, 0)) {
       for (int t = 0; t < m; ++t) S->rowslot[S->srow2[t]] = -1;
       return -3;
     }
-    pair_rows(&P, rows);
+    coupling_rows(S, &P, rows);
     pair_cols(&P, cols, owner);
     for (int r = 0; r < NPAIRQ; ++r) {
       if (rows[r] < 0) continue;
@@ -329,17 +468,29 @@ int kvrod_self_couplings(const kvrod_rod* rod, const double* y) {
   return 0;
 }
 
-int kvrod_self_values(const kvrod_rod* rod, const double* y, double* v) {
-  const kvrod_self* S = rod->contact->self;
+int kvrod_self_couplings(const kvrod_rod* rod, const double* y) {
+  sview V;
+  view_of_rod(rod, &V);
+  return pairs_couplings(&V, y);
+}
+
+int kvsys_pairs_couplings(kvrod_self* S, const double* y) {
+  sview V;
+  view_of_system(S, &V);
+  return pairs_couplings(&V, y);
+}
+
+static int pairs_values(const sview* V, const double* y, double* v) {
+  const kvrod_self* S = V->S;
   pwork W;
   cpair P;
   double E, Pd, g, Pf, st[2], Wc, F[3];
   memset(v, 0, sizeof(double) * NSV);
   v[3] = HUGE_VAL;
-  const int np = find_pairs(rod, y, &W);
+  const int np = find_pairs(V, y, &W);
   if (np < 0) return np;
   for (int q = 0; q < np; ++q) {
-    pair_of(rod, S, S->pairs[2 * q], S->pairs[2 * q + 1], &P);
+    pair_of(V, S->pairs[2 * q], S->pairs[2 * q + 1], &P);
     pair_args(&P, y, &W);
     W.res[0] = &E; W.res[1] = &Pd; W.res[2] = &g; W.res[3] = &Pf;
     W.res[4] = st; W.res[5] = &Wc; W.res[6] = F;
@@ -349,4 +500,16 @@ int kvrod_self_values(const kvrod_rod* rod, const double* y, double* v) {
   }
   v[4] = np;
   return 0;
+}
+
+int kvrod_self_values(const kvrod_rod* rod, const double* y, double* v) {
+  sview V;
+  view_of_rod(rod, &V);
+  return pairs_values(&V, y, v);
+}
+
+int kvsys_pairs_values(const kvrod_self* S, const double* y, double* v) {
+  sview V;
+  view_of_system(S, &V);
+  return pairs_values(&V, y, v);
 }

@@ -79,7 +79,7 @@ static int free_residual(const kvsys* s, double t, const double* y, const double
     for (int q = 0; q < BODY_NR; ++q)
       if (row[q] >= 0) res[row[q]] += rb[q];
   }
-  return 0;
+  return s->pairs ? s->pair_residual(s->pairs, y, res) : 0;
 }
 
 int kvsys_residual(const kvsys* s, double t, const double* y, const double* yp,
@@ -166,6 +166,7 @@ int kvsys_jacobian(const kvsys* s, double t, const double* y, const double* yp, 
         if (d >= 0) s->J[d] += JB[q + x * BODY_NR];
       }
   }
+  if (s->pairs && s->pair_jacobian(s->pairs, y)) return -3;
   /* the holds: the slaves' momentum rows into their masters', then the held rows */
   for (int q = 0; q < s->ncopy; ++q) s->J[s->copy_dst[q]] += s->J[s->copy_src[q]];
   for (int q = 0; q < s->nzero; ++q) s->J[s->zero[q]] = 0.0;
@@ -178,7 +179,7 @@ int kvsys_jacobian(const kvsys* s, double t, const double* y, const double* yp, 
     if (H[2] >= 0)
       for (int q = 0; q < 6; ++q) s->J[s->hold_e[6 * h + q]] = -1.0;
   }
-  return 0;
+  return s->pairs && s->pair_couplings(s->pairs, y) ? -3 : 0;
 }
 
 /* link k's forces Q (18) and its diagnostics (W, D, e 6, resultant 6: 14 values) */
@@ -247,6 +248,12 @@ int kvsys_energies(const kvsys* s, int m, const double* ts, const double* ys,
       if (rod_body_kinetic(W.arg, W.res, W.iw, W.w, 0)) return -3;
       o[0] += T[0];
       o[3] += T[1];
+    }
+    if (s->pairs) {
+      double pv[NSV];
+      if (s->pair_values(s->pairs, y, pv)) return -3;
+      o[1] += pv[0];
+      o[2] += pv[1];
     }
     if (m != 1) continue;
     if (s->nhold) {
