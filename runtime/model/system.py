@@ -35,7 +35,7 @@ import numpy as np
 from generated import rod_layout as L
 from runtime.errors import GeneratedCodeError
 from runtime.model import build
-from runtime.model.contact import SelfContactArrays
+from runtime.model.contact import SELF_VALUE_NAMES, SelfContactArrays
 from runtime.model.rod import SELF_COUPLING_DOUBLES, SELF_COUPLING_ENTRIES_PER_ROW, RodModel
 
 
@@ -618,6 +618,12 @@ class SystemModel:
 
     def set_directions(self, directions) -> None:
         """Give the assembly (and its rods) its parameters' directions (None: none)."""
+        if directions is not None and self.pairs is not None:
+            from runtime.errors import ParameterError
+
+            raise ParameterError("contact.self", True, "false for sensitivities: the "
+                                 "contact between an assembly's rods has no parameter "
+                                 "derivatives in this version")
         self._sdirs = directions
         self._csys_sens = None
         if directions is not None:
@@ -784,6 +790,24 @@ class SystemModel:
                        ) -> tuple[float, float, float, float, float]:
         """(T, W, 2D, P_ext, P_bc) of a state (J, J, W, W, W)."""
         return tuple(float(v) for v in self.energy_values(t, y, yp)[:5])
+
+    def pair_contact_values(self, t: float, y: np.ndarray) -> dict[str, float]:
+        """The contact between the rods (``contact.self``): energy (J), dissipated power
+        (W) and its friction part, the smallest gap between paired segments' surfaces (m;
+        inf: no pair in reach) and the number of pairs in reach
+        (``contact.SELF_VALUE_NAMES``)."""
+        if self.pairs is None:
+            raise ValueError("the assembly has no contact between its rods "
+                             "(contact.self = false)")
+        self._ptr()                  # the pairs attached to the system
+        self.at(t)
+        out = np.zeros(len(SELF_VALUE_NAMES))
+        y = np.ascontiguousarray(y, dtype=float)
+        rc = self._plib.kvsys_pairs_values(self.pairs.struct_address, y.ctypes.data,
+                                           out.ctypes.data)
+        if rc:
+            raise RuntimeError(f"kvsys_pairs_values failed ({rc})")
+        return dict(zip(SELF_VALUE_NAMES, out.tolist(), strict=True))
 
     @property
     def reaction_names(self) -> tuple[str, ...]:

@@ -4,7 +4,7 @@ plus the pairs' couplings) against central differences of the residual, the coup
 block's solve against a dense one, the broad phase against a brute-force search written
 here, pairs near along the rod never paired, a closing coil held apart in a simulation
 (with the energy audit) where without self-contact its turns pass through each other,
-statics with self-contact, and the refusal of contact between the rods of an assembly."""
+statics with self-contact (an assembly's rods: tests/runtime/test_rod_rod_contact.py)."""
 
 from __future__ import annotations
 
@@ -279,20 +279,6 @@ def test_statics_with_self_contact_uses_the_sparse_jacobian():
             Jfd[:, k] = (r1 - r0) / 2e-7
     scale = np.abs(J).max()
     assert np.abs(J - Jfd).max() < 1e-5 * scale
-
-
-def test_contact_between_the_rods_of_an_assembly_is_refused():
-    from runtime.problem.assemble_system import build_system
-    from runtime.problem.assembly import Assembly
-    from tests.runtime.test_assembly_problem import _base as assembly
-
-    m = assembly()
-    m["contact"] = {"radius": {"a": 0.008}, "self": True}
-    a = Assembly.from_mapping(m)                      # the format takes it
-    with pytest.raises(ParameterError) as exc:
-        build_system(a)
-    assert exc.value.name == "contact.self" and "\n" not in str(exc.value)
-    assert "not available" in str(exc.value)
 
 
 def test_the_plectoneme_example_holds_its_strands_apart():
