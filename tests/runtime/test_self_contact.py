@@ -11,9 +11,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pytest
 
-from runtime.errors import ParameterError
 from runtime.problem.assemble import build_model
 from runtime.problem.schema import Problem
 
