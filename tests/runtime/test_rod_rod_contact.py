@@ -205,9 +205,9 @@ def crossing_reference(doc: dict, a: float = 0.5) -> dict[str, float]:
 
 def test_the_crossing_example_against_linear_cantilevers():
     """examples/contact_crossing.toml (kvrod static): the contact force and the
-    crossing points' deflections within 2 % of linear beam theory (its slope 0.05 makes
-    it good to ~1e-3; shear ~1e-4; the law's compliance: the penetration delta, ~1e-3
-    of the 2 mm closed)."""
+    crossing points' deflections within 1 % of linear beam theory (its slope 0.05 makes
+    it good to ~1e-3; shear ~1e-4; the law's compliance, about delta, ~1e-3 of the 2 mm
+    closed; measured 1.5e-4 to 3.8e-4)."""
     import tomllib
 
     from runtime.problem.registry import EXAMPLES_DIR
@@ -231,12 +231,12 @@ def test_the_crossing_example_against_linear_cantilevers():
     thick, thin = model.names.index("thick"), model.names.index("thin")
     f = -(r_on - r_off)                                  # the force on each node
     P = -f[model.v_index[thick]][:, 2].sum()
-    assert P == pytest.approx(ref["P"], rel=0.02)
+    assert P == pytest.approx(ref["P"], rel=0.01)
     assert f[model.v_index[thin]][:, 2].sum() == pytest.approx(P, rel=1e-9)
     for name, k in (("thin", thin), ("thick", thick)):
         node = int(round(0.5 / p.rods[name].rod.length * p.rods[name].rod.elements))
         dz = y[model.phi_index[k][node, 2]] - model.reference[model.phi_index[k][node, 2]]
-        assert -dz == pytest.approx(ref[name], rel=0.02), name
+        assert -dz == pytest.approx(ref[name], rel=0.01), name
 
 
 # -- a rod dropped onto another --------------------------------------------------------------
