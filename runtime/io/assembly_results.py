@@ -7,7 +7,10 @@ positions (m) and ``NAME/centreline`` (m, 3, N+1) node positions at ``centreline
 N m: what the joint exerts on the rod of its first point, spatial, about that point), per
 body (file order) ``body{k}/centreline`` (m, 3) its mass centre at ``centreline_t``, the
 energies ``kinetic``, ``elastic``, ``dissipated``, ``external_work`` (J) and
-``energy_balance_rel``, ``peaks_t``/``peaks_x``, ``y_static``, ``y_last``.
+``energy_balance_rel``, ``peaks_t``/``peaks_x``, ``y_static``, ``y_last``; with
+``contact.self`` the pairs between and within the rods: ``self_contact_energy`` (J),
+``_dissipation``, ``_friction_dissipation`` (W), ``_gap_min`` (m; inf: no pair),
+``_pairs`` and ``_force`` (N: the sum of the pairs' force magnitudes), (n,).
 static.npz (statics): ``y``, per rod ``NAME/positions`` (3, N+1), ``NAME/frames``
 (N, 3, 3), ``NAME/reference`` (3, N+1), per joint ``joint{k}/force``, ``joint{k}/moment``
 (3,). summary.json has, at its top level, ``"joints"``: a list in file order with each
@@ -53,6 +56,8 @@ def write_assembly_run(out_dir: Path, res, extra: dict | None = None) -> dict:
     for k, j in enumerate(res.joint_series() if res.t.size else []):
         arrays[f"joint{k}/force"] = j["force"]
         arrays[f"joint{k}/moment"] = j["moment"]
+    for what, v in res.self_contact_series().items():
+        arrays[f"self_contact_{what}"] = v
     audit = res.audit()
     write_npz(out_dir / "series.npz", t=res.t, kinetic=res.kinetic, elastic=res.elastic,
               dissipated=res.dissipated, external_work=res.external_work,

@@ -44,7 +44,7 @@ STEP_FRACTION = 0.5
 
 #: values of the compiled ``kvrod_self_values`` (rod_contact.h, NSV)
 SELF_VALUE_NAMES: tuple[str, ...] = ("energy", "dissipation", "friction_dissipation",
-                                     "gap_min", "pairs")
+                                     "gap_min", "pairs", "force")
 #: segments i < j closer along the rod than ``SELF_NEAR (r_i + r_j)`` of reference arc
 #: length are never paired: a rod bent to its tightest (curvature 1/r) keeps stretches
 #: closer than pi r along it within 2 r of each other (docs/design.md, section 14)
@@ -66,7 +66,7 @@ class SelfStruct(ctypes.Structure):
                 ("nrod", ctypes.c_int), ("rods", ctypes.c_void_p), ("off", ctypes.c_void_p),
                 ("sg0", ctypes.c_void_p), ("rowmap", ctypes.c_void_p),
                 ("J", ctypes.c_void_p), ("ab_start", ctypes.c_void_p),
-                ("ldabs", ctypes.c_void_p)]
+                ("ldabs", ctypes.c_void_p), ("last", ctypes.c_void_p)]
 
 
 class ContactStruct(ctypes.Structure):
@@ -122,6 +122,9 @@ class SelfContactArrays:
         s.seg, s.s0, s.near = self.seg.ctypes.data, self.s0.ctypes.data, self.near
         s.key, s.pairs = self._key.ctypes.data, self._pairs.ctypes.data
         s.paircap = SELF_PAIRS_PER_SEGMENT * N
+        #: the values of the last energies of a single rod (kvrod_energies_contact's)
+        self._last = np.zeros(len(SELF_VALUE_NAMES))
+        s.last = self._last.ctypes.data
         self.blocks = None
 
     @property

@@ -199,7 +199,8 @@ class SystemModel:
         self._static = False
         self._load_scale = 1.0
         self._t = math.nan
-        self.nextra = 12 * len(self.rods) + 3 * len(self.holds) + 6 * len(self.links)
+        self.nextra = (12 * len(self.rods) + 3 * len(self.holds) + 6 * len(self.links)
+                       + (0 if pairs is None else len(SELF_VALUE_NAMES)))
         self._sdirs = None            # parameter directions (runtime/model/system_sensitivity)
         self._csys_sens = None
         self.at(0.0)
@@ -769,7 +770,8 @@ class SystemModel:
     def energy_values(self, t: float, y: np.ndarray, yp: np.ndarray | None = None
                       ) -> np.ndarray:
         """The values of one state: T, W, 2D, P_ext, P_bc, then the extras (the rods'
-        supports, the holds' free rows, the links' force and moment on side a)."""
+        supports, the holds' free rows, the links' force and moment on side a, the pairs'
+        values with ``contact.self``)."""
         p = self._ptr()
         self.at(t)
         yp = self._zeros if yp is None else yp
@@ -819,6 +821,8 @@ class SystemModel:
             out += [f"hold{i}_force_{c}" for c in "xyz"]
         for i in range(len(self.links)):
             out += [f"link{i}_{w}_{c}" for w in ("force", "moment") for c in "xyz"]
+        if self.pairs is not None:
+            out += [f"self_contact_{v}" for v in SELF_VALUE_NAMES]
         return tuple(out)
 
     def energy_floor(self) -> float:
@@ -837,6 +841,8 @@ class SystemModel:
         for i in range(len(self.links)):
             out[f"link:{i}"] = slice(k, k + 6)
             k += 6
+        if self.pairs is not None:
+            out["self_contact"] = slice(k, k + len(SELF_VALUE_NAMES))
         return out
 
     def c_kernels(self):

@@ -33,7 +33,12 @@ from runtime.simulate.observers import (
     Sampler,
     Snapshots,
 )
-from runtime.simulate.simulate import ATOL_FLOOR, ATOL_FRACTION, ErrorControl
+from runtime.simulate.simulate import (
+    ATOL_FLOOR,
+    ATOL_FRACTION,
+    ErrorControl,
+    self_contact_summary,
+)
 from runtime.simulate.vibration_centre import VibrationCentre, inputs_constant
 from runtime.solvers.driver import run_loop
 from runtime.solvers.initial import consistent_initial
@@ -101,9 +106,23 @@ class AssemblyResult:
         of its first point (N, N m about that point, spatial)."""
         return joint_forces(self.amap, self.extras)
 
+    def self_contact_series(self) -> dict[str, np.ndarray]:
+        """With ``contact.self``: the pairs' values (n,) on the output grid
+        (``runtime.model.contact.SELF_VALUE_NAMES``: energy, dissipation, its friction
+        part, smallest gap, pairs in reach, the sum of their forces' magnitudes); empty
+        without."""
+        from runtime.model.contact import SELF_VALUE_NAMES
+
+        lay = None if self.model is None else self.model.extras_layout()
+        if lay is None or "self_contact" not in lay or self.extras.ndim != 2:
+            return {}
+        s = lay["self_contact"]
+        block = self.extras[s.start - 5:s.stop - 5]
+        return dict(zip(SELF_VALUE_NAMES, block, strict=True))
+
     def summary(self) -> dict:
         """JSON-ready summary: status, static result, maxima and decrements, energy audit,
-        joints, bodies, warnings, counters."""
+        joints, bodies, contact between the rods, warnings, counters."""
         p = self.problem
         warnings: list[str] = []
         pk: dict = {"peaks": [{"t": float(a), "x": float(b)}
@@ -167,6 +186,8 @@ class AssemblyResult:
                              "scale_J": audit.scale, "note": audit.reason},
             "joints": joints,
             "bodies": bodies,
+            **({"self_contact": self_contact_summary(self.t, sc)}
+               if (sc := self.self_contact_series()) else {}),
             "ends": {k: [float(x) for x in v[:, -1]] for k, v in self.ends.items()
                      if v.shape[1]},
             "warnings": warnings,

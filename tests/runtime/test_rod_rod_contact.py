@@ -240,7 +240,7 @@ def test_the_crossing_example_against_linear_cantilevers():
 
 
 # -- a rod dropped onto another --------------------------------------------------------------
-def test_a_rod_dropped_onto_another_is_held_above_it_and_the_audit_closes():
+def test_a_rod_dropped_onto_another_is_held_above_it_and_the_audit_closes(tmp_path):
     """A free rod falls 2 mm onto a rod clamped at both ends across it: it never sinks
     into it by more than a tenth of the radius, ends resting on it (its centreline 2 r
     above the other's at the crossing, within the law's compliance) and the energy audit
@@ -266,6 +266,20 @@ def test_a_rod_dropped_onto_another_is_held_above_it_and_the_audit_closes():
     z_drop = y[model.phi_index[drop][4, 2]]
     z_beam = y[model.phi_index[beam][4, 2]]
     assert z_drop - z_beam == pytest.approx(2 * R, abs=0.05 * R)
+    # the pairs' values on the output grid: series.npz and summary.json
+    from runtime.io.assembly_results import write_assembly_run
+
+    summary = write_assembly_run(tmp_path, res)
+    with np.load(tmp_path / "series.npz") as z:
+        force, gap = z["self_contact_force"], z["self_contact_gap_min"]
+        assert force.shape == z["t"].shape == (51,)
+    assert force[0] == pytest.approx(0.0, abs=1e-12) and force.max() > 0.0
+    assert np.all(gap >= min(gaps))                      # the output grid is coarser
+    sc = summary["self_contact"]
+    assert sc["gap_min"]["value"] == pytest.approx(gap.min())
+    assert 0.02 < sc["gap_min"]["t"] < 0.25 and sc["pairs_max"] >= 1
+    weight = 1100.0 * math.pi * R**2 * 0.2 * 9.81         # the impact exceeds it
+    assert sc["force"]["max"] > weight and sc["force"]["final"] > 0.0
     m_off = dict(m)
     del m_off["contact"]
     m_off["simulation"] = {**m["simulation"], "t_end": 0.1}

@@ -239,7 +239,7 @@ def test_a_closing_coil_is_held_apart_and_audited():
         res = simulate(p, snapshot_every=0.005,
                        snapshot_sink=lambda t, y, yp, s=snaps: s.append(y.copy()))
         assert res.status == "finished", res.message
-        states[on] = (build_model(p), snaps, res.summary())
+        states[on] = (build_model(p), snaps, res.summary(), res.self_contact)
     r = 0.002
     passed = _worst_gap(states[False][0], states[False][1], r)
     assert passed < -r                    # without self-contact the turns pass through
@@ -251,6 +251,15 @@ def test_a_closing_coil_is_held_apart_and_audited():
     assert -0.05 * r < held < 0.1 * r
     assert _worst_gap(states[True][0], states[True][1], r) > -0.25 * r
     assert states[True][2]["energy_balance_max_rel"] < 1e-4
+    # the pairs' values on the output grid (series.npz) and in the summary
+    series, summary = states[True][3], states[True][2]["self_contact"]
+    assert set(series) == {"energy", "dissipation", "friction_dissipation", "gap_min",
+                           "pairs", "force"}
+    assert all(v.shape == (16,) for v in series.values())      # t = 0, 0.01, ... 0.15
+    assert -0.25 * r < summary["gap_min"]["value"] < 0.1 * r
+    assert summary["pairs_max"] > 0 and summary["force"]["max"] > 0.0
+    assert np.all(series["energy"] >= 0.0) and np.all(series["dissipation"] >= 0.0)
+    assert not states[False][3] and "self_contact" not in states[False][2]
 
 
 def test_statics_with_self_contact_uses_the_sparse_jacobian():

@@ -1052,12 +1052,16 @@ int kvrod_energies_contact(const kvrod_rod* rod, int m, const double* ts, const 
   if (check_rod(rod)) return check_rod(rod);
   const size_t n = (size_t) kvrod_n_state(rod->N, rod->nb);
   const int nobs = has_contact(rod) ? rod->contact->nobs : 0;
-  const size_t stride = (size_t)NDIAG + (size_t)NCV * (size_t)nobs;
+  const kvrod_self* S = has_contact(rod) ? rod->contact->self : NULL;
+  if (S && !S->last) return -4;
+  const size_t stride = (size_t)NDIAG + (size_t)NCV * (size_t)nobs + (S ? NSV : 0);
   for (int k = 0; k < m; ++k) {
     double* o = out + (size_t)k * stride;
     const int rc = kvrod_energies(rod, 1, ts + k, ys + (size_t)k * n, yps + (size_t)k * n, o);
     if (rc) return rc;
     if (nobs && rod->contact->values(rod, ys + (size_t)k * n, o + NDIAG)) return -3;
+    /* the pairs' values kvrod_energies just computed (kvrod_contact_energies keeps them) */
+    if (S) memcpy(o + NDIAG + (size_t)NCV * (size_t)nobs, S->last, sizeof(double) * NSV);
   }
   return 0;
 }

@@ -278,6 +278,7 @@ int kvrod_contact_energies(const kvrod_rod* rod, const double* y, double* e) {
     if (rc) return rc;
     e[1] += sv[0];
     e[2] += sv[1];
+    if (rod->contact->self->last) memcpy(rod->contact->self->last, sv, sizeof sv);
   }
   return support_forces(rod, y, &W, e);
 }

@@ -76,6 +76,8 @@ typedef struct {
   double* J;
   const long long* ab_start;
   const int* ldabs;
+  double* last;          /* NSV: the values of the last kvrod_contact_energies (a single
+                            rod's: kvrod_energies_contact's outputs; NULL: not kept) */
 } kvrod_self;
 
 struct kvrod_contact_s {
@@ -131,8 +133,10 @@ int kvrod_self_residual(const kvrod_rod* rod, const double* y, double* res);
 int kvrod_self_jacobian(const kvrod_rod* rod, const double* y, double cy, int ldab,
                         double* ab, int col0, int s0, int s1);
 /* self-contact energies: e[1] += E, e[2] += P_diss over the pairs in reach; v (NSV) the
-   pairs' values (rod_self_contact.c) */
-#define NSV 5
+   pairs' values (rod_self_contact.c): E (J), P_diss (W), its friction part P_fric (W),
+   the smallest gap (m; HUGE_VAL: no pair), the number of pairs in reach, the sum of the
+   magnitudes of the pairs' forces |F_12| (N) */
+#define NSV 6
 int kvrod_self_values(const kvrod_rod* rod, const double* y, double* v);
 /* the contact between the rods of an assembly (kvrod_self with nrod > 0; y and res the
    system's state and residual): the forces into res before the system's holds act on
@@ -150,7 +154,8 @@ int kvsys_pairs_values(const kvrod_self* S, const double* y, double* v);
 int kvrod_jacobian_system(const void* ctx, double t, const double* y, const double* yp,
                           double cj, void* blocks);
 /* (rod library, rod_assembly.c) kvrod_energies with the per obstacle values after each
-   state's NDIAG scalars (stride NDIAG + NCV nobs) */
+   state's NDIAG scalars, then with self-contact the pairs' NSV values (stride NDIAG +
+   NCV nobs (+ NSV)) */
 int kvrod_energies_contact(const kvrod_rod* rod, int m, const double* ts, const double* ys,
                            const double* yps, double* out);
 

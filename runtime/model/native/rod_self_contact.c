@@ -497,6 +497,7 @@ static int pairs_values(const sview* V, const double* y, double* v) {
     if (rod_contact_pair_diagnostics(W.arg, W.res, W.iw, W.w, 0)) return -3;
     v[0] += E; v[1] += Pd; v[2] += Pf;
     if (g < v[3]) v[3] = g;
+    v[5] += sqrt(F[0] * F[0] + F[1] * F[1] + F[2] * F[2]);
   }
   v[4] = np;
   return 0;
