@@ -425,10 +425,12 @@ class SystemModel:
         if self.pairs is not None:
             # the pairs' entries between two segments: dynamic couplings, at most every
             # momentum row of every rod within SELF_COUPLING_DOUBLES of Z (as a single
-            # rod's self-contact; pairs beyond stay in the residual only)
+            # rod's self-contact) and of the capacitance matrix (m + rows)^2 (many small
+            # rods: Z is small, C is not); pairs beyond stay in the residual only
             biggest = max(r.n for r in rods)
             rows = min(sum(6 * r.N + 3 for r in rods),
-                       max(SELF_COUPLING_DOUBLES // max(biggest, 1), 36))
+                       max(SELF_COUPLING_DOUBLES // max(biggest, 1), 36),
+                       max(math.isqrt(SELF_COUPLING_DOUBLES) - len(coupling), 36))
             entries = rows * SELF_COUPLING_ENTRIES_PER_ROW
         cb = self._blocks = CoupledBlocks(blocks, {r: sorted(c) for r, c in coupling.items()},
                                           dynamic_rows=rows, dynamic_entries=entries)
@@ -821,7 +823,7 @@ class SystemModel:
             out += [f"hold{i}_force_{c}" for c in "xyz"]
         for i in range(len(self.links)):
             out += [f"link{i}_{w}_{c}" for w in ("force", "moment") for c in "xyz"]
-        if self.pairs is not None:
+        if self.pairs is not None:                # the last extras (kvsys_energies)
             out += [f"self_contact_{v}" for v in SELF_VALUE_NAMES]
         return tuple(out)
 
@@ -841,8 +843,9 @@ class SystemModel:
         for i in range(len(self.links)):
             out[f"link:{i}"] = slice(k, k + 6)
             k += 6
-        if self.pairs is not None:
-            out["self_contact"] = slice(k, k + len(SELF_VALUE_NAMES))
+        if self.pairs is not None:                # the last extras (kvsys_energies)
+            out["self_contact"] = slice(5 + self.nextra - len(SELF_VALUE_NAMES),
+                                        5 + self.nextra)
         return out
 
     def c_kernels(self):

@@ -398,13 +398,18 @@ def _obstacle_series(model: RodModel, extras: np.ndarray) -> list[dict[str, np.n
     from runtime.model.contact import N_VALUES, VALUE_NAMES
 
     out = []
-    for k in range(0 if model.contact is None else model.contact.n_obstacles):
+    for k in range(len(model.contact_value_names()) // N_VALUES):
         block = extras[k * N_VALUES:(k + 1) * N_VALUES]
         d = {"force": block[0:3], "moment": block[3:6]}
         d.update({name: block[j] for j, name in enumerate(VALUE_NAMES) if j >= 6})
         d["power"] = d.pop("obstacle_power")
         out.append(d)
     return out
+
+
+def _reference_value(res: SimulationResult, which: str) -> float:
+    ix = _maxima_indices(res.model, which)[0]
+    return float(res.model.reference[ix])
 
 
 def _self_contact_series(model: RodModel, extras: np.ndarray) -> dict[str, np.ndarray]:
@@ -435,11 +440,6 @@ def self_contact_summary(t: np.ndarray, v: dict[str, np.ndarray]) -> dict:
     out["gap_min"] = ({"value": float(g[j]), "t": float(t[j])} if np.isfinite(g[j])
                       else None)
     return out
-
-
-def _reference_value(res: SimulationResult, which: str) -> float:
-    ix = _maxima_indices(res.model, which)[0]
-    return float(res.model.reference[ix])
 
 
 def reference_end_quaternions(model: RodModel) -> dict[str, np.ndarray]:

@@ -197,7 +197,7 @@ int kvsys_link_values(const kvsys* s, int k, const double* y, double* Q, double*
    energies only) the extras: every rod's 12 support values (kvrod_diagnostics), every
    hold's free momentum row (3: the force the support or the tie exerts on that node's
    rod, inertia included), every link's force on node a and moment on side a (6, spatial:
-   f_a and R(p_a1) T_a1 + R(p_a2) T_a2), then with pairs their NSV values
+   f_a and R(p_a1) T_a1 + R(p_a2) T_a2), with pairs their NSV values last
    (kvsys_pairs_values); NaN where not computed. */
 /* the step loop's kv_maxstep_fn of an assembly: the smallest of its rods' contact step
    bounds (kvrod_contact_max_step; HUGE_VAL when no rod touches anything) */
@@ -280,9 +280,9 @@ int kvsys_energies(const kvsys* s, int m, const double* ts, const double* ys,
       }
       for (int q = 0; q < 3; ++q) { o[x + 6 * l + q] = Q[q]; o[x + 6 * l + 3 + q] = M[q]; }
     }
-    x += 6 * s->nlink;
+    /* the pairs' values: the last NSV extras */
     if (s->pairs)
-      for (int q = 0; q < NSV; ++q) o[x + q] = pv[q];
+      for (int q = 0; q < NSV; ++q) o[nen - NSV + q] = pv[q];
   }
   return 0;
 }
