@@ -66,7 +66,8 @@ class SelfStruct(ctypes.Structure):
                 ("nrod", ctypes.c_int), ("rods", ctypes.c_void_p), ("off", ctypes.c_void_p),
                 ("sg0", ctypes.c_void_p), ("rowmap", ctypes.c_void_p),
                 ("J", ctypes.c_void_p), ("ab_start", ctypes.c_void_p),
-                ("ldabs", ctypes.c_void_p), ("last", ctypes.c_void_p)]
+                ("ldabs", ctypes.c_void_p), ("last", ctypes.c_void_p),
+                ("step_fraction", ctypes.c_double)]
 
 
 class ContactStruct(ctypes.Structure):
@@ -125,6 +126,8 @@ class SelfContactArrays:
         #: the values of the last energies of a single rod (kvrod_energies_contact's)
         self._last = np.zeros(len(SELF_VALUE_NAMES))
         s.last = self._last.ctypes.data
+        #: the step bound by the pairs' approach speed (kvrod_self.step_fraction; 0: none)
+        s.step_fraction = STEP_FRACTION
         self.blocks = None
 
     @property

@@ -104,7 +104,8 @@ class SysStruct(ctypes.Structure):
                 ("lconst", _P), ("ldst", _P), ("nbody", _I), ("bidx", _P), ("brow", _P),
                 ("bpar", _P), ("bdst", _P), ("gravity", _D * 3), ("nextra", _I),
                 ("scratch", _P), ("pairs", _P), ("pair_residual", _P),
-                ("pair_jacobian", _P), ("pair_couplings", _P), ("pair_values", _P)]
+                ("pair_jacobian", _P), ("pair_couplings", _P), ("pair_values", _P),
+                ("pair_max_step", _P)]
 
 
 #: the link kernel's inputs in order (name, size): its Jacobian's columns follow them
@@ -145,9 +146,11 @@ class SystemModel:
         self.pairs = pairs
         self._pair_scale = 1.0
         self._plib = None if pairs is None else build.load_contact_library()
-        #: the step bound of rods touching obstacles (BDF's state_max_step), None without
+        #: the step bound of rods touching obstacles and of the pairs (BDF's
+        #: state_max_step), None without contact
         self.state_max_step = (self._contact_max_step
-                               if any(r.contact is not None for r in self.rods) else None)
+                               if pairs is not None
+                               or any(r.contact is not None for r in self.rods) else None)
         self.names = list(names)
         self.holds, self.links, self.bodies = list(holds), list(links), list(bodies)
         self._gravity = gravity
@@ -521,6 +524,7 @@ class SystemModel:
             s.pair_jacobian = addr(self._plib.kvsys_pairs_jacobian)
             s.pair_couplings = addr(self._plib.kvsys_pairs_couplings)
             s.pair_values = addr(self._plib.kvsys_pairs_values)
+            s.pair_max_step = addr(self._plib.kvsys_pairs_max_step)
         self._struct = s
         self._t = math.nan
 
@@ -872,7 +876,8 @@ class SystemModel:
 
     def _contact_max_step(self, t: float, y: np.ndarray) -> float:
         """The largest next step (s) that moves no segment of any rod toward an obstacle
-        by more than its share of the gap (the rods' ``kvrod_contact_max_step``)."""
+        or another segment by more than its share of the gap (the rods'
+        ``kvrod_contact_max_step``, the pairs' ``kvsys_pairs_max_step``)."""
         self.at(t)
         y = np.ascontiguousarray(y, dtype=float)
         return float(self._lib.kvsys_max_step(self._ptr(), t, y.ctypes.data, None))

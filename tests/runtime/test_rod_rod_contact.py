@@ -287,3 +287,75 @@ def test_a_rod_dropped_onto_another_is_held_above_it_and_the_audit_closes(tmp_pa
     assert free.status == "finished", free.message
     yf = free.y_last
     assert yf[model.phi_index[drop][4, 2]] - yf[model.phi_index[beam][4, 2]] < 0.0
+
+
+# -- the step bound by the approach speed ---------------------------------------------------
+STEEL = {"density": 7850.0, "youngs_modulus": 2.1e11, "poisson_ratio": 0.3, "tau": 1e-4}
+
+
+def _fall(height: float, rtol: float | None = None) -> Assembly:
+    """A steel wire (2 mm radius) dropped from ``height`` (m, between the surfaces) across
+    one clamped at both ends, until 20 ms after the free fall's impact."""
+    r = 0.002
+    rods = {"beam": _rod((-0.1, 0.0, 0.0), (1, 0, 0), 0.2, 8, r=r, material=STEEL,
+                         start={"kind": "clamped"}, end={"kind": "clamped"}),
+            "drop": _rod((0.0, -0.1, 2 * r + height), (0, 1, 0), 0.2, 8, r=r,
+                         material=STEEL)}
+    sim = {"t_end": math.sqrt(2 * height / 9.81) + 0.02, "initial": "reference",
+           "output_step": 0.005}
+    if rtol is not None:
+        sim["rtol"] = rtol
+    return Assembly.from_mapping({"name": "fall", "rods": rods,
+                                  "loads": [{"kind": "gravity", "vector": [0, 0, -9.81]}],
+                                  "simulation": sim,
+                                  "contact": {"self": True, "restitution": 0.5}})
+
+
+def _lowest(p: Assembly, bound: bool) -> tuple[float, object]:
+    """The smallest height (m) of the dropped wire's middle node above the beam's over
+    the run (sampled every 0.5 ms), and the result."""
+    amap = build_system(p)
+    model = amap.model
+    if not bound:
+        model.pairs._struct.step_fraction = 0.0
+    dz = []
+    res = simulate_assembly(p, amap=amap, snapshot_every=5e-4, snapshot_sink=lambda t, y, yp:
+                            dz.append(y[model.phi_index[1][4, 2]]
+                                      - y[model.phi_index[0][4, 2]]))
+    assert res.status == "finished", res.message
+    return min(dz), res
+
+
+@pytest.mark.parametrize("height, rtol", [(0.3, None), (1.0, 1e-3), (3.0, 1e-3)])
+def test_a_wire_dropped_from_any_height_never_steps_through_another(height, rtol):
+    """Without the bound the free fall's steps carry the wire through the other one (its
+    BDF error is nil in free fall); with it the step closes at most half the gap."""
+    r = 0.002
+    low, res = _lowest(_fall(height, rtol), bound=True)
+    assert low > 1.9 * r                                  # 2 r: touching
+    assert res.audit().max_rel < 1e-3
+    if height == 0.3:
+        low, res = _lowest(_fall(height, rtol), bound=False)
+        assert low < -r
+
+
+def test_the_step_bound_of_a_single_rods_own_pairs():
+    """A single rod's self-contact bounds the step too (kvrod_contact_max_step): finite
+    while two turns of a coil approach each other, shorter the faster; none in a rigid
+    translation (nothing closes)."""
+    from runtime.problem.assemble import build_model
+    from runtime.problem.schema import Problem
+    from tests.runtime.test_self_contact import _helix
+
+    model = build_model(Problem.from_mapping(_helix(gap=5e-3)))
+    y = model.reference.copy()
+    z = y[model.phi_index][:, 2]
+    y[model.v_index] = 0.0
+    y[model.v_index[:, 2]] = np.where(z > np.median(z), -1.0, 0.0)  # the top turn falls
+    h1 = model.state_max_step(0.0, y)
+    y[model.v_index[:, 2]] *= 2.0
+    h2 = model.state_max_step(0.0, y)
+    assert 0.0 < h2 < h1 < math.inf
+    assert h2 == pytest.approx(h1 / 2, rel=0.2)
+    y[model.v_index] = [0.3, -0.2, 1.0]
+    assert model.state_max_step(0.0, y) > 1e6               # rounding of the mean only

@@ -78,6 +78,9 @@ typedef struct {
   const int* ldabs;
   double* last;          /* NSV: the values of the last kvrod_contact_energies (a single
                             rod's: kvrod_energies_contact's outputs; NULL: not kept) */
+  double step_fraction;  /* the step bound by the approach speed (as an obstacle's: a
+                            step closes at most this fraction of a pair's gap plus delta;
+                            0: none) */
 } kvrod_self;
 
 struct kvrod_contact_s {
@@ -147,6 +150,14 @@ int kvsys_pairs_residual(const kvrod_self* S, const double* y, double* res);
 int kvsys_pairs_jacobian(const kvrod_self* S, const double* y);
 int kvsys_pairs_couplings(kvrod_self* S, const double* y);
 int kvsys_pairs_values(const kvrod_self* S, const double* y, double* v);
+/* the largest step (s) that closes no pair's gap by more than S->step_fraction of it
+   plus delta at the nodes' current velocities, for pairs within a horizon D (twice the
+   longest segment, four largest radii and CONTACT_CUTOFF delta) found by the sweep;
+   pairs farther apart close at most twice the largest node speed about the mean
+   velocity, which bounds the step by step_fraction D / that (HUGE_VAL: no bound); a
+   single rod's (through kvrod_contact_max_step) and an assembly's */
+double kvrod_self_max_step(const kvrod_rod* rod, const double* y);
+double kvsys_pairs_max_step(const kvrod_self* S, const double* y);
 /* (rod library, rod_assembly.c) the Newton matrix of a rod with self-contact into its
    coupled band block: the band (kvrod_jacobian_band with cy = 1) and the couplings; the
    step loop's kv_sysjac_fn (ctx: the kvrod_rod; blocks unused: kvrod_self points into

@@ -514,3 +514,164 @@ int kvsys_pairs_values(const kvrod_self* S, const double* y, double* v) {
   view_of_system(S, &V);
   return pairs_values(&V, y, v);
 }
+
+static double clamp01(double x) { return x < 0.0 ? 0.0 : (x > 1.0 ? 1.0 : x); }
+
+/* the distance (m) between segments p1 q1 and p2 q2 (Ericson, Real-Time Collision
+   Detection, 5.1.9): the step bound's gap, exact where the pair kernel's bound (the
+   midpoints' distance minus the half lengths) lies up to a segment length below it */
+static double segment_distance(const double* p1, const double* q1, const double* p2,
+                               const double* q2) {
+  double d1[3], d2[3], r[3], a = 0.0, e = 0.0, f = 0.0, c = 0.0, b = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    d1[k] = q1[k] - p1[k]; d2[k] = q2[k] - p2[k]; r[k] = p1[k] - p2[k];
+    a += d1[k] * d1[k]; e += d2[k] * d2[k]; f += d2[k] * r[k];
+    c += d1[k] * r[k]; b += d1[k] * d2[k];
+  }
+  double s = 0.0, t = 0.0;
+  if (a > 0.0 && e > 0.0) {
+    const double den = a * e - b * b;
+    s = den > 0.0 ? clamp01((b * f - c * e) / den) : 0.0;
+    t = (b * s + f) / e;
+    if (t < 0.0) { t = 0.0; s = clamp01(-c / a); }
+    else if (t > 1.0) { t = 1.0; s = clamp01((b - c) / a); }
+  } else if (a > 0.0) {
+    s = clamp01(-c / a);
+  } else if (e > 0.0) {
+    t = clamp01(f / e);
+  }
+  double d2s = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    const double x = p1[k] + s * d1[k] - p2[k] - t * d2[k];
+    d2s += x * x;
+  }
+  return sqrt(d2s);
+}
+
+/* the pairs' step bound (rod_contact.h says what it bounds) */
+static double pairs_max_step(const sview* V, const double* y) {
+  const kvrod_self* S = V->S;
+  const double frac = S->step_fraction;
+  const int N = V->ntot;
+  if (!(frac > 0.0) || N < 2) return HUGE_VAL;
+  /* the nodes' velocities about their mean (every segment's two nodes) */
+  double mean[3] = {0, 0, 0}, umax = 0.0, hmax = 0.0, rmax = 0.0, dmax = 0.0;
+  for (int G = 1; G <= N; ++G)
+    for (int e = 0; e < 2; ++e) {
+      int s;
+      const int r = seg_rod(V, G, &s);
+      const double* v = y + V->off[r] + i_v(V->rods[r], s - 1 + e);
+      for (int k = 0; k < 3; ++k) mean[k] += v[k] / (2.0 * N);
+    }
+  for (int G = 1; G <= N; ++G) {
+    int s;
+    const int r = seg_rod(V, G, &s);
+    for (int e = 0; e < 2; ++e) {
+      const double* v = y + V->off[r] + i_v(V->rods[r], s - 1 + e);
+      double u2 = 0.0;
+      for (int k = 0; k < 3; ++k) u2 += (v[k] - mean[k]) * (v[k] - mean[k]);
+      if (u2 > umax * umax) umax = sqrt(u2);
+    }
+    const double* a = seg_node(V, G, 0, y);
+    const double* b = seg_node(V, G, 1, y);
+    double d2 = 0.0;
+    for (int k = 0; k < 3; ++k) d2 += (b[k] - a[k]) * (b[k] - a[k]);
+    const double* g = sseg(S, G);
+    if (sqrt(d2) > hmax) hmax = sqrt(d2);
+    if (g[CNT_R] > rmax) rmax = g[CNT_R];
+    if (g[CNT_DELTA] > dmax) dmax = g[CNT_DELTA];
+  }
+  if (!(umax > 0.0)) return HUGE_VAL;          /* a rigid translation: nothing closes */
+  const double D = 2.0 * hmax + 4.0 * rmax + CONTACT_CUTOFF * dmax;
+  double hbound = frac * D / (2.0 * umax);     /* the pairs beyond the horizon */
+  /* the sweep of rod_self_contact's broad phase with spheres grown by D / 2: a pair whose
+     spheres overlap has its bound below D */
+  pwork W;
+  skey* keys = (skey*)S->key;
+  double* R = S->key + 2 * (size_t)N;
+  double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  for (int G = 1; G <= N; ++G) {
+    const double* a = seg_node(V, G, 0, y);
+    for (int k = 0; k < 3; ++k) { lo[k] = fmin(lo[k], a[k]); hi[k] = fmax(hi[k], a[k]); }
+  }
+  int axis = 0;
+  for (int k = 1; k < 3; ++k)
+    if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
+  for (int G = 1; G <= N; ++G) {
+    const double* a = seg_node(V, G, 0, y);
+    const double* b = seg_node(V, G, 1, y);
+    double d2 = 0.0;
+    for (int k = 0; k < 3; ++k) d2 += (b[k] - a[k]) * (b[k] - a[k]);
+    R[G] = 0.5 * sqrt(d2) + sseg(S, G)[CNT_R] + 0.5 * D;
+    keys[G - 1].lo = 0.5 * (a[axis] + b[axis]) - R[G];
+    keys[G - 1].s = G;
+  }
+  qsort(keys, (size_t)N, sizeof(skey), by_lo);
+  for (int u = 0; u < N; ++u) {
+    const int si = keys[u].s;
+    const double top = keys[u].lo + 2.0 * R[si];
+    for (int w = u + 1; w < N && keys[w].lo <= top; ++w) {
+      const int sj = keys[w].s;
+      const int i = si < sj ? si : sj, j = si < sj ? sj : si;
+      const double* gi = sseg(S, i);
+      const double* gj = sseg(S, j);
+      int li, lj;
+      if (seg_rod(V, i, &li) == seg_rod(V, j, &lj)
+          && (j == i + 1 || seg_s0(V, j, 0) - seg_s0(V, i, 1)
+                                < S->near * (gi[CNT_R] + gj[CNT_R])))
+        continue;
+      const double* pos[4] = {seg_node(V, i, 0, y), seg_node(V, i, 1, y),
+                              seg_node(V, j, 0, y), seg_node(V, j, 1, y)};
+      const double* vel[4];
+      double speed = 0.0;
+      for (int q = 0; q < 4; ++q) {
+        int s;
+        const int G = q < 2 ? i : j;
+        const int r = seg_rod(V, G, &s);
+        vel[q] = y + V->off[r] + i_v(V->rods[r], s - 1 + (q & 1));
+        const double sp = sqrt(vel[q][0] * vel[q][0] + vel[q][1] * vel[q][1]
+                               + vel[q][2] * vel[q][2]);
+        if (sp > speed) speed = sp;
+      }
+      if (!(speed > 0.0)) continue;
+      double par[NPAIR], glb;
+      pair_params(gi, gj, par);
+      for (int q = 0; q < 4; ++q) W.arg[q] = pos[q];
+      W.arg[4] = par;
+      W.res[0] = &glb;
+      if (rod_contact_pair_bound(W.arg, W.res, W.iw, W.w, 0)) return HUGE_VAL;
+      if (glb > D) continue;                   /* beyond the horizon: hbound */
+      const double delta = par[PAIR_DELTA], rr = par[PAIR_R_1] + par[PAIR_R_2];
+      const double g0 = segment_distance(pos[0], pos[1], pos[2], pos[3]) - rr;
+      if (g0 < 3.0 * delta) continue;          /* in contact: the error test's */
+      /* the gap's rate by a difference over the time in which the fastest node moves a
+         thousandth of the smaller radius (rod_contact.c's rule) */
+      double travel = 1e-3 * fmin(par[PAIR_R_1], par[PAIR_R_2]);
+      if (travel < delta) travel = delta;
+      const double dt = travel / speed;
+      double moved[4][3];
+      for (int q = 0; q < 4; ++q)
+        for (int k = 0; k < 3; ++k) moved[q][k] = pos[q][k] + dt * vel[q][k];
+      const double g1 = segment_distance(moved[0], moved[1], moved[2], moved[3]) - rr;
+      const double approach = (g0 - g1) / dt;
+      if (!(approach > 0.0)) continue;
+      const double k = par[PAIR_K], c = par[PAIR_C];
+      const double tc = (k > 0.0 && c > 0.0) ? c / k : 0.0;
+      const double h = frac * ((g0 + delta) / approach + tc);
+      if (h < hbound) hbound = h;
+    }
+  }
+  return hbound;
+}
+
+double kvrod_self_max_step(const kvrod_rod* rod, const double* y) {
+  sview V;
+  view_of_rod(rod, &V);
+  return pairs_max_step(&V, y);
+}
+
+double kvsys_pairs_max_step(const kvrod_self* S, const double* y) {
+  sview V;
+  view_of_system(S, &V);
+  return pairs_max_step(&V, y);
+}

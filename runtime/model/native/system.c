@@ -200,7 +200,8 @@ int kvsys_link_values(const kvsys* s, int k, const double* y, double* Q, double*
    f_a and R(p_a1) T_a1 + R(p_a2) T_a2), with pairs their NSV values last
    (kvsys_pairs_values); NaN where not computed. */
 /* the step loop's kv_maxstep_fn of an assembly: the smallest of its rods' contact step
-   bounds (kvrod_contact_max_step; HUGE_VAL when no rod touches anything) */
+   bounds (kvrod_contact_max_step) and its pairs' (kvsys_pairs_max_step); HUGE_VAL when
+   nothing touches anything */
 double kvsys_max_step(const void* ctx, double t, const double* y, const double* yp) {
   (void) t; (void) yp;
   const kvsys* s = (const kvsys*) ctx;
@@ -211,6 +212,10 @@ double kvsys_max_step(const void* ctx, double t, const double* y, const double* 
       continue;
     const double hr = rod->contact->max_step(rod, y + s->off[r]);
     if (hr < h) h = hr;
+  }
+  if (s->pairs && s->pair_max_step) {
+    const double hp = s->pair_max_step(s->pairs, y);
+    if (hp < h) h = hp;
   }
   return h;
 }

@@ -82,6 +82,7 @@ typedef struct {
   int (*pair_jacobian)(const kvrod_self* S, const double* y);
   int (*pair_couplings)(kvrod_self* S, const double* y);
   int (*pair_values)(const kvrod_self* S, const double* y, double* v);
+  double (*pair_max_step)(const kvrod_self* S, const double* y);
 } kvsys;
 
 int kvsys_residual(const kvsys* s, double t, const double* y, const double* yp, double* res);
