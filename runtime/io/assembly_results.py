@@ -7,16 +7,19 @@ positions (m) and ``NAME/centreline`` (m, 3, N+1) node positions at ``centreline
 N m: what the joint exerts on the rod of its first point, spatial, about that point), per
 body (file order) ``body{k}/centreline`` (m, 3) its mass centre at ``centreline_t``, the
 energies ``kinetic``, ``elastic``, ``dissipated``, ``external_work`` (J) and
-``energy_balance_rel``, ``peaks_t``/``peaks_x``, ``y_static``, ``y_last``, and per
+``energy_balance_rel``, ``peaks_t``/``peaks_x``, ``y_static``, ``y_last``, per
 obstacle k the values of ``runtime.model.contact.obstacle_series`` summed over the rods:
 ``obstacle{k}_force``, ``_moment`` (3, n), ``_energy``, ``_dissipation``,
-``_friction_dissipation``, ``_power``, ``_gap_min``, ``_segments`` (n,), as a single rod's.
+``_friction_dissipation``, ``_power``, ``_gap_min``, ``_segments`` (n,), as a single rod's;
+with ``contact.self`` the pairs between and within the rods: ``self_contact_energy`` (J),
+``_dissipation``, ``_friction_dissipation`` (W), ``_gap_min`` (m; inf: no pair),
+``_pairs`` and ``_force`` (N: the sum of the pairs' force magnitudes), (n,).
 static.npz (statics): ``y``, per rod ``NAME/positions`` (3, N+1), ``NAME/frames``
 (N, 3, 3), ``NAME/reference`` (3, N+1), per joint ``joint{k}/force``, ``joint{k}/moment``
 (3,), per obstacle ``obstacle{k}_force``, ``obstacle{k}_moment`` (3,; N, N m about its
 point, on the rods). summary.json has, at its top level, ``"joints"``: a list in file
-order with each joint's ``force`` and ``moment`` (statics: 3-vectors; a run: the final value and the
-largest with its time, like the supports' reactions), ``"bodies"``: each body's
+order with each joint's ``force`` and ``moment`` (statics: 3-vectors; a run: the final
+value and the largest with its time, like the supports' reactions), ``"bodies"``: each body's
 mass-centre position and frame, and on obstacles ``"obstacles"`` (each one's force,
 moment and smallest gap, as a single rod's).
 """
@@ -60,6 +63,8 @@ def write_assembly_run(out_dir: Path, res, extra: dict | None = None) -> dict:
         arrays[f"joint{k}/moment"] = j["moment"]
     for k, o in enumerate(res.obstacle_series()):
         arrays.update({f"obstacle{k}_{what}": v for what, v in o.items()})
+    for what, v in res.self_contact_series().items():
+        arrays[f"self_contact_{what}"] = v
     audit = res.audit()
     write_npz(out_dir / "series.npz", t=res.t, kinetic=res.kinetic, elastic=res.elastic,
               dissipated=res.dissipated, external_work=res.external_work,
@@ -89,6 +94,7 @@ def static_obstacle_values(amap, y: np.ndarray, obstacles) -> list[dict]:
     """Per obstacle (file order; ``obstacles`` the problem's) at the equilibrium y: the
     force and moment it exerts on the rods, the smallest gap and the segments in reach
     (:func:`runtime.simulate.simulate.static_obstacle_summary`)."""
+    from runtime.model.contact import N_VALUES
     from runtime.simulate.simulate import static_obstacle_summary
 
     model = amap.model
@@ -97,7 +103,7 @@ def static_obstacle_values(amap, y: np.ndarray, obstacles) -> list[dict]:
     with model.statics():
         e = model.energy_values(0.0, y)
     first = model.extras_layout()["obstacle:0"].start
-    return static_obstacle_summary(obstacles, e[first:])
+    return static_obstacle_summary(obstacles, e[first:first + N_VALUES * model.n_obstacles])
 
 
 def static_assembly_and_write(problem, out: Path, overwrite: bool = False,

@@ -95,7 +95,10 @@ def write_run(out_dir: Path, run, extra: dict | None = None) -> dict:
     ``simulation.centreline_frames``) and the stress-free ``reference`` centreline
     (3, N+1; m); per obstacle k ``obstacle{k}_force`` / ``_moment`` (3, n; N, N m about
     its point, on the rod, spatial), ``obstacle{k}_energy`` (J), ``_dissipation``,
-    ``_friction_dissipation``, ``_power`` (W), ``_gap_min`` (m) and ``_segments`` (n,).
+    ``_friction_dissipation``, ``_power`` (W), ``_gap_min`` (m) and ``_segments`` (n,);
+    with ``contact.self`` the pairs' ``self_contact_energy`` (J), ``_dissipation``,
+    ``_friction_dissipation`` (W), ``_gap_min`` (m; inf: no pair), ``_pairs`` and
+    ``_force`` (N: the sum of the pairs' force magnitudes), (n,).
     problem.toml: the resolved problem (rerun it with ``kvrod simulate
     DIR/problem.toml``).
     """
@@ -114,6 +117,8 @@ def write_run(out_dir: Path, run, extra: dict | None = None) -> dict:
     for k, r in enumerate(getattr(run, "obstacles", ())):
         for what, v in r.items():
             ends[f"obstacle{k}_{what}"] = v
+    for what, v in getattr(run, "self_contact", {}).items():
+        ends[f"self_contact_{what}"] = v
     write_npz(out_dir / "series.npz", t=run.t, tip=run.tip, start=run.start,
               kinetic=run.kinetic, elastic=run.elastic, dissipated=run.dissipated,
               external_work=run.external_work, energy_balance_rel=run.energy_balance_rel,

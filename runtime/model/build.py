@@ -341,6 +341,8 @@ def _declare_contact(lib: ctypes.CDLL) -> ctypes.CDLL:
     lib.kvrod_self_values.restype = i
     lib.kvrod_self_couplings.argtypes = [p, p]
     lib.kvrod_self_couplings.restype = i
+    lib.kvsys_pairs_values.argtypes = [p, p, p]
+    lib.kvsys_pairs_values.restype = i
     return lib
 
 

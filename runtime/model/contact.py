@@ -66,7 +66,7 @@ STEP_FRACTION = 0.5
 
 #: values of the compiled ``kvrod_self_values`` (rod_contact.h, NSV)
 SELF_VALUE_NAMES: tuple[str, ...] = ("energy", "dissipation", "friction_dissipation",
-                                     "gap_min", "pairs")
+                                     "gap_min", "pairs", "force")
 #: segments i < j closer along the rod than ``SELF_NEAR (r_i + r_j)`` of reference arc
 #: length are never paired: a rod bent to its tightest (curvature 1/r) keeps stretches
 #: closer than pi r along it within 2 r of each other (docs/design.md, section 14)
@@ -84,7 +84,12 @@ class SelfStruct(ctypes.Structure):
                 ("m2", ctypes.c_void_p), ("m2cap", ctypes.c_int), ("nz2cap", ctypes.c_int),
                 ("srow2", ctypes.c_void_p), ("er2", ctypes.c_void_p), ("ec2", ctypes.c_void_p),
                 ("ev2", ctypes.c_void_p), ("rowslot", ctypes.c_void_p),
-                ("rowfill", ctypes.c_void_p), ("dropped", ctypes.c_int)]
+                ("rowfill", ctypes.c_void_p), ("dropped", ctypes.c_int),
+                ("nrod", ctypes.c_int), ("rods", ctypes.c_void_p), ("off", ctypes.c_void_p),
+                ("sg0", ctypes.c_void_p), ("rowmap", ctypes.c_void_p),
+                ("J", ctypes.c_void_p), ("ab_start", ctypes.c_void_p),
+                ("ldabs", ctypes.c_void_p), ("last", ctypes.c_void_p),
+                ("step_fraction", ctypes.c_double)]
 
 
 class ContactStruct(ctypes.Structure):
@@ -119,13 +124,22 @@ class SelfContactArrays:
     h). The Jacobian's entries between a pair's two segments go to the dynamic couplings
     of the rod's coupled band block (:meth:`attach`)."""
 
-    def __init__(self, seg: np.ndarray, near: float = SELF_NEAR) -> None:
+    def __init__(self, seg: np.ndarray, near: float = SELF_NEAR,
+                 rod_segments: tuple[int, ...] | None = None) -> None:
         self.seg = np.ascontiguousarray(seg, dtype=np.float64)
         if self.seg.ndim != 2 or self.seg.shape[1] != L.N_CNT or self.seg.shape[0] < 1:
             raise ValueError(f"self-contact law of shape {self.seg.shape}; expected "
                              f"(N, {L.N_CNT})")
         N = self.seg.shape[0]
-        self.s0 = np.concatenate([[0.0], np.cumsum(self.seg[:, L.CNT_OFFSETS["h"]])])
+        #: the segments of each rod (an assembly's rods one after the other in seg)
+        self.rod_segments = (N,) if rod_segments is None else tuple(int(n) for n in
+                                                                    rod_segments)
+        if sum(self.rod_segments) != N or min(self.rod_segments) < 1:
+            raise ValueError(f"rod segments {self.rod_segments} do not add up to {N}")
+        h = self.seg[:, L.CNT_OFFSETS["h"]]
+        cuts = np.cumsum((0,) + self.rod_segments)
+        self.s0 = np.concatenate([np.concatenate([[0.0], np.cumsum(h[a:b])])
+                                  for a, b in zip(cuts[:-1], cuts[1:], strict=True)])
         self.near = float(near)
         self._key = np.zeros(3 * N + 1)
         self._pairs = np.zeros(2 * SELF_PAIRS_PER_SEGMENT * N, dtype=np.int32)
@@ -133,6 +147,11 @@ class SelfContactArrays:
         s.seg, s.s0, s.near = self.seg.ctypes.data, self.s0.ctypes.data, self.near
         s.key, s.pairs = self._key.ctypes.data, self._pairs.ctypes.data
         s.paircap = SELF_PAIRS_PER_SEGMENT * N
+        #: the values of the last energies of a single rod (kvrod_energies_contact's)
+        self._last = np.zeros(len(SELF_VALUE_NAMES))
+        s.last = self._last.ctypes.data
+        #: the step bound by the pairs' approach speed (kvrod_self.step_fraction; 0: none)
+        s.step_fraction = STEP_FRACTION
         self.blocks = None
 
     @property
@@ -153,6 +172,51 @@ class SelfContactArrays:
         s.ec2, s.ev2 = blocks.ec2.ctypes.data, blocks.ev2.ctypes.data
         s.rowslot, s.rowfill = self._rowslot.ctypes.data, self._rowfill.ctypes.data
 
+    def attach_system(self, model, blocks) -> None:
+        """The contact between the rods of an assembly (``model``: its ``SystemModel``,
+        whose rods' segments ``rod_segments`` counts, in order): the pairs in the system's
+        state, the entries within a segment into its rod's band of ``blocks``' buffer,
+        those between segments into its dynamic couplings, a tied node's momentum row's
+        into its master's and none of a node a joint holds at ground (``model.holds``)."""
+        if tuple(r.N for r in model.rods) != self.rod_segments:
+            raise ValueError(f"rods of {tuple(r.N for r in model.rods)} segments for pairs "
+                             f"over {self.rod_segments}")
+        self.attach(blocks, model.n)
+        s = self._struct
+        rowmap = np.arange(model.n, dtype=np.int32)
+        for h in model.holds:
+            rows = model.v_index[h.rod][h.node]
+            rowmap[rows] = (-1 if h.master is None
+                            else model.v_index[h.master[0]][h.master[1]])
+        P = ctypes.c_void_p
+        self._sys = (rowmap,
+                     np.ascontiguousarray(model.offsets, dtype=np.int32),
+                     np.array(np.cumsum((0,) + self.rod_segments), dtype=np.int32),
+                     np.ascontiguousarray(blocks.ab_start, dtype=np.int64),
+                     np.ascontiguousarray(blocks.ldab, dtype=np.int32),
+                     (P * len(model.rods))(*[ctypes.addressof(r._struct)
+                                             for r in model.rods]))
+        s.nrod = len(model.rods)
+        s.rods = ctypes.addressof(self._sys[5])
+        s.off, s.sg0 = self._sys[1].ctypes.data, self._sys[2].ctypes.data
+        s.rowmap = self._sys[0].ctypes.data
+        s.J = blocks.buffer.ctypes.data
+        s.ab_start, s.ldabs = self._sys[3].ctypes.data, self._sys[4].ctypes.data
+
+    def set_force_scale(self, scale: float) -> None:
+        """Scale the pairs' stiffness k and damping c from the values they were built
+        with (statics takes the contact up with the load factor:
+        :meth:`ContactArrays.set_force_scale`)."""
+        kk, kc = L.CNT_OFFSETS["k"], L.CNT_OFFSETS["c"]
+        base = getattr(self, "_base", None)
+        if base is None:
+            if scale == 1.0:
+                return
+            base = self._base = self.seg[:, [kk, kc]].copy()
+        scale = max(float(scale), MIN_FORCE_SCALE)
+        self.seg[:, kk] = scale * base[:, 0]
+        self.seg[:, kc] = scale * base[:, 1]
+
     @property
     def dropped(self) -> int:
         """Pairs whose couplings did not fit the capacity at the last Jacobian (their
@@ -164,7 +228,7 @@ class SelfContactArrays:
         return ctypes.addressof(self._struct)
 
     def copy(self) -> SelfContactArrays:
-        return SelfContactArrays(self.seg.copy(), self.near)
+        return SelfContactArrays(self.seg.copy(), self.near, self.rod_segments)
 
 
 @dataclass(eq=False)

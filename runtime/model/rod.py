@@ -171,9 +171,9 @@ class RodModel:
         self._ab = np.zeros((self.ldab, self.n), order="F")
         self._diag = np.zeros(L.diagnostics_size(N))
         #: values per state of :meth:`energies`: the DIAG_SCALARS, then per obstacle the
-        #: contact's values (runtime.model.contact.VALUE_NAMES)
-        self.n_energies = len(L.DIAG_SCALARS) + (0 if self.contact is None else
-                                                 N_VALUES * self.contact.n_obstacles)
+        #: contact's values (runtime.model.contact.VALUE_NAMES), then with self-contact
+        #: the pairs' (SELF_VALUE_NAMES)
+        self.n_energies = len(L.DIAG_SCALARS) + len(self.contact_value_names())
         self._energy = np.zeros(self.n_energies)
         nodes, segs = np.arange(N + 1), np.arange(1, N + 1)
         self.phi_index = np.array([L.node_phi(i, B) for i in nodes])[:, None] + np.arange(3)
@@ -956,11 +956,13 @@ class RodModel:
 
     def contact_value_names(self) -> tuple[str, ...]:
         """Names of the columns of :meth:`energies` after the DIAG_SCALARS:
-        ``obstacle{k}_{value}``."""
+        ``obstacle{k}_{value}``, then ``self_contact_{value}`` with self-contact."""
         if self.contact is None:
             return ()
-        return tuple(f"obstacle{k}_{v}" for k in range(self.contact.n_obstacles)
-                     for v in VALUE_NAMES)
+        return (tuple(f"obstacle{k}_{v}" for k in range(self.contact.n_obstacles)
+                      for v in VALUE_NAMES)
+                + tuple(f"self_contact_{v}" for v in SELF_VALUE_NAMES
+                        if self.self_contact is not None))
 
     def reactions(self, t: float, y: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
         """The force (N) and moment (N m, about the node) that each held end's support

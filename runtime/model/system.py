@@ -35,8 +35,8 @@ import numpy as np
 from generated import rod_layout as L
 from runtime.errors import GeneratedCodeError
 from runtime.model import build
-from runtime.model.contact import N_VALUES, VALUE_NAMES
-from runtime.model.rod import RodModel
+from runtime.model.contact import N_VALUES, SELF_VALUE_NAMES, VALUE_NAMES, SelfContactArrays
+from runtime.model.rod import SELF_COUPLING_DOUBLES, SELF_COUPLING_ENTRIES_PER_ROW, RodModel
 
 
 @dataclass(frozen=True)
@@ -103,7 +103,9 @@ class SysStruct(ctypes.Structure):
                 ("nev", _I), ("nlink", _I), ("lidx", _P), ("lrow", _P), ("lpar", _P),
                 ("lconst", _P), ("ldst", _P), ("nbody", _I), ("bidx", _P), ("brow", _P),
                 ("bpar", _P), ("bdst", _P), ("gravity", _D * 3), ("nextra", _I),
-                ("scratch", _P)]
+                ("scratch", _P), ("pairs", _P), ("pair_residual", _P),
+                ("pair_jacobian", _P), ("pair_couplings", _P), ("pair_values", _P),
+                ("pair_max_step", _P)]
 
 
 #: the link kernel's inputs in order (name, size): its Jacobian's columns follow them
@@ -123,19 +125,32 @@ class SystemModel:
     rods: the rods' models (built as single rods; a rod whose node is held or tied by
     the system is built free there); names: their names; holds, links, bodies: the
     couplings; gravity: ``gravity(t, left, scale)`` the scaled gravity (m/s^2) on the
-    bodies at time t (the rods' own loads are in their drives).
+    bodies at time t (the rods' own loads are in their drives); pairs: the contact
+    between the rods' segments and of each rod with itself (``contact.self``;
+    :class:`~runtime.model.contact.SelfContactArrays` over every rod's segments in
+    order; None: none; the rods themselves then carry no self-contact).
     """
 
     def __init__(self, rods: Sequence[RodModel], names: Sequence[str],
                  holds: Sequence[Hold] = (), links: Sequence[Link] = (),
                  bodies: Sequence[Body] = (),
-                 gravity: Callable[[float, bool, float], np.ndarray] | None = None) -> None:
+                 gravity: Callable[[float, bool, float], np.ndarray] | None = None,
+                 pairs: SelfContactArrays | None = None) -> None:
         if not rods:
             raise ValueError("an assembly needs at least one rod")
+        if pairs is not None and any(r.self_contact is not None for r in rods):
+            raise ValueError("an assembly's contact between its rods takes every rod's "
+                             "self-contact: build the rods without it")
         self.rods = list(rods)
-        #: the step bound of rods touching obstacles (BDF's state_max_step), None without
+        #: the contact between the rods' segments (None: off)
+        self.pairs = pairs
+        self._pair_scale = 1.0
+        self._plib = None if pairs is None else build.load_contact_library()
+        #: the step bound of rods touching obstacles and of the pairs (BDF's
+        #: state_max_step), None without contact
         self.state_max_step = (self._contact_max_step
-                               if any(r.contact is not None for r in self.rods) else None)
+                               if pairs is not None
+                               or any(r.contact is not None for r in self.rods) else None)
         self.names = list(names)
         self.holds, self.links, self.bodies = list(holds), list(links), list(bodies)
         self._gravity = gravity
@@ -191,7 +206,8 @@ class SystemModel:
         self.n_obstacles = max((r.contact.n_obstacles for r in self.rods
                                 if r.contact is not None), default=0)
         self.nextra = (12 * len(self.rods) + 3 * len(self.holds) + 6 * len(self.links)
-                       + N_VALUES * self.n_obstacles)
+                       + N_VALUES * self.n_obstacles
+                       + (0 if pairs is None else len(SELF_VALUE_NAMES)))
         self._sdirs = None            # parameter directions (runtime/model/system_sensitivity)
         self._csys_sens = None
         self.at(0.0)
@@ -230,6 +246,13 @@ class SystemModel:
         """Drive every rod and the bodies' gravity to time ``t``."""
         for r in self.rods:
             r.at(t)
+        if self.pairs is not None:
+            # statics takes the pairs' contact up with the load factor, as a rod's drive
+            # does its obstacles' (runtime.problem.assemble.ProblemDrive)
+            scale = self._load_scale if self._static else 1.0
+            if scale != self._pair_scale:
+                self.pairs.set_force_scale(scale)
+                self._pair_scale = scale
         if t != self._t and self._struct is not None:
             self._set_gravity(t)
         self._t = t
@@ -405,7 +428,19 @@ class SystemModel:
                                    _condensation_blocks(rod, held),
                                    cells=rod.condensation_cells(), pattern=patterns[k])
             blocks.append(Block(int(off[k]), rod.n, rod.kl, rod.ku, cond))
-        cb = self._blocks = CoupledBlocks(blocks, {r: sorted(c) for r, c in coupling.items()})
+        rows = entries = 0
+        if self.pairs is not None:
+            # the pairs' entries between two segments: dynamic couplings, at most every
+            # momentum row of every rod within SELF_COUPLING_DOUBLES of Z (as a single
+            # rod's self-contact) and of the capacitance matrix (m + rows)^2 (many small
+            # rods: Z is small, C is not); pairs beyond stay in the residual only
+            biggest = max(r.n for r in rods)
+            rows = min(sum(6 * r.N + 3 for r in rods),
+                       max(SELF_COUPLING_DOUBLES // max(biggest, 1), 36),
+                       max(math.isqrt(SELF_COUPLING_DOUBLES) - len(coupling), 36))
+            entries = rows * SELF_COUPLING_ENTRIES_PER_ROW
+        cb = self._blocks = CoupledBlocks(blocks, {r: sorted(c) for r, c in coupling.items()},
+                                          dynamic_rows=rows, dynamic_entries=entries)
         dest = cb.destination
         s = SysStruct()
         keep = self._keep
@@ -485,6 +520,15 @@ class SystemModel:
         s.bdst = ptr(arr(bdst or [0], np.int64))
         s.nextra = self.nextra
         s.scratch = self._scratch.ctypes.data
+        if self.pairs is not None:
+            self.pairs.attach_system(self, cb)
+            addr = lambda fn: ctypes.cast(fn, ctypes.c_void_p).value  # noqa: E731
+            s.pairs = self.pairs.struct_address
+            s.pair_residual = addr(self._plib.kvsys_pairs_residual)
+            s.pair_jacobian = addr(self._plib.kvsys_pairs_jacobian)
+            s.pair_couplings = addr(self._plib.kvsys_pairs_couplings)
+            s.pair_values = addr(self._plib.kvsys_pairs_values)
+            s.pair_max_step = addr(self._plib.kvsys_pairs_max_step)
         self._struct = s
         self._t = math.nan
 
@@ -585,6 +629,12 @@ class SystemModel:
 
     def set_directions(self, directions) -> None:
         """Give the assembly (and its rods) its parameters' directions (None: none)."""
+        if directions is not None and self.pairs is not None:
+            from runtime.errors import ParameterError
+
+            raise ParameterError("contact.self", True, "false for sensitivities: the "
+                                 "contact between an assembly's rods has no parameter "
+                                 "derivatives in this version")
         self._sdirs = directions
         self._csys_sens = None
         if directions is not None:
@@ -679,7 +729,15 @@ class SystemModel:
         rows, cols, flat = self._coo_pattern()
         vals = self._blocks.buffer[flat]
         nz = vals != 0.0
-        return sp.csc_matrix((vals[nz], (rows[nz], cols[nz])), shape=(self.n, self.n))
+        rows, cols, vals = rows[nz], cols[nz], vals[nz]
+        if self.pairs is not None:            # the pairs' couplings (dynamic rows)
+            cb = self._blocks
+            m = int(ctypes.c_int.from_address(cb.m2_address).value)
+            k = int(cb.er2[m])
+            rows = np.concatenate([rows, np.repeat(cb.srow2[:m], np.diff(cb.er2[:m + 1]))])
+            cols = np.concatenate([cols, cb.ec2[:k]])
+            vals = np.concatenate([vals, cb.ev2[:k]])
+        return sp.csc_matrix((vals, (rows, cols)), shape=(self.n, self.n))
 
     def _coo_pattern(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(rows, cols, flat index into the blocks' buffer) of every entry J may hold:
@@ -723,7 +781,8 @@ class SystemModel:
                       ) -> np.ndarray:
         """The values of one state: T, W, 2D, P_ext, P_bc, then the extras (the rods'
         supports, the holds' free rows, the links' force and moment on side a, each
-        obstacle's ``runtime.model.contact.VALUE_NAMES`` summed over the rods)."""
+        obstacle's ``runtime.model.contact.VALUE_NAMES`` summed over the rods, the pairs'
+        values with ``contact.self``)."""
         p = self._ptr()
         self.at(t)
         yp = self._zeros if yp is None else yp
@@ -745,6 +804,24 @@ class SystemModel:
         """(T, W, 2D, P_ext, P_bc) of a state (J, J, W, W, W)."""
         return tuple(float(v) for v in self.energy_values(t, y, yp)[:5])
 
+    def pair_contact_values(self, t: float, y: np.ndarray) -> dict[str, float]:
+        """The contact between the rods (``contact.self``): energy (J), dissipated power
+        (W) and its friction part, the smallest gap between paired segments' surfaces (m;
+        inf: no pair in reach) and the number of pairs in reach
+        (``contact.SELF_VALUE_NAMES``)."""
+        if self.pairs is None:
+            raise ValueError("the assembly has no contact between its rods "
+                             "(contact.self = false)")
+        self._ptr()                  # the pairs attached to the system
+        self.at(t)
+        out = np.zeros(len(SELF_VALUE_NAMES))
+        y = np.ascontiguousarray(y, dtype=float)
+        rc = self._plib.kvsys_pairs_values(self.pairs.struct_address, y.ctypes.data,
+                                           out.ctypes.data)
+        if rc:
+            raise RuntimeError(f"kvsys_pairs_values failed ({rc})")
+        return dict(zip(SELF_VALUE_NAMES, out.tolist(), strict=True))
+
     @property
     def reaction_names(self) -> tuple[str, ...]:
         """Names of the extras of :meth:`energy_values` (after the five energies)."""
@@ -757,6 +834,8 @@ class SystemModel:
             out += [f"link{i}_{w}_{c}" for w in ("force", "moment") for c in "xyz"]
         for i in range(self.n_obstacles):
             out += [f"obstacle{i}_{v}" for v in VALUE_NAMES]
+        if self.pairs is not None:                # the last extras (kvsys_energies)
+            out += [f"self_contact_{v}" for v in SELF_VALUE_NAMES]
         return tuple(out)
 
     def energy_floor(self) -> float:
@@ -778,6 +857,9 @@ class SystemModel:
         for i in range(self.n_obstacles):
             out[f"obstacle:{i}"] = slice(k, k + N_VALUES)
             k += N_VALUES
+        if self.pairs is not None:                # the last extras (kvsys_energies)
+            out["self_contact"] = slice(5 + self.nextra - len(SELF_VALUE_NAMES),
+                                        5 + self.nextra)
         return out
 
     def c_kernels(self):
@@ -804,7 +886,8 @@ class SystemModel:
 
     def _contact_max_step(self, t: float, y: np.ndarray) -> float:
         """The largest next step (s) that moves no segment of any rod toward an obstacle
-        by more than its share of the gap (the rods' ``kvrod_contact_max_step``)."""
+        or another segment by more than its share of the gap (the rods'
+        ``kvrod_contact_max_step``, the pairs' ``kvsys_pairs_max_step``)."""
         self.at(t)
         y = np.ascontiguousarray(y, dtype=float)
         return float(self._lib.kvsys_max_step(self._ptr(), t, y.ctypes.data, None))

@@ -383,3 +383,19 @@ def build_model(problem: Problem, backend: str = "auto") -> RodModel:
     arrays, y_ref, r_ends, p_ends = reference_arrays(problem)
     drive = ProblemDrive(problem, arrays.N, r_ends, p_ends)
     return RodModel(arrays, y_ref, drive=drive, backend=backend)
+
+
+def build_assembly_rod(problem: Problem, backend: str = "auto"
+                       ) -> tuple[RodModel, SelfContactArrays | None]:
+    """A rod of an assembly (:func:`build_model`) and, with ``contact.self``, its law for
+    the contact between the assembly's rods (``SelfContactArrays`` of its segments),
+    taken out of the rod: the system pairs every rod's segments with every other's and
+    its own (``runtime.model.system.SystemModel``'s ``pairs``)."""
+    arrays, y_ref, r_ends, p_ends = reference_arrays(problem)
+    law = None
+    c = arrays.contact
+    if c is not None and c.self_contact is not None:
+        law = c.self_contact
+        arrays.contact = ContactArrays(c.kind, c.obs, c.cnt, c.step_fraction)
+    drive = ProblemDrive(problem, arrays.N, r_ends, p_ends)
+    return RodModel(arrays, y_ref, drive=drive, backend=backend), law

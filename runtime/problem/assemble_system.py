@@ -38,10 +38,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from runtime.model.contact import SelfContactArrays
 from runtime.model.quaternion import quat_mul, quat_rotation
 from runtime.model.rod import RodModel
 from runtime.model.system import Body, Hold, Link, Side, SystemModel
-from runtime.problem.assemble import build_model
+from runtime.problem.assemble import build_assembly_rod
 
 _CONJ = np.array([1.0, -1.0, -1.0, -1.0])
 
@@ -154,14 +155,15 @@ def build_system(assembly, backend: str = "auto") -> AssemblyMap:
     """The :class:`SystemModel` of an assembly problem (see the module docstring)."""
     from runtime.errors import ParameterError
 
+    names = list(assembly.rods)
+    built = [build_assembly_rod(assembly.rods[n], backend=backend) for n in names]
+    rods = [rod for rod, _ in built]
+    pairs = None
     contact = getattr(assembly, "contact", None)
     if contact is not None and contact.self_contact:
-        raise ParameterError("contact.self", True, "false in an assembly: contact between "
-                             "its rods (and of each rod with itself) is not available in "
-                             "this version; a single rod's self-contact is (kvrod "
-                             "simulate)")
-    names = list(assembly.rods)
-    rods = [build_model(assembly.rods[n], backend=backend) for n in names]
+        # one set of pairs over every rod's segments: rod-rod and each rod's self-contact
+        pairs = SelfContactArrays(np.concatenate([law.seg for _, law in built]),
+                                  rod_segments=tuple(r.N for r in rods))
     y_ref = [r.reference for r in rods]
     points: dict[str, PointRef] = {}
 
@@ -328,7 +330,7 @@ def build_system(assembly, backend: str = "auto") -> AssemblyMap:
         bodies.append(Body(P.rod, P.node, seg, float(b.mass), np.asarray(b.inertia, float),
                            tuple(float(v) for v in b.offset)))
     gravity = _gravity(assembly)
-    model = SystemModel(rods, names, holds, links, bodies, gravity=gravity)
+    model = SystemModel(rods, names, holds, links, bodies, gravity=gravity, pairs=pairs)
     return AssemblyMap(model, names, parts, points)
 
 

@@ -22,7 +22,7 @@ import numpy as np
 from runtime.analysis.audit import audit_run, significant_maxima
 from runtime.analysis.decay import beat_warning, damping_ratios, log_decrements, periods
 from runtime.errors import IllPosedError
-from runtime.model.contact import obstacle_series
+from runtime.model.contact import N_VALUES, obstacle_series
 from runtime.model.quaternion import quat_rotation
 from runtime.model.system_statics import SystemStatics
 from runtime.problem.assemble_system import AssemblyMap, build_system, frames_of
@@ -39,6 +39,7 @@ from runtime.simulate.simulate import (
     ATOL_FRACTION,
     ErrorControl,
     obstacle_summary,
+    self_contact_summary,
 )
 from runtime.simulate.vibration_centre import VibrationCentre, inputs_constant
 from runtime.solvers.driver import run_loop
@@ -115,12 +116,26 @@ class AssemblyResult:
         model = self.model
         if model is None or not model.n_obstacles or self.extras.shape[0] == 0:
             return []
-        first = model.extras_layout()["obstacle:0"].start - 5     # obstacles come last
-        return obstacle_series(self.extras[first:])
+        first = model.extras_layout()["obstacle:0"].start - 5
+        return obstacle_series(self.extras[first:first + N_VALUES * model.n_obstacles])
+
+    def self_contact_series(self) -> dict[str, np.ndarray]:
+        """With ``contact.self``: the pairs' values (n,) on the output grid
+        (``runtime.model.contact.SELF_VALUE_NAMES``: energy, dissipation, its friction
+        part, smallest gap, pairs in reach, the sum of their forces' magnitudes); empty
+        without."""
+        from runtime.model.contact import SELF_VALUE_NAMES
+
+        lay = None if self.model is None else self.model.extras_layout()
+        if lay is None or "self_contact" not in lay or self.extras.ndim != 2:
+            return {}
+        s = lay["self_contact"]
+        block = self.extras[s.start - 5:s.stop - 5]
+        return dict(zip(SELF_VALUE_NAMES, block, strict=True))
 
     def summary(self) -> dict:
         """JSON-ready summary: status, static result, maxima and decrements, energy audit,
-        joints, bodies, obstacles, warnings, counters."""
+        joints, bodies, obstacles, contact between the rods, warnings, counters."""
         p = self.problem
         warnings: list[str] = []
         pk: dict = {"peaks": [{"t": float(a), "x": float(b)}
@@ -186,6 +201,8 @@ class AssemblyResult:
             "bodies": bodies,
             **({"obstacles": obstacle_summary(p.obstacles, self.t, self.obstacle_series())}
                if p.obstacles else {}),
+            **({"self_contact": self_contact_summary(self.t, sc)}
+               if (sc := self.self_contact_series()) else {}),
             "ends": {k: [float(x) for x in v[:, -1]] for k, v in self.ends.items()
                      if v.shape[1]},
             "warnings": warnings,

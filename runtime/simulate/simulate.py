@@ -123,6 +123,11 @@ class SimulationResult:
     #: "gap_min" (m, negative: penetration) and the "segments" in reach, (n,), on the
     #: output grid (runtime.model.contact.VALUE_NAMES)
     obstacles: list[dict[str, np.ndarray]] = field(default_factory=list)
+    #: with ``contact.self``: the pairs' "energy" (J), "dissipation" and
+    #: "friction_dissipation" (W), smallest "gap_min" (m; inf: no pair in reach), number
+    #: of "pairs" in reach and the sum of their forces' magnitudes "force" (N), (n,) on
+    #: the output grid (runtime.model.contact.SELF_VALUE_NAMES); empty without
+    self_contact: dict[str, np.ndarray] = field(default_factory=dict)
     #: unit quaternions (4, n) of the frames at s = 0 ("start") and s = L ("end")
     end_quaternions: dict[str, np.ndarray] = field(default_factory=dict)
     counters: dict[str, int] = field(default_factory=dict)
@@ -332,6 +337,8 @@ class SimulationResult:
                              "scale_J": audit.scale, "note": audit.reason},
             "reactions": self.reaction_summary(),
             **({"obstacles": self.obstacle_summary()} if self.problem.obstacles else {}),
+            **({"self_contact": self_contact_summary(self.t, self.self_contact)}
+               if self.self_contact else {}),
             "end_rotation": {end: {"rotation_vector": [float(v) for v in r[:, -1]],
                                    "angle_deg": float(np.degrees(np.linalg.norm(r[:, -1])))}
                              for end, r in self.end_rotations().items() if r.size},
@@ -416,6 +423,36 @@ def static_obstacle_summary(obstacles, values: np.ndarray) -> list[dict]:
 def _reference_value(res: SimulationResult, which: str) -> float:
     ix = _maxima_indices(res.model, which)[0]
     return float(res.model.reference[ix])
+
+
+def _self_contact_series(model: RodModel, extras: np.ndarray) -> dict[str, np.ndarray]:
+    """The sampled self-contact values (the last rows of ``extras``,
+    ``self_contact_{value}`` of ``model.contact_value_names()``) as
+    :attr:`SimulationResult.self_contact` (empty without self-contact)."""
+    from runtime.model.contact import SELF_VALUE_NAMES
+
+    if model.self_contact is None:
+        return {}
+    block = extras[extras.shape[0] - len(SELF_VALUE_NAMES):]
+    return dict(zip(SELF_VALUE_NAMES, block, strict=True))
+
+
+def self_contact_summary(t: np.ndarray, v: dict[str, np.ndarray]) -> dict:
+    """summary.json's ``self_contact`` (a single rod's or an assembly's pairs, on the
+    output grid ``t``): the final and the largest total pair force (N, with its time),
+    the smallest gap (m; negative: the deepest penetration; None: no pair came into
+    reach) and its time, the most pairs in reach, the final contact energy (J)."""
+    if not t.size:
+        return {}
+    f, g, n = v["force"], v["gap_min"], v["pairs"]
+    k = int(np.argmax(f))
+    out: dict = {"force": {"final": float(f[-1]), "max": float(f[k]),
+                           "t_of_max": float(t[k])},
+                 "pairs_max": int(np.max(n)), "energy_final": float(v["energy"][-1])}
+    j = int(np.argmin(g))
+    out["gap_min"] = ({"value": float(g[j]), "t": float(t[j])} if np.isfinite(g[j])
+                      else None)
+    return out
 
 
 def reference_end_quaternions(model: RodModel) -> dict[str, np.ndarray]:
@@ -853,6 +890,7 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
     res.t, res.tip, res.start = a["t"], a["tip"], a["start"]
     names = model.reaction_names
     res.obstacles = _obstacle_series(model, a["extras"][len(names):])
+    res.self_contact = _self_contact_series(model, a["extras"][len(names):])
     held_at = getattr(model.drive, "held_positions", None)
     for end, i, series in (("start", 0, res.start), ("end", model.N, res.tip)):
         if i in model.held_nodes and held_at is not None and res.t.size:

@@ -39,7 +39,8 @@ from runtime.problem.timefunctions import TimeFunction
 
 MATERIAL = {"density": 7850.0, "youngs_modulus": 2.1e11, "poisson_ratio": 0.3, "tau": 1e-4}
 EXAMPLES = ("contact_lifted_rod", "contact_incline", "contact_capstan", "contact_flat_drop",
-            "contact_draped_cable", "contact_insertion", "contact_plectoneme")
+            "contact_draped_cable", "contact_insertion", "contact_plectoneme",
+            "contact_crossing")
 PLANE = {"kind": "plane", "point": [0.0, 0.0, -0.005], "normal": [0.0, 0.0, 2.0],
          "friction": 0.3}
 SPHERE = {"kind": "sphere", "centre": [0.1, 0.0, 0.05], "radius": 0.02}

@@ -4,16 +4,14 @@ plus the pairs' couplings) against central differences of the residual, the coup
 block's solve against a dense one, the broad phase against a brute-force search written
 here, pairs near along the rod never paired, a closing coil held apart in a simulation
 (with the energy audit) where without self-contact its turns pass through each other,
-statics with self-contact, and the refusal of contact between the rods of an assembly."""
+statics with self-contact (an assembly's rods: tests/runtime/test_rod_rod_contact.py)."""
 
 from __future__ import annotations
 
 import math
 
 import numpy as np
-import pytest
 
-from runtime.errors import ParameterError
 from runtime.problem.assemble import build_model
 from runtime.problem.schema import Problem
 
@@ -241,7 +239,7 @@ def test_a_closing_coil_is_held_apart_and_audited():
         res = simulate(p, snapshot_every=0.005,
                        snapshot_sink=lambda t, y, yp, s=snaps: s.append(y.copy()))
         assert res.status == "finished", res.message
-        states[on] = (build_model(p), snaps, res.summary())
+        states[on] = (build_model(p), snaps, res.summary(), res.self_contact)
     r = 0.002
     passed = _worst_gap(states[False][0], states[False][1], r)
     assert passed < -r                    # without self-contact the turns pass through
@@ -253,6 +251,15 @@ def test_a_closing_coil_is_held_apart_and_audited():
     assert -0.05 * r < held < 0.1 * r
     assert _worst_gap(states[True][0], states[True][1], r) > -0.25 * r
     assert states[True][2]["energy_balance_max_rel"] < 1e-4
+    # the pairs' values on the output grid (series.npz) and in the summary
+    series, summary = states[True][3], states[True][2]["self_contact"]
+    assert set(series) == {"energy", "dissipation", "friction_dissipation", "gap_min",
+                           "pairs", "force"}
+    assert all(v.shape == (16,) for v in series.values())      # t = 0, 0.01, ... 0.15
+    assert -0.25 * r < summary["gap_min"]["value"] < 0.1 * r
+    assert summary["pairs_max"] > 0 and summary["force"]["max"] > 0.0
+    assert np.all(series["energy"] >= 0.0) and np.all(series["dissipation"] >= 0.0)
+    assert not states[False][3] and "self_contact" not in states[False][2]
 
 
 def test_statics_with_self_contact_uses_the_sparse_jacobian():
@@ -279,20 +286,6 @@ def test_statics_with_self_contact_uses_the_sparse_jacobian():
             Jfd[:, k] = (r1 - r0) / 2e-7
     scale = np.abs(J).max()
     assert np.abs(J - Jfd).max() < 1e-5 * scale
-
-
-def test_contact_between_the_rods_of_an_assembly_is_refused():
-    from runtime.problem.assemble_system import build_system
-    from runtime.problem.assembly import Assembly
-    from tests.runtime.test_assembly_problem import _base as assembly
-
-    m = assembly()
-    m["contact"] = {"radius": {"a": 0.008}, "self": True}
-    a = Assembly.from_mapping(m)                      # the format takes it
-    with pytest.raises(ParameterError) as exc:
-        build_system(a)
-    assert exc.value.name == "contact.self" and "\n" not in str(exc.value)
-    assert "not available" in str(exc.value)
 
 
 def test_the_plectoneme_example_holds_its_strands_apart():

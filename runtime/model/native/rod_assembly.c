@@ -1052,7 +1052,9 @@ int kvrod_energies_contact(const kvrod_rod* rod, int m, const double* ts, const 
   if (check_rod(rod)) return check_rod(rod);
   const size_t n = (size_t) kvrod_n_state(rod->N, rod->nb);
   const int nobs = has_contact(rod) ? rod->contact->nobs : 0;
-  const size_t stride = (size_t)NDIAG + (size_t)NCV * (size_t)nobs;
+  const kvrod_self* S = has_contact(rod) ? rod->contact->self : NULL;
+  if (S && !S->last) return -4;
+  const size_t stride = (size_t)NDIAG + (size_t)NCV * (size_t)nobs + (S ? NSV : 0);
   work_t W;
   for (int k = 0; k < m; ++k) {
     double* o = out + (size_t)k * stride;
@@ -1060,11 +1062,13 @@ int kvrod_energies_contact(const kvrod_rod* rod, int m, const double* ts, const 
     if (!nobs) {
       const int rc = kvrod_energies(rod, 1, ts + k, y, yps + (size_t)k * n, o);
       if (rc) return rc;
-      continue;
+    } else {
+      /* kvrod_energies' sums with the obstacles' values from the same pass */
+      if (energies_one(rod, y, yps + (size_t)k * n, o, 0, &W)) return -3;
+      if (rod->contact->energies_values(rod, y, o, o + NDIAG)) return -3;
     }
-    /* kvrod_energies' sums with the obstacles' values from the same pass */
-    if (energies_one(rod, y, yps + (size_t)k * n, o, 0, &W)) return -3;
-    if (rod->contact->energies_values(rod, y, o, o + NDIAG)) return -3;
+    /* the pairs' values the energies just computed (kvrod_contact_energies keeps them) */
+    if (S) memcpy(o + NDIAG + (size_t)NCV * (size_t)nobs, S->last, sizeof(double) * NSV);
   }
   return 0;
 }

@@ -286,6 +286,7 @@ static int energies_values(const kvrod_rod* rod, const double* y, double* e, dou
     if (rc) return rc;
     e[1] += sv[0];
     e[2] += sv[1];
+    if (rod->contact->self->last) memcpy(rod->contact->self->last, sv, sizeof sv);
   }
   return support_forces(rod, y, &W, e);
 }
@@ -312,11 +313,14 @@ static void turn(double* q, const double* w, double h) {
 static double norm3(const double* a) { return sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]); }
 
 double kvrod_contact_max_step(const kvrod_rod* rod, const double* y) {
-  if (!active(rod) || !(rod->contact->step_fraction > 0.0)) return HUGE_VAL;
+  /* the self-contact pairs' bound (rod_self_contact.c), then the obstacles' */
+  const double hself = rod->contact && rod->contact->self ? kvrod_self_max_step(rod, y)
+                                                          : HUGE_VAL;
+  if (!active(rod) || !(rod->contact->step_fraction > 0.0)) return hself;
   const kvrod_contact* C = rod->contact;
   cwork W;
   cseg g;
-  double hmax = HUGE_VAL, obs2[NOBS];
+  double hmax = hself, obs2[NOBS];
   for (int o = 0; o < C->nobs; ++o) {
     const int kind = C->kind[o];
     if (kind < 0 || kind >= KV_NKINDS) return HUGE_VAL;

@@ -59,6 +59,28 @@ typedef struct {
   int* rowslot;          /* work, n: -1 */
   int* rowfill;          /* work, m2cap */
   int dropped;           /* pairs whose couplings did not fit at the last Jacobian */
+  /* the contact between the rods of an assembly (system.c; nrod = 0: a single rod's,
+     reached through that rod's kvrod_contact): its nrod rods, their state offsets off
+     (nrod + 1) and first segments sg0 (nrod + 1: rod r's segments are the global
+     segments sg0[r] + 1 .. sg0[r + 1], seg and s0 run over all rods, s0 holding rod r's
+     nodes from sg0[r] + r); rowmap (n, or NULL: the row itself) where a momentum row's
+     Jacobian entries go in the couplings: its own row, its master's (a node a joint ties
+     to another: the system adds the node's momentum row to its master's) or -1 (a node
+     a joint holds at ground: its rows are the support's); J the system's Jacobian
+     buffer, rod r's band storage at J + ab_start[r] (leading dimension ldabs[r]) */
+  int nrod;
+  const kvrod_rod* const* rods;
+  const int* off;
+  const int* sg0;
+  const int* rowmap;
+  double* J;
+  const long long* ab_start;
+  const int* ldabs;
+  double* last;          /* NSV: the values of the last kvrod_contact_energies (a single
+                            rod's: kvrod_energies_contact's outputs; NULL: not kept) */
+  double step_fraction;  /* the step bound by the approach speed (as an obstacle's: a
+                            step closes at most this fraction of a pair's gap plus delta;
+                            0: none) */
 } kvrod_self;
 
 struct kvrod_contact_s {
@@ -133,9 +155,28 @@ int kvrod_self_residual(const kvrod_rod* rod, const double* y, double* res);
 int kvrod_self_jacobian(const kvrod_rod* rod, const double* y, double cy, int ldab,
                         double* ab, int col0, int s0, int s1);
 /* self-contact energies: e[1] += E, e[2] += P_diss over the pairs in reach; v (NSV) the
-   pairs' values (rod_self_contact.c) */
-#define NSV 5
+   pairs' values (rod_self_contact.c): E (J), P_diss (W), its friction part P_fric (W),
+   the smallest gap (m; HUGE_VAL: no pair), the number of pairs in reach, the sum of the
+   magnitudes of the pairs' forces |F_12| (N) */
+#define NSV 6
 int kvrod_self_values(const kvrod_rod* rod, const double* y, double* v);
+/* the contact between the rods of an assembly (kvrod_self with nrod > 0; y and res the
+   system's state and residual): the forces into res before the system's holds act on
+   it; the Jacobian's entries within each segment (cy = 1) into its rod's band in S->J
+   and those between the two segments of a pair into the dynamic couplings (rows mapped
+   by S->rowmap); the values (NSV) of the pairs in reach */
+int kvsys_pairs_residual(const kvrod_self* S, const double* y, double* res);
+int kvsys_pairs_jacobian(const kvrod_self* S, const double* y);
+int kvsys_pairs_couplings(kvrod_self* S, const double* y);
+int kvsys_pairs_values(const kvrod_self* S, const double* y, double* v);
+/* the largest step (s) that closes no pair's gap by more than S->step_fraction of it
+   plus delta at the nodes' current velocities, for pairs within a horizon D (twice the
+   longest segment, four largest radii and CONTACT_CUTOFF delta) found by the sweep;
+   pairs farther apart close at most twice the largest node speed about the mean
+   velocity, which bounds the step by step_fraction D / that (HUGE_VAL: no bound); a
+   single rod's (through kvrod_contact_max_step) and an assembly's */
+double kvrod_self_max_step(const kvrod_rod* rod, const double* y);
+double kvsys_pairs_max_step(const kvrod_self* S, const double* y);
 /* (rod library, rod_assembly.c) the Newton matrix of a rod with self-contact into its
    coupled band block: the band (kvrod_jacobian_band with cy = 1) and the couplings; the
    step loop's kv_sysjac_fn (ctx: the kvrod_rod; blocks unused: kvrod_self points into
@@ -143,7 +184,8 @@ int kvrod_self_values(const kvrod_rod* rod, const double* y, double* v);
 int kvrod_jacobian_system(const void* ctx, double t, const double* y, const double* yp,
                           double cj, void* blocks);
 /* (rod library, rod_assembly.c) kvrod_energies with the per obstacle values after each
-   state's NDIAG scalars (stride NDIAG + NCV nobs) */
+   state's NDIAG scalars, then with self-contact the pairs' NSV values (stride NDIAG +
+   NCV nobs (+ NSV)) */
 int kvrod_energies_contact(const kvrod_rod* rod, int m, const double* ts, const double* ys,
                            const double* yps, double* out);
 

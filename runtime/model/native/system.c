@@ -79,7 +79,7 @@ static int free_residual(const kvsys* s, double t, const double* y, const double
     for (int q = 0; q < BODY_NR; ++q)
       if (row[q] >= 0) res[row[q]] += rb[q];
   }
-  return 0;
+  return s->pairs ? s->pair_residual(s->pairs, y, res) : 0;
 }
 
 int kvsys_residual(const kvsys* s, double t, const double* y, const double* yp,
@@ -166,6 +166,7 @@ int kvsys_jacobian(const kvsys* s, double t, const double* y, const double* yp, 
         if (d >= 0) s->J[d] += JB[q + x * BODY_NR];
       }
   }
+  if (s->pairs && s->pair_jacobian(s->pairs, y)) return -3;
   /* the holds: the slaves' momentum rows into their masters', then the held rows */
   for (int q = 0; q < s->ncopy; ++q) s->J[s->copy_dst[q]] += s->J[s->copy_src[q]];
   for (int q = 0; q < s->nzero; ++q) s->J[s->zero[q]] = 0.0;
@@ -178,7 +179,7 @@ int kvsys_jacobian(const kvsys* s, double t, const double* y, const double* yp, 
     if (H[2] >= 0)
       for (int q = 0; q < 6; ++q) s->J[s->hold_e[6 * h + q]] = -1.0;
   }
-  return 0;
+  return s->pairs && s->pair_couplings(s->pairs, y) ? -3 : 0;
 }
 
 /* link k's forces Q (18) and its diagnostics (W, D, e 6, resultant 6: 14 values) */
@@ -197,9 +198,11 @@ int kvsys_link_values(const kvsys* s, int k, const double* y, double* Q, double*
    hold's free momentum row (3: the force the support or the tie exerts on that node's
    rod, inertia included), every link's force on node a and moment on side a (6, spatial:
    f_a and R(p_a1) T_a1 + R(p_a2) T_a2), then, on obstacles, each obstacle's NCV values
-   (obstacle_values below; nextra says how many); NaN where not computed. */
+   (obstacle_values below), and with pairs their NSV values last (kvsys_pairs_values);
+   nextra says how many; NaN where not computed. */
 /* the step loop's kv_maxstep_fn of an assembly: the smallest of its rods' contact step
-   bounds (kvrod_contact_max_step; HUGE_VAL when no rod touches anything) */
+   bounds (kvrod_contact_max_step) and its pairs' (kvsys_pairs_max_step); HUGE_VAL when
+   nothing touches anything */
 double kvsys_max_step(const void* ctx, double t, const double* y, const double* yp) {
   (void) t; (void) yp;
   const kvsys* s = (const kvsys*) ctx;
@@ -210,6 +213,10 @@ double kvsys_max_step(const void* ctx, double t, const double* y, const double* 
       continue;
     const double hr = rod->contact->max_step(rod, y + s->off[r]);
     if (hr < h) h = hr;
+  }
+  if (s->pairs && s->pair_max_step) {
+    const double hp = s->pair_max_step(s->pairs, y);
+    if (hp < h) h = hp;
   }
   return h;
 }
@@ -268,6 +275,12 @@ int kvsys_energies(const kvsys* s, int m, const double* ts, const double* ys,
       o[0] += T[0];
       o[3] += T[1];
     }
+    double pv[NSV];
+    if (s->pairs) {
+      if (s->pair_values(s->pairs, y, pv)) return -3;
+      o[1] += pv[0];
+      o[2] += pv[1];
+    }
     if (m != 1) continue;
     if (s->nhold) {
       const int rc = free_residual(s, ts[k], y, yp, s->scratch, &W);
@@ -293,7 +306,11 @@ int kvsys_energies(const kvsys* s, int m, const double* ts, const double* ys,
       for (int q = 0; q < 3; ++q) { o[x + 6 * l + q] = Q[q]; o[x + 6 * l + 3 + q] = M[q]; }
     }
     x += 6 * s->nlink;
-    if (x < nen && obstacle_values(s, y, o + x, nen - x)) return -3;
+    const int npv = s->pairs ? NSV : 0;
+    if (x < nen - npv && obstacle_values(s, y, o + x, nen - npv - x)) return -3;
+    /* the pairs' values: the last NSV extras */
+    if (s->pairs)
+      for (int q = 0; q < NSV; ++q) o[nen - NSV + q] = pv[q];
   }
   return 0;
 }

@@ -21,6 +21,7 @@
 #ifndef KVROD_SYSTEM_H
 #define KVROD_SYSTEM_H
 #include "rod_assembly.h"
+#include "rod_contact.h"
 
 typedef struct {
   int n, nrod;
@@ -69,6 +70,19 @@ typedef struct {
   double gravity[3];             /* scaled gravity acting on the bodies (m/s^2) */
   int nextra;                    /* extras per state of kvsys_energies (see there) */
   double* scratch;               /* n doubles of work (the holds' free rows) */
+  /* the contact between the rods' segments (contact.self; NULL: none): the pairs over
+     all rods (kvrod_self with nrod > 0) and the contact library's kvsys_pairs_*
+     (rod_contact.h; the rod library reaches them through these pointers). Their forces
+     join the free residual (before the holds act), their energy W and their
+     dissipation 2D; their Jacobian's entries within a segment its rod's band (before the
+     slaves' rows move to their masters'), those between two segments the blocks'
+     dynamic couplings */
+  kvrod_self* pairs;
+  int (*pair_residual)(const kvrod_self* S, const double* y, double* res);
+  int (*pair_jacobian)(const kvrod_self* S, const double* y);
+  int (*pair_couplings)(kvrod_self* S, const double* y);
+  int (*pair_values)(const kvrod_self* S, const double* y, double* v);
+  double (*pair_max_step)(const kvrod_self* S, const double* y);
 } kvsys;
 
 int kvsys_residual(const kvsys* s, double t, const double* y, const double* yp, double* res);
