@@ -187,6 +187,13 @@ typedef struct {
     double s_cj;
     long long s_stamp, lu_stamp;
     int s_have_lu;
+    /* an output grid of whole states (solve's t_eval): after every accepted step, y and
+       y' at each t_grid[k_grid] that the step reaches (direction * (t_grid - t) <= 0) are
+       interpolated on it into rows k_grid of grid_y, grid_yp (m_grid x n, row-major,
+       owned by Python), so that the loop need not return at each output time */
+    int m_grid, k_grid;
+    const double *t_grid;
+    double *grid_y, *grid_yp;
 } kv_ida;
 
 enum { SEC_RES, SEC_JAC, SEC_LU, SEC_NEWTON, SEC_EN, SEC_DRIVE };
@@ -1189,9 +1196,21 @@ static int replay_step(kv_run *R)
     return 0;
 }
 
+/* the outputs of the grid that this step reaches, on its interpolant (IDAGetDky; what
+   BDFDenseOutput.values computes from the same history) */
+static void grid_step(kv_ida *S)
+{
+    const size_t n = (size_t)S->n;
+    while (S->k_grid < S->m_grid && S->direction * (S->t_grid[S->k_grid] - S->t) <= 0.0) {
+        const size_t k = (size_t)S->k_grid++;
+        interp(S, 1, S->t_grid + k, S->grid_y + k * n, S->grid_yp + k * n);
+    }
+}
+
 static int after_step(kv_run *R)
 {
     kv_ida *S = R->S;
+    if (S->k_grid < S->m_grid) grid_step(S);
     if (S->k_rep < S->m_rep && replay_step(R)) return 1;
     if (S->audit) {
         if (audit_step(R)) return 1;
