@@ -675,6 +675,8 @@ class RodModel:
                         n_energies=self.n_energies)
         if self.contact is not None:
             kern.max_step = address(self._clib.kvrod_max_step)
+        elif self.self_contact is None:
+            kern.audit_energies = address(lib.kvrod_audit_powers)
         if self.self_contact is not None:
             self.blocks  # noqa: B018 (attached before the first Jacobian)
             kern.system_jacobian = address(lib.kvrod_jacobian_system)

@@ -183,7 +183,11 @@ class CKernels:
 
     ``max_step`` (optional, 0 if none): ``double f(ctx, t, y, yp)``, the largest next step
     the state allows (contact: ``kvrod_max_step``); the loop applies it after every
-    accepted step as the BDF's ``_state_max_step`` does."""
+    accepted step as the BDF's ``_state_max_step`` does.
+
+    ``audit_energies`` (optional, 0 if none): the energies' signature, filling only 2D
+    and the powers (values 2, 3, 4 of a state) bit for bit as ``energies`` does
+    (``kvrod_audit_powers``): the energy audit's quadrature points need no more."""
 
     def __init__(self, residual: int, jacobian: int, energies: int, ctx: int,
                  drive=None, keep: Any = None, jacobian_cells: int = 0,
@@ -199,3 +203,4 @@ class CKernels:
         self.keep = keep
         self.system_jacobian = 0
         self.max_step = 0
+        self.audit_energies = 0

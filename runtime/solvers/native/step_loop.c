@@ -194,6 +194,9 @@ typedef struct {
     int m_grid, k_grid;
     const double *t_grid;
     double *grid_y, *grid_yp;
+    /* NULL, or en's 2D and powers alone (values 2, 3, 4 of a state, bit for bit those of
+       en; the others need not be filled): the audit's quadrature points need no more */
+    kv_en_fn en_audit;
 } kv_ida;
 
 enum { SEC_RES, SEC_JAC, SEC_LU, SEC_NEWTON, SEC_EN, SEC_DRIVE };
@@ -263,8 +266,8 @@ static int call_jac(kv_run *R, double t, double cj)
 
 /* energies of m states (rows of ys, yps) at times ts: one kernel call when the loads are
    constant over all of them, else one per state (as RodModel.energies) */
-static int call_en(kv_run *R, int m, const double *ts, const double *ys, const double *yps,
-                   double *out)
+static int call_en_fn(kv_run *R, kv_en_fn en, int m, const double *ts, const double *ys,
+                      const double *yps, double *out)
 {
     kv_ida *S = R->S;
     if (drive_to(R, ts[0])) return 1;
@@ -277,7 +280,7 @@ static int call_en(kv_run *R, int m, const double *ts, const double *ys, const d
     if (steady) {
         TIC(S);
         USER_MODE(R);
-        rc = S->en(S->ctx, m, ts, ys, yps, out);
+        rc = en(S->ctx, m, ts, ys, yps, out);
         CORE_MODE(R);
         TOC(S, SEC_EN);
         return rc;
@@ -286,12 +289,18 @@ static int call_en(kv_run *R, int m, const double *ts, const double *ys, const d
         if (drive_to(R, ts[i])) return 1;
         TIC(S);
         USER_MODE(R);
-        rc = S->en(S->ctx, 1, ts + i, ys + (size_t)i * S->n, yps + (size_t)i * S->n,
-                   out + (size_t)i * S->nen);
+        rc = en(S->ctx, 1, ts + i, ys + (size_t)i * S->n, yps + (size_t)i * S->n,
+                out + (size_t)i * S->nen);
         CORE_MODE(R);
         TOC(S, SEC_EN);
     }
     return rc;
+}
+
+static int call_en(kv_run *R, int m, const double *ts, const double *ys, const double *yps,
+                   double *out)
+{
+    return call_en_fn(R, R->S->en, m, ts, ys, yps, out);
 }
 
 /* ---- vector helpers ---------------------------------------------------------------- */
@@ -1112,7 +1121,7 @@ static int audit_step(kv_run *R)
     double tq[3], e[3 * KV_MAXEN];
     for (int j = 0; j < 3; ++j) tq[j] = t0 + h * S->gl_x[j];
     interp(S, 3, tq, S->wy, S->wyp);
-    if (call_en(R, 3, tq, S->wy, S->wyp, e)) return 1;
+    if (call_en_fn(R, S->en_audit ? S->en_audit : S->en, 3, tq, S->wy, S->wyp, e)) return 1;
     double g[3][2];
     for (int j = 0; j < 3; ++j) {
         g[j][0] = e[j * S->nen + 2];

@@ -140,6 +140,7 @@ class CoreStruct(ctypes.Structure):
         + _fields(_I, "s_have_lu")
         + _fields(_I, "m_grid", "k_grid")
         + _fields(_P, "t_grid", "grid_y", "grid_yp")
+        + _fields(_P, "en_audit")
     )
     #: names of the entries of ``sec`` (seconds per part when ``timing`` is set)
     SECTIONS = ("residual", "jacobian", "lu", "newton_solve_update", "energies", "drive")
@@ -174,6 +175,7 @@ class CoreLink:
         if kern is not None:
             s.res, s.jac, s.en, s.ctx = kern.residual, kern.jacobian, kern.energies, kern.ctx
             s.nen = kern.n_energies
+            s.en_audit = getattr(kern, "audit_energies", 0) or None
             s.maxstep = kern.max_step or None
             self._keep.append(kern.keep)
             self.has_energies = bool(kern.energies)
