@@ -438,3 +438,41 @@ def test_solve_interpolates_its_output_grid_in_the_compiled_loop(moving, monkeyp
     assert ev.status == 1 and np.array_equal(ev.t, ev_ref.t)
     assert ev.t.size < grid.size and ev.t[-1] <= ev.t_events[0][0]
     assert np.array_equal(ev.y, ev_ref.y)
+
+
+_FOLLOWER = [{"kind": "force", "at": "end", "frame": "follower", "vector": [0.02, 0.01, -0.03]},
+             {"kind": "moment", "at": "end", "frame": "follower",
+              "vector": [-0.002, 0.001, 0.002]},
+             {"kind": "gravity", "vector": [0.0, -9.81, 1.0]}]
+
+
+@pytest.mark.parametrize("kw", [dict(), dict(tau=None, **MAXWELL),
+                                dict(start="pinned", end="clamped"),
+                                dict(start="clamped", end="clamped", loads=_FOLLOWER),
+                                dict(loads=_FOLLOWER)])
+def test_the_audits_powers_are_the_energies_own_bits(kw):
+    """The energy audit's quadrature points evaluate 2D and the powers alone
+    (kvrod_audit_powers, CKernels.audit_energies): bit for bit the values of the full
+    energies (kvrod_energies), so that the audit and every output stay the same; the
+    kinetic energy and the supports' moments are not evaluated there (left 0)."""
+    import ctypes
+
+    from tests.rods import random_state
+
+    m = rod_model(7, **kw)
+    kern = m.c_kernels()
+    assert kern.audit_energies and kern.audit_energies != kern.energies
+    rng = np.random.default_rng(7)
+    ys = np.array([random_state(m, rng) for _ in range(5)])
+    yps = rng.standard_normal(ys.shape)
+    ts = np.zeros(len(ys))
+    fn = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_int, ctypes.c_void_p,
+                          ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
+    m.at(0.0)
+    full, powers = (np.full((len(ys), kern.n_energies), np.nan) for _ in range(2))
+    for f, out in ((kern.energies, full), (kern.audit_energies, powers)):
+        assert fn(f)(kern.ctx, len(ys), ts.ctypes.data, ys.ctypes.data, yps.ctypes.data,
+                     out.ctypes.data) == 0
+    assert np.array_equal(powers[:, 2:5], full[:, 2:5])
+    assert np.all(full[:, [2, 3]] != 0.0) and np.all(full[:, 0] > 0.0)
+    assert np.all(powers[:, 0] == 0.0)
