@@ -476,3 +476,19 @@ def test_the_audits_powers_are_the_energies_own_bits(kw):
     assert np.array_equal(powers[:, 2:5], full[:, 2:5])
     assert np.all(full[:, [2, 3]] != 0.0) and np.all(full[:, 0] > 0.0)
     assert np.all(powers[:, 0] == 0.0)
+
+
+def test_the_output_grid_in_the_compiled_loop_backwards_and_at_the_start():
+    """The grid in the compiled loop integrating backwards (t_eval descending), with an
+    output at t0 (the initial values) and one at the very end: the NumPy path's bits."""
+    from runtime.solvers.integrator import solve
+
+    p = Oscillator()
+    for span, t_eval in (((5.0, 0.0), np.linspace(5.0, 0.0, 41)),
+                         ((0.0, 5.0), np.array([0.0, 1e-4, 2.5, 5.0]))):
+        a = solve(p, span, np.array([1.0, 0.0]), None, t_eval=t_eval, rtol=1e-8, atol=1e-10)
+        b = solve(p, span, np.array([1.0, 0.0]), None, t_eval=t_eval, rtol=1e-8, atol=1e-10,
+                  compiled_loop=False)
+        assert a.status == 0 and a.counters == b.counters and np.array_equal(a.t, t_eval)
+        assert np.array_equal(a.y, b.y) and np.array_equal(a.yp, b.yp)
+        np.testing.assert_allclose(a.y[0], np.cos(2.0 * (t_eval - span[0])), atol=1e-6)
