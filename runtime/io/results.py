@@ -43,13 +43,31 @@ def write_json(path: Path, data: dict) -> Path:
     return write_text(path, json.dumps(jsonable(data), indent=2) + "\n")
 
 
+#: zlib level of the NPZ files (``np.savez_compressed`` uses zlib's default, 6): level 1
+#: wrote the N = 50 cantilever's series.npz (0.81 MB of arrays) in ~60 % of the time for
+#: a 1 % larger file (0.289 vs 0.285 MB); floating-point series hardly compress further
+NPZ_COMPRESSLEVEL = 1
+
+
 def write_npz(path: Path, **arrays: np.ndarray) -> Path:
-    """Write arrays to a compressed NPZ atomically."""
+    """Write arrays to a compressed NPZ atomically: what ``np.savez_compressed`` writes
+    (an entry ``<key>.npy`` per array, read back by ``np.load``), at
+    :data:`NPZ_COMPRESSLEVEL`."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path, suffix=".npz") as tmp:
-        np.savez_compressed(tmp, **arrays)
+        _write_archive(tmp, arrays)
     return path
+
+
+def _write_archive(tmp: Path, arrays: dict[str, Any]) -> None:
+    # a function of its own: the ZipFile is released (its __del__ runs) before
+    # atomic_path delivers a held signal, not after, where an interrupt is lost
+    with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_DEFLATED,
+                         compresslevel=NPZ_COMPRESSLEVEL) as archive:
+        for key, value in arrays.items():
+            with archive.open(f"{key}.npy", "w", force_zip64=True) as entry:
+                np.lib.format.write_array(entry, np.asanyarray(value), allow_pickle=True)
 
 
 class DamagedFileError(ValueError):

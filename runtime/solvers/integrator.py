@@ -197,7 +197,9 @@ def solve(
         d = np.diff(t_eval)
         if (direction > 0 and np.any(d <= 0)) or (direction < 0 and np.any(d >= 0)):
             raise ValueError("t_eval must be strictly monotonic in the direction of t_span")
-        outputs: OutputGrid | StepOutputs = OutputGrid(t_eval, n, direction)
+        # a progress callback is called at the outputs: the loop stops at each for it
+        outputs: OutputGrid | StepOutputs = OutputGrid(t_eval, n, direction,
+                                                       in_loop=progress is None)
     else:
         outputs = StepOutputs()
     ev = None

@@ -15,17 +15,35 @@ from runtime.solvers.roots import bracketed_root
 
 class OutputGrid:
     """y and y' at the times ``t_eval`` (sorted in the direction of integration), in
-    preallocated (m, n) arrays; the driver stops at each (``next_time``), so the
-    compiled loop runs from one output to the next."""
+    preallocated (m, n) arrays.
+
+    With the compiled step loop the outputs are interpolated there, after each step that
+    reaches them (``attach``: ``CoreLink.enable_grid``, the same interpolant and
+    arithmetic as ``BDFDenseOutput.values``), so the loop does not return at each; with
+    ``in_loop=False`` (a progress callback that expects to be called at the outputs), or
+    without the compiled loop, the driver stops at each (``next_time``) and they are
+    interpolated here."""
 
     sparse = True
 
-    def __init__(self, t_eval: np.ndarray, n: int, direction: float) -> None:
+    def __init__(self, t_eval: np.ndarray, n: int, direction: float,
+                 in_loop: bool = True) -> None:
         self.t_eval = np.asarray(t_eval, dtype=float)
         self.direction = direction
         self.y = np.empty((self.t_eval.size, n))
         self.yp = np.empty((self.t_eval.size, n))
         self.k = 0
+        self.in_loop = in_loop
+        self._core = None
+
+    def attach(self, solver) -> bool:
+        """Interpolate the outputs in the compiled loop (with ``in_loop``); True: the
+        driver need not call ``step`` after every step either way."""
+        core = getattr(solver, "core", None)
+        if self._core is None and self.in_loop and core is not None:
+            core.enable_grid(self.t_eval, self.k, self.y, self.yp)
+            self._core = core
+        return True
 
     def begin(self, run) -> None:
         # an output at t0 itself comes from the initial values
@@ -34,11 +52,16 @@ class OutputGrid:
             self.k += 1
 
     def next_time(self) -> float:
-        return float(self.t_eval[self.k]) if self.k < self.t_eval.size else math.inf \
-            if self.direction > 0 else -math.inf
+        if self.k < self.t_eval.size and self._core is None:
+            return float(self.t_eval[self.k])
+        return math.inf if self.direction > 0 else -math.inf
 
     def step(self, run, dense: BDFDenseOutput, t0: float, t1: float) -> None:
         t_stop = run.stop_at if run.stop_at is not None else t1
+        if self._core is not None:     # filled in the loop, up to the last step
+            self.k = self._core.grid_done
+            while self.k > 0 and self.direction * (self.t_eval[self.k - 1] - t_stop) > 0:
+                self.k -= 1            # past a terminal event's time: not reached
         j0 = self.k
         while (self.k < self.t_eval.size
                and self.direction * (self.t_eval[self.k] - t_stop) <= 0):

@@ -188,7 +188,11 @@ class CKernels:
     ``error_weights`` (optional, 0 if none): ``int f(ctx, y, rtol, atol, w)``, the state's
     change of the error test's weights ``w = 1/(rtol |y| + atol)`` in place (contact:
     ``kvrod_error_weights``); the loop applies it after every accepted step as the BDF's
-    ``_state_error_weights`` does; a negative return fails the run."""
+    ``_state_error_weights`` does; a negative return fails the run.
+
+    ``audit_energies`` (optional, 0 if none): the energies' signature, filling only 2D
+    and the powers (values 2, 3, 4 of a state) bit for bit as ``energies`` does
+    (``kvrod_audit_powers``): the energy audit's quadrature points need no more."""
 
     def __init__(self, residual: int, jacobian: int, energies: int, ctx: int,
                  drive=None, keep: Any = None, jacobian_cells: int = 0,
@@ -205,3 +209,4 @@ class CKernels:
         self.system_jacobian = 0
         self.max_step = 0
         self.error_weights = 0
+        self.audit_energies = 0

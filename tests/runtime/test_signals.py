@@ -137,3 +137,27 @@ def test_an_interrupted_simulation_in_a_calibration_is_an_interrupt():
             _simulate_tip(problem, 0.05, 20000.0)        # minutes of stepping
     finally:
         timer.cancel()
+
+
+def test_npz_files_are_deflated_archives_that_np_load_reads_back(tmp_path):
+    """write_npz writes what np.savez_compressed wrote (one deflated ``<key>.npy`` entry
+    per array; zlib level NPZ_COMPRESSLEVEL instead of the default): every dtype and
+    shape comes back as it went in."""
+    import zipfile
+
+    from runtime.io.results import read_npz, write_npz
+
+    arrays = {"t": np.linspace(0.0, 1.0, 501), "count": np.array(7),
+              "index": np.arange(12, dtype=np.int32).reshape(3, 4),
+              "names": np.array(["start", "end"]), "empty": np.zeros((0, 3)),
+              "flags": np.array([True, False]), "fortran": np.asfortranarray(np.eye(3)[:, :2])}
+    path = write_npz(tmp_path / "x.npz", **arrays)
+    with zipfile.ZipFile(path) as z:
+        infos = z.infolist()
+    assert sorted(i.filename for i in infos) == sorted(f"{k}.npy" for k in arrays)
+    assert all(i.compress_type == zipfile.ZIP_DEFLATED for i in infos)
+    back = read_npz(path)
+    for k, a in arrays.items():
+        assert back[k].dtype == a.dtype and back[k].shape == a.shape, k
+        assert np.array_equal(back[k], a), k
+    assert [p.name for p in tmp_path.iterdir()] == ["x.npz"]

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from runtime.problem.registry import load_problem
-from runtime.simulate.simulate import simulate
+from runtime.simulate.simulate import simulate, static_equilibrium
 from runtime.solvers import driver
 from runtime.solvers.bdf import BDF, IntegrationError
 from runtime.solvers.integrator import consistent_initial
@@ -385,3 +385,110 @@ def test_interpolation_in_c_sums_like_numpy_at_every_size_and_alignment(n, k):
             wy += c[j, i] * phi[j]
             wyp += d[j, i] * phi[j]
         assert np.array_equal(y[i], wy) and np.array_equal(yp[i], wyp), i
+
+
+@pytest.mark.parametrize("moving", [False, True])
+def test_solve_interpolates_its_output_grid_in_the_compiled_loop(moving, monkeypatch):
+    """solve(t_eval=...) with the compiled loop fills the output grid there, after each
+    step that reaches an output (issue 33: a return to Python per output cost ~25 us,
+    a fifth of the N = 50 integration): the loop returns a few times, not once per
+    output, and the outputs are those of the NumPy path and of a run that stops at each
+    output (a progress callback) bit for bit, through a moving clamp's drive callback
+    too; a terminal event keeps the outputs up to its time only."""
+    from runtime.problem.assemble import build_model
+    from runtime.solvers.integrator import solve
+    from runtime.solvers.native import step_loop
+
+    if moving:
+        model = build_model(load_problem("examples/base_excitation.toml",
+                                         {"rod.elements": 6, "simulation.t_end": 0.6}))
+        y0 = model.constrain(model.initial_state(0.0))
+        y0, yp0 = consistent_initial(model, 0.0, y0, np.zeros(model.n))
+    else:                                  # released from its static deflection
+        problem = load_problem("cantilever", {"rod.elements": 6})
+        model = build_model(problem)
+        y_static = static_equilibrium(problem, model).y
+        model.at(0.0)
+        y0, yp0 = consistent_initial(model, 0.0, y_static, np.zeros(model.n))
+    grid = np.linspace(0.0, 0.6, 61)
+    kw = dict(rtol=1e-6, atol=1e-9, t_eval=grid)
+    ref = solve(model, (0.0, 0.6), y0, yp0, compiled_loop=False, **kw)
+    ticks: list[float] = []
+    stopped = solve(model, (0.0, 0.6), y0, yp0, progress=ticks.append, **kw)
+    runs: list[int] = []
+    advance = step_loop.CoreLink.advance
+    monkeypatch.setattr(step_loop.CoreLink, "advance",
+                        lambda self, *a: runs.append(1) or advance(self, *a))
+    res = solve(model, (0.0, 0.6), y0, yp0, **kw)
+    assert res.status == 0 and res.counters == ref.counters == stopped.counters
+    assert res.counters["nstep"] > 100 and len(ticks) >= grid.size // 2
+    assert 0 < len(runs) <= 2 + res.counters["nstep"] // 1000 < grid.size // 10
+    for other in (ref, stopped):
+        assert np.array_equal(res.t, other.t)
+        assert np.array_equal(res.y, other.y) and np.array_equal(res.yp, other.yp)
+
+    i_x = int(model.phi_index[-1][0])
+    x_mid = float(res.y[i_x, grid.size // 2])
+
+    def crossing(t, y, yp):                # the tip passes its x at t = 0.3 s
+        return y[i_x] - x_mid
+    crossing.terminal = True
+    ev = solve(model, (0.0, 0.6), y0, yp0, events=crossing, **kw)
+    ev_ref = solve(model, (0.0, 0.6), y0, yp0, events=crossing, compiled_loop=False, **kw)
+    assert ev.status == 1 and np.array_equal(ev.t, ev_ref.t)
+    assert ev.t.size < grid.size and ev.t[-1] <= ev.t_events[0][0]
+    assert np.array_equal(ev.y, ev_ref.y)
+
+
+_FOLLOWER = [{"kind": "force", "at": "end", "frame": "follower", "vector": [0.02, 0.01, -0.03]},
+             {"kind": "moment", "at": "end", "frame": "follower",
+              "vector": [-0.002, 0.001, 0.002]},
+             {"kind": "gravity", "vector": [0.0, -9.81, 1.0]}]
+
+
+@pytest.mark.parametrize("kw", [dict(), dict(tau=None, **MAXWELL),
+                                dict(start="pinned", end="clamped"),
+                                dict(start="clamped", end="clamped", loads=_FOLLOWER),
+                                dict(loads=_FOLLOWER)])
+def test_the_audits_powers_are_the_energies_own_bits(kw):
+    """The energy audit's quadrature points evaluate 2D and the powers alone
+    (kvrod_audit_powers, CKernels.audit_energies): bit for bit the values of the full
+    energies (kvrod_energies), so that the audit and every output stay the same; the
+    kinetic energy and the supports' moments are not evaluated there (left 0)."""
+    import ctypes
+
+    from tests.rods import random_state
+
+    m = rod_model(7, **kw)
+    kern = m.c_kernels()
+    assert kern.audit_energies and kern.audit_energies != kern.energies
+    rng = np.random.default_rng(7)
+    ys = np.array([random_state(m, rng) for _ in range(5)])
+    yps = rng.standard_normal(ys.shape)
+    ts = np.zeros(len(ys))
+    fn = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_int, ctypes.c_void_p,
+                          ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
+    m.at(0.0)
+    full, powers = (np.full((len(ys), kern.n_energies), np.nan) for _ in range(2))
+    for f, out in ((kern.energies, full), (kern.audit_energies, powers)):
+        assert fn(f)(kern.ctx, len(ys), ts.ctypes.data, ys.ctypes.data, yps.ctypes.data,
+                     out.ctypes.data) == 0
+    assert np.array_equal(powers[:, 2:5], full[:, 2:5])
+    assert np.all(full[:, [2, 3]] != 0.0) and np.all(full[:, 0] > 0.0)
+    assert np.all(powers[:, 0] == 0.0)
+
+
+def test_the_output_grid_in_the_compiled_loop_backwards_and_at_the_start():
+    """The grid in the compiled loop integrating backwards (t_eval descending), with an
+    output at t0 (the initial values) and one at the very end: the NumPy path's bits."""
+    from runtime.solvers.integrator import solve
+
+    p = Oscillator()
+    for span, t_eval in (((5.0, 0.0), np.linspace(5.0, 0.0, 41)),
+                         ((0.0, 5.0), np.array([0.0, 1e-4, 2.5, 5.0]))):
+        a = solve(p, span, np.array([1.0, 0.0]), None, t_eval=t_eval, rtol=1e-8, atol=1e-10)
+        b = solve(p, span, np.array([1.0, 0.0]), None, t_eval=t_eval, rtol=1e-8, atol=1e-10,
+                  compiled_loop=False)
+        assert a.status == 0 and a.counters == b.counters and np.array_equal(a.t, t_eval)
+        assert np.array_equal(a.y, b.y) and np.array_equal(a.yp, b.yp)
+        np.testing.assert_allclose(a.y[0], np.cos(2.0 * (t_eval - span[0])), atol=1e-6)

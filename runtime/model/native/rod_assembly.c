@@ -791,12 +791,15 @@ static void relax_energy(const kvrod_rod* rod, const double* C0, size_t stride, 
 }
 
 /* energies and powers of one state; per-element strains and resultants if out_el != 0
- * (V (3N), F (3N), U (3(N+1)), M (3(N+1))) */
+ * (V (3N), F (3N), U (3(N+1)), M (3(N+1))); powers_only (a rod without coupled sections):
+ * only what the energy audit integrates, 2D (e[2]) and the powers (e[3], e[4]), with the
+ * same arithmetic (W comes with D; the kinetic energy and the supports' moments are not
+ * evaluated: e[0] and the moments are left 0) */
 static int energies_coupled(const kvrod_rod* rod, const double* y, const double* yp,
                             double* e, double* out_el, work_t* W);
 
 static int energies_one(const kvrod_rod* rod, const double* y, const double* yp,
-                        double* e, double* out_el, work_t* W) {
+                        double* e, double* out_el, work_t* W, int powers_only) {
   if (rod->coupled) return energies_coupled(rod, y, yp, e, out_el, W);
   const int N = rod->N;
   double Tk, Q[9], T6[6], f[3], m, nq[3], dX[3];
@@ -808,11 +811,13 @@ static int energies_one(const kvrod_rod* rod, const double* y, const double* yp,
   int i, j, k;
   for (k = 0; k < NDIAG; ++k) e[k] = 0.0;
   for (i = 0; i <= N; ++i) {            /* kinetic energy and power of the nodes' loads */
-    m = node_mass(rod, i);
-    W->arg[0] = y + i_v(rod, i); W->arg[1] = &m;
-    W->res[0] = &Tk;
-    if (rod_node_kinetic(W->arg, W->res, W->iw, W->w, 0)) return -3;
-    e[0] += Tk;
+    if (!powers_only) {
+      m = node_mass(rod, i);
+      W->arg[0] = y + i_v(rod, i); W->arg[1] = &m;
+      W->res[0] = &Tk;
+      if (rod_node_kinetic(W->arg, W->res, W->iw, W->w, 0)) return -3;
+      e[0] += Tk;
+    }
     if (node_force(rod, i, y, W, f)) return -3;
     for (k = 0; k < 3; ++k) e[3] += f[k] * y[i_v(rod, i) + k];
   }
@@ -834,10 +839,12 @@ static int energies_one(const kvrod_rod* rod, const double* y, const double* yp,
     }
     for (l = 0; l < nl; ++l) {
       const int s = i + l;
-      W->arg[0] = y + i_om(rod, s); W->arg[1] = segp(rod, s);
-      W->res[0] = &Tk;
-      if (rod_segment_kinetic(W->arg, W->res, W->iw, W->w, 0)) return -3;
-      e[0] += Tk;
+      if (!powers_only) {
+        W->arg[0] = y + i_om(rod, s); W->arg[1] = segp(rod, s);
+        W->res[0] = &Tk;
+        if (rod_segment_kinetic(W->arg, W->res, W->iw, W->w, 0)) return -3;
+        e[0] += Tk;
+      }
       if (segment_torque(rod, s, y, W, T3)) return -3;
       for (k = 0; k < 3; ++k) e[3] += T3[k] * y[i_om(rod, s) + k];
       const int ends = s == 1 || s == N;
@@ -898,6 +905,7 @@ static int energies_one(const kvrod_rod* rod, const double* y, const double* yp,
         double mTc[3];
         const double* Tc = jj == 0 ? T6 : T6 + 3;  /* the joint's torque on the clamp frame */
         for (k = 0; k < 3; ++k) { e[4] -= Tc[k] * om[k]; mTc[k] = -Tc[k]; }
+        if (powers_only) continue;
         W->arg[0] = pc; W->arg[1] = mTc;    /* the support's moment, spatial */
         W->res[0] = e + NDIAG_E + (jj == 0 ? 3 : 9);
         if (rod_rotate(W->arg, W->res, W->iw, W->w, 0)) return -3;
@@ -1028,7 +1036,7 @@ int kvrod_diagnostics(const kvrod_rod* rod, double t, const double* y, const dou
   if (check_rod(rod)) return check_rod(rod);
   work_t W;
   memset(out, 0, sizeof(double) * (size_t)(NDIAG + 6 * N + 6 * (N + 1)));
-  const int rc = energies_one(rod, y, yp, out, out + NDIAG, &W);
+  const int rc = energies_one(rod, y, yp, out, out + NDIAG, &W, 0);
   return rc || !has_contact(rod) ? rc : rod->contact->energies(rod, y, out);
 }
 
@@ -1040,10 +1048,25 @@ int kvrod_energies(const kvrod_rod* rod, int m, const double* ts, const double* 
   work_t W;
   int k;
   for (k = 0; k < m; ++k) {
-    if (energies_one(rod, ys + k * n, yps + k * n, out + (size_t)k * NDIAG, 0, &W)) return -3;
+    if (energies_one(rod, ys + k * n, yps + k * n, out + (size_t)k * NDIAG, 0, &W, 0))
+      return -3;
     if (has_contact(rod) && rod->contact->energies(rod, ys + k * n, out + (size_t)k * NDIAG))
       return -3;
   }
+  return 0;
+}
+
+int kvrod_audit_powers(const kvrod_rod* rod, int m, const double* ts, const double* ys,
+                       const double* yps, double* out) {
+  (void) ts;
+  if (check_rod(rod)) return check_rod(rod);
+  if (has_contact(rod))                 /* its energies add to these */
+    return kvrod_energies(rod, m, ts, ys, yps, out);
+  const size_t n = (size_t) kvrod_n_state(rod->N, rod->nb);
+  work_t W;
+  for (int k = 0; k < m; ++k)
+    if (energies_one(rod, ys + k * n, yps + k * n, out + (size_t)k * NDIAG, 0, &W, 1))
+      return -3;
   return 0;
 }
 

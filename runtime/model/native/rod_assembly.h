@@ -82,6 +82,12 @@ int kvrod_diagnostics(const kvrod_rod* rod, double t, const double* y, const dou
 int kvrod_energies(const kvrod_rod* rod, int m, const double* ts, const double* ys,
                    const double* yps, double* out);
 
+/* kvrod_energies' 2D (out[k NDIAG + 2]) and powers P_ext, P_bc (out[k NDIAG + 3, 4]) alone,
+ * bit for bit, for the energy audit's quadrature points (the kinetic energy and the
+ * supports' moments are left 0); a rod with contact gets kvrod_energies itself */
+int kvrod_audit_powers(const kvrod_rod* rod, int m, const double* ts, const double* ys,
+                       const double* yps, double* out);
+
 #ifdef __cplusplus
 }
 #endif

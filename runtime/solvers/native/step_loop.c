@@ -195,6 +195,16 @@ typedef struct {
     /* NULL, or the state's change of the error test's weights (ewt_err, then a separate
        array), applied after every accepted step (bdf.py: BDF._state_error_weights) */
     kv_errw_fn errw;
+    /* an output grid of whole states (solve's t_eval): after every accepted step, y and
+       y' at each t_grid[k_grid] that the step reaches (direction * (t_grid - t) <= 0) are
+       interpolated on it into rows k_grid of grid_y, grid_yp (m_grid x n, row-major,
+       owned by Python), so that the loop need not return at each output time */
+    int m_grid, k_grid;
+    const double *t_grid;
+    double *grid_y, *grid_yp;
+    /* NULL, or en's 2D and powers alone (values 2, 3, 4 of a state, bit for bit those of
+       en; the others need not be filled): the audit's quadrature points need no more */
+    kv_en_fn en_audit;
 } kv_ida;
 
 enum { SEC_RES, SEC_JAC, SEC_LU, SEC_NEWTON, SEC_EN, SEC_DRIVE };
@@ -264,8 +274,8 @@ static int call_jac(kv_run *R, double t, double cj)
 
 /* energies of m states (rows of ys, yps) at times ts: one kernel call when the loads are
    constant over all of them, else one per state (as RodModel.energies) */
-static int call_en(kv_run *R, int m, const double *ts, const double *ys, const double *yps,
-                   double *out)
+static int call_en_fn(kv_run *R, kv_en_fn en, int m, const double *ts, const double *ys,
+                      const double *yps, double *out)
 {
     kv_ida *S = R->S;
     if (drive_to(R, ts[0])) return 1;
@@ -278,7 +288,7 @@ static int call_en(kv_run *R, int m, const double *ts, const double *ys, const d
     if (steady) {
         TIC(S);
         USER_MODE(R);
-        rc = S->en(S->ctx, m, ts, ys, yps, out);
+        rc = en(S->ctx, m, ts, ys, yps, out);
         CORE_MODE(R);
         TOC(S, SEC_EN);
         return rc;
@@ -287,12 +297,18 @@ static int call_en(kv_run *R, int m, const double *ts, const double *ys, const d
         if (drive_to(R, ts[i])) return 1;
         TIC(S);
         USER_MODE(R);
-        rc = S->en(S->ctx, 1, ts + i, ys + (size_t)i * S->n, yps + (size_t)i * S->n,
-                   out + (size_t)i * S->nen);
+        rc = en(S->ctx, 1, ts + i, ys + (size_t)i * S->n, yps + (size_t)i * S->n,
+                out + (size_t)i * S->nen);
         CORE_MODE(R);
         TOC(S, SEC_EN);
     }
     return rc;
+}
+
+static int call_en(kv_run *R, int m, const double *ts, const double *ys, const double *yps,
+                   double *out)
+{
+    return call_en_fn(R, R->S->en, m, ts, ys, yps, out);
 }
 
 /* ---- vector helpers ---------------------------------------------------------------- */
@@ -1116,7 +1132,7 @@ static int audit_step(kv_run *R)
     double tq[3], e[3 * KV_MAXEN];
     for (int j = 0; j < 3; ++j) tq[j] = t0 + h * S->gl_x[j];
     interp(S, 3, tq, S->wy, S->wyp);
-    if (call_en(R, 3, tq, S->wy, S->wyp, e)) return 1;
+    if (call_en_fn(R, S->en_audit ? S->en_audit : S->en, 3, tq, S->wy, S->wyp, e)) return 1;
     double g[3][2];
     for (int j = 0; j < 3; ++j) {
         g[j][0] = e[j * S->nen + 2];
@@ -1200,9 +1216,21 @@ static int replay_step(kv_run *R)
     return 0;
 }
 
+/* the outputs of the grid that this step reaches, on its interpolant (IDAGetDky; what
+   BDFDenseOutput.values computes from the same history) */
+static void grid_step(kv_ida *S)
+{
+    const size_t n = (size_t)S->n;
+    while (S->k_grid < S->m_grid && S->direction * (S->t_grid[S->k_grid] - S->t) <= 0.0) {
+        const size_t k = (size_t)S->k_grid++;
+        interp(S, 1, S->t_grid + k, S->grid_y + k * n, S->grid_yp + k * n);
+    }
+}
+
 static int after_step(kv_run *R)
 {
     kv_ida *S = R->S;
+    if (S->k_grid < S->m_grid) grid_step(S);
     if (S->k_rep < S->m_rep && replay_step(R)) return 1;
     if (S->audit) {
         if (audit_step(R)) return 1;

@@ -139,6 +139,9 @@ class CoreStruct(ctypes.Structure):
         + _fields(_L, "s_stamp", "lu_stamp")
         + _fields(_I, "s_have_lu")
         + _fields(_P, "errw")
+        + _fields(_I, "m_grid", "k_grid")
+        + _fields(_P, "t_grid", "grid_y", "grid_yp")
+        + _fields(_P, "en_audit")
     )
     #: names of the entries of ``sec`` (seconds per part when ``timing`` is set)
     SECTIONS = ("residual", "jacobian", "lu", "newton_solve_update", "energies", "drive")
@@ -173,6 +176,7 @@ class CoreLink:
         if kern is not None:
             s.res, s.jac, s.en, s.ctx = kern.residual, kern.jacobian, kern.energies, kern.ctx
             s.nen = kern.n_energies
+            s.en_audit = getattr(kern, "audit_energies", 0) or None
             s.maxstep = kern.max_step or None
             s.errw = kern.error_weights or None
             self._keep.append(kern.keep)
@@ -525,6 +529,29 @@ class CoreLink:
                 o = 3 + NH + NH * n
                 args += (row[o:o + (k + 1) * ns].reshape(k + 1, ns),)
             self._rep_sink(*args)
+
+    def enable_grid(self, t_grid: np.ndarray, k: int, out_y: np.ndarray,
+                    out_yp: np.ndarray) -> None:
+        """Interpolate y and y' at ``t_grid[k:]`` (sorted in the direction of integration)
+        into the rows of ``out_y``, ``out_yp`` ((m, n), C order, kept alive by the caller)
+        after every step that reaches them, inside the compiled loop; :attr:`grid_done`
+        tells how many rows are filled."""
+        n = self._solver.n
+        for a in (out_y, out_yp):
+            if a.shape != (t_grid.size, n) or not a.flags.c_contiguous or a.dtype != float:
+                raise ValueError(f"output grid arrays must be C-ordered float ({t_grid.size}, "
+                                 f"{n}), got {a.shape}")
+        self._t_grid = np.ascontiguousarray(t_grid, dtype=float)
+        self._grid = (out_y, out_yp)
+        s = self.s
+        s.t_grid = self._t_grid.ctypes.data
+        s.grid_y, s.grid_yp = out_y.ctypes.data, out_yp.ctypes.data
+        s.m_grid, s.k_grid = self._t_grid.size, int(k)
+
+    @property
+    def grid_done(self) -> int:
+        """Rows of the output grid filled so far (:meth:`enable_grid`)."""
+        return int(self.s.k_grid)
 
     def set_watches(self, watches: list[tuple[int, float]]) -> None:
         """Stop after any step in which ``y[index]`` changes sign in ``direction`` (< 0:
