@@ -1087,7 +1087,7 @@ int kvrod_energies_contact(const kvrod_rod* rod, int m, const double* ts, const 
       if (rc) return rc;
     } else {
       /* kvrod_energies' sums with the obstacles' values from the same pass */
-      if (energies_one(rod, y, yps + (size_t)k * n, o, 0, &W)) return -3;
+      if (energies_one(rod, y, yps + (size_t)k * n, o, 0, &W, 0)) return -3;
       if (rod->contact->energies_values(rod, y, o, o + NDIAG)) return -3;
     }
     /* the pairs' values the energies just computed (kvrod_contact_energies keeps them) */
