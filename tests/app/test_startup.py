@@ -42,3 +42,28 @@ def test_a_study_loads_without_its_engine():
     got = _imported_after("from runtime.study.sweep import load_study\n"
                           "load_study('examples/study_tau.toml')")
     assert "distributed" not in got and "dask" not in got and "matplotlib" not in got
+
+
+def test_a_problem_loads_without_scipy_or_the_mesher():
+    """A rod problem's material check (runtime.section.materials) does not load the
+    section solver: SciPy and shapely stay out of ``kvrod simulate`` (a third of a short
+    run's process before; issue 33, item 5)."""
+    got = _imported_after("from runtime.problem.registry import load_problem\n"
+                          "load_problem('cantilever')\n"
+                          "import runtime.section as s\n"
+                          "assert s.SectionMaterial and 'runtime.section.analysis' not in "
+                          "sys.modules")
+    assert "scipy" not in got and "shapely" not in got
+    assert "numpy" in got and "runtime" in got
+
+
+def test_a_short_simulation_runs_without_scipy():
+    """``simulate`` of a cantilever (static solve, integration, audit, summary): no SciPy,
+    shapely or plotting imported on the way."""
+    got = _imported_after("from runtime.problem.registry import load_problem\n"
+                          "from runtime.simulate.simulate import simulate\n"
+                          "r = simulate(load_problem('cantilever', {'n_elements': 4, "
+                          "'t_end': 0.02}))\n"
+                          "assert r.status == 'finished', r.status\n"
+                          "r.summary()")
+    assert not {"scipy", "shapely", "matplotlib", "casadi"} & set(got), got
