@@ -338,7 +338,7 @@ class RodStatics:
 
 
 #: quat_mul's cross product, component by component: av[_C1] * bv[_C2] - av[_C2] * bv[_C1]
-_C1, _C2 = [1, 2, 0], [2, 0, 1]
+_C1, _C2 = np.array([1, 2, 0]), np.array([2, 0, 1])
 
 
 def _rotate(p: np.ndarray, th: np.ndarray) -> np.ndarray:
@@ -355,5 +355,6 @@ def _rotate(p: np.ndarray, th: np.ndarray) -> np.ndarray:
     out = np.empty(p.shape)
     out[:, 0] = a0 * b0 - np.add.reduce(av * bv, axis=-1)
     out[:, 1:] = (a0[:, None] * bv + b0[:, None] * av
-                  + (av[:, _C1] * bv[:, _C2] - av[:, _C2] * bv[:, _C1]))
+                  + (av.take(_C1, axis=1) * bv.take(_C2, axis=1)
+                     - av.take(_C2, axis=1) * bv.take(_C1, axis=1)))
     return out / np.sqrt(np.add.reduce(out * out, axis=-1))[:, None]
