@@ -324,7 +324,7 @@ def quiet_blas_threads(command: str, environ=None, numpy_loaded: bool | None = N
     (0.45 -> 0.32 s of a 10-element run here) and, on a busy machine, takes from the
     run's own thread. The threading itself is unchanged (the same BLAS calls split the
     same way), so every result is too. Only before NumPy is imported (OpenBLAS reads it
-    then), only for :data:`_QUIET_BLAS` (``kvrod section``'s dense blocks keep the
+    then), only for ``_QUIET_BLAS`` (``kvrod section``'s dense blocks keep the
     default)."""
     import os
 
