@@ -21,7 +21,6 @@ if TYPE_CHECKING:
     import scipy.sparse as sp
 
 from generated import rod_layout as L
-from runtime.model.quaternion import quat_exp, quat_mul
 from runtime.model.rigid import (
     StaticGauge,
     check_stiffness,
@@ -89,6 +88,17 @@ class RodStatics:
         self._rowmask = np.ones(self.n_static, dtype=bool)
         self._rowmask[self.fixed_cols] = False
         self._plan: tuple[np.ndarray, ...] | None = None   # static_jacobian_band's gather
+        # flat index tables of the Newton loop's gathers (static_retract, the Jacobian's
+        # rotation weights) and buffers reused by every call: a fresh array per call
+        # misses the model's pointer cache (~3 us each) and the fancy 2-D indices cost
+        # more than the arithmetic at a few elements (issue 33: the tiny sweep point)
+        self._phi_flat, self._phi_cols_flat = m.phi_index.ravel(), self.phi_cols.ravel()
+        self._theta_flat = self.theta_cols.ravel()
+        self._y0 = np.empty(m.n)
+        self._r = np.empty(m.n)
+        self._weights: np.ndarray | None = None
+        self._weight_src: np.ndarray | None = None
+        self._weight_sign: np.ndarray | None = None
         # the rod's band Jacobian, kept between Newton iterations (a fresh one costs its
         # page faults: 1.4 MB for the Maxwell cantilever, every iteration)
         self._ab: np.ndarray | None = None
@@ -157,6 +167,13 @@ class RodStatics:
         y0[self.model.velocity_mask] = 0.0
         return y0
 
+    def _at_rest_buffer(self, y: np.ndarray) -> np.ndarray:
+        """:meth:`at_rest` into a buffer of this problem's (overwritten by the next call)."""
+        y0 = self._y0
+        y0[:] = y
+        y0[self.model.velocity_mask] = 0.0
+        return y0
+
     def _constrain(self, y: np.ndarray) -> np.ndarray:
         """Held nodes at their prescribed positions at the current load factor, at rest."""
         return self.at_rest(self.model.constrain(y))
@@ -165,10 +182,10 @@ class RodStatics:
         """Force/torque balance at rest (n_static,): node 0 forces, then per cell i the
         segment i torques (material) and node i forces; zero on held nodes."""
         m = self.model
-        r = np.empty(m.n)
-        m.residual(self.time, self.at_rest(y), m._zeros, r)
+        r = self._r
+        m.residual(self.time, self._at_rest_buffer(y), m._zeros, r)
         out[:] = r[self.static_rows]
-        out[~self._rowmask] = 0.0
+        out[self.fixed_cols] = 0.0
         if self.gauge is not None:
             out[self.gauge.cols] += self.gauge.force(y)
 
@@ -264,13 +281,12 @@ class RodStatics:
             self._plan = self._gather_plan()
         src, widx, dst, fixed = self._plan
         m = self.model
-        y0 = self.at_rest(y)
+        y0 = self._at_rest_buffer(y)
         if self._ab is None:
             self._ab = np.zeros((m.ldab, m.n), order="F")
         ab = self._ab                      # (jacobian_band2 writes all of J's band)
         m.jacobian_band2(self.time, y0, m._zeros, 1.0, 0.0, ab)
-        Lm = _half_L(y0[m.p_index])
-        weights = np.concatenate([[1.0], Lm.ravel()])
+        weights = self._half_L_weights(y0)
         vals = ab.ravel(order="F")[src] * weights[widx]
         flat = np.bincount(dst, weights=vals, minlength=out_ab.size)
         flat[fixed] += 1.0
@@ -279,12 +295,66 @@ class RodStatics:
             c = self.gauge.cols
             out_ab[kl + ku + c[:, None] - c[None, :], c[None, :]] += self.gauge.K
 
+    def _half_L_weights(self, y0: np.ndarray) -> np.ndarray:
+        """``[1, 0.5 Lm.ravel()]`` (:func:`_half_L` of the state's quaternions, the weights of
+        :meth:`_gather_plan`) as one gather: every entry of L(p) is one component of p,
+        signed, so 0.5 L(p) is that component times +-0.5, the same rounding as
+        :func:`_half_L`'s (zeros may differ in sign only, which no sum starting from +0
+        in :meth:`static_jacobian_band` can see)."""
+        if self._weights is None:
+            # Lm[b, a] (b = 0..3, a = 0..2) = sign * p[k]: row 0 is -q, rows 1..3 are
+            # p0 I + [q]x, with [q]x as in _half_L
+            k = np.zeros((4, 3), dtype=int)
+            sign = np.zeros((4, 3))
+            k[0], sign[0] = (1, 2, 3), -1.0
+            for r in range(3):
+                k[1 + r, r], sign[1 + r, r] = 0, 1.0
+            for (r, a), (kk, sg) in {(0, 1): (3, -1.0), (0, 2): (2, 1.0), (1, 0): (3, 1.0),
+                                     (1, 2): (1, -1.0), (2, 0): (2, -1.0),
+                                     (2, 1): (1, 1.0)}.items():
+                k[1 + r, a], sign[1 + r, a] = kk, sg
+            p_index = self.model.p_index
+            self._weight_src = p_index[:, k.ravel()].ravel()
+            self._weight_sign = np.tile(0.5 * sign.ravel(), self.N)
+            self._weights = np.empty(1 + self._weight_src.size)
+            self._weights[0] = 1.0
+        w = self._weights
+        np.multiply(y0[self._weight_src], self._weight_sign, out=w[1:])
+        return w
+
     def static_retract(self, y: np.ndarray, dx: np.ndarray) -> np.ndarray:
-        """New state: phi += dphi, p <- p*exp(dtheta/2) renormalised; velocities kept."""
+        """New state: phi += dphi, p <- p*exp(dtheta/2) renormalised; velocities kept.
+
+        The arithmetic of :func:`~runtime.model.quaternion.quat_exp`, then
+        :func:`~runtime.model.quaternion.quat_mul`, then the normalisation, operation by
+        operation on the same arrays (the same bits), in fewer NumPy calls: at a few
+        elements the calls, not the arithmetic, are the cost."""
         m = self.model
         y1 = np.array(y, dtype=float)
         dx = np.asarray(dx)
-        y1[m.phi_index] += dx[self.phi_cols]
-        p = quat_mul(y1[m.p_index], quat_exp(dx[self.theta_cols]))
-        y1[m.p_index] = p / np.linalg.norm(p, axis=1)[:, None]
+        y1[self._phi_flat] += dx[self._phi_cols_flat]
+        y1[m.p_index] = _rotate(y1[m.p_index], dx[self._theta_flat].reshape(-1, 3))
         return y1
+
+
+#: quat_mul's cross product, component by component: av[_C1] * bv[_C2] - av[_C2] * bv[_C1]
+_C1, _C2 = np.array([1, 2, 0]), np.array([2, 0, 1])
+
+
+def _rotate(p: np.ndarray, th: np.ndarray) -> np.ndarray:
+    """``p * exp(th / 2)`` normalised, (N, 4) from quaternions p (N, 4) and rotation
+    vectors th (N, 3): ``quat_mul(p, quat_exp(th))`` over its norm, the same operations
+    on every element (the elementwise products and sums in the same order, the same
+    reductions over the last axis of contiguous arrays; a test compares the bits)."""
+    a = np.sqrt(np.add.reduce(th * th, axis=-1))            # np.linalg.norm(th, axis=-1)
+    e = np.empty(th.shape[:-1] + (4,))
+    e[:, 0] = np.cos(a / 2)
+    sinc = np.where(a > 1e-8, np.sin(a / 2) / np.where(a > 0, a, 1.0), 0.5 - a**2 / 48)
+    e[:, 1:] = sinc[:, None] * th
+    a0, av, b0, bv = p[:, 0], p[:, 1:], e[:, 0], e[:, 1:]
+    out = np.empty(p.shape)
+    out[:, 0] = a0 * b0 - np.add.reduce(av * bv, axis=-1)
+    out[:, 1:] = (a0[:, None] * bv + b0[:, None] * av
+                  + (av.take(_C1, axis=1) * bv.take(_C2, axis=1)
+                     - av.take(_C2, axis=1) * bv.take(_C1, axis=1)))
+    return out / np.sqrt(np.add.reduce(out * out, axis=-1))[:, None]

@@ -42,3 +42,55 @@ def test_a_study_loads_without_its_engine():
     got = _imported_after("from runtime.study.sweep import load_study\n"
                           "load_study('examples/study_tau.toml')")
     assert "distributed" not in got and "dask" not in got and "matplotlib" not in got
+
+
+def test_a_problem_loads_without_scipy_or_the_mesher():
+    """A rod problem's material check (runtime.section.materials) does not load the
+    section solver: SciPy and shapely stay out of ``kvrod simulate`` (a third of a short
+    run's process before; issue 33, item 5)."""
+    got = _imported_after("from runtime.problem.registry import load_problem\n"
+                          "load_problem('cantilever')\n"
+                          "import runtime.section as s\n"
+                          "assert s.SectionMaterial and 'runtime.section.analysis' not in "
+                          "sys.modules")
+    assert "scipy" not in got and "shapely" not in got
+    assert "numpy" in got and "runtime" in got
+
+
+def test_a_short_simulation_runs_without_scipy():
+    """``simulate`` of a cantilever (static solve, integration, audit, summary): no SciPy,
+    shapely or plotting imported on the way."""
+    got = _imported_after("from runtime.problem.registry import load_problem\n"
+                          "from runtime.simulate.simulate import simulate\n"
+                          "r = simulate(load_problem('cantilever', {'n_elements': 4, "
+                          "'t_end': 0.02}))\n"
+                          "assert r.status == 'finished', r.status\n"
+                          "r.summary()")
+    assert not {"scipy", "shapely", "matplotlib", "casadi"} & set(got), got
+
+
+def test_rod_runs_let_openblas_threads_sleep():
+    """kvrod simulate / sweep set OPENBLAS_THREAD_TIMEOUT before NumPy loads (its idle
+    threads spin ~0.1 s of CPU otherwise); never over the user's value, never once NumPy
+    is loaded (too late), never for other commands."""
+    from kvrod.cli import quiet_blas_threads
+
+    env: dict[str, str] = {}
+    assert quiet_blas_threads("simulate", env, numpy_loaded=False)
+    assert env == {"OPENBLAS_THREAD_TIMEOUT": "4"}
+    env = {"OPENBLAS_THREAD_TIMEOUT": "28"}
+    assert not quiet_blas_threads("sweep", env, numpy_loaded=False)
+    assert env == {"OPENBLAS_THREAD_TIMEOUT": "28"}
+    for command, loaded in (("section", False), ("modes", False), ("simulate", True)):
+        env = {}
+        assert not quiet_blas_threads(command, env, numpy_loaded=loaded) and env == {}
+    # in a fresh process: set, and NumPy still not loaded (OpenBLAS reads it on load)
+    got = subprocess.run(
+        [sys.executable, "-c",
+         "import os, sys\nimport kvrod.cli as c\n"
+         "c.quiet_blas_threads('simulate')\n"
+         "print(os.environ.get('OPENBLAS_THREAD_TIMEOUT'), 'numpy' in sys.modules)"],
+        capture_output=True, text=True, cwd=ROOT, timeout=120,
+        env={k: v for k, v in os.environ.items() if k != "OPENBLAS_THREAD_TIMEOUT"}
+        | {"PYTHONPATH": str(ROOT)})
+    assert got.stdout.split() == ["4", "False"], got.stderr
