@@ -71,9 +71,10 @@ static void args_of(const cseg* g, const double* y, cwork* W) {
    normal in space n and its offset (d(x) = n . x - off, the kernel's d by other
    arithmetic), so that a segment whose bound exceeds a threshold by far more than either
    computation's round-off (1e-9 of the magnitudes in it) is known to be out of reach
-   without the kernel. Where the screen does not decide, the kernel does: the same
-   segments are in reach, bit for bit (a rod in flight skips nearly every bound kernel,
-   a third of the contact's cost on the bench's falling cable). Other kinds: no screen. */
+   without the kernel, and one whose bound lies below it by as much in reach. Where the
+   screen does not decide, the kernel does: the same segments are in reach, bit for bit
+   (the bound kernels were a third of the contact's cost on the bench's falling cable).
+   Other kinds: no screen. */
 typedef struct {
   int on;
   double n[3], off, mag;
@@ -109,9 +110,10 @@ static void screen_of(int kind, const double* obs, cscreen* sc) {
            && isfinite(sc->n[1]) && isfinite(sc->n[2]);
 }
 
-/* 1: the segment (pa, pb) of contact radius r has its gap bound above thresh for sure */
-static int screened_far(const cscreen* sc, const double* pa, const double* pb, double r,
-                        double thresh) {
+/* the screen's verdict on segment (pa, pb) of contact radius r: 1 its gap bound is above
+   thresh for sure, -1 at most thresh for sure, 0 too near to tell (the kernel decides) */
+static int screen(const cscreen* sc, const double* pa, const double* pb, double r,
+                  double thresh) {
   if (!sc || !sc->on) return 0;
   double d = 0.0, uu = 0.0, mag = sc->mag + fabs(r) + fabs(thresh);
   for (int k = 0; k < 3; ++k) {
@@ -120,9 +122,12 @@ static int screened_far(const cscreen* sc, const double* pa, const double* pb, d
     uu += u * u;
     mag += fabs(m) + fabs(u);
   }
-  /* the bound d(m) - r - |u|/2 > thresh: D = d(m) - r - thresh (less the margin) > |u|/2 */
-  const double D = d - sc->off - r - thresh - 1e-9 * mag;
-  return D > 0.0 && 4.0 * D * D > uu * (1.0 + 1e-9);
+  /* the bound is d(m) - r - |u|/2: compared with thresh through D = d(m) - r - thresh
+     against |u|/2 (squared), D taken low and high by the margin */
+  const double D = d - sc->off - r - thresh, tol = 1e-9 * mag, lo = D - tol, hi = D + tol;
+  if (lo > 0.0 && 4.0 * lo * lo > uu * (1.0 + 1e-9)) return 1;
+  if (hi <= 0.0 || 4.0 * hi * hi * (1.0 + 1e-9) < uu) return -1;
+  return 0;
 }
 
 /* the gap's lower bound of the segment (m) */
@@ -134,13 +139,14 @@ static int bound_of(int kind, const double* pa, const double* pb, const double* 
 }
 
 /* whether segment g is in reach (its bound at most CONTACT_CUTOFF delta); *glb <- bound
-   (sc not NULL: screened first; a segment the screen finds out of reach gets the
-   threshold as *glb, which its bound exceeds) */
+   (sc not NULL: screened first; a segment the screen decides gets the threshold as *glb,
+   which its bound exceeds (out of reach) or does not (in reach)) */
 static int in_reach(int kind, const cseg* g, const double* y, cwork* W, int* yes,
                     double* glb, const cscreen* sc) {
   const double thresh = CONTACT_CUTOFF * g->cnt[CNT_DELTA];
-  if (screened_far(sc, y + g->idx[0], y + g->idx[1], g->cnt[CNT_R], thresh)) {
-    *yes = 0;
+  const int verdict = screen(sc, y + g->idx[0], y + g->idx[1], g->cnt[CNT_R], thresh);
+  if (verdict) {
+    *yes = verdict < 0;
     *glb = thresh;
     return 0;
   }
@@ -479,9 +485,12 @@ int kvrod_contact_error_weights(const kvrod_rod* rod, const double* y, double rt
       double g0;
       double band = g.cnt[CNT_H];
       if (g.cnt[CNT_R] > band) band = g.cnt[CNT_R];
-      if (screened_far(&sc, y + g.idx[0], y + g.idx[1], g.cnt[CNT_R], band)) continue;
-      if (bound_of(kind, y + g.idx[0], y + g.idx[1], obs, g.cnt, &W, &g0)) return -3;
-      if (g0 > band) continue;
+      const int verdict = screen(&sc, y + g.idx[0], y + g.idx[1], g.cnt[CNT_R], band);
+      if (verdict > 0) continue;
+      if (!verdict) {
+        if (bound_of(kind, y + g.idx[0], y + g.idx[1], obs, g.cnt, &W, &g0)) return -3;
+        if (g0 > band) continue;
+      }
       touching = 1;
       /* the nodes' velocities at the positions' tolerance times the contact's rate */
       for (int e = 0; e < 2; ++e)
