@@ -681,7 +681,7 @@ class RodModel:
                         n_energies=self.n_energies)
         if self.contact is not None:
             kern.max_step = address(self._clib.kvrod_max_step)
-        elif self.self_contact is None:
+        if self.self_contact is None:
             kern.audit_energies = address(lib.kvrod_audit_powers)
         if self.state_error_weights is not None:
             kern.error_weights = address(self._clib.kvrod_error_weights)

@@ -1058,15 +1058,22 @@ int kvrod_energies(const kvrod_rod* rod, int m, const double* ts, const double* 
 
 int kvrod_audit_powers(const kvrod_rod* rod, int m, const double* ts, const double* ys,
                        const double* yps, double* out) {
-  (void) ts;
   if (check_rod(rod)) return check_rod(rod);
-  if (has_contact(rod))                 /* its energies add to these */
-    return kvrod_energies(rod, m, ts, ys, yps, out);
+  if (has_contact(rod) && rod->contact->self)   /* the pairs' values kept: the full ones */
+    return kvrod_energies_contact(rod, m, ts, ys, yps, out);
   const size_t n = (size_t) kvrod_n_state(rod->N, rod->nb);
+  const int nobs = has_contact(rod) ? rod->contact->nobs : 0;
+  const size_t stride = (size_t)NDIAG + (size_t)NCV * (size_t)nobs;
   work_t W;
-  for (int k = 0; k < m; ++k)
-    if (energies_one(rod, ys + k * n, yps + k * n, out + (size_t)k * NDIAG, 0, &W, 1))
-      return -3;
+  for (int k = 0; k < m; ++k) {
+    double* o = out + (size_t)k * stride;
+    const double* y = ys + (size_t)k * n;
+    if (energies_one(rod, y, yps + (size_t)k * n, o, 0, &W, 1)) return -3;
+    /* the obstacles' E, P_diss, P_obs and the supports' share of the contact forces, as
+       kvrod_energies_contact adds them (the same sums in the same order) without the
+       obstacles' values (the exact smallest gap's second pass) */
+    if (has_contact(rod) && rod->contact->energies(rod, y, o)) return -3;
+  }
   return 0;
 }
 

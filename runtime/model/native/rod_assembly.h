@@ -84,7 +84,9 @@ int kvrod_energies(const kvrod_rod* rod, int m, const double* ts, const double* 
 
 /* kvrod_energies' 2D (out[k NDIAG + 2]) and powers P_ext, P_bc (out[k NDIAG + 3, 4]) alone,
  * bit for bit, for the energy audit's quadrature points (the kinetic energy and the
- * supports' moments are left 0); a rod with contact gets kvrod_energies itself */
+ * supports' moments are left 0). With obstacles the stride is kvrod_energies_contact's
+ * (NDIAG + NCV nobs), the contact's terms added as there and the obstacles' values not
+ * written; with self-contact it is kvrod_energies_contact itself */
 int kvrod_audit_powers(const kvrod_rod* rod, int m, const double* ts, const double* ys,
                        const double* yps, double* out);
 

@@ -67,6 +67,69 @@ static void args_of(const cseg* g, const double* y, cwork* W) {
   W->arg[7] = g->cnt;
 }
 
+/* A screen of the in-reach tests before the bound kernel, for planes: the plane's unit
+   normal in space n and its offset (d(x) = n . x - off, the kernel's d by other
+   arithmetic), so that a segment whose bound exceeds a threshold by far more than either
+   computation's round-off (1e-9 of the magnitudes in it) is known to be out of reach
+   without the kernel, and one whose bound lies below it by as much in reach. Where the
+   screen does not decide, the kernel does: the same segments are in reach, bit for bit
+   (the bound kernels were a third of the contact's cost on the bench's falling cable).
+   Other kinds: no screen. */
+typedef struct {
+  int on;
+  double n[3], off, mag;
+} cscreen;
+
+static void screen_of(int kind, const double* obs, cscreen* sc) {
+  sc->on = 0;
+  if (kind != KV_PLANE) return;
+  const double* q = obs + OBS_Q;
+  const double* a = obs + OBS_AXIS;
+  const double* pt = obs + OBS_POINT;
+  const double* c = obs + OBS_C;
+  const double qq = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+  const double aa = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+  if (!(qq > 0.0) || !(aa > 0.0)) return;
+  double u[3], cr[3];
+  const double la = sqrt(aa);
+  for (int k = 0; k < 3; ++k) u[k] = a[k] / la;
+  const double* v = q + 1;      /* the local normal u in space: R(q) u, q of any norm */
+  const double s = q[0] * q[0] - (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  const double vu = v[0] * u[0] + v[1] * u[1] + v[2] * u[2];
+  cr[0] = v[1] * u[2] - v[2] * u[1];
+  cr[1] = v[2] * u[0] - v[0] * u[2];
+  cr[2] = v[0] * u[1] - v[1] * u[0];
+  sc->off = 0.0;
+  sc->mag = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    sc->n[k] = (s * u[k] + 2.0 * vu * v[k] + 2.0 * q[0] * cr[k]) / qq;
+    sc->off += sc->n[k] * c[k] + u[k] * pt[k];
+    sc->mag += fabs(c[k]) + fabs(pt[k]);
+  }
+  sc->on = isfinite(sc->off) && isfinite(sc->mag) && isfinite(sc->n[0])
+           && isfinite(sc->n[1]) && isfinite(sc->n[2]);
+}
+
+/* the screen's verdict on segment (pa, pb) of contact radius r: 1 its gap bound is above
+   thresh for sure, -1 at most thresh for sure, 0 too near to tell (the kernel decides) */
+static int screen(const cscreen* sc, const double* pa, const double* pb, double r,
+                  double thresh) {
+  if (!sc || !sc->on) return 0;
+  double d = 0.0, uu = 0.0, mag = sc->mag + fabs(r) + fabs(thresh);
+  for (int k = 0; k < 3; ++k) {
+    const double m = 0.5 * (pa[k] + pb[k]), u = pb[k] - pa[k];
+    d += sc->n[k] * m;
+    uu += u * u;
+    mag += fabs(m) + fabs(u);
+  }
+  /* the bound is d(m) - r - |u|/2: compared with thresh through D = d(m) - r - thresh
+     against |u|/2 (squared), D taken low and high by the margin */
+  const double D = d - sc->off - r - thresh, tol = 1e-9 * mag, lo = D - tol, hi = D + tol;
+  if (lo > 0.0 && 4.0 * lo * lo > uu * (1.0 + 1e-9)) return 1;
+  if (hi <= 0.0 || 4.0 * hi * hi * (1.0 + 1e-9) < uu) return -1;
+  return 0;
+}
+
 /* the gap's lower bound of the segment (m) */
 static int bound_of(int kind, const double* pa, const double* pb, const double* obs,
                     const double* cnt, cwork* W, double* g) {
@@ -75,11 +138,20 @@ static int bound_of(int kind, const double* pa, const double* pb, const double* 
   return kBound[kind](W->arg, W->res, W->iw, W->w, 0) ? -3 : 0;
 }
 
-/* whether segment g is in reach (its bound at most CONTACT_CUTOFF delta); *glb <- bound */
+/* whether segment g is in reach (its bound at most CONTACT_CUTOFF delta); *glb <- bound
+   (sc not NULL: screened first; a segment the screen decides gets the threshold as *glb,
+   which its bound exceeds (out of reach) or does not (in reach)) */
 static int in_reach(int kind, const cseg* g, const double* y, cwork* W, int* yes,
-                    double* glb) {
+                    double* glb, const cscreen* sc) {
+  const double thresh = CONTACT_CUTOFF * g->cnt[CNT_DELTA];
+  const int verdict = screen(sc, y + g->idx[0], y + g->idx[1], g->cnt[CNT_R], thresh);
+  if (verdict) {
+    *yes = verdict < 0;
+    *glb = thresh;
+    return 0;
+  }
   if (bound_of(kind, y + g->idx[0], y + g->idx[1], g->obs, g->cnt, W, glb)) return -3;
-  *yes = *glb <= CONTACT_CUTOFF * g->cnt[CNT_DELTA];
+  *yes = *glb <= thresh;
   return 0;
 }
 
@@ -93,9 +165,11 @@ static int obstacle_residual(const kvrod_rod* rod, const double* y, double* res)
   for (int o = 0; o < C->nobs; ++o) {
     const int kind = C->kind[o];
     if (kind < 0 || kind >= KV_NKINDS) return -4;
+    cscreen sc;
+    screen_of(kind, rod->contact->obs + (size_t)o * NOBS, &sc);
     for (int s = 1; s <= rod->N; ++s) {
       seg_of(rod, o, s, &g);
-      if (in_reach(kind, &g, y, &W, &yes, &glb)) return -3;
+      if (in_reach(kind, &g, y, &W, &yes, &glb, &sc)) return -3;
       if (!yes) continue;
       args_of(&g, y, &W);
       W.res[0] = Q;
@@ -130,9 +204,11 @@ static int obstacle_jacobian(const kvrod_rod* rod, const double* y, double cy, i
   for (int o = 0; o < C->nobs; ++o) {
     const int kind = C->kind[o];
     if (kind < 0 || kind >= KV_NKINDS) return -4;
+    cscreen sc;
+    screen_of(kind, rod->contact->obs + (size_t)o * NOBS, &sc);
     for (int s = s0; s <= s1; ++s) {
       seg_of(rod, o, s, &g);
-      if (in_reach(kind, &g, y, &W, &yes, &glb)) return -3;
+      if (in_reach(kind, &g, y, &W, &yes, &glb, &sc)) return -3;
       if (!yes) continue;
       args_of(&g, y, &W);
       W.res[0] = J;
@@ -194,12 +270,14 @@ static int obstacle_values(const kvrod_rod* rod, int o, const double* y, cwork* 
   double glb;
   int yes;
   if (kind < 0 || kind >= KV_NKINDS) return -4;
+  cscreen sc;
+  screen_of(kind, rod->contact->obs + (size_t)o * NOBS, &sc);
   memset(v, 0, sizeof(double) * NCV);
   v[10] = HUGE_VAL;
   int far = 0;
   for (int s = 1; s <= rod->N; ++s) {
     seg_of(rod, o, s, &g);
-    if (in_reach(kind, &g, y, W, &yes, &glb)) return -3;
+    if (in_reach(kind, &g, y, W, &yes, &glb, &sc)) return -3;
     if (!yes) {
       far = 1;
       if (!exact_gap && glb < v[10]) v[10] = glb;
@@ -216,7 +294,7 @@ static int obstacle_values(const kvrod_rod* rod, int o, const double* y, cwork* 
      in reach hardly any is evaluated */
   for (int s = 1; exact_gap && far && s <= rod->N; ++s) {
     seg_of(rod, o, s, &g);
-    if (in_reach(kind, &g, y, W, &yes, &glb)) return -3;
+    if (in_reach(kind, &g, y, W, &yes, &glb, NULL)) return -3;
     if (yes || !(glb < v[10])) continue;
     if (diag_of(kind, &g, y, W, &d)) return -3;
     if (d.g_min < v[10]) v[10] = d.g_min;
@@ -246,10 +324,12 @@ static int support_forces(const kvrod_rod* rod, const double* y, cwork* W, doubl
   for (int o = 0; o < C->nobs; ++o) {
     const int kind = C->kind[o];
     if (kind < 0 || kind >= KV_NKINDS) return -4;
+    cscreen sc;
+    screen_of(kind, rod->contact->obs + (size_t)o * NOBS, &sc);
     for (int end = 0; end < 2; ++end) {
       seg_of(rod, o, end == 0 ? 1 : rod->N, &g);
       if (g.free_ab[end]) continue;
-      if (in_reach(kind, &g, y, W, &yes, &glb)) return -3;
+      if (in_reach(kind, &g, y, W, &yes, &glb, &sc)) return -3;
       if (!yes) continue;
       args_of(&g, y, W);
       W->res[0] = Q;
@@ -397,14 +477,20 @@ int kvrod_contact_error_weights(const kvrod_rod* rod, const double* y, double rt
   for (int o = 0; o < C->nobs; ++o) {
     const int kind = C->kind[o];
     if (kind < 0 || kind >= KV_NKINDS) return -4;
+    cscreen sc;
+    screen_of(kind, rod->contact->obs + (size_t)o * NOBS, &sc);
     const double* obs = C->obs + (size_t)o * NOBS;
     for (int s = 1; s <= rod->N; ++s) {
       seg_of(rod, o, s, &g);
       double g0;
-      if (bound_of(kind, y + g.idx[0], y + g.idx[1], obs, g.cnt, &W, &g0)) return -3;
       double band = g.cnt[CNT_H];
       if (g.cnt[CNT_R] > band) band = g.cnt[CNT_R];
-      if (g0 > band) continue;
+      const int verdict = screen(&sc, y + g.idx[0], y + g.idx[1], g.cnt[CNT_R], band);
+      if (verdict > 0) continue;
+      if (!verdict) {
+        if (bound_of(kind, y + g.idx[0], y + g.idx[1], obs, g.cnt, &W, &g0)) return -3;
+        if (g0 > band) continue;
+      }
       touching = 1;
       /* the nodes' velocities at the positions' tolerance times the contact's rate */
       for (int e = 0; e < 2; ++e)
@@ -440,9 +526,11 @@ int kvrod_contact_points(const kvrod_rod* rod, const double* y, double* out, int
   for (int o = 0; o < C->nobs; ++o) {
     const int kind = C->kind[o];
     if (kind < 0 || kind >= KV_NKINDS) return -4;
+    cscreen sc;
+    screen_of(kind, rod->contact->obs + (size_t)o * NOBS, &sc);
     for (int s = 1; s <= rod->N; ++s) {
       seg_of(rod, o, s, &g);
-      if (in_reach(kind, &g, y, &W, &yes, &glb)) return -3;
+      if (in_reach(kind, &g, y, &W, &yes, &glb, &sc)) return -3;
       if (!yes) continue;
       if (diag_of(kind, &g, y, &W, &d)) return -3;
       for (int q = 0; q < NQ; ++q) {
