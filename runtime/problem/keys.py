@@ -612,8 +612,8 @@ CONTACT_KEYS: tuple[Key, ...] = (
        "(rods not named: their section's)", "the rod's contact radius: the round "
        "envelope about the centreline the contact sees", invalid=-0.01),
     _k("contact", "self", "-", "false", "true, false", "contact of a rod with "
-       "itself (a plectoneme); of the rods of an assembly with each other: refused when "
-       "it runs, in this version",
+       "itself (a plectoneme); in an assembly also of its rods with each other (and "
+       "each with itself); not with sensitivities or kvrod modes",
        invalid="yes"),
     _k("contact", "friction", "-", "0", "0 ... 100", "the Coulomb coefficient of the "
        "rods' contact with each other and themselves (self = true; an obstacle has its "
