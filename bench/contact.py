@@ -11,7 +11,8 @@ kvrod.cli simulate FILE --out DIR --overwrite``, after one warm-up each (the com
 warm, the contact library included), in PAIRS pairs run in turn; the ratio fall/free is
 taken pair by pair and its median reported (a slow spell of the shared machine spoils one
 pair). CPU time of each child from the operating system. The issue's target: the fall at
-most 3x the free swing.
+most 3x the free swing. Then self-contact's share of a step at N = 1000
+(:mod:`bench.self_contact_share`).
 
 ``python -m bench --only contact`` runs this section alone; ``--quick``: N = 50, 0.5 s,
 one pair, no warm-up (a smoke run, not a measurement).
@@ -25,6 +26,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+from bench import self_contact_share
 from bench.maxwell_kv import machine, timed_process
 from bench.meta import target, targets_md
 
@@ -127,6 +129,14 @@ def run(quick: bool = False, log=print, pairs: int | None = None) -> dict:
     doc["targets"] = [target("cable falling onto a floor / swinging free, whole processes "
                              f"(N = {N}, {T:g} s), paired median", doc["median_ratio"],
                              RATIO_MAX, note="quick run" if quick else "")]
+    log("  self-contact's share of a step")
+    sc = self_contact_share.run(quick, log=log)
+    doc["self_contact"] = sc
+    doc["targets"].append(target(
+        f"self-contact: search and forces, share of a step at N = {sc['N']}",
+        sc["share_search_forces"], self_contact_share.SHARE_MAX,
+        note=f"all contact costs {100 * sc['share_all_contact']:.0f} % of a step"
+             + ("; quick run" if quick else "")))
     return doc
 
 
@@ -150,5 +160,6 @@ def markdown(doc: dict) -> list[str]:
     mr, mc = doc.get("median_ratio"), doc.get("median_cpu_ratio")
     lines += ["", f"Paired median ratio fall / free: wall {'-' if mr is None else f'{mr:.2f}'}, "
               f"CPU {'-' if mc is None else f'{mc:.2f}'}.", ""]
+    lines += self_contact_share.markdown(doc.get("self_contact") or {})
     lines += targets_md(doc.get("targets", []))
     return lines
