@@ -46,3 +46,18 @@ def call_compiled(lib, name: str, **inputs) -> dict[str, np.ndarray]:
         shaped[f.name_out(o)] = outs[o] if cols == 1 else outs[o].reshape((rows, cols),
                                                                          order="F")
     return shaped
+
+
+def energies_through(kern, fn: int, ys: np.ndarray, yps: np.ndarray) -> np.ndarray:
+    """(m, ``kern.n_energies``) of the states ``ys``, ``yps`` at t = 0 through the step
+    loop's energies signature ``int f(ctx, m, ts, ys, yps, out)`` at address ``fn`` (a
+    :class:`runtime.solvers.protocols.CKernels`' ``energies`` or ``audit_energies``);
+    entries the function does not write stay NaN."""
+    ys, yps = np.ascontiguousarray(ys, dtype=float), np.ascontiguousarray(yps, dtype=float)
+    ts = np.zeros(len(ys))
+    out = np.full((len(ys), kern.n_energies), np.nan)
+    P = ctypes.c_void_p
+    f = ctypes.CFUNCTYPE(ctypes.c_int, P, ctypes.c_int, P, P, P, P)(fn)
+    assert f(kern.ctx, len(ys), ts.ctypes.data, ys.ctypes.data, yps.ctypes.data,
+             out.ctypes.data) == 0
+    return out

@@ -68,6 +68,18 @@ def residual(m: RodModel, y: np.ndarray, yp: np.ndarray, t: float = 0.0) -> np.n
     return r
 
 
+def central_difference_jacobian(f, y: np.ndarray, rel: float = 1e-6) -> np.ndarray:
+    """The columns (f(y + h e_k) - f(y - h e_k)) / (2 h), h = rel max(1, |y_k|): the
+    Jacobian of f (a state's residual) by central differences."""
+    cols = []
+    for k in range(y.size):
+        h = rel * max(1.0, abs(y[k]))
+        e = np.zeros(y.size)
+        e[k] = h
+        cols.append((f(y + e) - f(y - e)) / (2 * h))
+    return np.stack(cols, axis=1)
+
+
 #: a generalized Maxwell material for rod_mapping(..., tau=None, **MAXWELL): two branches
 #: with their own Poisson ratios (so extension gets 2 extra relaxation times: B = 4)
 MAXWELL: dict[str, Any] = {

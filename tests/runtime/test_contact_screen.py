@@ -13,15 +13,13 @@ just above, at and just below the thresholds (within and beyond the screen's mar
 
 from __future__ import annotations
 
-import ctypes
-
 import numpy as np
 import pytest
 
 from generated import rod_layout as L
 from runtime.model.quaternion import quat_rotation
 from runtime.problem.assemble import build_model
-from tests.kernel_calls import call_compiled
+from tests.kernel_calls import call_compiled, energies_through
 from tests.runtime.test_contact_tolerances import _cable
 
 
@@ -132,14 +130,9 @@ def test_the_audits_powers_with_obstacles_are_the_energies_own_bits(friction):
         ys.append(y)
     ys = np.array(ys)
     yps = rng.standard_normal(ys.shape)
-    ts = np.zeros(len(ys))
-    fn = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_int, ctypes.c_void_p,
-                          ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
     m.at(0.0)
-    full, powers = (np.full((len(ys), kern.n_energies), np.nan) for _ in range(2))
-    for f, out in ((kern.energies, full), (kern.audit_energies, powers)):
-        assert fn(f)(kern.ctx, len(ys), ts.ctypes.data, ys.ctypes.data, yps.ctypes.data,
-                     out.ctypes.data) == 0
+    full = energies_through(kern, kern.energies, ys, yps)
+    powers = energies_through(kern, kern.audit_energies, ys, yps)
     assert np.array_equal(powers[:, 2:5], full[:, 2:5])
     assert np.all(full[:, 2] != 0.0) and np.all(full[:, 0] > 0.0)
     assert np.all(powers[:, 0] == 0.0)

@@ -18,6 +18,7 @@ from runtime.problem.assemble_system import build_system
 from runtime.problem.assembly import Assembly
 from runtime.problem.registry import load_problem
 from runtime.simulate.assembly import simulate_assembly, static_equilibrium
+from tests.rods import central_difference_jacobian
 
 R = 0.01                  # m, the rods' radius (= contact radius) in the small cases
 RUBBER = {"density": 1100.0, "youngs_modulus": 1e6, "poisson_ratio": 0.45, "tau": 0.01}
@@ -127,12 +128,7 @@ def test_system_jacobian_against_central_differences(joints):
     yp = np.zeros(model.n)
     assert model.pair_contact_values(0.0, y)["pairs"] >= 2
     J = model.jacobian_sparse(0.0, y, yp, 1.0, 0.0).toarray()
-    Jfd = np.zeros_like(J)
-    for k in range(model.n):
-        h = 1e-6 * max(1.0, abs(y[k]))
-        e = np.zeros(model.n)
-        e[k] = h
-        Jfd[:, k] = (_residual(model, y + e) - _residual(model, y - e)) / (2 * h)
+    Jfd = central_difference_jacobian(lambda x: _residual(model, x), y)
     scale = np.abs(J).max()
     assert np.abs(J - Jfd).max() < 1e-7 * scale
     # entries between the two rods: the pairs' couplings (no joint couples a and b)

@@ -14,6 +14,7 @@ import numpy as np
 
 from runtime.problem.assemble import build_model
 from runtime.problem.schema import Problem
+from tests.rods import central_difference_jacobian
 
 R_ROD = 0.01           # m, contact radius of the helices below
 CUTOFF = 40.0          # generated/rod_layout.CONTACT_CUTOFF, written here on purpose
@@ -95,12 +96,7 @@ def test_jacobian_against_central_differences_with_friction_and_damping():
     y = _state(model, rng)
     yp = np.zeros(model.n)
     J = model.dF_dy_sparse(0.0, y, yp).toarray()
-    Jfd = np.zeros_like(J)
-    for k in range(model.n):
-        h = 1e-6 * max(1.0, abs(y[k]))
-        e = np.zeros(model.n)
-        e[k] = h
-        Jfd[:, k] = (_residual(model, y + e) - _residual(model, y - e)) / (2 * h)
+    Jfd = central_difference_jacobian(lambda x: _residual(model, x), y)
     scale = np.abs(J).max()
     assert np.abs(J - Jfd).max() < 1e-7 * scale
     # the couplings hold entries far outside the band (segments a turn apart)

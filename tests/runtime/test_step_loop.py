@@ -455,8 +455,7 @@ def test_the_audits_powers_are_the_energies_own_bits(kw):
     (kvrod_audit_powers, CKernels.audit_energies): bit for bit the values of the full
     energies (kvrod_energies), so that the audit and every output stay the same; the
     kinetic energy and the supports' moments are not evaluated there (left 0)."""
-    import ctypes
-
+    from tests.kernel_calls import energies_through
     from tests.rods import random_state
 
     m = rod_model(7, **kw)
@@ -465,14 +464,9 @@ def test_the_audits_powers_are_the_energies_own_bits(kw):
     rng = np.random.default_rng(7)
     ys = np.array([random_state(m, rng) for _ in range(5)])
     yps = rng.standard_normal(ys.shape)
-    ts = np.zeros(len(ys))
-    fn = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_int, ctypes.c_void_p,
-                          ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
     m.at(0.0)
-    full, powers = (np.full((len(ys), kern.n_energies), np.nan) for _ in range(2))
-    for f, out in ((kern.energies, full), (kern.audit_energies, powers)):
-        assert fn(f)(kern.ctx, len(ys), ts.ctypes.data, ys.ctypes.data, yps.ctypes.data,
-                     out.ctypes.data) == 0
+    full = energies_through(kern, kern.energies, ys, yps)
+    powers = energies_through(kern, kern.audit_energies, ys, yps)
     assert np.array_equal(powers[:, 2:5], full[:, 2:5])
     assert np.all(full[:, [2, 3]] != 0.0) and np.all(full[:, 0] > 0.0)
     assert np.all(powers[:, 0] == 0.0)
