@@ -630,11 +630,7 @@ class SystemModel:
     def set_directions(self, directions) -> None:
         """Give the assembly (and its rods) its parameters' directions (None: none)."""
         if directions is not None and self.pairs is not None:
-            from runtime.errors import ParameterError
-
-            raise ParameterError("contact.self", True, "false for sensitivities: the "
-                                 "contact between an assembly's rods has no parameter "
-                                 "derivatives in this version")
+            refuse_pair_sensitivities()
         self._sdirs = directions
         self._csys_sens = None
         if directions is not None:
@@ -891,6 +887,16 @@ class SystemModel:
         self.at(t)
         y = np.ascontiguousarray(y, dtype=float)
         return float(self._lib.kvsys_max_step(self._ptr(), t, y.ctypes.data, None))
+
+
+def refuse_pair_sensitivities() -> None:
+    """Sensitivities of an assembly whose rods touch each other (``contact.self``) are not
+    available: a one-line :class:`~runtime.errors.ParameterError` naming the key."""
+    from runtime.errors import ParameterError
+
+    raise ParameterError("contact.self", True, "false for sensitivities: the contact "
+                         "between an assembly's rods has no parameter derivatives in this "
+                         "version")
 
 
 def _condensation_blocks(rod: RodModel, held: set[int]) -> list[tuple[int, int, int, int, int]]:

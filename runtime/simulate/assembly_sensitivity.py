@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from runtime.model.system import refuse_pair_sensitivities
 from runtime.problem.parameters import ResolvedParameter, system_directions
 from runtime.simulate.sensitivity import Sensitivities, _labels
 
@@ -22,6 +23,11 @@ class AssemblySensitivityRun:
 
     def __init__(self, problem, resolved: Sequence[ResolvedParameter],
                  errcon: bool = False) -> None:
+        contact = getattr(problem, "contact", None)
+        if contact is not None and contact.self_contact:
+            # refused here, with the problem, before a results folder is touched (the
+            # model refuses it too: SystemModel.set_directions)
+            refuse_pair_sensitivities()
         self.problem = problem
         self.resolved = list(resolved)
         self.errcon = errcon

@@ -172,6 +172,17 @@ def test_sensitivities_with_contact_between_the_rods_are_refused():
     assert exc.value.name == "contact.self" and "\n" not in str(exc.value)
 
 
+def test_kvrod_simulate_refuses_those_sensitivities_before_writing(tmp_path):
+    """The command's path refuses them with the problem, before the results folder."""
+    from runtime.io.runs import run_and_write
+
+    with pytest.raises(ParameterError) as exc:
+        run_and_write(load_problem("contact_crossing"), tmp_path / "out", "test",
+                      sensitivities=["E"])
+    assert exc.value.name == "contact.self"
+    assert not (tmp_path / "out").exists()
+
+
 # -- the crossing example against linear cantilevers ----------------------------------------
 def _cantilever(doc_rod: dict, g: float) -> tuple[float, float, float]:
     """(q N/m, EI N m^2, L m) of a round steel wire of the example."""
