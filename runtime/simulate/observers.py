@@ -23,11 +23,8 @@ from typing import Any, Protocol
 import numpy as np
 
 from runtime.solvers.driver import RunState
+from runtime.solvers.native.step_loop import AUDIT_NODES
 from runtime.solvers.roots import bracketed_root
-
-#: Gauss-Legendre nodes/weights on [0, 1] for the per-step energy quadrature
-GL_X = (np.polynomial.legendre.leggauss(3)[0] + 1.0) / 2.0
-GL_W = np.polynomial.legendre.leggauss(3)[1] / 2.0
 
 
 class EnergyModel(Protocol):
@@ -43,24 +40,60 @@ class EnergyModel(Protocol):
         ...
 
 
+def audit_polynomial(ht: list[float], hg: list[tuple[float, float]], t0: float, h: float
+                     ) -> list[list[float]]:
+    """The polynomials through the audit's nodes ``(ht[j], hg[j])`` (times, (2D, P)) in
+    x = (t - t0) / h: for 2D and for P, the monomial coefficients ``[c_0, ..., c_3]``
+    (Newton's divided differences expanded by Horner's scheme; float for float the
+    arithmetic of ``kv_audit_polynomial`` in native/step_loop.c, so that both paths give
+    the same audit)."""
+    m = len(ht)
+    x = [(tj - t0) / h for tj in ht]
+    out = []
+    for c in range(2):
+        d = [g[c] for g in hg]
+        for k in range(1, m):
+            for j in range(m - 1, k - 1, -1):
+                d[j] = (d[j] - d[j - 1]) / (x[j] - x[j - k])
+        p = [0.0] * AUDIT_NODES
+        p[0] = d[m - 1]
+        for k in range(m - 2, -1, -1):
+            for r in range(m - 1 - k, 0, -1):
+                p[r] = p[r - 1] - x[k] * p[r]
+            p[0] = d[k] - x[k] * p[0]
+        out.append(p)
+    return out
+
+
+def audit_integral(m: int, p: list[float], x: float) -> float:
+    """The integral over [0, x] of ``p[0] + p[1] x + ...`` (its first ``m`` coefficients;
+    ``kv_audit_integral``)."""
+    s = 0.0
+    for r in range(m - 1, -1, -1):
+        s = s * x + p[r] / float(r + 1)
+    return s * x
+
+
 class EnergyIntegrator:
     """Running integrals of the dissipated power 2D and the external power P over the run.
 
-    Each accepted step is integrated on its interpolant by 3-point Gauss-Legendre (one
-    kernel call for the three nodes). ``partial(dense, t0, t1, t)`` gives the integrals
-    from the step's start to a ``t`` inside it (for outputs) from the same three values:
-    the integral of their quadratic interpolant, which equals the Gauss-Legendre sum at
-    ``t = t1`` (so outputs and the running totals agree at step ends) and is accurate to
-    O(h^3) of the step inside it. ``dissipated`` and ``external_work`` hold the integrals
-    up to the last accepted step (J). The external power includes the power of prescribed
-    end motion when the model reports it (a fifth scalar).
+    2D and P are evaluated once per accepted step, at its end on its interpolant (at the
+    run's start and after every restart also at the step's start), and each step is
+    integrated on the cubic through the last ``AUDIT_NODES`` = 4 of these nodes: a
+    variable-step Adams-Moulton rule of order 4 (lower right after a (re)start, where
+    fewer nodes exist; they begin again there because P may jump). ``partial`` gives the
+    integrals from the step's start to a ``t`` inside it (for outputs) on the same
+    polynomial, so outputs and the running totals agree at step ends. Why not Gauss
+    nodes inside each step: three evaluations a step were 30 % of ``simulate``'s compiled
+    loop, and the audit is no more exact for them (both agree to well inside the
+    integrator's tolerance: tests/runtime/test_energy_audit.py). ``dissipated`` and
+    ``external_work`` hold the integrals up to the last accepted step (J). The external
+    power includes the power of prescribed end motion when the model reports it (a fifth
+    scalar). With the compiled step loop the same arithmetic runs in C
+    (``audit_step`` in native/step_loop.c).
     """
 
     name = "energy"
-    #: maps the values at the Gauss nodes to the coefficients of their quadratic in
-    #: x = (t - t0) / h: (c0, c1, c2) = _FIT @ values
-    _FIT = np.linalg.inv(np.vander(GL_X, 3, increasing=True))
-
     sparse = True
 
     def __init__(self, model: EnergyModel) -> None:
@@ -68,15 +101,17 @@ class EnergyIntegrator:
         self.dissipated = 0.0
         self.external_work = 0.0
         self._key: tuple[float, float] | None = None
-        self._coef = np.zeros((3, 2))
+        self._ht: list[float] = []                   # the nodes' times
+        self._hg: list[tuple[float, float]] = []     # (2D, P) at them
+        self._coef: list[list[float]] = [[0.0] * AUDIT_NODES, [0.0] * AUDIT_NODES]
         self._core = None        # the compiled loop doing this observer's work, if any
 
     def attach(self, solver) -> bool:
-        """Integrate in the compiled step loop (same nodes, weights and fit; True if it
+        """Integrate in the compiled step loop (the same nodes and arithmetic; True if it
         can: the solver runs compiled and the model has compiled energies)."""
         core = getattr(solver, "core", None)
         if self._core is None and core is not None and core.enable_audit(
-                GL_X, self._FIT, self.dissipated, self.external_work):
+                self.dissipated, self.external_work):
             self._core = core
         return self._core is not None
 
@@ -84,24 +119,34 @@ class EnergyIntegrator:
         s = self._core.s
         self.dissipated, self.external_work = s.dissipated, s.external_work
 
+    def begin(self, run: RunState) -> None:
+        self._ht, self._hg, self._key = [], [], None
+
     def evaluate(self, dense, t0: float, t1: float, ts: np.ndarray | None = None
                  ) -> tuple[np.ndarray, np.ndarray] | None:
-        """Prepare the step [t0, t1] (its Gauss-node values) and, if ``ts`` is given,
-        return ``(ys, energies)`` there (rows per time) from the same interpolation and
-        the same kernel call as the nodes: one of each per step, outputs included."""
+        """Prepare the step [t0, t1] (its end's 2D and P, the polynomial) and, if ``ts``
+        is given, return ``(ys, energies)`` there (rows per time) from the same
+        interpolation and the same kernel call as the node: one of each per step,
+        outputs included."""
         if self._key == (t0, t1) and ts is None:
             return None
-        tq = t0 + (t1 - t0) * GL_X
+        new = self._key != (t0, t1)
+        tq = np.array(([t0, t1] if not self._ht else [t1]) if new else [], dtype=float)
+        nq = tq.size
         if ts is not None:
             tq = np.concatenate([tq, ts])
-        ys, yps = dense.values(tq)                    # (3 + k, n) each
+        ys, yps = dense.values(tq)                    # (nodes + k, n) each
         e = self.model.energies(tq, ys, yps)          # one kernel call
-        if self._key != (t0, t1):
-            g = e[:3]
-            power = g[:, 3] + (g[:, 4] if g.shape[1] > 4 else 0.0)
-            self._coef = self._FIT @ np.column_stack([g[:, 2], power])
+        if new:
+            for j in range(nq):
+                if len(self._ht) == AUDIT_NODES:
+                    del self._ht[0], self._hg[0]
+                g = e[j]
+                self._ht.append(float(tq[j]))
+                self._hg.append((float(g[2]), float(g[3] + (g[4] if g.size > 4 else 0.0))))
+            self._coef = audit_polynomial(self._ht, self._hg, t0, t1 - t0)
             self._key = (t0, t1)
-        return (ys[3:], e[3:]) if ts is not None else None
+        return (ys[nq:], e[nq:]) if ts is not None else None
 
     def partial(self, dense, t0: float, t1: float, t):
         """(int 2D dt, int P dt) over [t0, t] inside the accepted step [t0, t1]; ``t`` a
@@ -111,12 +156,11 @@ class EnergyIntegrator:
             z = np.zeros_like(np.asarray(t, dtype=float))
             return (0.0, 0.0) if np.ndim(t) == 0 else (z, z)
         self.evaluate(dense, t0, t1)
-        c = self._coef
-        x = (np.asarray(t, dtype=float) - t0) / h
-        x2 = x * x
-        d = (c[0, 0] * x + c[1, 0] * x2 / 2.0 + c[2, 0] * x2 * x / 3.0) * h
-        w = (c[0, 1] * x + c[1, 1] * x2 / 2.0 + c[2, 1] * x2 * x / 3.0) * h
-        return (float(d), float(w)) if np.ndim(t) == 0 else (d, w)
+        m = len(self._ht)
+        xs = ((np.asarray(t, dtype=float) - t0) / h).ravel()
+        d = np.array([audit_integral(m, self._coef[0], float(x)) * h for x in xs])
+        w = np.array([audit_integral(m, self._coef[1], float(x)) * h for x in xs])
+        return (float(d[0]), float(w[0])) if np.ndim(t) == 0 else (d, w)
 
     def step(self, run: RunState, dense, t0: float, t1: float) -> None:
         if self._core is not None:
@@ -125,10 +169,10 @@ class EnergyIntegrator:
         h = t1 - t0
         if h == 0.0:
             return
-        self.evaluate(dense, t0, t1)          # the Gauss-Legendre sum: x = 1 below
-        c = self._coef
-        self.dissipated += float(c[0, 0] + c[1, 0] / 2.0 + c[2, 0] / 3.0) * h
-        self.external_work += float(c[0, 1] + c[1, 1] / 2.0 + c[2, 1] / 3.0) * h
+        self.evaluate(dense, t0, t1)          # the whole step: x = 1 below
+        m = len(self._ht)
+        self.dissipated += audit_integral(m, self._coef[0], 1.0) * h
+        self.external_work += audit_integral(m, self._coef[1], 1.0) * h
 
     def end(self, run: RunState) -> None:
         if self._core is not None:
@@ -138,6 +182,7 @@ class EnergyIntegrator:
         """The integrator restarted at a breakpoint where prescribed velocities jump: the
         supports' impulse did the work of the held masses' kinetic energy jump (the
         positions, hence W, are continuous), booked as external work."""
+        self._ht, self._hg, self._key = [], [], None     # P may jump here: new nodes
         t = restart.t
         dT = (self.model.energy_scalars(t, restart.y_after)[0]
               - self.model.energy_scalars(t, restart.y_before)[0])

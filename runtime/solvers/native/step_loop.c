@@ -59,6 +59,7 @@ typedef int (*kv_errw_fn)(const void *ctx, const double *y, double rtol, const d
 #define KV_MAXEN 2048       /* most values per state the energies may return (nen;
                                protocols.MAX_ENERGIES) */
 #define KV_MAXWATCH 8
+#define KV_AUDIT_NODES 4    /* the energy audit's polynomial: cubic (order 4) */
 
 /* IDA's constants (bdf.py) */
 #define EPS_NEWT 0.33
@@ -116,12 +117,14 @@ typedef struct {
     int watch_idx[KV_MAXWATCH];
     double watch_dir[KV_MAXWATCH], watch_old[KV_MAXWATCH];
     int watch_hit;              /* bit mask of the watches that fired in the last step */
-    /* energy audit: 3-point Gauss-Legendre on each step's interpolant */
-    int audit;
-    double gl_x[3], fit[9];     /* nodes on [0, 1]; values -> quadratic coefficients */
-    double dissipated, external_work;   /* J, up to t */
-    double coef[6];             /* the last step's quadratics of 2D and P: c0, c1, c2 each */
-    double *wy, *wyp;           /* work: 3 x n each */
+    /* energy audit: 2D and P at the ends of the last KV_AUDIT_NODES steps (since the
+       last (re)start), integrated over each step on the polynomial through them */
+    int audit, nh;              /* nh: nodes held (0 after a (re)start: push()) */
+    double ht[KV_AUDIT_NODES], hg[2 * KV_AUDIT_NODES];   /* times; (2D, P) at each */
+    double dissipated, external_work;   /* J, up to t_old + the last step (t) */
+    double coef[2 * KV_AUDIT_NODES];    /* the last step's polynomials of 2D and P in
+                                           x = (t - t_old) / h: coef[KV_AUDIT_NODES c + r] x^r */
+    double *wy, *wyp;           /* work: 2 x n each */
     /* samples on an output grid t_out[0..m_out): rows [t, y[samp_idx]..., T, W, int 2D,
        int P] for t_out[k_out], ... into a buffer of rec_cap rows, rec_n of them filled;
        when it is full, flush() hands them to Python (which empties it: rec_n = 0) */
@@ -1118,6 +1121,36 @@ static int step(kv_run *R)
 }
 
 /* ---- after a step: energy audit, output samples, watches --------------------------- */
+/* The polynomial through (ht[j], hg[2 j + c]), j < m, in x = (t - t0) / h: monomial
+   coefficients coef[KV_AUDIT_NODES c + r], from Newton's divided differences expanded
+   by Horner's scheme (runtime.simulate.observers.audit_polynomial: the same operations) */
+static void kv_audit_polynomial(int m, const double *ht, const double *hg, double t0,
+                                double h, double *coef)
+{
+    double x[KV_AUDIT_NODES], d[KV_AUDIT_NODES];
+    for (int j = 0; j < m; ++j) x[j] = (ht[j] - t0) / h;
+    for (int c = 0; c < 2; ++c) {
+        for (int j = 0; j < m; ++j) d[j] = hg[2 * j + c];
+        for (int k = 1; k < m; ++k)
+            for (int j = m - 1; j >= k; --j) d[j] = (d[j] - d[j - 1]) / (x[j] - x[j - k]);
+        double *p = coef + KV_AUDIT_NODES * c;
+        for (int r = 0; r < KV_AUDIT_NODES; ++r) p[r] = 0.0;
+        p[0] = d[m - 1];
+        for (int k = m - 2; k >= 0; --k) {         /* p <- p (x - x_k) + d_k */
+            for (int r = m - 1 - k; r >= 1; --r) p[r] = p[r - 1] - x[k] * p[r];
+            p[0] = d[k] - x[k] * p[0];
+        }
+    }
+}
+
+/* the integral over [0, x] of the polynomial p[0] + p[1] x + ... (m coefficients) */
+static double kv_audit_integral(int m, const double *p, double x)
+{
+    double s = 0.0;
+    for (int r = m - 1; r >= 0; --r) s = s * x + p[r] / (double)(r + 1);
+    return s * x;
+}
+
 static void interp(const kv_ida *S, int m, const double *ts, double *oy, double *oyp)
 {
     const int k = S->kused > 1 ? S->kused : 1;
@@ -1126,22 +1159,36 @@ static void interp(const kv_ida *S, int m, const double *ts, double *oy, double 
 
 static int audit_step(kv_run *R)
 {
+    /* 2D and P once per step, at its end on its interpolant (at a (re)start also at its
+       start), and their integral over the step on the polynomial through the last
+       KV_AUDIT_NODES ends: a variable-step Adams-Moulton rule of order 4 (3 evaluations
+       a step on Gauss-Legendre nodes cost 30 % of simulate's loop; the two agree to the
+       integrator's tolerance, tests/runtime/test_energy_audit.py).
+       runtime.simulate.observers.audit_polynomial is the same arithmetic in Python. */
     kv_ida *S = R->S;
     const double t0 = S->t_old, t1 = S->t, h = t1 - t0;
     if (h == 0.0) return 0;
-    double tq[3], e[3 * KV_MAXEN];
-    for (int j = 0; j < 3; ++j) tq[j] = t0 + h * S->gl_x[j];
-    interp(S, 3, tq, S->wy, S->wyp);
-    if (call_en_fn(R, S->en_audit ? S->en_audit : S->en, 3, tq, S->wy, S->wyp, e)) return 1;
-    double g[3][2];
-    for (int j = 0; j < 3; ++j) {
-        g[j][0] = e[j * S->nen + 2];
-        g[j][1] = e[j * S->nen + 3] + e[j * S->nen + 4];
+    const int first = S->nh == 0, m = first ? 2 : 1;
+    double tq[2] = {t0, t1}, e[2 * KV_MAXEN];
+    interp(S, m, first ? tq : tq + 1, S->wy, S->wyp);
+    if (call_en_fn(R, S->en_audit ? S->en_audit : S->en, m, first ? tq : tq + 1, S->wy,
+                   S->wyp, e)) return 1;
+    for (int j = 0; j < m; ++j) {
+        if (S->nh == KV_AUDIT_NODES) {          /* the oldest node leaves */
+            for (int i = 1; i < KV_AUDIT_NODES; ++i) {
+                S->ht[i - 1] = S->ht[i];
+                S->hg[2 * i - 2] = S->hg[2 * i];
+                S->hg[2 * i - 1] = S->hg[2 * i + 1];
+            }
+            S->nh--;
+        }
+        const double *g = e + j * S->nen;
+        S->ht[S->nh] = first ? tq[j] : t1;
+        S->hg[2 * S->nh] = g[2];
+        S->hg[2 * S->nh + 1] = g[3] + g[4];
+        S->nh++;
     }
-    for (int r = 0; r < 3; ++r)          /* coef = FIT @ g, row r of FIT */
-        for (int c = 0; c < 2; ++c)
-            S->coef[3 * c + r] = S->fit[3 * r] * g[0][c] + S->fit[3 * r + 1] * g[1][c]
-                                 + S->fit[3 * r + 2] * g[2][c];
+    kv_audit_polynomial(S->nh, S->ht, S->hg, t0, h, S->coef);
     return 0;
 }
 
@@ -1149,10 +1196,9 @@ static void partial(const kv_ida *S, double t, double *d, double *w)
 {
     const double t0 = S->t_old, h = S->t - t0;
     if (h == 0.0) { *d = *w = 0.0; return; }
-    const double x = (t - t0) / h, x2 = x * x;
-    const double *c = S->coef;
-    *d = (c[0] * x + c[1] * x2 / 2.0 + c[2] * x2 * x / 3.0) * h;
-    *w = (c[3] * x + c[4] * x2 / 2.0 + c[5] * x2 * x / 3.0) * h;
+    const double x = (t - t0) / h;
+    *d = kv_audit_integral(S->nh, S->coef, x) * h;
+    *w = kv_audit_integral(S->nh, S->coef + KV_AUDIT_NODES, x) * h;
 }
 
 static int sample_step(kv_run *R)
@@ -1235,10 +1281,10 @@ static int after_step(kv_run *R)
     if (S->audit) {
         if (audit_step(R)) return 1;
         if (S->m_out > S->k_out && sample_step(R)) return 1;
-        if (S->t != S->t_old) {            /* the Gauss-Legendre sum: x = 1 */
-            const double h = S->t - S->t_old, *c = S->coef;
-            S->dissipated += (c[0] + c[1] / 2.0 + c[2] / 3.0) * h;
-            S->external_work += (c[3] + c[4] / 2.0 + c[5] / 3.0) * h;
+        if (S->t != S->t_old) {            /* the whole step: x = 1 */
+            const double h = S->t - S->t_old;
+            S->dissipated += kv_audit_integral(S->nh, S->coef, 1.0) * h;
+            S->external_work += kv_audit_integral(S->nh, S->coef + KV_AUDIT_NODES, 1.0) * h;
         }
     }
     S->watch_hit = 0;

@@ -68,6 +68,7 @@ TSTOP, WATCH, FINISHED, MAXSTEPS = 0, 1, 2, 3
 FAIL_CONV, FAIL_ERR, FAIL_STALL, FAIL_HMIN, FAIL_FIXED, CALLBACK, NONFINITE = range(-1, -8, -1)
 MAXWATCH = 8
 NH = 7          # history rows: max order 5 + 2
+AUDIT_NODES = 4  # the energy audit's nodes (KV_AUDIT_NODES): a cubic through the last 4
 
 RES_FN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_double, ctypes.c_void_p,
                           ctypes.c_void_p, ctypes.c_void_p)
@@ -110,11 +111,11 @@ class CoreStruct(ctypes.Structure):
         + _fields(_I, "nwatch")
         + _fields(_I * MAXWATCH, "watch_idx")
         + _fields(_D * MAXWATCH, "watch_dir", "watch_old")
-        + _fields(_I, "watch_hit", "audit")
-        + _fields(_D * 3, "gl_x")
-        + _fields(_D * 9, "fit")
+        + _fields(_I, "watch_hit", "audit", "nh")
+        + _fields(_D * AUDIT_NODES, "ht")
+        + _fields(_D * (2 * AUDIT_NODES), "hg")
         + _fields(_D, "dissipated", "external_work")
-        + _fields(_D * 6, "coef")
+        + _fields(_D * (2 * AUDIT_NODES), "coef")
         + _fields(_P, "wy", "wyp")
         + _fields(_I, "nsamp", "m_out", "k_out", "rec_w", "rec_cap", "rec_n")
         + _fields(_P, "samp_idx", "t_out", "rec", "flush", "sy", "syp")
@@ -339,6 +340,7 @@ class CoreLink:
     def push(self, solver: BDF) -> None:
         """Copy the solver's Python-side state into the struct (at construction)."""
         s = self.s
+        s.nh = 0                 # a (re)start: the energy audit's nodes begin again
         for name in self._SCALARS:
             setattr(s, name, getattr(solver, "_" + name))
         s.have_lu = int(solver._have_lu)
@@ -422,21 +424,18 @@ class CoreLink:
         return code
 
     # -- audit, samples, watches --------------------------------------------------------
-    def enable_audit(self, gl_x: np.ndarray, fit: np.ndarray, dissipated: float,
-                     external_work: float) -> bool:
-        """Integrate 2D and P over every step in C (3-point Gauss-Legendre on the step's
-        interpolant, ``runtime.simulate.observers.EnergyIntegrator``); False when the
-        problem has no compiled energies."""
+    def enable_audit(self, dissipated: float, external_work: float) -> bool:
+        """Integrate 2D and P over every step in C (at the steps' ends, on the polynomial
+        through the last ``AUDIT_NODES`` of them:
+        :class:`runtime.simulate.observers.EnergyIntegrator`); False when the problem has
+        no compiled energies."""
         if not self.has_energies:
             return False
         s, n = self.s, self._solver.n
-        self._wy, self._wyp = np.zeros((3, n)), np.zeros((3, n))
+        self._wy, self._wyp = np.zeros((2, n)), np.zeros((2, n))
         s.wy, s.wyp = self._wy.ctypes.data, self._wyp.ctypes.data
-        for k in range(3):
-            s.gl_x[k] = float(gl_x[k])
-        for k, v in enumerate(np.asarray(fit, dtype=float).ravel()):
-            s.fit[k] = v
         s.dissipated, s.external_work = dissipated, external_work
+        s.nh = 0
         s.audit = 1
         return True
 
