@@ -29,6 +29,8 @@ from runtime.model import build
 from runtime.model.arrays import RodArrays
 from runtime.model.contact import N_VALUES, SELF_VALUE_NAMES, VALUE_NAMES
 from runtime.model.quaternion import end_quaternion, quat_mul, quat_rotation
+from runtime.solvers.native.pointers import PointerCache as _PointerCache
+from runtime.solvers.native.pointers import data_address as _ptr
 
 #: the self-contact couplings' capacity: at most this many doubles of the Woodbury
 #: columns Z (rows x n; beyond, a rod's pairs are left out of the Jacobian) and the
@@ -54,39 +56,6 @@ class Drive(Protocol):
     def apply(self, arrays: RodArrays, t: float, *, left: bool = False, scale: float = 1.0,
               static: bool = False) -> None:
         ...
-
-
-def _ptr(a: np.ndarray, n: int, fortran: bool = False) -> int:
-    """Data address of a contiguous (C, or Fortran if asked) float64 array of size >= n."""
-    ok = isinstance(a, np.ndarray) and a.dtype == np.float64 and a.size >= n and (
-        a.flags.f_contiguous if fortran else a.flags.c_contiguous)
-    if not ok:
-        order = "Fortran" if fortran else "C"
-        raise TypeError(f"expected a {order}-contiguous float64 numpy array of size >= {n}")
-    return a.ctypes.data
-
-
-class _PointerCache:
-    """Data addresses of the last few arrays seen (``ndarray.ctypes.data`` costs ~3 us).
-
-    Holding a reference keeps an array alive and its buffer fixed (numpy refuses to
-    resize referenced arrays), so an identity hit always returns the right address.
-    """
-
-    def __init__(self, size: int = 8) -> None:
-        self._arrays: list[np.ndarray] = []
-        self._ptrs: list[int] = []
-        self._size = size
-
-    def __call__(self, a: np.ndarray, n: int, fortran: bool = False) -> int:
-        for k, b in enumerate(self._arrays):
-            if b is a:
-                return self._ptrs[k]
-        ptr = _ptr(a, n, fortran)
-        self._arrays.insert(0, a)
-        self._ptrs.insert(0, ptr)
-        del self._arrays[self._size:], self._ptrs[self._size:]
-        return ptr
 
 
 class RodModel:

@@ -21,6 +21,7 @@ if TYPE_CHECKING:
     import scipy.sparse as sp
 
 from generated import rod_layout as L
+from runtime.errors import GeneratedCodeError
 from runtime.model.rigid import (
     StaticGauge,
     check_stiffness,
@@ -108,10 +109,62 @@ class RodStatics:
         self.constrain = self._constrain if moving else None
         #: the gauge holding free rigid motions (:meth:`hold_rigid_motions`), or None
         self.gauge: StaticGauge | None = None
+        self._native = None      # NativeStatics, or False where there is none
         if m.self_contact is not None:
             # self-contact couples segments far apart: the static Jacobian is not banded,
             # solve_static factorises it sparse (static_factor)
             self.static_factor = self._static_factor_sparse
+        elif self._native_core() is not None:
+            # the band path's Jacobian, LU and solves in C (statics.c): the same bits
+            self.static_factor = self._static_factor_native
+
+    def _native_core(self):
+        """The Newton iteration's model work in C (:mod:`runtime.solvers.native.static_core`:
+        residual, gathered band Jacobian and its LU, retraction; the same arithmetic as
+        the NumPy methods below, bit for bit), or None: the CasADi backend, self-contact,
+        no compiled helpers."""
+        if self._native is None:
+            self._native = False
+            m = self.model
+            if m._lib is None or m.self_contact is not None:
+                return None
+            import ctypes
+
+            from runtime.solvers.native.static_core import NativeStatics, StaticLayout
+
+            if self._plan is None:
+                self._plan = self._gather_plan()
+            self._half_L_weights(m.reference)          # the weight tables
+            src, widx, dst, _ = self._plan
+            layout = StaticLayout(
+                n=m.n, ns=self.n_static, kl=self.kl_static, ku=self.ku_static, ldab=m.ldab,
+                velocities=np.flatnonzero(m.velocity_mask), rows=self.static_rows,
+                fixed=self.fixed_cols, plan=(src, widx, dst), weight_src=self._weight_src,
+                weight_sign=self._weight_sign, phi=self._phi_flat,
+                phi_cols=self._phi_cols_flat, p_index=m.p_index, theta=self._theta_flat)
+
+            def address(fn) -> int:
+                return ctypes.cast(fn, ctypes.c_void_p).value
+
+            core = NativeStatics.build(layout, self.time, address(m._lib.kvrod_residual),
+                                       address(m._lib.kvrod_jacobian_band),
+                                       ctypes.addressof(m._struct), keep=m)
+            self._native = core if core is not None else False
+        return self._native or None
+
+    def _static_factor_native(self, y: np.ndarray):
+        """LU of the static band Jacobian at y (gauge included) in C, with the ``info`` /
+        ``solve`` face of ``BandLU``: valid until the next call."""
+        core = self._native
+        m = self.model
+        m._time(self.time)
+        rc = core.jacobian(np.ascontiguousarray(y, dtype=float))
+        if rc:
+            raise GeneratedCodeError(f"kvrod_jacobian_band failed (code {rc})")
+        if self.gauge is not None:
+            c, kl, ku = self.gauge.cols, self.kl_static, self.ku_static
+            core.band[kl + ku + c[:, None] - c[None, :], c[None, :]] += self.gauge.K
+        return core.factor()
 
     def _static_factor_sparse(self, y: np.ndarray):
         """SuperLU factors of :meth:`jacobian_csr` (fixed columns and gauge included)
@@ -182,10 +235,17 @@ class RodStatics:
         """Force/torque balance at rest (n_static,): node 0 forces, then per cell i the
         segment i torques (material) and node i forces; zero on held nodes."""
         m = self.model
-        r = self._r
-        m.residual(self.time, self._at_rest_buffer(y), m._zeros, r)
-        out[:] = r[self.static_rows]
-        out[self.fixed_cols] = 0.0
+        core = self._native
+        if core:
+            m._time(self.time)
+            rc = core.residual(np.ascontiguousarray(y, dtype=float), out)
+            if rc:
+                raise GeneratedCodeError(f"kvrod_residual failed (code {rc})")
+        else:
+            r = self._r
+            m.residual(self.time, self._at_rest_buffer(y), m._zeros, r)
+            out[:] = r[self.static_rows]
+            out[self.fixed_cols] = 0.0
         if self.gauge is not None:
             out[self.gauge.cols] += self.gauge.force(y)
 
@@ -329,6 +389,10 @@ class RodStatics:
         :func:`~runtime.model.quaternion.quat_mul`, then the normalisation, operation by
         operation on the same arrays (the same bits), in fewer NumPy calls: at a few
         elements the calls, not the arithmetic, are the cost."""
+        core = self._native
+        if core:
+            return core.retract(np.ascontiguousarray(y, dtype=float),
+                                np.ascontiguousarray(dx, dtype=float))
         m = self.model
         y1 = np.array(y, dtype=float)
         dx = np.asarray(dx)

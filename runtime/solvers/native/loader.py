@@ -18,8 +18,8 @@ from runtime import native
 from .step_loop import CoreStruct
 
 #: the C sources, kept as files beside this module: step_loop.c includes band.c,
-#: condensed.c and blocks.c (one unit; the first is the one compiled)
-FILES = ("step_loop.c", "band.c", "condensed.c", "blocks.c")
+#: condensed.c, blocks.c and statics.c (one unit; the first is the one compiled)
+FILES = ("step_loop.c", "band.c", "condensed.c", "blocks.c", "statics.c")
 SOURCES = {name: Path(__file__).with_name(name).read_text() for name in FILES}
 SOURCE = "".join(SOURCES.values())
 
@@ -97,6 +97,17 @@ def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
     lib.kv_blocks_newton.restype = D
     lib.kv_wrms.argtypes = [I, P, P, P]
     lib.kv_wrms.restype = D
+    lib.kv_static_sizeof.argtypes = []
+    lib.kv_static_sizeof.restype = ctypes.c_size_t
+    for name in ("kv_static_residual", "kv_static_jacobian"):
+        getattr(lib, name).argtypes = [P, P] + ([P] if name.endswith("residual") else [])
+        getattr(lib, name).restype = I
+    lib.kv_static_factor.argtypes = [P]
+    lib.kv_static_factor.restype = I
+    lib.kv_static_solve.argtypes = [P, P]
+    lib.kv_static_solve.restype = None
+    lib.kv_static_retract.argtypes = [P, P, P, P]
+    lib.kv_static_retract.restype = None
     lib.kv_ida_sizeof.argtypes = []
     lib.kv_ida_sizeof.restype = ctypes.c_size_t
     lib.kv_ida_advance.argtypes = [P, D, ctypes.c_longlong]

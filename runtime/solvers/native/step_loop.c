@@ -22,6 +22,7 @@
 #include "band.c"
 #include "condensed.c"
 #include "blocks.c"
+#include "statics.c"
 
 typedef int (*kv_res_fn)(const void *ctx, double t, const double *y, const double *yp,
                          double *res);

@@ -1,0 +1,97 @@
+"""The static Newton iteration's model work in C (runtime/solvers/native/statics.c,
+``RodStatics`` on its compiled kernels) against the NumPy methods it replaces: the same
+bits for the residual at rest, the gathered band Jacobian, the retraction and whole
+static solves (a gauge, obstacles, a Maxwell rod, coupled sections, large rotations)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from runtime.model.statics import RodStatics
+from runtime.problem.assemble import build_model
+from runtime.problem.registry import load_problem
+from runtime.simulate import simulate as S
+from runtime.solvers.protocols import band_storage
+
+CASES = [("cantilever", {"rod.elements": 6}),
+         ("maxwell_cantilever", {"rod.elements": 5}),
+         ("coupled_strip", {"rod.elements": 5}),
+         ("bathe_bolourchi", {"rod.elements": 8}),
+         ("contact_lifted_rod", {"rod.elements": 12})]
+
+
+def _numpy(st: RodStatics):
+    """The problem with its NumPy methods (the C core set aside)."""
+    core, st._native = st._native, False
+    return core
+
+
+@pytest.mark.parametrize("name, overrides", CASES)
+def test_residual_jacobian_and_retraction_are_numpys_bits(name, overrides):
+    model = build_model(load_problem(name, overrides))
+    rng = np.random.default_rng(5)
+    with model.statics():
+        st = RodStatics(model)
+        core = st._native
+        assert core, "the compiled static core is used on the C backend"
+        st.load_scale = 1.0
+        for _ in range(3):
+            y = model.reference + 0.05 * rng.standard_normal(model.n)
+            dx = 0.4 * rng.standard_normal(st.n_static)
+            got = {"r": np.empty(st.n_static)}
+            st.static_residual(y, got["r"])
+            got["y1"] = st.static_retract(y, dx)
+            st.static_factor(y)                  # the band, then its LU in place
+            band = core.band.copy()
+            core.jacobian(y)
+            got["J"] = core.band.copy()
+            _numpy(st)
+            want = {"r": np.empty(st.n_static)}
+            st.static_residual(y, want["r"])
+            want["y1"] = st.static_retract(y, dx)
+            want["J"] = band_storage(st.n_static, st.kl_static, st.ku_static)
+            want["J"].fill(0.0)
+            st.static_jacobian_band(y, want["J"])
+            st._native = core
+            for key in want:
+                assert np.array_equal(got[key], want[key]), key
+            assert not np.array_equal(band, got["J"])   # the factor overwrote its band
+
+
+@pytest.mark.parametrize("name, overrides", [
+    ("cantilever", {"rod.elements": 6}),
+    ("bathe_bolourchi", {"rod.elements": 8}),
+    ("simply_supported", {"rod.elements": 6}),       # its gauge holds a rigid rotation
+    ("rollup", {"rod.elements": 8}),
+])
+def test_a_static_solve_is_the_same_with_and_without_the_c_core(name, overrides,
+                                                                monkeypatch):
+    p = load_problem(name, overrides)
+    native = S.static_equilibrium(p, build_model(p))
+    with monkeypatch.context() as mp:
+        mp.setattr(RodStatics, "_native_core", lambda self: None)
+        plain = S.static_equilibrium(p, build_model(p))
+    assert native.per_step == plain.per_step and native.iterations == plain.iterations
+    assert np.array_equal(native.y, plain.y)
+
+
+def test_the_factor_solves_the_static_band_system():
+    model = build_model(load_problem("cantilever", {"rod.elements": 6}))
+    rng = np.random.default_rng(2)
+    with model.statics():
+        st = RodStatics(model)
+        st.load_scale = 1.0
+        y = model.reference + 0.02 * rng.standard_normal(model.n)
+        st._native.jacobian(y)
+        J = st._native.band.copy()
+        lu = st.static_factor(y)
+        assert lu.info == 0
+        b = rng.standard_normal(st.n_static)
+        x = lu.solve(b)
+        kl, ku, n = st.kl_static, st.ku_static, st.n_static
+        dense = np.zeros((n, n))
+        for j in range(n):
+            for i in range(max(0, j - ku), min(n, j + kl + 1)):
+                dense[i, j] = J[kl + ku + i - j, j]
+        np.testing.assert_allclose(dense @ x, b, rtol=1e-10, atol=1e-10 * np.abs(b).max())
