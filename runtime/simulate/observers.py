@@ -489,6 +489,28 @@ class Centreline:
         self.rec: list[np.ndarray] = []
         #: the positions' sensitivities (k, 3, N+1) per frame, when the run has them
         self.srec: list[np.ndarray] = []
+        self._core = None            # the compiled loop taking the frames, if any
+        self._frames: np.ndarray | None = None
+
+    def into_core(self, solver) -> bool:
+        """Take the frames inside the compiled loop (its frame grid,
+        ``CoreLink.enable_frames``: the same interpolation at the same times as
+        :meth:`step`, so the same bits) instead of from replayed steps; True if it does
+        (not with sensitivities, nor when the grid is taken)."""
+        core = getattr(solver, "core", None)
+        if core is None or solver.n_sensitivities or self.k >= self.t_frames.size:
+            return False
+        frames = np.zeros((self.t_frames.size, self.idx.size))
+        if not core.enable_frames(self.t_frames, self.k, self.idx.ravel(), frames):
+            return False
+        self._core, self._frames = core, frames
+        return True
+
+    def _collect(self) -> None:
+        done = self._core.grid_done
+        for j in range(self.k, done):
+            self.rec.append(self._frames[j].reshape(self.idx.shape).T.copy())
+        self.k = max(self.k, done)
 
     def begin(self, run: RunState) -> None:
         if self.k == 0 and self.t_frames.size and self.t_frames[0] <= run.t:
@@ -502,16 +524,29 @@ class Centreline:
         return self.t_frames[self.k:]
 
     def step(self, run: RunState, dense, t0: float, t1: float) -> None:
+        if self._core is not None:
+            self._collect()
+            return
         k = int(np.searchsorted(self.t_frames, t1 + 1e-12 * max(1.0, abs(t1)), side="right"))
-        for t in self.t_frames[self.k:k]:
-            self.rec.append(np.array(np.asarray(dense(min(t, t1)))[self.idx].T))
+        if k <= self.k:
+            return
+        # dense.values: kv_interp, the arithmetic of the compiled loop's frames (into_core)
+        ys, _ = dense.values(np.minimum(self.t_frames[self.k:k], t1))
+        for j, t in enumerate(self.t_frames[self.k:k]):
+            self.rec.append(np.array(ys[j][self.idx].T))
             if dense.sens is not None:
                 s = np.asarray(dense.sens(min(t, t1))).reshape(-1, run.y.size)
                 self.srec.append(np.array(s[:, self.idx].transpose(0, 2, 1)))
         self.k = max(self.k, k)
 
+    def end(self, run: RunState) -> None:
+        if self._core is not None:
+            self._collect()
+
     def arrays(self) -> tuple[np.ndarray, np.ndarray]:
         """``(t, positions)``: the frame times reached (m,) and positions (m, 3, N+1), m."""
+        if self._core is not None:
+            self._collect()
         pos = (np.stack(self.rec) if self.rec
                else np.zeros((0, self.idx.shape[1], self.idx.shape[0])))
         return self.t_frames[:self.k].copy(), pos

@@ -216,7 +216,10 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
     timed = [o for o in observers if hasattr(o, "next_time")]
     flush_replay = None
     if not every_step:
-        replayed = [o for o in observers if hasattr(o, "replay_times")]
+        # observers that can take their times inside the compiled loop (into_core) need
+        # no replayed steps
+        replayed = [o for o in observers if hasattr(o, "replay_times")
+                    and not (hasattr(o, "into_core") and o.into_core(solver))]
         if replayed:
             flush_replay = _replay(solver, run, replayed, t_end)
             timed = [o for o in timed if o not in replayed]

@@ -209,6 +209,14 @@ typedef struct {
     /* NULL, or en's 2D and powers alone (values 2, 3, 4 of a state, bit for bit those of
        en; the others need not be filled): the audit's quadrature points need no more */
     kv_en_fn en_audit;
+    /* frames of chosen components instead (the deformed centreline, Centreline in
+       observers.py): with grid_idx set, rows of grid_y hold y[grid_idx[0..grid_nidx)] and
+       grid_yp is not written (grid_wy, grid_wyp: work, n each); with grid_slack, a time
+       up to 1e-12 max(1, |t|) past the step's end counts as reached and is taken at the
+       end (forward runs: the Python observer's rule) */
+    const int *grid_idx;
+    double *grid_wy, *grid_wyp;
+    int grid_nidx, grid_slack;
 } kv_ida;
 
 enum { SEC_RES, SEC_JAC, SEC_LU, SEC_NEWTON, SEC_EN, SEC_DRIVE };
@@ -1268,6 +1276,19 @@ static int replay_step(kv_run *R)
 static void grid_step(kv_ida *S)
 {
     const size_t n = (size_t)S->n;
+    if (S->grid_idx) {                  /* frames of chosen components */
+        const double t1 = S->t;
+        const double reach = S->grid_slack ? t1 + 1e-12 * (fabs(t1) > 1.0 ? fabs(t1) : 1.0)
+                                           : t1;
+        while (S->k_grid < S->m_grid && S->t_grid[S->k_grid] <= reach) {
+            const size_t k = (size_t)S->k_grid++;
+            const double t = S->t_grid[k] < t1 ? S->t_grid[k] : t1;
+            interp(S, 1, &t, S->grid_wy, S->grid_wyp);
+            double *row = S->grid_y + k * (size_t)S->grid_nidx;
+            for (int j = 0; j < S->grid_nidx; ++j) row[j] = S->grid_wy[S->grid_idx[j]];
+        }
+        return;
+    }
     while (S->k_grid < S->m_grid && S->direction * (S->t_grid[S->k_grid] - S->t) <= 0.0) {
         const size_t k = (size_t)S->k_grid++;
         interp(S, 1, S->t_grid + k, S->grid_y + k * n, S->grid_yp + k * n);

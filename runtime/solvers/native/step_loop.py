@@ -143,6 +143,8 @@ class CoreStruct(ctypes.Structure):
         + _fields(_I, "m_grid", "k_grid")
         + _fields(_P, "t_grid", "grid_y", "grid_yp")
         + _fields(_P, "en_audit")
+        + _fields(_P, "grid_idx", "grid_wy", "grid_wyp")
+        + _fields(_I, "grid_nidx", "grid_slack")
     )
     #: names of the entries of ``sec`` (seconds per part when ``timing`` is set)
     SECTIONS = ("residual", "jacobian", "lu", "newton_solve_update", "energies", "drive")
@@ -546,6 +548,28 @@ class CoreLink:
         s.t_grid = self._t_grid.ctypes.data
         s.grid_y, s.grid_yp = out_y.ctypes.data, out_yp.ctypes.data
         s.m_grid, s.k_grid = self._t_grid.size, int(k)
+
+    def enable_frames(self, t_frames: np.ndarray, k: int, indices: np.ndarray,
+                      out: np.ndarray) -> bool:
+        """Record ``y[indices]`` at ``t_frames[k:]`` (increasing; forward runs) into the
+        rows of ``out`` ((m, indices.size), C order, kept alive by the caller) inside the
+        compiled loop, with the Centreline observer's rule: a time up to 1e-12 max(1, |t|)
+        past a step's end is taken at the end. False (nothing enabled) when the output grid
+        is in use or the run goes backwards; :attr:`grid_done` tells the rows filled."""
+        s = self.s
+        if s.m_grid or s.direction < 0:
+            return False
+        idx = np.ascontiguousarray(indices, dtype=np.int32).ravel()
+        if out.shape != (np.size(t_frames), idx.size) or not out.flags.c_contiguous:
+            raise ValueError(f"frame rows must be C-ordered ({np.size(t_frames)}, {idx.size})")
+        n = self._solver.n
+        self._t_grid = np.ascontiguousarray(t_frames, dtype=float)
+        self._grid = (out, idx, np.zeros(n), np.zeros(n))
+        s.t_grid, s.grid_y, s.grid_yp = self._t_grid.ctypes.data, out.ctypes.data, None
+        s.grid_idx, s.grid_nidx, s.grid_slack = idx.ctypes.data, idx.size, 1
+        s.grid_wy, s.grid_wyp = self._grid[2].ctypes.data, self._grid[3].ctypes.data
+        s.m_grid, s.k_grid = self._t_grid.size, int(k)
+        return True
 
     @property
     def grid_done(self) -> int:
