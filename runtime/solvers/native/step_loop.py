@@ -553,7 +553,7 @@ class CoreLink:
                       out: np.ndarray) -> bool:
         """Record ``y[indices]`` at ``t_frames[k:]`` (increasing; forward runs) into the
         rows of ``out`` ((m, indices.size), C order, kept alive by the caller) inside the
-        compiled loop, with the Centreline observer's rule: a time up to 1e-12 max(1, |t|)
+        compiled loop, with the Centreline observer's rule: a time up to ``1e-12 max(1, abs(t))``
         past a step's end is taken at the end. False (nothing enabled) when the output grid
         is in use or the run goes backwards; :attr:`grid_done` tells the rows filled."""
         s = self.s
