@@ -429,8 +429,8 @@ class CoreLink:
     def enable_audit(self, dissipated: float, external_work: float) -> bool:
         """Integrate 2D and P over every step in C (at the steps' ends, on the polynomial
         through the last ``AUDIT_NODES`` of them:
-        :class:`runtime.simulate.observers.EnergyIntegrator`); False when the problem has
-        no compiled energies."""
+        ``runtime.simulate.observers.EnergyIntegrator``); False when the problem has no
+        compiled energies."""
         if not self.has_energies:
             return False
         s, n = self.s, self._solver.n
