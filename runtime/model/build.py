@@ -209,22 +209,25 @@ def require_casadi_kernels() -> None:
     verify_manifest(names=tuple(f"{name}.casadi" for name in L.KERNELS))
 
 
-#: files whose bytes this process has hashed: path -> (mtime ns, size, digest)
-_DIGESTS: dict[Path, tuple[int, int, str]] = {}
+#: files whose bytes this process has hashed: path -> (stat signature, digest)
+_DIGESTS: dict[Path, tuple[tuple[int, ...], str]] = {}
 
 
 def file_digest(path: Path) -> str:
     """sha256 (hex) of a file's bytes followed by a NUL byte (the manifest's hash of a file
-    as written), computed once per process while the file's size and modification time
-    stay the same: the manifest check and the libraries' cache keys read the same 2.5 MB
-    of generated C (8 ms a process, twice, before)."""
+    as written), computed once per process while the file stays the same file with the
+    same size, modification and change times (the change time too: ``cp -p``, ``rsync
+    -t`` or ``tar x`` restore an edited file's modification time, never its change time):
+    the manifest check and the libraries' cache keys read the same 2.5 MB of generated C
+    (8 ms a process, twice, before)."""
     path = Path(path)
     st = path.stat()            # before reading: a file changed meanwhile is hashed again
+    sig = (st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns)
     seen = _DIGESTS.get(path)
-    if seen is not None and seen[:2] == (st.st_mtime_ns, st.st_size):
-        return seen[2]
+    if seen is not None and seen[0] == sig:
+        return seen[1]
     digest = hashlib.sha256(path.read_bytes() + b"\0").hexdigest()
-    _DIGESTS[path] = (st.st_mtime_ns, st.st_size, digest)
+    _DIGESTS[path] = (sig, digest)
     return digest
 
 

@@ -161,10 +161,14 @@ class RodStatics:
         rc = core.jacobian(np.ascontiguousarray(y, dtype=float))
         if rc:
             raise GeneratedCodeError(f"kvrod_jacobian_band failed (code {rc})")
+        self._add_gauge_stiffness(core.band)
+        return core.factor()
+
+    def _add_gauge_stiffness(self, ab: np.ndarray) -> None:
+        """The gauge's stiffness into a static band (LAPACK storage), if there is one."""
         if self.gauge is not None:
             c, kl, ku = self.gauge.cols, self.kl_static, self.ku_static
-            core.band[kl + ku + c[:, None] - c[None, :], c[None, :]] += self.gauge.K
-        return core.factor()
+            ab[kl + ku + c[:, None] - c[None, :], c[None, :]] += self.gauge.K
 
     def _static_factor_sparse(self, y: np.ndarray):
         """SuperLU factors of :meth:`jacobian_csr` (fixed columns and gauge included)
@@ -351,9 +355,7 @@ class RodStatics:
         flat = np.bincount(dst, weights=vals, minlength=out_ab.size)
         flat[fixed] += 1.0
         out_ab[:] = flat.reshape(out_ab.shape, order="F")
-        if self.gauge is not None:
-            c = self.gauge.cols
-            out_ab[kl + ku + c[:, None] - c[None, :], c[None, :]] += self.gauge.K
+        self._add_gauge_stiffness(out_ab)
 
     def _half_L_weights(self, y0: np.ndarray) -> np.ndarray:
         """``[1, 0.5 Lm.ravel()]`` (:func:`_half_L` of the state's quaternions, the weights of

@@ -7,9 +7,11 @@ ends, energies and reactions (:class:`Sampler`), maxima of one coordinate
 They are called in the order given, so an observer may use the results of earlier ones
 (:class:`Sampler` reads the running integrals of :class:`EnergyIntegrator`). All of them
 are ``sparse``: with the compiled step loop (``runtime/solvers/native/step_loop.c``) the
-energy quadrature and the output samples run inside it (``attach``), the snapshots and the
-centreline frames are taken on copies of the steps that reach their times, handed over in
-batches (``replay_times``), and maxima stop the loop where the velocity changes sign
+energy audit and the output samples run inside it (``attach``), so do the centreline
+frames where the loop's frame grid is free (``into_core``), the snapshots (and frames
+that cannot go into the loop) are taken on copies of the steps that reach their times,
+handed over in batches (``replay_times``), and maxima stop the loop where the velocity
+changes sign
 (``watches``); ``step`` of a sparse observer may be called for any step, not only those it
 asked for.
 """
@@ -42,11 +44,13 @@ class EnergyModel(Protocol):
 
 def audit_polynomial(ht: list[float], hg: list[tuple[float, float]], t0: float, h: float
                      ) -> list[list[float]]:
-    """The polynomials through the audit's nodes ``(ht[j], hg[j])`` (times, (2D, P)) in
-    x = (t - t0) / h: for 2D and for P, the monomial coefficients ``[c_0, ..., c_3]``
-    (Newton's divided differences expanded by Horner's scheme; float for float the
-    arithmetic of ``kv_audit_polynomial`` in native/step_loop.c, so that both paths give
-    the same audit)."""
+    """The polynomials through the audit's nodes ``(ht[j], hg[j])`` (times, (2D, P); the
+    last two: the step's start and end) in x = (t - t0) / h: for 2D and for P, the
+    monomial coefficients ``[c_0, ..., c_3]`` (Newton's divided differences expanded by
+    Horner's scheme), for 2D the straight line through the step's ends where the cubic's
+    mean over the step is negative (float for float the arithmetic of
+    ``kv_audit_polynomial`` in native/step_loop.c, so that both paths give the same
+    audit)."""
     m = len(ht)
     x = [(tj - t0) / h for tj in ht]
     out = []
@@ -61,6 +65,12 @@ def audit_polynomial(ht: list[float], hg: list[tuple[float, float]], t0: float, 
             for r in range(m - 1 - k, 0, -1):
                 p[r] = p[r - 1] - x[k] * p[r]
             p[0] = d[k] - x[k] * p[0]
+        if c == 0 and m > 2 and audit_integral(m, p, 1.0) < 0.0:
+            # 2D >= 0: an edge the cubic overshoots (a contact's release) gets the
+            # straight line through the step's two ends
+            g0, g1 = hg[m - 2][0], hg[m - 1][0]
+            p = [0.0] * AUDIT_NODES
+            p[0], p[1] = g0, g1 - g0
         out.append(p)
     return out
 
@@ -308,7 +318,7 @@ class Sampler:
             return
         ts = np.minimum(self.t_out[k0:k], t1)
         e = self.energy
-        ys, en = e.evaluate(dense, t0, t1, ts)        # with the step's quadrature nodes
+        ys, en = e.evaluate(dense, t0, t1, ts)        # with the step's audit node
         dd, ww = e.partial(dense, t0, t1, ts)
         self._record(ts, ys[:, self._all_indices()], en, e.dissipated + dd,
                      e.external_work + ww)
@@ -497,6 +507,7 @@ class Centreline:
         ``CoreLink.enable_frames``: the same interpolation at the same times as
         :meth:`step`, so the same bits) instead of from replayed steps; True if it does
         (not with sensitivities, nor when the grid is taken)."""
+        self._core = self._frames = None
         core = getattr(solver, "core", None)
         if core is None or solver.n_sensitivities or self.k >= self.t_frames.size:
             return False

@@ -76,7 +76,9 @@ class Observer(Protocol):
       them are kept and ``step`` is called for them later, in order (when the compiled
       loop's buffer is full and at every stop, before the stop's own calls), on a copy
       of their interpolant: its ``step`` must then use ``dense``, ``t0``, ``t1`` only
-      (``run`` is the state of the stop).
+      (``run`` is the state of the stop);
+    * ``into_core(solver) -> bool``: an observer with ``replay_times`` may take its
+      times inside the compiled loop instead (True: no steps are kept for it).
 
     Observers are called in the order given, so one may use the results of earlier
     ones.

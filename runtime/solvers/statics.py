@@ -214,7 +214,7 @@ def solve_static(
             if it >= max_iter:
                 raise _NewtonFailure(f"no convergence in {max_iter} iterations", r)
             f = res.copy()
-            if own_factor is not None:      # a sparse static problem (an assembly)
+            if own_factor is not None:      # the problem factorises (sparse; a rod's C core)
                 lu = own_factor(y)
             else:
                 ab.fill(0.0)

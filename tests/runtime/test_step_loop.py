@@ -241,10 +241,11 @@ def test_the_compiled_loop_calls_python_rarely_unless_an_observer_needs_every_st
 
 
 def test_frames_and_snapshots_come_from_kept_steps_not_stops(monkeypatch):
-    """The centreline frames and the snapshots are taken on copies of the steps that
-    reach their times, handed to Python in batches (a 2-row buffer here): the compiled
-    loop stops only for the maxima and the end, and the frames are those of a run that
-    stops at each of them (observers called at every step)."""
+    """The snapshots are taken on copies of the steps that reach their times, handed to
+    Python in batches (a 2-row buffer here), the centreline frames inside the compiled
+    loop (its frame grid) or, where that is refused, on copied steps as well: the loop
+    stops only for the maxima and the end, and the frames are those of a run that stops
+    at each of them (observers called at every step), the same bits all three ways."""
     from runtime.solvers.native.step_loop import CoreLink
 
     p = load_problem("cantilever", {"rod.elements": 6, "simulation.t_end": 2.0,
@@ -269,6 +270,11 @@ def test_frames_and_snapshots_come_from_kept_steps_not_stops(monkeypatch):
     assert len(snaps[False]) == len(snaps[True]) >= 40
     for (t1, y1, yp1), (t2, y2, yp2) in zip(snaps[True], snaps[False], strict=True):
         assert t1 == t2 and np.array_equal(y1, y2) and np.array_equal(yp1, yp2)
+    from runtime.simulate.observers import Centreline
+
+    monkeypatch.setattr(Centreline, "into_core", lambda self, solver: False)
+    replayed = _simulate(p, False, monkeypatch)
+    assert np.array_equal(replayed.centreline, b.centreline)
 
 
 def test_checkpoints_after_the_first_wait_for_their_wall_time():

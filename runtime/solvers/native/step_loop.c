@@ -207,7 +207,7 @@ typedef struct {
     const double *t_grid;
     double *grid_y, *grid_yp;
     /* NULL, or en's 2D and powers alone (values 2, 3, 4 of a state, bit for bit those of
-       en; the others need not be filled): the audit's quadrature points need no more */
+       en; the others need not be filled): the audit's nodes need no more */
     kv_en_fn en_audit;
     /* frames of chosen components instead (the deformed centreline, Centreline in
        observers.py): with grid_idx set, rows of grid_y hold y[grid_idx[0..grid_nidx)] and
@@ -1130,9 +1130,21 @@ static int step(kv_run *R)
 }
 
 /* ---- after a step: energy audit, output samples, watches --------------------------- */
-/* The polynomial through (ht[j], hg[2 j + c]), j < m, in x = (t - t0) / h: monomial
-   coefficients coef[KV_AUDIT_NODES c + r], from Newton's divided differences expanded
-   by Horner's scheme (runtime.simulate.observers.audit_polynomial: the same operations) */
+/* the integral over [0, x] of the polynomial p[0] + p[1] x + ... (m coefficients) */
+static double kv_audit_integral(int m, const double *p, double x)
+{
+    double s = 0.0;
+    for (int r = m - 1; r >= 0; --r) s = s * x + p[r] / (double)(r + 1);
+    return s * x;
+}
+
+/* The polynomial through (ht[j], hg[2 j + c]), j < m (the last two: the step's start and
+   end), in x = (t - t0) / h: monomial coefficients coef[KV_AUDIT_NODES c + r], from
+   Newton's divided differences expanded by Horner's scheme. 2D is never negative: where
+   its cubic's mean over the step is (an edge the cubic overshoots: a contact's release,
+   2D falling from hundreds of watts to nothing within a few steps), the straight line
+   through the step's two ends instead. runtime.simulate.observers.audit_polynomial: the
+   same operations. */
 static void kv_audit_polynomial(int m, const double *ht, const double *hg, double t0,
                                 double h, double *coef)
 {
@@ -1149,15 +1161,13 @@ static void kv_audit_polynomial(int m, const double *ht, const double *hg, doubl
             for (int r = m - 1 - k; r >= 1; --r) p[r] = p[r - 1] - x[k] * p[r];
             p[0] = d[k] - x[k] * p[0];
         }
+        if (c == 0 && m > 2 && kv_audit_integral(m, p, 1.0) < 0.0) {
+            const double g0 = hg[2 * (m - 2)], g1 = hg[2 * (m - 1)];
+            for (int r = 0; r < KV_AUDIT_NODES; ++r) p[r] = 0.0;
+            p[0] = g0;
+            p[1] = g1 - g0;
+        }
     }
-}
-
-/* the integral over [0, x] of the polynomial p[0] + p[1] x + ... (m coefficients) */
-static double kv_audit_integral(int m, const double *p, double x)
-{
-    double s = 0.0;
-    for (int r = m - 1; r >= 0; --r) s = s * x + p[r] / (double)(r + 1);
-    return s * x;
 }
 
 static void interp(const kv_ida *S, int m, const double *ts, double *oy, double *oyp)

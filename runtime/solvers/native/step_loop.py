@@ -340,7 +340,8 @@ class CoreLink:
     _SENS_COUNTERS = ("nfevS", "nniS", "ncfnS", "netfS", "nsetupS")
 
     def push(self, solver: BDF) -> None:
-        """Copy the solver's Python-side state into the struct (at construction)."""
+        """Copy the solver's Python-side state into the struct (at construction and at
+        every restart: the energy audit's nodes begin again there)."""
         s = self.s
         s.nh = 0                 # a (re)start: the energy audit's nodes begin again
         for name in self._SCALARS:
@@ -547,6 +548,7 @@ class CoreLink:
         s = self.s
         s.t_grid = self._t_grid.ctypes.data
         s.grid_y, s.grid_yp = out_y.ctypes.data, out_yp.ctypes.data
+        s.grid_idx, s.grid_nidx, s.grid_slack = None, 0, 0      # whole states
         s.m_grid, s.k_grid = self._t_grid.size, int(k)
 
     def enable_frames(self, t_frames: np.ndarray, k: int, indices: np.ndarray,
@@ -560,9 +562,13 @@ class CoreLink:
         if s.m_grid or s.direction < 0:
             return False
         idx = np.ascontiguousarray(indices, dtype=np.int32).ravel()
-        if out.shape != (np.size(t_frames), idx.size) or not out.flags.c_contiguous:
-            raise ValueError(f"frame rows must be C-ordered ({np.size(t_frames)}, {idx.size})")
         n = self._solver.n
+        if (out.shape != (np.size(t_frames), idx.size) or not out.flags.c_contiguous
+                or out.dtype != np.float64):
+            raise ValueError(f"frame rows must be C-ordered float ({np.size(t_frames)}, "
+                             f"{idx.size})")
+        if idx.size and not (0 <= idx.min() and idx.max() < n):
+            raise ValueError(f"frame components must be state indices 0 ... {n - 1}")
         self._t_grid = np.ascontiguousarray(t_frames, dtype=float)
         self._grid = (out, idx, np.zeros(n), np.zeros(n))
         s.t_grid, s.grid_y, s.grid_yp = self._t_grid.ctypes.data, out.ctypes.data, None
@@ -573,7 +579,8 @@ class CoreLink:
 
     @property
     def grid_done(self) -> int:
-        """Rows of the output grid filled so far (:meth:`enable_grid`)."""
+        """Rows of the output grid filled so far (:meth:`enable_grid`,
+        :meth:`enable_frames`)."""
         return int(self.s.k_grid)
 
     def set_watches(self, watches: list[tuple[int, float]]) -> None:
