@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from generated import rod_layout as L
+from runtime.solvers.native.pointers import function_address
 
 #: the kernel kinds, in the compiled dispatch order
 KINDS: tuple[str, ...] = tuple(L.OBSTACLE_KINDS)
@@ -105,7 +106,7 @@ class ContactStruct(ctypes.Structure):
 
     def bind(self, lib: ctypes.CDLL) -> None:
         """Point at the contact library's functions (``build.load_contact_library``)."""
-        addr = lambda fn: ctypes.cast(fn, ctypes.c_void_p).value  # noqa: E731
+        addr = function_address
         self.residual = addr(lib.kvrod_contact_residual)
         self.jacobian = addr(lib.kvrod_contact_jacobian)
         self.energies = addr(lib.kvrod_contact_energies)

@@ -31,6 +31,7 @@ from runtime.model.contact import N_VALUES, SELF_VALUE_NAMES, VALUE_NAMES
 from runtime.model.quaternion import end_quaternion, quat_mul, quat_rotation
 from runtime.solvers.native.pointers import PointerCache as _PointerCache
 from runtime.solvers.native.pointers import data_address as _ptr
+from runtime.solvers.native.pointers import function_address
 
 #: the self-contact couplings' capacity: at most this many doubles of the Woodbury
 #: columns Z (rows x n; beyond, a rod's pairs are left out of the Jacobian) and the
@@ -602,13 +603,12 @@ class RodModel:
         the compiled step loop; None on the CasADi backend or without directions."""
         if self._lib is None or self._directions is None:
             return None
-        import ctypes
 
         from runtime.model.sensitivity import CSensitivities
 
         if self._csens is None:
             self._csens = CSensitivities(self._struct, self._directions, self.kl, self.ku)
-        fn = ctypes.cast(self._lib.kvrod_sens_residual, ctypes.c_void_p).value
+        fn = function_address(self._lib.kvrod_sens_residual)
         return fn, self._csens.ptr, self._csens
 
     def c_kernels(self):
@@ -621,9 +621,6 @@ class RodModel:
         import ctypes
 
         from runtime.solvers.protocols import CKernels
-
-        def address(fn) -> int:
-            return ctypes.cast(fn, ctypes.c_void_p).value
 
         drive = None
         if self.drive is not None:
@@ -641,22 +638,23 @@ class RodModel:
 
         lib = self._lib
         energies = lib.kvrod_energies if self.contact is None else lib.kvrod_energies_contact
-        kern = CKernels(address(lib.kvrod_residual), address(lib.kvrod_jacobian_band),
-                        address(energies), ctypes.addressof(self._struct),
+        kern = CKernels(function_address(lib.kvrod_residual),
+                        function_address(lib.kvrod_jacobian_band),
+                        function_address(energies), ctypes.addressof(self._struct),
                         drive=drive, keep=self,
                         jacobian_cells=(0 if self.coupled else
-                                        address(lib.kvrod_jacobian_band_cells)),
+                                        function_address(lib.kvrod_jacobian_band_cells)),
                         drive_constant=drive is not None and not self.drive.time_dependent,
                         n_energies=self.n_energies)
         if self.contact is not None:
-            kern.max_step = address(self._clib.kvrod_max_step)
+            kern.max_step = function_address(self._clib.kvrod_max_step)
         if self.self_contact is None:
-            kern.audit_energies = address(lib.kvrod_audit_powers)
+            kern.audit_energies = function_address(lib.kvrod_audit_powers)
         if self.state_error_weights is not None:
-            kern.error_weights = address(self._clib.kvrod_error_weights)
+            kern.error_weights = function_address(self._clib.kvrod_error_weights)
         if self.self_contact is not None:
             self.blocks  # noqa: B018 (attached before the first Jacobian)
-            kern.system_jacobian = address(lib.kvrod_jacobian_system)
+            kern.system_jacobian = function_address(lib.kvrod_jacobian_system)
         return kern
 
     # -- self-contact: the coupled band block (runtime/solvers/native/blocks.py) --------------

@@ -130,6 +130,7 @@ class RodStatics:
                 return None
             import ctypes
 
+            from runtime.solvers.native.pointers import function_address
             from runtime.solvers.native.static_core import NativeStatics, StaticLayout
 
             if self._plan is None:
@@ -143,11 +144,9 @@ class RodStatics:
                 weight_sign=self._weight_sign, phi=self._phi_flat,
                 phi_cols=self._phi_cols_flat, p_index=m.p_index, theta=self._theta_flat)
 
-            def address(fn) -> int:
-                return ctypes.cast(fn, ctypes.c_void_p).value
-
-            core = NativeStatics.build(layout, self.time, address(m._lib.kvrod_residual),
-                                       address(m._lib.kvrod_jacobian_band),
+            core = NativeStatics.build(layout, self.time,
+                                       function_address(m._lib.kvrod_residual),
+                                       function_address(m._lib.kvrod_jacobian_band),
                                        ctypes.addressof(m._struct), keep=m)
             self._native = core if core is not None else False
         return self._native or None

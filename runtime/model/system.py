@@ -37,6 +37,7 @@ from runtime.errors import GeneratedCodeError
 from runtime.model import build
 from runtime.model.contact import N_VALUES, SELF_VALUE_NAMES, VALUE_NAMES, SelfContactArrays
 from runtime.model.rod import SELF_COUPLING_DOUBLES, SELF_COUPLING_ENTRIES_PER_ROW, RodModel
+from runtime.solvers.native.pointers import function_address
 
 
 @dataclass(frozen=True)
@@ -522,7 +523,7 @@ class SystemModel:
         s.scratch = self._scratch.ctypes.data
         if self.pairs is not None:
             self.pairs.attach_system(self, cb)
-            addr = lambda fn: ctypes.cast(fn, ctypes.c_void_p).value  # noqa: E731
+            addr = function_address
             s.pairs = self.pairs.struct_address
             s.pair_residual = addr(self._plib.kvsys_pairs_residual)
             s.pair_jacobian = addr(self._plib.kvsys_pairs_jacobian)
@@ -695,7 +696,7 @@ class SystemModel:
         if self._sdirs is None:
             return None
         ctx = self._c_sensitivity_context()
-        fn = ctypes.cast(self._lib.kvsys_sens_residual, ctypes.c_void_p).value
+        fn = function_address(self._lib.kvsys_sens_residual)
         return fn, ctx.ptr, ctx
 
     @property
@@ -863,7 +864,7 @@ class SystemModel:
         from runtime.solvers.protocols import CKernels
 
         p = self._ptr()
-        addr = lambda fn: ctypes.cast(fn, ctypes.c_void_p).value  # noqa: E731
+        addr = function_address
         lib = self._lib
 
         def drive(t: float) -> tuple[float, float]:

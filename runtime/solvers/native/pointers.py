@@ -37,3 +37,11 @@ class PointerCache:
         self._ptrs.insert(0, ptr)
         del self._arrays[self._size:], self._ptrs[self._size:]
         return ptr
+
+
+def function_address(fn) -> int:
+    """Address of a ctypes function (a library's symbol or a callback) as an int, for the
+    C structs that call it."""
+    import ctypes
+
+    return ctypes.cast(fn, ctypes.c_void_p).value
