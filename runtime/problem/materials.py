@@ -45,6 +45,7 @@ from runtime.problem.sections import (
     Shape,
 )
 from runtime.section.materials import check_wave_speed
+from runtime.sorted_sets import sorted_union
 
 #: DAMPING_ROUTES lives in runtime.problem.sections (the key is section.damping); imported
 #: here for the material's own checks and the older imports
@@ -260,7 +261,7 @@ class GeneralizedMaxwell:
         pr = _constitutive().maxwell_rod_prony(*self.moduli)
         E_k, th_E = pr["extension"]
         G_k, th_G = pr["shear"]
-        theta = np.union1d(th_E, th_G)
+        theta = sorted_union(th_E, th_G)
         E = np.zeros(theta.size)
         G = np.zeros(theta.size)
         E[np.searchsorted(theta, th_E)] = E_k

@@ -54,6 +54,7 @@ import numpy as np
 
 from runtime.errors import ParameterError
 from runtime.problem import coerce as C
+from runtime.sorted_sets import sorted_unique
 
 #: the constants a section provides (m^2, m^4, -)
 CONSTANTS = ("A", "I1", "I2", "I3", "J_T", "kappa_1", "kappa_2", "kappa_3")
@@ -208,7 +209,7 @@ def energy_shear_factors(kind: str, dims: dict[str, np.ndarray], nu: float
         return np.full(n, k1), np.full(n, k2)
     aspect = np.broadcast_to(aspect, (n,))
     keys = np.array([float(f"{a:.12g}") for a in aspect])
-    distinct = np.unique(keys)
+    distinct = sorted_unique(keys)
     if distinct.size <= ENERGY_DIRECT:
         rows = {a: _energy_factors_at(kind, float(a), float(nu)) for a in distinct}
         return (np.array([rows[a][0] for a in keys]), np.array([rows[a][1] for a in keys]))

@@ -69,6 +69,24 @@ def test_a_short_simulation_runs_without_scipy():
     assert not {"scipy", "shapely", "matplotlib", "casadi"} & set(got), got
 
 
+def test_a_maxwell_simulation_skips_numpys_lazy_submodules():
+    """A generalized Maxwell rod's ``simulate`` (its Prony times' union, the integrator's
+    band pattern and stiff-decay extents) imports neither ``numpy.ma`` (which NumPy 2's
+    ``np.unique`` loads, 15-25 ms) nor ``numpy.random`` (7-12 ms): runtime.sorted_sets and
+    the band pattern's own splitmix64 numbers instead."""
+    probe = ("import sys\n"
+             "from runtime.problem.registry import load_problem\n"
+             "from runtime.simulate.simulate import simulate\n"
+             "r = simulate(load_problem('examples/maxwell_cantilever.toml', "
+             "{'n_elements': 4, 't_end': 0.02}))\n"
+             "assert r.status == 'finished', r.status\n"
+             "print(sorted(m for m in ('numpy.ma', 'numpy.random') if m in sys.modules))")
+    r = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                       cwd=ROOT, timeout=120, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip().splitlines()[-1] == "[]"
+
+
 def test_rod_runs_let_openblas_threads_sleep():
     """kvrod simulate / sweep set OPENBLAS_THREAD_TIMEOUT before NumPy loads (its idle
     threads spin ~0.1 s of CPU otherwise); never over the user's value, never once NumPy

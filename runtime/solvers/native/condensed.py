@@ -8,6 +8,8 @@ import ctypes
 
 import numpy as np
 
+from runtime.sorted_sets import sorted_unique
+
 from .loader import load
 
 #: the relaxation blocks' tables (relaxation.py), in the order of ``kv_cond``
@@ -286,17 +288,6 @@ def _check_block_rows(pattern, kl: int, ku: int, b, entries=None) -> None:
                          f"involves column {int(j[bad][0])}, outside the block")
 
 
-def _sorted_unique(a):
-    """``np.unique(a)`` of a 1-D array (np.unique imports numpy.ma on first use: ~20 ms of
-    a short run's first solve)."""
-    import numpy as np
-
-    a = np.sort(a)
-    keep = np.ones(a.size, bool)
-    np.not_equal(a[1:], a[:-1], out=keep[1:])
-    return a[keep]
-
-
 def _diagonal_blocks(pattern, kl: int, ku: int, b):
     """Per block, 1 when M_b and K_b are structurally diagonal in ``pattern`` (e = k)."""
     import numpy as np
@@ -305,7 +296,7 @@ def _diagonal_blocks(pattern, kl: int, ku: int, b):
     if pattern is None:
         return out
     kv = kl + ku
-    for size in _sorted_unique(b[:, 1]):
+    for size in sorted_unique(b[:, 1]):
         sel = np.flatnonzero((b[:, 1] == size) & (b[:, 4] == size))
         if not sel.size:
             continue
@@ -376,7 +367,7 @@ def _cell_tables(n: int, kl: int, ku: int, b, keep_row, keep_col, col2c, cells, 
     mmax = int(m.max())
     # the kept rows of each cell as runs of consecutive state indices
     brk = np.flatnonzero(np.diff(keep_row) != 1) + 1         # run starts (condensed)
-    starts = _sorted_unique(np.concatenate((brk, cs[:-1])))
+    starts = sorted_unique(np.concatenate((brk, cs[:-1])))
     lens = np.diff(np.append(starts, keep_row.size))
     rp = np.searchsorted(starts, cs)
     cell_of_run = np.searchsorted(cs, starts, side="right") - 1
