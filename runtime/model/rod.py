@@ -800,7 +800,7 @@ class RodModel:
 
         Found by evaluating the banded Jacobian at two pseudo-random states (loads with
         follower parts present keep their entries), so no entry vanishes by accident. No
-        SciPy (unlike :meth:`sparsity`) and no ``numpy.random`` (:class:`_Scatter`): the
+        SciPy (unlike :meth:`sparsity`) and no ``numpy.random`` (``_Scatter`` instead): the
         integrator's setup uses it.
         """
         if self._band_pattern is None:
