@@ -27,8 +27,9 @@ FORBIDDEN = {
 
 #: the floors of runtime/, bottom up: a module may import its own floor and those below
 RUNTIME_FLOORS: tuple[tuple[str, ...], ...] = (
-    ("errors", "native", "signals", "version"),   # errors; compiling native code; Ctrl-C
-                                                  # and SIGTERM around C code; the version
+    ("errors", "native", "signals", "sorted_sets", "version"),   # errors; compiling native
+                                   # code; Ctrl-C and SIGTERM around C code; np.unique without
+                                   # numpy.ma; the version
     ("section",),                      # cross-section analysis (NumPy/SciPy/shapely)
     ("solvers",),                      # integrator, statics, run driver: no problem known
     ("model",),                        # the rod over the generated kernels
