@@ -36,6 +36,8 @@ def test_whole_processes_ran_in_pairs(tiny):
         assert len(wp[name]["walls"]) == len(wp[name]["cpu"]) == 2
         assert min(wp[name]["walls"]) > 0 and min(wp[name]["cpu"]) > 0
     assert len(wp["ratios"]) == 2 and wp["median_ratio"] > 0
+    least = min(wp[mk.MAXWELL]["cpu"]) / min(wp[mk.KV]["cpu"])
+    assert wp["min_cpu_ratio"] == pytest.approx(least, rel=1e-12)
     assert tiny["in_process"]["median_ratio"] > 0
     assert tiny["machine"]["cores"] >= 1 and tiny["machine"]["cpu"]
 
@@ -44,7 +46,7 @@ def test_markdown_has_every_row(tiny):
     md = "\n".join(mk.markdown(tiny))
     assert md.startswith("## 11. Generalized Maxwell over Kelvin-Voigt")
     assert "| Maxwell cantilever |" in md and "| Kelvin-Voigt cantilever |" in md
-    assert "paired median" in md
+    assert "paired median" in md and "least CPU over least CPU" in md
 
 
 def test_bad_sizes_are_refused():
