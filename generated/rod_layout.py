@@ -1,7 +1,7 @@
 # GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 # source: derive/templates/rod_layout.py.jinja
 # derivation step: discrete_rod
-# inputs sha256: 640587370a011841679bc17ffd1463c1864af79b75a59f10cff1b320adbf0336
+# inputs sha256: 43c2b19942d6af3a495097bbe0357eb5a2a81b2ba4865ea7a39bb4f54775a1eb
 # tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 """State, parameter and diagnostics layout of the discrete rod (the one place that owns it).
@@ -44,6 +44,8 @@ kvrod_energies, each on a kvrod_rod struct (N, B, the band and pointers to the a
 per-element CasADi kernels in generated/rod_kernels.c (contact: rod_contact_kernels.c) and
 generated/rod_<kernel>.casadi.
 """
+
+from functools import lru_cache
 
 CELL0_SIZE = 6
 CELL_SIZE = 13
@@ -276,16 +278,24 @@ def _check_branches(branches: int) -> int:
     return branches
 
 
+# the index functions below run once per node or element while a model is built: the
+# offsets and sizes of each B are worked out once per process
+@lru_cache(maxsize=None)
+def _offsets(branches: int, first: bool) -> tuple[tuple[str, int], ...]:
+    B = _check_branches(branches)
+    out, k = [], 0
+    for name, size, per in (CELL0_FIELDS_B if first else CELL_FIELDS_B):
+        out.append((name, k))
+        k += size + per * B
+    return tuple(out)
+
+
 def cell_offsets(branches: int = 0, first: bool = False) -> dict[str, int]:
     """Offsets of the fields of a cell (``first``: cell 0) for B = ``branches`` terms."""
-    B = _check_branches(branches)
-    out, k = {}, 0
-    for name, size, per in (CELL0_FIELDS_B if first else CELL_FIELDS_B):
-        out[name] = k
-        k += size + per * B
-    return out
+    return dict(_offsets(branches, bool(first)))
 
 
+@lru_cache(maxsize=None)
 def cell_sizes(branches: int = 0) -> tuple[int, int]:
     """(size of cell 0, size of cell i >= 1) for B = ``branches`` terms."""
     B = _check_branches(branches)
@@ -310,8 +320,13 @@ def cell_start(i: int, branches: int = 0) -> int:
     return 0 if i == 0 else c0 + c * (i - 1)
 
 
+@lru_cache(maxsize=None)
+def _offset(name: str, branches: int, first: bool) -> int:
+    return dict(_offsets(branches, first))[name]
+
+
 def _at(i: int, name: str, branches: int) -> int:
-    return cell_start(i, branches) + cell_offsets(branches, first=i == 0)[name]
+    return cell_start(i, branches) + _offset(name, branches, i == 0)
 
 
 def node_phi(i: int, branches: int = 0) -> int:

@@ -47,6 +47,7 @@ from runtime.native import (
     compile_command,
     compiling,
     file_hash,
+    file_sha256,
     find_compiler,
     host_id,
     remove_compile_observer,
@@ -209,26 +210,11 @@ def require_casadi_kernels() -> None:
     verify_manifest(names=tuple(f"{name}.casadi" for name in L.KERNELS))
 
 
-#: files whose bytes this process has hashed: path -> (stat signature, digest)
-_DIGESTS: dict[Path, tuple[tuple[int, ...], str]] = {}
-
-
 def file_digest(path: Path) -> str:
     """sha256 (hex) of a file's bytes followed by a NUL byte (the manifest's hash of a file
-    as written), computed once per process while the file stays the same file with the
-    same size, modification and change times (the change time too: ``cp -p``, ``rsync
-    -t`` or ``tar x`` restore an edited file's modification time, never its change time):
-    the manifest check and the libraries' cache keys read the same 2.5 MB of generated C
-    (8 ms a process, twice, before)."""
-    path = Path(path)
-    st = path.stat()            # before reading: a file changed meanwhile is hashed again
-    sig = (st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns)
-    seen = _DIGESTS.get(path)
-    if seen is not None and seen[0] == sig:
-        return seen[1]
-    digest = hashlib.sha256(path.read_bytes() + b"\0").hexdigest()
-    _DIGESTS[path] = (sig, digest)
-    return digest
+    as written), remembered while the file stays the same (:func:`runtime.native.file_sha256`):
+    the manifest check and the libraries' cache keys read the same 2.5 MB of generated C."""
+    return file_sha256(path, b"\0")
 
 
 def library_key(compiler: str, gdir: Path | None = None,

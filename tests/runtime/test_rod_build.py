@@ -197,3 +197,58 @@ def test_edited_casadi_kernels_are_refused_when_loaded(tmp_path):
     build.verify_manifest(gdir, exclude=(".casadi",))
     with pytest.raises(GeneratedCodeError, match="rod_segment_forces.casadi"):
         load_kernels(gdir)
+
+
+@pytest.fixture
+def digest_memo(monkeypatch, tmp_path):
+    """A cache folder of its own and a memo not read yet (a fresh process)."""
+    monkeypatch.setenv("KVROD_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr(native, "_digests", None)
+    return tmp_path / "cache" / native.DIGESTS_FILE
+
+
+def test_file_digests_are_remembered_across_processes_until_the_file_changes(
+        digest_memo, tmp_path, monkeypatch):
+    import hashlib
+
+    monkeypatch.setattr(native, "RACY_SECONDS", -1.0)      # the file counts as old
+    path = tmp_path / "kernels.c"
+    path.write_bytes(b"int f(void) { return 1; }\n")
+    want = hashlib.sha256(path.read_bytes() + b"\0").hexdigest()
+    assert native.file_sha256(path, b"\0") == want
+    assert native.file_sha256(path) == hashlib.sha256(path.read_bytes()).hexdigest()
+    assert digest_memo.is_file()
+    # a later process: the same signature is not read again
+    monkeypatch.setattr(native, "_digests", None)
+    reads = []
+    real = Path.read_bytes
+    monkeypatch.setattr(Path, "read_bytes", lambda p: reads.append(p) or real(p))
+    assert native.file_sha256(path, b"\0") == want
+    assert reads == []
+    # an edit (same size) changes the signature: hashed again
+    path.write_bytes(b"int f(void) { return 2; }\n")
+    monkeypatch.setattr(native, "_digests", None)
+    assert native.file_sha256(path, b"\0") == hashlib.sha256(
+        b"int f(void) { return 2; }\n\0").hexdigest()
+    assert reads == [path]
+
+
+def test_a_file_changed_just_now_is_not_remembered_across_processes(digest_memo, tmp_path):
+    path = tmp_path / "fresh.c"
+    path.write_bytes(b"x")
+    native.file_sha256(path)
+    assert not digest_memo.exists()        # within RACY_SECONDS of its change: this process only
+
+
+@pytest.mark.parametrize("content", ["{", "[1, 2]", '{"00:/x": [[1, 2], "short"]}', ""])
+def test_an_unreadable_digest_memo_is_ignored(digest_memo, tmp_path, monkeypatch, content):
+    import hashlib
+
+    monkeypatch.setattr(native, "RACY_SECONDS", -1.0)
+    digest_memo.parent.mkdir(parents=True)
+    digest_memo.write_text(content)
+    path = tmp_path / "a.c"
+    path.write_bytes(b"abc")
+    assert native.file_sha256(path) == hashlib.sha256(b"abc").hexdigest()
+    kept = json.loads(digest_memo.read_text())
+    assert kept[":" + str(path)][1] == hashlib.sha256(b"abc").hexdigest()
