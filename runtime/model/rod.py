@@ -673,6 +673,9 @@ class RodModel:
             kern.max_step = function_address(self._clib.kvrod_max_step)
         if self.self_contact is None:
             kern.audit_energies = function_address(lib.kvrod_audit_powers)
+        # without obstacles the energies only read the rod's struct and the state (the
+        # contact library keeps per-call values of the gaps): safe beside the residual
+        kern.energies_reentrant = self.contact is None and self.self_contact is None
         if self.state_error_weights is not None:
             kern.error_weights = function_address(self._clib.kvrod_error_weights)
         if self.self_contact is not None:

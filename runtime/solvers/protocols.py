@@ -192,7 +192,12 @@ class CKernels:
 
     ``audit_energies`` (optional, 0 if none): the energies' signature, filling only 2D
     and the powers (values 2, 3, 4 of a state) bit for bit as ``energies`` does
-    (``kvrod_audit_powers``): the energy audit's quadrature points need no more."""
+    (``kvrod_audit_powers``): the energy audit's quadrature points need no more.
+
+    ``energies_reentrant``: the energies read nothing that the residual or the Jacobian
+    write (a rod without contact: its kernels take the rod's struct read-only), so the
+    step loop may evaluate them on a second thread while the steps go on
+    (``CoreLink.enable_audit``)."""
 
     def __init__(self, residual: int, jacobian: int, energies: int, ctx: int,
                  drive=None, keep: Any = None, jacobian_cells: int = 0,
@@ -210,3 +215,4 @@ class CKernels:
         self.max_step = 0
         self.error_weights = 0
         self.audit_energies = 0
+        self.energies_reentrant = False

@@ -90,6 +90,10 @@ def warm_up() -> dict:
     import runtime.simulate.simulate  # noqa: F401 - pay the import once, not in the first task
     from runtime.model import build
 
+    # a sweep's workers fill the cores with points: the energy audit's second thread
+    # (step_loop.audit_thread_wanted) would only add its own cost to every point
+    os.environ.setdefault("KVROD_AUDIT_THREAD", "0")
+
     lib = build.load_library()
     try:  # compiled BDF helpers, when this checkout has them
         from runtime.solvers.native import loader

@@ -492,3 +492,138 @@ def test_the_output_grid_in_the_compiled_loop_backwards_and_at_the_start():
         assert a.status == 0 and a.counters == b.counters and np.array_equal(a.t, t_eval)
         assert np.array_equal(a.y, b.y) and np.array_equal(a.yp, b.yp)
         np.testing.assert_allclose(a.y[0], np.cos(2.0 * (t_eval - span[0])), atol=1e-6)
+
+
+def _runs_with_and_without_the_audit_thread(problem, monkeypatch, **kw):
+    """(one-thread run, two-thread run, CoreLinks of the latter) of ``simulate`` (the
+    thread asked for whatever the machine's CPUs)."""
+    from runtime.solvers.native import step_loop
+
+    links: list = []
+    init = step_loop.CoreLink.__init__
+
+    def kept(self, *a, **k):
+        init(self, *a, **k)
+        links.append(self)
+
+    monkeypatch.setattr(step_loop.CoreLink, "__init__", kept)
+    monkeypatch.setattr(step_loop, "audit_thread_wanted", lambda: False)
+    one = simulate(problem, **kw)
+    assert links and all(link.s.async_runs == 0 for link in links)
+    links.clear()
+    monkeypatch.setattr(step_loop, "audit_thread_wanted", lambda: True)
+    two = simulate(problem, **kw)
+    return one, two, links
+
+
+@pytest.mark.parametrize("name, overrides, rows", [
+    ("cantilever", {"rod.elements": 8, "simulation.t_end": 2.0}, None),
+    ("cantilever", {"rod.elements": 8, "simulation.t_end": 2.0}, 3),
+    ("examples/maxwell_cantilever.toml", {"rod.elements": 6, "simulation.t_end": 1.0}, None),
+    ("examples/coupled_strip.toml", {"rod.elements": 6, "simulation.t_end": 0.5}, 7),
+])
+def test_the_audit_on_its_own_thread_gives_the_one_thread_series(name, overrides, rows,
+                                                                  monkeypatch):
+    """The energy audit and the samples on a second thread (step_loop.c, audit_async):
+    the same values bit for bit (a Kelvin-Voigt, a generalized Maxwell and a coupled rod,
+    whose energies read y' too; a few-row sample buffer, drained before each flush), and
+    the thread did run."""
+    from runtime.solvers.native.step_loop import CoreLink
+
+    if rows is not None:
+        monkeypatch.setattr(CoreLink, "SAMPLE_ROWS", rows)
+    p = load_problem(name, overrides)
+    a, b, links = _runs_with_and_without_the_audit_thread(p, monkeypatch)
+    assert a.status == b.status == "finished" and a.counters == b.counters
+    assert sum(link.s.async_runs for link in links) >= 1
+    for key in ("t", "tip", "start", "kinetic", "elastic", "dissipated", "external_work",
+                "peaks_t", "peaks_x", "y_last"):
+        assert np.array_equal(getattr(a, key), getattr(b, key)), key
+    for end, r in a.reactions.items():
+        for what, v in r.items():
+            assert np.array_equal(v, b.reactions[end][what]), (end, what)
+
+
+def test_the_audit_stays_in_the_loop_while_the_loads_move(monkeypatch):
+    """Base excitation drives the clamp with t: the energies must see the loads of their
+    own time, so those calls keep the audit in the loop (no second thread); same series."""
+    p = load_problem("examples/base_excitation.toml", {"rod.elements": 6,
+                                                       "simulation.t_end": 0.5})
+    a, b, links = _runs_with_and_without_the_audit_thread(p, monkeypatch)
+    assert a.counters == b.counters and links
+    assert all(link.s.async_runs == 0 for link in links)
+    for key in ("t", "tip", "kinetic", "elastic", "dissipated", "external_work"):
+        assert np.array_equal(getattr(a, key), getattr(b, key)), key
+
+
+def test_a_failure_of_the_energies_on_the_audits_thread_fails_the_run(monkeypatch):
+    """Energies that return an error code (at their 301st call) on the worker: the run
+    fails with the compiled functions' message and keeps the samples of the one-thread
+    run's failure, no more (the loop may take a few more steps before it sees it)."""
+    import ctypes
+    import threading
+
+    from runtime.model.rod import RodModel
+    from runtime.solvers.native import step_loop
+
+    EN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_int, ctypes.c_void_p,
+                          ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
+    calls = {"n": 0, "threads": set()}
+    c_kernels = RodModel.c_kernels
+
+    def failing(self):
+        kern = c_kernels(self)
+        real = EN(kern.energies)
+
+        def en(ctx, m, ts, ys, yps, out):
+            calls["n"] += 1
+            calls["threads"].add(threading.get_ident())
+            return -3 if calls["n"] > 300 else real(ctx, m, ts, ys, yps, out)
+
+        cb = EN(en)
+        kern.keep = (kern.keep, cb, real)
+        kern.energies = ctypes.cast(cb, ctypes.c_void_p).value
+        kern.audit_energies = 0
+        return kern
+
+    monkeypatch.setattr(RodModel, "c_kernels", failing)
+    p = load_problem("cantilever", {"rod.elements": 6, "simulation.t_end": 2.0})
+    runs = {}
+    for threaded in (False, True):
+        calls["n"], calls["threads"] = 0, set()
+        monkeypatch.setattr(step_loop, "audit_thread_wanted", lambda t=threaded: t)
+        runs[threaded] = simulate(p)
+        assert (threading.get_ident() in calls["threads"]) is not threaded
+    a, b = runs[False], runs[True]
+    for run in (a, b):
+        assert run.status == "failed" and "energies" in run.message
+    assert 10 < a.t.size < 401 and np.all(np.isfinite(a.dissipated))
+    for key in ("t", "tip", "kinetic", "elastic", "dissipated", "external_work"):
+        assert np.array_equal(getattr(a, key), getattr(b, key)), key
+
+
+def test_the_audit_thread_is_asked_for_with_two_cpus_unless_switched_off(monkeypatch):
+    import os
+
+    from runtime.solvers.native import step_loop
+
+    monkeypatch.delenv("KVROD_AUDIT_THREAD", raising=False)
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
+    assert step_loop.audit_thread_wanted()
+    monkeypatch.setenv("KVROD_AUDIT_THREAD", "0")
+    assert not step_loop.audit_thread_wanted()
+    monkeypatch.setenv("KVROD_AUDIT_THREAD", "1")
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {3}, raising=False)
+    assert not step_loop.audit_thread_wanted()
+
+
+def test_a_sweeps_workers_keep_the_audit_in_the_loop(monkeypatch):
+    """Their cores run points: a second thread per point would only add its cost."""
+    import os
+
+    from runtime.study.sweep_dask import warm_up
+
+    monkeypatch.setenv("KVROD_AUDIT_THREAD", "")      # restored (to unset) afterwards
+    monkeypatch.delenv("KVROD_AUDIT_THREAD")
+    warm_up()
+    assert os.environ["KVROD_AUDIT_THREAD"] == "0"

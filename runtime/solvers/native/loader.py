@@ -33,6 +33,9 @@ SOURCE = "".join(SOURCES.values())
 # instructions in the products, but GCC's AVX-512 code of the pivoting and gathering
 # kernels is slower here), so -mno-avx512f on x86-64: 468 / 72.
 _EXTRA = ("-mno-avx512f",) if platform.machine().lower() in ("x86_64", "amd64") else ()
+# POSIX threads for the energy audit's second thread (step_loop.c: KV_THREADS); on
+# Windows the audit stays in the loop
+_THREADS = () if os.name == "nt" else ("-pthread",)
 _lib: ctypes.CDLL | None = None
 _tried = False
 
@@ -45,7 +48,7 @@ def _compile(cc: str, dest: Path) -> None:
         out = Path(tmp) / dest.name
         with native.compiling(native.STEP_LOOP):
             proc = native.run_compiler([*_EXTRA, str(Path(tmp) / FILES[0]), "-o", str(out),
-                                       "-lm"], cc)
+                                       *_THREADS, "-lm"], cc)
         if proc.returncode != 0:
             raise subprocess.SubprocessError(proc.stderr)
         os.replace(out, dest)
@@ -60,7 +63,7 @@ def load() -> ctypes.CDLL | None:
     cc = native.find_compiler()
     if cc is None:
         return None
-    key = hashlib.sha256((SOURCE + " ".join((*native.compile_command(cc), *_EXTRA))
+    key = hashlib.sha256((SOURCE + " ".join((*native.compile_command(cc), *_EXTRA, *_THREADS))
                           + native.host_id()).encode()).hexdigest()[:16]
     path = native.cache_dir() / f"kvrod_bdf_{key}.so"
     try:

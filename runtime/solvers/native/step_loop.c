@@ -17,8 +17,13 @@
    callback ("drive") only when t leaves the interval on which they are constant. Steps
    whose interpolant Python observers need at given times (the deformed centreline,
    snapshots) are copied and handed over in batches (replay_step) instead of stopping. */
-#define _POSIX_C_SOURCE 199309L     /* clock_gettime under -std=c99 */
+#define _POSIX_C_SOURCE 200112L     /* clock_gettime, POSIX threads under -std=c99 */
 #include <time.h>
+#if !defined(_WIN32) && !defined(KV_NO_THREADS)
+#define KV_THREADS 1                /* the audit's second thread (audit_async) */
+#include <pthread.h>
+#include <signal.h>
+#endif
 #include "band.c"
 #include "condensed.c"
 #include "blocks.c"
@@ -217,6 +222,13 @@ typedef struct {
     const int *grid_idx;
     double *grid_wy, *grid_wyp;
     int grid_nidx, grid_slack;
+    /* the energy audit and the output samples on a second thread while the steps go on
+       (1: asked for; taken only with KV_THREADS, en reentrant, no drive and no
+       sensitivities): jobs in a ring of async_cap slots of 4 n doubles at async_buf
+       (owned by Python); the values are those of the one-thread path bit for bit;
+       async_runs: the advance calls that ran it */
+    int audit_async, async_cap, async_runs;
+    double *async_buf;
 } kv_ida;
 
 enum { SEC_RES, SEC_JAC, SEC_LU, SEC_NEWTON, SEC_EN, SEC_DRIVE };
@@ -243,7 +255,9 @@ size_t kv_ida_sizeof(void) { return sizeof(kv_ida); }
 #define CORE_MODE(S)
 #endif
 
-typedef struct { kv_ida *S; unsigned int user_csr_; } kv_run;   /* one advance call */
+struct kv_async_s;
+/* one advance call (A: the audit's thread, NULL when the audit runs in the loop) */
+typedef struct { kv_ida *S; unsigned int user_csr_; struct kv_async_s *A; } kv_run;
 
 static int drive_to(kv_run *R, double t)
 {
@@ -1176,6 +1190,33 @@ static void interp(const kv_ida *S, int m, const double *ts, double *oy, double 
     kv_interp(k, S->n, m, S->t, S->psi, S->phi, ts, oy, oyp);
 }
 
+/* a node of the audit: 2D and P of m states (ys, yps: m rows of n) at ts, the oldest node
+   dropped beyond KV_AUDIT_NODES, and the polynomial of the step [t0, t0 + h] through them */
+static int audit_node(kv_run *R, int m, const double *ts, const double *ys,
+                      const double *yps, double t0, double h)
+{
+    kv_ida *S = R->S;
+    double e[2 * KV_MAXEN];
+    if (call_en_fn(R, S->en_audit ? S->en_audit : S->en, m, ts, ys, yps, e)) return 1;
+    for (int j = 0; j < m; ++j) {
+        if (S->nh == KV_AUDIT_NODES) {          /* the oldest node leaves */
+            for (int i = 1; i < KV_AUDIT_NODES; ++i) {
+                S->ht[i - 1] = S->ht[i];
+                S->hg[2 * i - 2] = S->hg[2 * i];
+                S->hg[2 * i - 1] = S->hg[2 * i + 1];
+            }
+            S->nh--;
+        }
+        const double *g = e + j * S->nen;
+        S->ht[S->nh] = ts[j];
+        S->hg[2 * S->nh] = g[2];
+        S->hg[2 * S->nh + 1] = g[3] + g[4];
+        S->nh++;
+    }
+    kv_audit_polynomial(S->nh, S->ht, S->hg, t0, h, S->coef);
+    return 0;
+}
+
 static int audit_step(kv_run *R)
 {
     /* 2D and P once per step, at its end on its interpolant (at a (re)start also at its
@@ -1188,36 +1229,45 @@ static int audit_step(kv_run *R)
     const double t0 = S->t_old, t1 = S->t, h = t1 - t0;
     if (h == 0.0) return 0;
     const int first = S->nh == 0, m = first ? 2 : 1;
-    double tq[2] = {t0, t1}, e[2 * KV_MAXEN];
+    double tq[2] = {t0, t1};
     interp(S, m, first ? tq : tq + 1, S->wy, S->wyp);
-    if (call_en_fn(R, S->en_audit ? S->en_audit : S->en, m, first ? tq : tq + 1, S->wy,
-                   S->wyp, e)) return 1;
-    for (int j = 0; j < m; ++j) {
-        if (S->nh == KV_AUDIT_NODES) {          /* the oldest node leaves */
-            for (int i = 1; i < KV_AUDIT_NODES; ++i) {
-                S->ht[i - 1] = S->ht[i];
-                S->hg[2 * i - 2] = S->hg[2 * i];
-                S->hg[2 * i - 1] = S->hg[2 * i + 1];
-            }
-            S->nh--;
-        }
-        const double *g = e + j * S->nen;
-        S->ht[S->nh] = first ? tq[j] : t1;
-        S->hg[2 * S->nh] = g[2];
-        S->hg[2 * S->nh + 1] = g[3] + g[4];
-        S->nh++;
-    }
-    kv_audit_polynomial(S->nh, S->ht, S->hg, t0, h, S->coef);
-    return 0;
+    return audit_node(R, m, first ? tq : tq + 1, S->wy, S->wyp, t0, h);
 }
 
-static void partial(const kv_ida *S, double t, double *d, double *w)
+/* the audit's integrals over [t0, t] of the step [t0, t1] */
+static void partial(const kv_ida *S, double t0, double t1, double t, double *d, double *w)
 {
-    const double t0 = S->t_old, h = S->t - t0;
+    const double h = t1 - t0;
     if (h == 0.0) { *d = *w = 0.0; return; }
     const double x = (t - t0) / h;
     *d = kv_audit_integral(S->nh, S->coef, x) * h;
     *w = kv_audit_integral(S->nh, S->coef + KV_AUDIT_NODES, x) * h;
+}
+
+/* the sample row at ts of the step [t0, t1] (state y, y' there) into row `row` of rec */
+static int sample_row(kv_run *R, double ts, const double *y, const double *yp, double t0,
+                      double t1, int row)
+{
+    kv_ida *S = R->S;
+    double e[KV_MAXEN], d, w;
+    if (call_en(R, 1, &ts, y, yp, e)) return 1;
+    partial(S, t0, t1, ts, &d, &w);
+    double *r = S->rec + (size_t)row * (size_t)S->rec_w;
+    r[0] = ts;
+    for (int i = 0; i < S->nsamp; ++i) r[1 + i] = y[S->samp_idx[i]];
+    r[1 + S->nsamp] = e[0];
+    r[2 + S->nsamp] = e[1];
+    r[3 + S->nsamp] = S->dissipated + d;
+    r[4 + S->nsamp] = S->external_work + w;
+    for (int k = KV_NEN; k < S->nen; ++k) r[k + S->nsamp] = e[k];
+    return 0;
+}
+
+/* the audit's whole step [t0, t0 + h] (x = 1) */
+static void audit_step_end(kv_ida *S, double h)
+{
+    S->dissipated += kv_audit_integral(S->nh, S->coef, 1.0) * h;
+    S->external_work += kv_audit_integral(S->nh, S->coef + KV_AUDIT_NODES, 1.0) * h;
 }
 
 static int sample_step(kv_run *R)
@@ -1225,16 +1275,15 @@ static int sample_step(kv_run *R)
     kv_ida *S = R->S;
     const double t1 = S->t, slack = 1e-12 * (fabs(t1) > 1.0 ? fabs(t1) : 1.0);
     while (S->k_out < S->m_out && S->t_out[S->k_out] <= t1 + slack) {
-        double ts = S->t_out[S->k_out] < t1 ? S->t_out[S->k_out] : t1, e[KV_MAXEN], d, w;
+        double ts = S->t_out[S->k_out] < t1 ? S->t_out[S->k_out] : t1;
         interp(S, 1, &ts, S->sy, S->syp);
-        if (call_en(R, 1, &ts, S->sy, S->syp, e)) return 1;
-        partial(S, ts, &d, &w);
         if (S->rec_n == S->rec_cap) {
             USER_MODE(R);
             int rc = S->flush(ts);
             CORE_MODE(R);
             if (rc || S->rec_n == S->rec_cap) return 1;
         }
+        if (sample_row(R, ts, S->sy, S->syp, S->t_old, t1, S->rec_n)) return 1;
         if (S->nsens && S->srec) {      /* the sensitivities of the sampled components */
             const int k = S->kused > 1 ? S->kused : 1, n = S->n;
             kv_interp(k, S->nsens * n, 1, S->t, S->psi, S->sphi, &ts, S->s_wy, S->s_wyp);
@@ -1243,18 +1292,246 @@ static int sample_step(kv_run *R)
                 for (int j = 0; j < S->nsamp; ++j)
                     srow[i * S->nsamp + j] = S->s_wy[(size_t)i * n + S->samp_idx[j]];
         }
-        double *row = S->rec + (size_t)S->rec_n++ * (size_t)S->rec_w;
-        row[0] = ts;
-        for (int i = 0; i < S->nsamp; ++i) row[1 + i] = S->sy[S->samp_idx[i]];
-        row[1 + S->nsamp] = e[0];
-        row[2 + S->nsamp] = e[1];
-        row[3 + S->nsamp] = S->dissipated + d;
-        row[4 + S->nsamp] = S->external_work + w;
-        for (int k = KV_NEN; k < S->nen; ++k) row[k + S->nsamp] = e[k];
+        S->rec_n++;
         S->k_out++;
     }
     return 0;
 }
+
+/* ---- the audit's second thread ------------------------------------------------------
+   Why: the audit's node a step and the samples' full energies are a quarter of a
+   simulate's loop at N = 50 (~5000 evaluations of ~3.5 us), and they feed nothing back
+   into the steps. With audit_async the loop interpolates the states (from the history,
+   which the next step overwrites) into a ring of slots and goes on; a worker evaluates
+   the energies, the audit's nodes and polynomials, the step integrals and the sample
+   rows in the loop's order, with the same functions, so every value is the one-thread
+   value bit for bit. The worker owns nh, ht, hg, coef, dissipated, external_work and
+   the rows it is given until the ring is drained: before any return to Python (a flush,
+   the end of the advance call), so Python never sees a half-done audit; and only while
+   the loads cannot move (async_start). The worker is
+   woken once per KV_ASYNC_BATCH jobs, not per job (a futex wake costs as much as a
+   small job). An error of the energies fails the run at the next step the loop takes
+   (KV_CALLBACK), with the audit up to the failing job. */
+#ifdef KV_THREADS
+#define KV_ASYNC_BATCH 32
+enum { JOB_AUDIT, JOB_SAMPLE, JOB_STEP };
+typedef struct { int kind, m, row; double ts[2], t0, t1; } kv_job;
+typedef struct kv_async_s {
+    kv_ida *S;
+    unsigned int user_csr_;
+    pthread_t thread;
+    pthread_mutex_t mu;
+    pthread_cond_t wake, done;
+    kv_job *jobs;               /* async_cap of them; job k's slot: async_buf + (k % cap) 4n */
+    long long head, tail;       /* next job of the worker, next free slot (under mu) */
+    int quit, err, sleeping, waiting, primed;
+    int bad_row;                /* the first sample row not written (after a failure), -1 */
+} kv_async;
+
+static double *async_slot_at(const kv_async *A, long long k)
+{
+    const kv_ida *S = A->S;
+    return S->async_buf + (size_t)(k % S->async_cap) * 4u * (size_t)S->n;
+}
+
+static int async_run_job(kv_run *R, const kv_job *J, const double *slot)
+{
+    kv_ida *S = R->S;
+    const size_t n = (size_t)S->n;
+    switch (J->kind) {
+    case JOB_AUDIT:
+        return audit_node(R, J->m, J->ts, slot, slot + 2 * n, J->t0, J->t1 - J->t0);
+    case JOB_SAMPLE:
+        return sample_row(R, J->ts[0], slot, slot + 2 * n, J->t0, J->t1, J->row);
+    default:
+        audit_step_end(S, J->t1 - J->t0);
+        return 0;
+    }
+}
+
+static void *async_worker(void *arg)
+{
+    kv_async *A = (kv_async *)arg;
+    kv_run R = {A->S, A->user_csr_, NULL};
+    CORE_MODE(&R);          /* as the loop: the audit's own arithmetic flushes to zero */
+    pthread_mutex_lock(&A->mu);
+    for (;;) {
+        while (A->head == A->tail && !A->quit) {
+            A->sleeping = 1;
+            pthread_cond_wait(&A->wake, &A->mu);
+            A->sleeping = 0;
+        }
+        if (A->head == A->tail) break;                 /* told to quit, nothing left */
+        const long long k = A->head;
+        const kv_job J = A->jobs[k % A->S->async_cap];
+        const int failed = A->err;
+        pthread_mutex_unlock(&A->mu);
+        const int rc = failed ? 1 : async_run_job(&R, &J, async_slot_at(A, k));
+        pthread_mutex_lock(&A->mu);
+        if (rc) {                   /* this job and every later one are not done */
+            A->err = 1;
+            if (J.kind == JOB_SAMPLE && (A->bad_row < 0 || J.row < A->bad_row))
+                A->bad_row = J.row;
+        }
+        A->head = k + 1;
+        if (A->waiting) pthread_cond_signal(&A->done);
+    }
+    pthread_mutex_unlock(&A->mu);
+    return NULL;
+}
+
+/* the slot of the next job (waits while the ring is full) */
+static double *async_slot(kv_async *A)
+{
+    pthread_mutex_lock(&A->mu);
+    while (A->tail - A->head == A->S->async_cap) {
+        A->waiting = 1;
+        if (A->sleeping) pthread_cond_signal(&A->wake);
+        pthread_cond_wait(&A->done, &A->mu);
+        A->waiting = 0;
+    }
+    double *slot = async_slot_at(A, A->tail);
+    pthread_mutex_unlock(&A->mu);
+    return slot;
+}
+
+/* hand the job of the slot async_slot gave over; nonzero: the worker has failed */
+static int async_push(kv_async *A, const kv_job *J)
+{
+    pthread_mutex_lock(&A->mu);
+    A->jobs[A->tail % A->S->async_cap] = *J;
+    A->tail++;
+    if (A->sleeping && A->tail - A->head >= KV_ASYNC_BATCH) pthread_cond_signal(&A->wake);
+    const int err = A->err;
+    pthread_mutex_unlock(&A->mu);
+    return err;
+}
+
+/* wait until every job is done; nonzero: one failed */
+static int async_drain(kv_async *A)
+{
+    pthread_mutex_lock(&A->mu);
+    while (A->head != A->tail) {
+        A->waiting = 1;
+        if (A->sleeping) pthread_cond_signal(&A->wake);
+        pthread_cond_wait(&A->done, &A->mu);
+        A->waiting = 0;
+    }
+    const int err = A->err;
+    pthread_mutex_unlock(&A->mu);
+    return err;
+}
+
+/* audit_step and sample_step as jobs for the worker */
+static int async_after_step(kv_run *R)
+{
+    kv_ida *S = R->S;
+    kv_async *A = R->A;
+    const size_t n = (size_t)S->n;
+    const double t0 = S->t_old, t1 = S->t, h = t1 - t0;
+    if (h != 0.0) {
+        const int m = A->primed ? 1 : 2;
+        kv_job J = {JOB_AUDIT, m, -1, {m == 2 ? t0 : t1, t1}, t0, t1};
+        double *slot = async_slot(A);
+        interp(S, m, J.ts, slot, slot + 2 * n);
+        if (async_push(A, &J)) return 1;
+        A->primed = 1;
+    }
+    const double slack = 1e-12 * (fabs(t1) > 1.0 ? fabs(t1) : 1.0);
+    while (S->k_out < S->m_out && S->t_out[S->k_out] <= t1 + slack) {
+        const double ts = S->t_out[S->k_out] < t1 ? S->t_out[S->k_out] : t1;
+        if (S->rec_n == S->rec_cap) {       /* the rows to Python: the worker done first */
+            if (async_drain(A)) return 1;
+            USER_MODE(R);
+            int rc = S->flush(ts);
+            CORE_MODE(R);
+            if (rc || S->rec_n == S->rec_cap) return 1;
+        }
+        kv_job J = {JOB_SAMPLE, 1, S->rec_n, {ts, ts}, t0, t1};
+        double *slot = async_slot(A);
+        interp(S, 1, &ts, slot, slot + 2 * n);
+        if (async_push(A, &J)) return 1;
+        S->rec_n++;
+        S->k_out++;
+    }
+    if (h != 0.0) {
+        kv_job J = {JOB_STEP, 0, -1, {t1, t1}, t0, t1};
+        async_slot(A);
+        if (async_push(A, &J)) return 1;
+    }
+    return 0;
+}
+
+/* the worker for one advance call (0 and A->S NULL: none, the audit stays in the loop) */
+static int async_start(kv_run *R, kv_async *A)
+{
+    kv_ida *S = R->S;
+    A->S = NULL;
+    /* the loads must stay as they are for the whole call: no drive, or one whose
+       constant interval covers everything up to t_bound (a release: step_loop.py,
+       CoreLink.advance), so that the energies never see the loads move under them */
+    const int steady = !S->drive || (S->direction > 0
+        ? S->t >= S->drive_lo && S->t_bound < S->drive_hi
+        : S->t < S->drive_hi && S->drive_lo == -HUGE_VAL);
+    if (!(S->audit && S->audit_async && S->async_cap >= 2 && S->async_buf && steady
+          && !S->nsens))
+        return 0;
+    A->jobs = (kv_job *)malloc(sizeof(kv_job) * (size_t)S->async_cap);
+    if (!A->jobs) return 0;
+    A->S = S;
+    A->user_csr_ = R->user_csr_;
+    A->head = A->tail = 0;
+    A->quit = A->err = A->sleeping = A->waiting = 0;
+    A->bad_row = -1;
+    A->primed = S->nh > 0;
+    const int made = (pthread_mutex_init(&A->mu, NULL) == 0)
+        + (pthread_cond_init(&A->wake, NULL) == 0) + (pthread_cond_init(&A->done, NULL) == 0);
+    /* the worker blocks every signal (it inherits the mask it is created with): Ctrl-C
+       and SIGTERM reach the loop's thread, as without it */
+    sigset_t all, mine;
+    sigfillset(&all);
+    int created = 0;
+    if (made == 3 && pthread_sigmask(SIG_SETMASK, &all, &mine) == 0) {
+        created = pthread_create(&A->thread, NULL, async_worker, A) == 0;
+        pthread_sigmask(SIG_SETMASK, &mine, NULL);
+    }
+    if (created) {
+        R->A = A;
+        S->async_runs++;
+        return 1;
+    }
+    /* no thread (resources): the audit stays in the loop */
+    if (made == 3) {
+        pthread_cond_destroy(&A->done);
+        pthread_cond_destroy(&A->wake);
+        pthread_mutex_destroy(&A->mu);
+    }
+    free(A->jobs);
+    A->S = NULL;
+    return 0;
+}
+
+/* drain, stop and join the worker; nonzero: a job failed */
+static int async_stop(kv_run *R)
+{
+    kv_async *A = R->A;
+    if (!A) return 0;
+    const int err = async_drain(A);
+    pthread_mutex_lock(&A->mu);
+    A->quit = 1;
+    pthread_cond_signal(&A->wake);
+    pthread_mutex_unlock(&A->mu);
+    pthread_join(A->thread, NULL);
+    if (err && A->bad_row >= 0 && A->bad_row < A->S->rec_n)
+        A->S->rec_n = A->bad_row;       /* the rows reserved for jobs not done */
+    pthread_cond_destroy(&A->done);
+    pthread_cond_destroy(&A->wake);
+    pthread_mutex_destroy(&A->mu);
+    free(A->jobs);
+    R->A = NULL;
+    return err;
+}
+#endif
 
 static int replay_step(kv_run *R)
 {
@@ -1310,14 +1587,15 @@ static int after_step(kv_run *R)
     kv_ida *S = R->S;
     if (S->k_grid < S->m_grid) grid_step(S);
     if (S->k_rep < S->m_rep && replay_step(R)) return 1;
+#ifdef KV_THREADS
+    if (R->A) {
+        if (async_after_step(R)) return 1;
+    } else
+#endif
     if (S->audit) {
         if (audit_step(R)) return 1;
         if (S->m_out > S->k_out && sample_step(R)) return 1;
-        if (S->t != S->t_old) {            /* the whole step: x = 1 */
-            const double h = S->t - S->t_old;
-            S->dissipated += kv_audit_integral(S->nh, S->coef, 1.0) * h;
-            S->external_work += kv_audit_integral(S->nh, S->coef + KV_AUDIT_NODES, 1.0) * h;
-        }
+        if (S->t != S->t_old) audit_step_end(S, S->t - S->t_old);   /* the whole step */
     }
     S->watch_hit = 0;
     for (int k = 0; k < S->nwatch; ++k) {
@@ -1335,10 +1613,14 @@ static int after_step(kv_run *R)
    completed (t may pass t_stop: interpolate back). Returns a KV_ code. */
 int kv_ida_advance(kv_ida *S, double t_stop, long long max_steps)
 {
-    kv_run R = {S, 0};
+    kv_run R = {S, 0, NULL};
 #if defined(__x86_64__) || defined(__SSE2__)
     R.user_csr_ = _mm_getcsr();
     CORE_MODE(&R);
+#endif
+#ifdef KV_THREADS
+    kv_async A;
+    async_start(&R, &A);
 #endif
     int rc = KV_MAXSTEPS;
     for (long long k = 0; k < max_steps; ++k) {
@@ -1351,6 +1633,9 @@ int kv_ida_advance(kv_ida *S, double t_stop, long long max_steps)
         if (S->direction * (S->t - t_stop) >= 0.0) { rc = KV_TSTOP; break; }
         if (S->stop) break;
     }
+#ifdef KV_THREADS
+    if (async_stop(&R) && rc >= 0) rc = KV_CALLBACK;
+#endif
     USER_MODE(&R);
     return rc;
 }

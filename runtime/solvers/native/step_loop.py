@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import ctypes
 import math
+import os
 import signal
 import threading
 from typing import Any
@@ -61,6 +62,20 @@ def _call_holding_signals(s, fn, *args):
     finally:
         for sig, old in saved:
             signal.signal(sig, old)
+
+
+def audit_thread_wanted() -> bool:
+    """Whether the energy audit and the output samples may run on a second thread
+    (``kv_ida.audit_async``): this process may use at least two CPUs, and
+    ``KVROD_AUDIT_THREAD`` is not ``0`` (same results either way, bit for bit; the
+    thread only moves ~a quarter of a run's loop off its critical path)."""
+    if os.environ.get("KVROD_AUDIT_THREAD", "").strip() == "0":
+        return False
+    try:
+        cpus = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        cpus = os.cpu_count() or 1
+    return cpus >= 2
 
 
 #: return codes of kv_ida_advance
@@ -145,6 +160,8 @@ class CoreStruct(ctypes.Structure):
         + _fields(_P, "en_audit")
         + _fields(_P, "grid_idx", "grid_wy", "grid_wyp")
         + _fields(_I, "grid_nidx", "grid_slack")
+        + _fields(_I, "audit_async", "async_cap", "async_runs")
+        + _fields(_P, "async_buf")
     )
     #: names of the entries of ``sec`` (seconds per part when ``timing`` is set)
     SECTIONS = ("residual", "jacobian", "lu", "newton_solve_update", "energies", "drive")
@@ -180,6 +197,7 @@ class CoreLink:
             s.res, s.jac, s.en, s.ctx = kern.residual, kern.jacobian, kern.energies, kern.ctx
             s.nen = kern.n_energies
             s.en_audit = getattr(kern, "audit_energies", 0) or None
+            self._en_reentrant = bool(getattr(kern, "energies_reentrant", False))
             s.maxstep = kern.max_step or None
             s.errw = kern.error_weights or None
             self._keep.append(kern.keep)
@@ -194,6 +212,7 @@ class CoreLink:
         else:
             self._python_functions(problem)
             self.has_energies = False
+            self._en_reentrant = False
             s.nen = 5
         s.drive_t = math.nan
         newton = solver._newton
@@ -440,6 +459,13 @@ class CoreLink:
         s.dissipated, s.external_work = dissipated, external_work
         s.nh = 0
         s.audit = 1
+        if self._en_reentrant and not s.nsens and audit_thread_wanted():
+            # the ring of the audit's thread: up to 64 slots, at most ~8 MB (taken by
+            # the calls during which the loads stay constant: step_loop.c, async_start)
+            cap = max(4, min(64, (8 << 20) // (32 * max(n, 1))))
+            self._async_buf = np.empty((cap, 4 * n))
+            s.async_buf, s.async_cap = self._async_buf.ctypes.data, cap
+            s.audit_async = 1
         return True
 
     #: rows of the sample buffer (handed to ``sink`` whenever full, and at every stop)
