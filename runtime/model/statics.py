@@ -75,8 +75,9 @@ class RodStatics:
         self.kl_static, self.ku_static = ((L.COUPLED_STATIC_KL, L.COUPLED_STATIC_KU)
                                           if m.coupled else (L.STATIC_KL, L.STATIC_KU))
         nodes = np.arange(N + 1)
+        # node 0's force rows, then per cell i segment i's torques and node i's forces
         self.static_rows = np.concatenate(
-            [m.v_index[0]] + [np.r_[m.omega_index[i - 1], m.v_index[i]] for i in range(1, N + 1)])
+            [m.v_index[0], np.hstack([m.omega_index, m.v_index[1:]]).ravel()])
         self.phi_cols = np.array([L.static_phi(i) for i in nodes])[:, None] + np.arange(3)
         self.theta_cols = np.array([L.static_theta(i) for i in range(1, N + 1)])[
             :, None] + np.arange(3)
@@ -311,9 +312,9 @@ class RodStatics:
         # (full column, static column, weight index) of T's entries
         cols = [(m.phi_index.ravel(), self.phi_cols.ravel(), np.zeros(m.phi_index.size, int))]
         b, a = np.meshgrid(np.arange(4), np.arange(3), indexing="ij")   # Lm[i, b, a]
-        for i in range(N):
-            cols.append((m.p_index[i][b.ravel()], self.theta_cols[i][a.ravel()],
-                         1 + 12 * i + 3 * b.ravel() + a.ravel()))
+        b, a = b.ravel(), a.ravel()
+        cols.append((m.p_index[:, b].ravel(), self.theta_cols[:, a].ravel(),
+                     (1 + 12 * np.arange(N)[:, None] + 3 * b + a).ravel()))
         j, cs, w = (np.concatenate(x) for x in zip(*cols, strict=True))
         offs = np.arange(-ku, kl + 1)                           # rows r = j + off
         r = j[:, None] + offs
