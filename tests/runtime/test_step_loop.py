@@ -557,9 +557,10 @@ def test_the_audit_stays_in_the_loop_while_the_loads_move(monkeypatch):
 
 
 def test_a_failure_of_the_energies_on_the_audits_thread_fails_the_run(monkeypatch):
-    """Energies that return an error code (at their 301st call) on the worker: the run
-    fails with the compiled functions' message and keeps the samples of the one-thread
-    run's failure, no more (the loop may take a few more steps before it sees it)."""
+    """Energies that return an error code (at their 801st call, after the worker has
+    started: step_loop.c, KV_ASYNC_AFTER) on the worker: the run fails with the compiled
+    functions' message and keeps the samples of the one-thread run's failure, no more
+    (the loop may take a few more steps before it sees it)."""
     import ctypes
     import threading
 
@@ -568,7 +569,7 @@ def test_a_failure_of_the_energies_on_the_audits_thread_fails_the_run(monkeypatc
 
     EN = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_int, ctypes.c_void_p,
                           ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
-    calls = {"n": 0, "threads": set()}
+    calls = {"n": 0, "failed_on": None}
     c_kernels = RodModel.c_kernels
 
     def failing(self):
@@ -577,8 +578,11 @@ def test_a_failure_of_the_energies_on_the_audits_thread_fails_the_run(monkeypatc
 
         def en(ctx, m, ts, ys, yps, out):
             calls["n"] += 1
-            calls["threads"].add(threading.get_ident())
-            return -3 if calls["n"] > 300 else real(ctx, m, ts, ys, yps, out)
+            if calls["n"] <= 800:
+                return real(ctx, m, ts, ys, yps, out)
+            if calls["failed_on"] is None:
+                calls["failed_on"] = threading.get_ident()
+            return -3
 
         cb = EN(en)
         kern.keep = (kern.keep, cb, real)
@@ -590,14 +594,14 @@ def test_a_failure_of_the_energies_on_the_audits_thread_fails_the_run(monkeypatc
     p = load_problem("cantilever", {"rod.elements": 6, "simulation.t_end": 2.0})
     runs = {}
     for threaded in (False, True):
-        calls["n"], calls["threads"] = 0, set()
+        calls["n"], calls["failed_on"] = 0, None
         monkeypatch.setattr(step_loop, "audit_thread_wanted", lambda t=threaded: t)
         runs[threaded] = simulate(p)
-        assert (threading.get_ident() in calls["threads"]) is not threaded
+        assert (calls["failed_on"] == threading.get_ident()) is not threaded
     a, b = runs[False], runs[True]
     for run in (a, b):
         assert run.status == "failed" and "energies" in run.message
-    assert 10 < a.t.size < 401 and np.all(np.isfinite(a.dissipated))
+    assert 100 < a.t.size < 401 and np.all(np.isfinite(a.dissipated))
     for key in ("t", "tip", "kinetic", "elastic", "dissipated", "external_work"):
         assert np.array_equal(getattr(a, key), getattr(b, key)), key
 

@@ -1314,6 +1314,9 @@ static int sample_step(kv_run *R)
    (KV_CALLBACK), with the audit up to the failing job. */
 #ifdef KV_THREADS
 #define KV_ASYNC_BATCH 32
+/* the worker starts once the run has taken this many steps: a short run (a sweep's tiny
+   point: ~60 steps) would pay more for the thread (~1 ms of CPU) than it gains */
+#define KV_ASYNC_AFTER 200
 enum { JOB_AUDIT, JOB_SAMPLE, JOB_STEP };
 typedef struct { int kind, m, row; double ts[2], t0, t1; } kv_job;
 typedef struct kv_async_s {
@@ -1620,7 +1623,8 @@ int kv_ida_advance(kv_ida *S, double t_stop, long long max_steps)
 #endif
 #ifdef KV_THREADS
     kv_async A;
-    async_start(&R, &A);
+    A.S = NULL;
+    if (S->nstep >= KV_ASYNC_AFTER) async_start(&R, &A);
 #endif
     int rc = KV_MAXSTEPS;
     for (long long k = 0; k < max_steps; ++k) {
@@ -1628,6 +1632,9 @@ int kv_ida_advance(kv_ida *S, double t_stop, long long max_steps)
         int r = step(&R);
         if (r) { rc = r; break; }
         if (after_step(&R)) { rc = KV_CALLBACK; break; }
+#ifdef KV_THREADS
+        if (!R.A && S->nstep == KV_ASYNC_AFTER) async_start(&R, &A);
+#endif
         if (S->direction * (S->t - S->t_bound) >= 0.0) { rc = KV_FINISHED; break; }
         if (S->watch_hit) { rc = KV_WATCH; break; }
         if (S->direction * (S->t - t_stop) >= 0.0) { rc = KV_TSTOP; break; }
