@@ -252,3 +252,23 @@ def test_an_unreadable_digest_memo_is_ignored(digest_memo, tmp_path, monkeypatch
     assert native.file_sha256(path) == hashlib.sha256(b"abc").hexdigest()
     kept = json.loads(digest_memo.read_text())
     assert kept[":" + str(path)][1] == hashlib.sha256(b"abc").hexdigest()
+
+
+@pytest.mark.parametrize("xdg, home", [(None, "/home/u"), ("/var/xdg", "/home/u"),
+                                       ("relative/xdg", "/home/u"), ("", "/home/u"),
+                                       ("/var/xdg", None)])
+def test_the_user_cache_folder_is_platformdirs_own(monkeypatch, xdg, home):
+    """cache_dir's shortcut (no platformdirs import on Linux) gives platformdirs' folder."""
+    import sys
+
+    import platformdirs
+
+    monkeypatch.delenv("KVROD_CACHE_DIR", raising=False)
+    for name, value in (("XDG_CACHE_HOME", xdg), ("HOME", home)):
+        if value is None:
+            monkeypatch.delenv(name, raising=False)
+        else:
+            monkeypatch.setenv(name, value)
+    if not sys.platform.startswith("linux") or (home is None and xdg is None):
+        pytest.skip("the shortcut is Linux's")
+    assert native.cache_dir() == Path(platformdirs.user_cache_dir("kvrod"))
