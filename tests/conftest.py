@@ -8,7 +8,15 @@ hunting for new edge cases; add what it finds as an ``@example``.
 
 import os
 
-from hypothesis import settings
+# One OpenBLAS thread in the test process and the commands it starts, set before NumPy
+# loads. The adversarial cases start their subprocesses from helper threads with a
+# preexec_fn, so with fork(): OpenBLAS's fork handler shuts its thread pool down in the
+# parent, and a dense product running meanwhile on another thread (an in-process `kvrod
+# section`) then waits for the pool forever (seen once: the suite spun at 100 % CPU in
+# exec_blas). kvrod's results do not depend on the BLAS thread count.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+from hypothesis import settings  # noqa: E402
 
 settings.register_profile("deterministic", derandomize=True, database=None)
 settings.register_profile("explore")
