@@ -544,6 +544,38 @@ def test_the_audit_on_its_own_thread_gives_the_one_thread_series(name, overrides
             assert np.array_equal(v, b.reactions[end][what]), (end, what)
 
 
+def test_the_audit_thread_waits_while_python_sees_replayed_steps(monkeypatch):
+    """Snapshots come to Python in batches of replayed steps (here 2 rows) while the loop
+    runs; their sink drives the model to each snapshot's time (diagnostics, as the VTK
+    frames do): the audit's thread is drained first, and the series and the snapshots
+    are the one-thread run's."""
+    from runtime.problem.assemble import build_model
+    from runtime.solvers.native.step_loop import CoreLink
+
+    monkeypatch.setattr(CoreLink, "REPLAY_ROWS", 2, raising=False)
+    p = load_problem("cantilever", {"rod.elements": 6, "simulation.t_end": 1.5})
+    model = build_model(p)
+    seen: dict[int, list] = {0: [], 1: []}
+    which = {"k": 0}
+
+    def sink(t, y, yp):
+        d = model.diagnostics(t, y, yp)
+        seen[which["k"]].append((t, d["elastic"], d["kinetic"]))
+
+    def run(threaded):
+        from runtime.solvers.native import step_loop
+
+        which["k"] = int(threaded)
+        monkeypatch.setattr(step_loop, "audit_thread_wanted", lambda: threaded)
+        return simulate(p, model=model, snapshot_every=0.05, snapshot_sink=sink)
+
+    a, b = run(False), run(True)
+    assert a.counters == b.counters and len(seen[0]) == len(seen[1]) > 20
+    assert seen[0] == seen[1]
+    for key in ("t", "tip", "kinetic", "elastic", "dissipated", "external_work"):
+        assert np.array_equal(getattr(a, key), getattr(b, key)), key
+
+
 def test_the_audit_stays_in_the_loop_while_the_loads_move(monkeypatch):
     """Base excitation drives the clamp with t: the energies must see the loads of their
     own time, so those calls keep the audit in the loop (no second thread); same series."""

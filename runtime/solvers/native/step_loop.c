@@ -1543,6 +1543,11 @@ static int replay_step(kv_run *R)
     while (S->k_rep < S->m_rep && S->direction * (S->t - S->t_rep[S->k_rep]) >= 0.0)
         S->k_rep++;
     if (S->rep_n == S->rep_cap) {
+#ifdef KV_THREADS
+        /* Python may move the loads (a snapshot's diagnostics drive the model to its
+           time): the audit's thread must not evaluate meanwhile */
+        if (R->A && async_drain(R->A)) return 1;
+#endif
         USER_MODE(R);
         int rc = S->rep_flush(S->t);
         CORE_MODE(R);
