@@ -1306,8 +1306,8 @@ static int sample_step(kv_run *R)
    the energies, the audit's nodes and polynomials, the step integrals and the sample
    rows in the loop's order, with the same functions, so every value is the one-thread
    value bit for bit. The worker owns nh, ht, hg, coef, dissipated, external_work and
-   the rows it is given until the ring is drained: before any return to Python (a flush,
-   the end of the advance call), so Python never sees a half-done audit; and only while
+   the rows it is given until the ring is drained: before any call or return to Python
+   (a flush of samples or of replayed steps, the end of the advance call), so Python never sees a half-done audit; and only while
    the loads cannot move (async_start). The worker is
    woken once per KV_ASYNC_BATCH jobs, not per job (a futex wake costs as much as a
    small job). An error of the energies fails the run at the next step the loop takes
