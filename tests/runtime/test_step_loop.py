@@ -12,6 +12,7 @@ series of the every-step Python run.
 from __future__ import annotations
 
 import math
+import os
 from functools import partial
 
 import numpy as np
@@ -516,6 +517,11 @@ def _runs_with_and_without_the_audit_thread(problem, monkeypatch, **kw):
     return one, two, links
 
 
+#: the audit's thread is built with POSIX threads (step_loop.c: KV_THREADS), not on Windows
+needs_threads = pytest.mark.skipif(os.name == "nt", reason="no POSIX threads")
+
+
+@needs_threads
 @pytest.mark.parametrize("name, overrides, rows", [
     ("cantilever", {"rod.elements": 8, "simulation.t_end": 2.0}, None),
     ("cantilever", {"rod.elements": 8, "simulation.t_end": 2.0}, 3),
@@ -588,6 +594,7 @@ def test_the_audit_stays_in_the_loop_while_the_loads_move(monkeypatch):
         assert np.array_equal(getattr(a, key), getattr(b, key)), key
 
 
+@needs_threads
 def test_a_failure_of_the_energies_on_the_audits_thread_fails_the_run(monkeypatch):
     """Energies that return an error code (at their 801st call, after the worker has
     started: step_loop.c, KV_ASYNC_AFTER) on the worker: the run fails with the compiled

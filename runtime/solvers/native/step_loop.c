@@ -223,10 +223,9 @@ typedef struct {
     double *grid_wy, *grid_wyp;
     int grid_nidx, grid_slack;
     /* the energy audit and the output samples on a second thread while the steps go on
-       (1: asked for; taken only with KV_THREADS, en reentrant, no drive and no
-       sensitivities): jobs in a ring of async_cap slots of 4 n doubles at async_buf
-       (owned by Python); the values are those of the one-thread path bit for bit;
-       async_runs: the advance calls that ran it */
+       (1: asked for; taken by an advance call only as async_start allows): jobs in a
+       ring of async_cap slots of 4 n doubles at async_buf (owned by Python); the values
+       are those of the one-thread path bit for bit; async_runs: the calls that ran it */
     int audit_async, async_cap, async_runs;
     double *async_buf;
 } kv_ida;
@@ -1270,20 +1269,52 @@ static void audit_step_end(kv_ida *S, double h)
     S->external_work += kv_audit_integral(S->nh, S->coef + KV_AUDIT_NODES, 1.0) * h;
 }
 
+/* the next output time this step reaches, taken at the step's end if up to 1e-12 past
+   it; 0 when there is none */
+static int next_output(const kv_ida *S, double *ts)
+{
+    const double t1 = S->t, slack = 1e-12 * (fabs(t1) > 1.0 ? fabs(t1) : 1.0);
+    if (S->k_out >= S->m_out || S->t_out[S->k_out] > t1 + slack) return 0;
+    *ts = S->t_out[S->k_out] < t1 ? S->t_out[S->k_out] : t1;
+    return 1;
+}
+
+#ifdef KV_THREADS
+struct kv_async_s;
+static int async_drain(struct kv_async_s *A);
+#endif
+
+/* before a call into Python: the audit's thread done (Python may read its rows or move
+   the loads); nonzero: it failed */
+static int python_ready(kv_run *R)
+{
+#ifdef KV_THREADS
+    if (R->A) return async_drain(R->A);
+#endif
+    (void)R;
+    return 0;
+}
+
+/* the sample rows to Python when the buffer is full; nonzero: a failure */
+static int flush_if_full(kv_run *R, double ts)
+{
+    kv_ida *S = R->S;
+    if (S->rec_n < S->rec_cap) return 0;
+    if (python_ready(R)) return 1;
+    USER_MODE(R);
+    const int rc = S->flush(ts);
+    CORE_MODE(R);
+    return rc || S->rec_n == S->rec_cap;
+}
+
 static int sample_step(kv_run *R)
 {
     kv_ida *S = R->S;
-    const double t1 = S->t, slack = 1e-12 * (fabs(t1) > 1.0 ? fabs(t1) : 1.0);
-    while (S->k_out < S->m_out && S->t_out[S->k_out] <= t1 + slack) {
-        double ts = S->t_out[S->k_out] < t1 ? S->t_out[S->k_out] : t1;
+    double ts;
+    while (next_output(S, &ts)) {
         interp(S, 1, &ts, S->sy, S->syp);
-        if (S->rec_n == S->rec_cap) {
-            USER_MODE(R);
-            int rc = S->flush(ts);
-            CORE_MODE(R);
-            if (rc || S->rec_n == S->rec_cap) return 1;
-        }
-        if (sample_row(R, ts, S->sy, S->syp, S->t_old, t1, S->rec_n)) return 1;
+        if (flush_if_full(R, ts)) return 1;
+        if (sample_row(R, ts, S->sy, S->syp, S->t_old, S->t, S->rec_n)) return 1;
         if (S->nsens && S->srec) {      /* the sensitivities of the sampled components */
             const int k = S->kused > 1 ? S->kused : 1, n = S->n;
             kv_interp(k, S->nsens * n, 1, S->t, S->psi, S->sphi, &ts, S->s_wy, S->s_wyp);
@@ -1307,10 +1338,10 @@ static int sample_step(kv_run *R)
    rows in the loop's order, with the same functions, so every value is the one-thread
    value bit for bit. The worker owns nh, ht, hg, coef, dissipated, external_work and
    the rows it is given until the ring is drained: before any call or return to Python
-   (a flush of samples or of replayed steps, the end of the advance call), so Python never sees a half-done audit; and only while
-   the loads cannot move (async_start). The worker is
-   woken once per KV_ASYNC_BATCH jobs, not per job (a futex wake costs as much as a
-   small job). An error of the energies fails the run at the next step the loop takes
+   (python_ready: a flush of samples or of replayed steps; the end of the advance
+   call), so Python never sees a half-done audit. It runs only while the loads cannot
+   move (async_start). It is woken once per KV_ASYNC_BATCH jobs, not per job (a futex
+   wake costs as much as a small job). An error of the energies fails the run at the next step the loop takes
    (KV_CALLBACK), with the audit up to the failing job. */
 #ifdef KV_THREADS
 #define KV_ASYNC_BATCH 32
@@ -1411,7 +1442,7 @@ static int async_push(kv_async *A, const kv_job *J)
 }
 
 /* wait until every job is done; nonzero: one failed */
-static int async_drain(kv_async *A)
+static int async_drain(struct kv_async_s *A)
 {
     pthread_mutex_lock(&A->mu);
     while (A->head != A->tail) {
@@ -1440,16 +1471,9 @@ static int async_after_step(kv_run *R)
         if (async_push(A, &J)) return 1;
         A->primed = 1;
     }
-    const double slack = 1e-12 * (fabs(t1) > 1.0 ? fabs(t1) : 1.0);
-    while (S->k_out < S->m_out && S->t_out[S->k_out] <= t1 + slack) {
-        const double ts = S->t_out[S->k_out] < t1 ? S->t_out[S->k_out] : t1;
-        if (S->rec_n == S->rec_cap) {       /* the rows to Python: the worker done first */
-            if (async_drain(A)) return 1;
-            USER_MODE(R);
-            int rc = S->flush(ts);
-            CORE_MODE(R);
-            if (rc || S->rec_n == S->rec_cap) return 1;
-        }
+    double ts;
+    while (next_output(S, &ts)) {
+        if (flush_if_full(R, ts)) return 1;
         kv_job J = {JOB_SAMPLE, 1, S->rec_n, {ts, ts}, t0, t1};
         double *slot = async_slot(A);
         interp(S, 1, &ts, slot, slot + 2 * n);
@@ -1457,7 +1481,7 @@ static int async_after_step(kv_run *R)
         S->rec_n++;
         S->k_out++;
     }
-    if (h != 0.0) {
+    if (h != 0.0) {             /* a slot of its own (unused): jobs and slots go one to one */
         kv_job J = {JOB_STEP, 0, -1, {t1, t1}, t0, t1};
         async_slot(A);
         if (async_push(A, &J)) return 1;
@@ -1543,11 +1567,9 @@ static int replay_step(kv_run *R)
     while (S->k_rep < S->m_rep && S->direction * (S->t - S->t_rep[S->k_rep]) >= 0.0)
         S->k_rep++;
     if (S->rep_n == S->rep_cap) {
-#ifdef KV_THREADS
         /* Python may move the loads (a snapshot's diagnostics drive the model to its
            time): the audit's thread must not evaluate meanwhile */
-        if (R->A && async_drain(R->A)) return 1;
-#endif
+        if (python_ready(R)) return 1;
         USER_MODE(R);
         int rc = S->rep_flush(S->t);
         CORE_MODE(R);
