@@ -676,6 +676,9 @@ class RodModel:
         # without obstacles the energies only read the rod's struct and the state (the
         # contact library keeps per-call values of the gaps): safe beside the residual
         kern.energies_reentrant = self.contact is None and self.self_contact is None
+        # energies_one reads y' only for coupled sections (rod_assembly.c); the contact
+        # energies are not looked at here
+        kern.energies_read_rates = self.coupled or not kern.energies_reentrant
         if self.state_error_weights is not None:
             kern.error_weights = function_address(self._clib.kvrod_error_weights)
         if self.self_contact is not None:

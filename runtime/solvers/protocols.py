@@ -197,7 +197,11 @@ class CKernels:
     ``energies_reentrant``: the energies read nothing that the residual or the Jacobian
     write (a rod without contact: its kernels take the rod's struct read-only), so the
     step loop may evaluate them on a second thread while the steps go on
-    (``CoreLink.enable_audit``)."""
+    (``CoreLink.enable_audit``).
+
+    ``energies_read_rates`` (default True): the energies read y' (a rod with coupled
+    sections); False lets the step loop interpolate the audit's and the samples' states
+    without y'."""
 
     def __init__(self, residual: int, jacobian: int, energies: int, ctx: int,
                  drive=None, keep: Any = None, jacobian_cells: int = 0,
@@ -216,3 +220,4 @@ class CKernels:
         self.error_weights = 0
         self.audit_energies = 0
         self.energies_reentrant = False
+        self.energies_read_rates = True

@@ -392,6 +392,9 @@ def test_interpolation_in_c_sums_like_numpy_at_every_size_and_alignment(n, k):
             wy += c[j, i] * phi[j]
             wyp += d[j, i] * phi[j]
         assert np.array_equal(y[i], wy) and np.array_equal(yp[i], wyp), i
+    y_only = np.full((3, n), np.nan)         # out_yp NULL: y alone, the same bits
+    lib.kv_interp(k, n, 3, ctypes.c_double(0.0), P(psi), P(phi), P(ts), P(y_only), None)
+    assert np.array_equal(y_only, y)
 
 
 @pytest.mark.parametrize("moving", [False, True])
@@ -670,3 +673,51 @@ def test_a_sweeps_workers_keep_the_audit_in_the_loop(monkeypatch):
     monkeypatch.delenv("KVROD_AUDIT_THREAD")
     warm_up()
     assert os.environ["KVROD_AUDIT_THREAD"] == "0"
+
+
+@pytest.mark.parametrize("name, overrides, no_yp", [
+    ("cantilever", {"rod.elements": 8, "simulation.t_end": 2.0}, 1),
+    ("examples/maxwell_cantilever.toml", {"rod.elements": 6, "simulation.t_end": 1.0}, 1),
+    ("examples/coupled_strip.toml", {"rod.elements": 6, "simulation.t_end": 0.5}, 0),
+])
+def test_the_audit_interpolates_without_rates_where_the_energies_ignore_them(
+        name, overrides, no_yp, monkeypatch):
+    """A rod whose energies read no y' (no coupled sections, no contact) has the audit's
+    and the samples' states interpolated without it (en_no_yp); the series are those of
+    the run that interpolates y' too, bit for bit, with and without the audit's thread."""
+    from runtime.model.rod import RodModel
+    from runtime.solvers.native import step_loop
+
+    p = load_problem(name, overrides)
+    links: list = []
+    init = step_loop.CoreLink.__init__
+
+    def kept(self, *a, **k):
+        init(self, *a, **k)
+        links.append(self)
+
+    monkeypatch.setattr(step_loop.CoreLink, "__init__", kept)
+    runs = {}
+    for thread in (False, True):
+        monkeypatch.setattr(step_loop, "audit_thread_wanted", lambda t=thread: t)
+        links.clear()
+        runs[thread, "own"] = simulate(p)
+        assert links and all(link.s.en_no_yp == no_yp for link in links)
+        kernels = RodModel.c_kernels
+
+        def with_rates(self, _k=kernels):
+            kern = _k(self)
+            kern.energies_read_rates = True
+            return kern
+
+        with monkeypatch.context() as mp:
+            mp.setattr(RodModel, "c_kernels", with_rates)
+            links.clear()
+            runs[thread, "rates"] = simulate(p)
+            assert links and all(link.s.en_no_yp == 0 for link in links)
+    ref = runs[False, "rates"]
+    for key, r in runs.items():
+        assert r.status == "finished" and r.counters == ref.counters, key
+        for name_ in ("t", "tip", "kinetic", "elastic", "dissipated", "external_work",
+                      "y_last"):
+            assert np.array_equal(getattr(r, name_), getattr(ref, name_)), (key, name_)

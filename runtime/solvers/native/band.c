@@ -193,7 +193,7 @@ double kv_wrms(int n, const double *v, const double *a, const double *w)
 
 /* IDA's interpolant of one step at m times (BDFDenseOutput.values): y(t_i) = sum_j
    c_j(t_i) phi_j and y'(t_i) = sum_j d_j(t_i) phi_j, phi (k+1, n) C order, out_y and
-   out_yp (m, n) C order. The coefficients are IDA's recurrences (bdf.py's
+   out_yp (m, n) C order (out_yp NULL: y only). The coefficients are IDA's recurrences (bdf.py's
    _interp_coefficients); one call replaces about twenty NumPy calls per step. */
 /* y = sum_j c_j phi_j, yp = sum_j d_j phi_j over components lo..hi-1, summed in j order
    per component; k a literal at the call sites, so that the j loop unrolls and the q
@@ -206,6 +206,17 @@ KV_INLINE void interp_span(int k, int lo, int hi, const double *const *ph, const
         for (int j = 1; j <= k; ++j) { a += c[j] * ph[j][q]; b += d[j] * ph[j][q]; }
         y[q] = a;
         yp[q] = b;
+    }
+}
+
+/* interp_span without y' (the same y, bit for bit) */
+KV_INLINE void interp_span_y(int k, int lo, int hi, const double *const *ph, const double *c,
+                             double *restrict y)
+{
+    for (int q = lo; q < hi; ++q) {
+        double a = ph[0][q];
+        for (int j = 1; j <= k; ++j) a += c[j] * ph[j][q];
+        y[q] = a;
     }
 }
 
@@ -251,7 +262,19 @@ void kv_interp(int k, int n, int m, double tn, const double *psi, const double *
         /* one pass over phi; outputs of a large state are stored past the cache (an
            output grid of full states at N = 4000 is 0.8 MB per time, which would
            otherwise evict the integrator's working set) */
-        double *y = out_y + (size_t)i * n, *yp = out_yp + (size_t)i * n;
+        double *y = out_y + (size_t)i * n;
+        if (!out_yp) {                   /* y only (no non-temporal path: small outputs) */
+            switch (k) {
+            case 1: interp_span_y(1, 0, n, ph, c, y); break;
+            case 2: interp_span_y(2, 0, n, ph, c, y); break;
+            case 3: interp_span_y(3, 0, n, ph, c, y); break;
+            case 4: interp_span_y(4, 0, n, ph, c, y); break;
+            case 5: interp_span_y(5, 0, n, ph, c, y); break;
+            default: interp_span_y(k, 0, n, ph, c, y); break;
+            }
+            continue;
+        }
+        double *yp = out_yp + (size_t)i * n;
         int q = 0;
 #if KV_STREAM
         if ((size_t)n * sizeof(double) >= ((size_t)1 << 18)) {

@@ -228,6 +228,10 @@ typedef struct {
        are those of the one-thread path bit for bit; async_runs: the calls that ran it */
     int audit_async, async_cap, async_runs;
     double *async_buf;
+    /* 1: the energies read nothing of y' (a rod without coupled sections or contact,
+       CKernels.energies_read_rates): the audit's and the samples' states are
+       interpolated without it (the same y, bit for bit; ~40 % less work) */
+    int en_no_yp;
 } kv_ida;
 
 enum { SEC_RES, SEC_JAC, SEC_LU, SEC_NEWTON, SEC_EN, SEC_DRIVE };
@@ -1229,7 +1233,7 @@ static int audit_step(kv_run *R)
     if (h == 0.0) return 0;
     const int first = S->nh == 0, m = first ? 2 : 1;
     double tq[2] = {t0, t1};
-    interp(S, m, first ? tq : tq + 1, S->wy, S->wyp);
+    interp(S, m, first ? tq : tq + 1, S->wy, S->en_no_yp ? NULL : S->wyp);
     return audit_node(R, m, first ? tq : tq + 1, S->wy, S->wyp, t0, h);
 }
 
@@ -1312,12 +1316,12 @@ static int sample_step(kv_run *R)
     kv_ida *S = R->S;
     double ts;
     while (next_output(S, &ts)) {
-        interp(S, 1, &ts, S->sy, S->syp);
+        interp(S, 1, &ts, S->sy, S->en_no_yp ? NULL : S->syp);
         if (flush_if_full(R, ts)) return 1;
         if (sample_row(R, ts, S->sy, S->syp, S->t_old, S->t, S->rec_n)) return 1;
         if (S->nsens && S->srec) {      /* the sensitivities of the sampled components */
             const int k = S->kused > 1 ? S->kused : 1, n = S->n;
-            kv_interp(k, S->nsens * n, 1, S->t, S->psi, S->sphi, &ts, S->s_wy, S->s_wyp);
+            kv_interp(k, S->nsens * n, 1, S->t, S->psi, S->sphi, &ts, S->s_wy, NULL);
             double *srow = S->srec + (size_t)S->rec_n * (size_t)S->nsens * (size_t)S->nsamp;
             for (int i = 0; i < S->nsens; ++i)
                 for (int j = 0; j < S->nsamp; ++j)
@@ -1467,7 +1471,7 @@ static int async_after_step(kv_run *R)
         const int m = A->primed ? 1 : 2;
         kv_job J = {JOB_AUDIT, m, -1, {m == 2 ? t0 : t1, t1}, t0, t1};
         double *slot = async_slot(A);
-        interp(S, m, J.ts, slot, slot + 2 * n);
+        interp(S, m, J.ts, slot, S->en_no_yp ? NULL : slot + 2 * n);
         if (async_push(A, &J)) return 1;
         A->primed = 1;
     }
@@ -1476,7 +1480,7 @@ static int async_after_step(kv_run *R)
         if (flush_if_full(R, ts)) return 1;
         kv_job J = {JOB_SAMPLE, 1, S->rec_n, {ts, ts}, t0, t1};
         double *slot = async_slot(A);
-        interp(S, 1, &ts, slot, slot + 2 * n);
+        interp(S, 1, &ts, slot, S->en_no_yp ? NULL : slot + 2 * n);
         if (async_push(A, &J)) return 1;
         S->rec_n++;
         S->k_out++;
@@ -1600,7 +1604,7 @@ static void grid_step(kv_ida *S)
         while (S->k_grid < S->m_grid && S->t_grid[S->k_grid] <= reach) {
             const size_t k = (size_t)S->k_grid++;
             const double t = S->t_grid[k] < t1 ? S->t_grid[k] : t1;
-            interp(S, 1, &t, S->grid_wy, S->grid_wyp);
+            interp(S, 1, &t, S->grid_wy, NULL);          /* rows of y only */
             double *row = S->grid_y + k * (size_t)S->grid_nidx;
             for (int j = 0; j < S->grid_nidx; ++j) row[j] = S->grid_wy[S->grid_idx[j]];
         }

@@ -162,6 +162,7 @@ class CoreStruct(ctypes.Structure):
         + _fields(_I, "grid_nidx", "grid_slack")
         + _fields(_I, "audit_async", "async_cap", "async_runs")
         + _fields(_P, "async_buf")
+        + _fields(_I, "en_no_yp")
     )
     #: names of the entries of ``sec`` (seconds per part when ``timing`` is set)
     SECTIONS = ("residual", "jacobian", "lu", "newton_solve_update", "energies", "drive")
@@ -198,6 +199,7 @@ class CoreLink:
             s.nen = kern.n_energies
             s.en_audit = getattr(kern, "audit_energies", 0) or None
             self._en_reentrant = bool(getattr(kern, "energies_reentrant", False))
+            s.en_no_yp = int(not getattr(kern, "energies_read_rates", True))
             s.maxstep = kern.max_step or None
             s.errw = kern.error_weights or None
             self._keep.append(kern.keep)
