@@ -372,7 +372,8 @@ def test_a_signal_during_callbacks_is_delivered_after_the_compiled_loop_returns(
 def test_interpolation_in_c_sums_like_numpy_at_every_size_and_alignment(n, k):
     """kv_interp (one pass over phi, vectorised per order, non-temporal stores from 256 kB
     per output row, rows of odd n alternating in alignment) gives y = phi_0 + c_1 phi_1
-    + ... and y' = 0 + d_1 phi_1 + ... summed in j order: NumPy's sums term by term."""
+    + ... and y' = 0 + d_1 phi_1 + ... summed in j order: NumPy's sums term by term; y
+    alone and y at tn (kv_interp_at_tn) are the same bits."""
     import ctypes
 
     from runtime.solvers.dense import _interp_coefficients
@@ -395,6 +396,15 @@ def test_interpolation_in_c_sums_like_numpy_at_every_size_and_alignment(n, k):
     y_only = np.full((3, n), np.nan)         # out_yp NULL: y alone, the same bits
     lib.kv_interp(k, n, 3, ctypes.c_double(0.0), P(psi), P(phi), P(ts), P(y_only), None)
     assert np.array_equal(y_only, y)
+    # at t = tn itself (ts[2] = 0), read off phi_0 where it is not zero: the same bits,
+    # signed zeros included (phi_0 = -0.0 stays -0.0 only if every term is -0.0)
+    phi[0, ::3], phi[0, 1::7] = 0.0, -0.0
+    phi[1:, ::5] = -np.abs(phi[1:, ::5])
+    at = np.full(n, np.nan)
+    lib.kv_interp(k, n, 1, ctypes.c_double(0.0), P(psi), P(phi), P(ts[2:]), P(y_only), None)
+    lib.kv_interp_at_tn(k, n, P(psi), P(phi), P(at))
+    assert np.array_equal(np.signbit(at), np.signbit(y_only[0]))
+    assert np.array_equal(at, y_only[0])
 
 
 @pytest.mark.parametrize("moving", [False, True])

@@ -241,6 +241,40 @@ KV_INLINE int interp_stream(int k, int lo, int hi, const double *const *ph, cons
 }
 #endif
 
+/* c_j, d_j (j = 0 .. k) of the interpolant at t = tn + delt: IDA's recurrences */
+KV_INLINE void interp_coefficients(int k, double delt, const double *psi, double *c,
+                                   double *d)
+{
+    double cs = 1.0, ds = 0.0, gs = delt / psi[0];
+    c[0] = 1.0;
+    d[0] = 0.0;
+    for (int j = 1; j <= k; ++j) {
+        ds = ds * gs + cs / psi[j - 1];
+        cs = cs * gs;
+        if (j < k) gs = (delt + psi[j - 1]) / psi[j];
+        c[j] = cs;
+        d[j] = ds;
+    }
+}
+
+/* kv_interp's y at t = tn itself (out_y, n), bit for bit, mostly without reading the
+   history: there c_j = 0 for j >= 1, so y = phi_0 + (+-0) + ... = phi_0 wherever phi_0
+   is finite and not zero (the sum of signed zeros, or a non-finite value, is formed as
+   kv_interp forms it). phi_1 .. phi_k are finite after an accepted step (differences of
+   finite states). */
+void kv_interp_at_tn(int k, int n, const double *psi, const double *phi, double *out_y)
+{
+    double c[6], d[6];
+    interp_coefficients(k, 0.0, psi, c, d);
+    const double *ph0 = phi;
+    for (int q = 0; q < n; ++q) {
+        double a = ph0[q];
+        if (!(a != 0.0) || !isfinite(a))
+            for (int j = 1; j <= k; ++j) a += c[j] * phi[(size_t)j * n + q];
+        out_y[q] = a;
+    }
+}
+
 void kv_interp(int k, int n, int m, double tn, const double *psi, const double *phi,
                const double *ts, double *out_y, double *out_yp)
 {
@@ -248,17 +282,7 @@ void kv_interp(int k, int n, int m, double tn, const double *psi, const double *
     const double *ph[6];
     for (int j = 0; j <= k; ++j) ph[j] = phi + (size_t)j * n;
     for (int i = 0; i < m; ++i) {
-        const double delt = ts[i] - tn;
-        double cs = 1.0, ds = 0.0, gs = delt / psi[0];
-        c[0] = 1.0;
-        d[0] = 0.0;
-        for (int j = 1; j <= k; ++j) {
-            ds = ds * gs + cs / psi[j - 1];
-            cs = cs * gs;
-            if (j < k) gs = (delt + psi[j - 1]) / psi[j];
-            c[j] = cs;
-            d[j] = ds;
-        }
+        interp_coefficients(k, ts[i] - tn, psi, c, d);
         /* one pass over phi; outputs of a large state are stored past the cache (an
            output grid of full states at N = 4000 is 0.8 MB per time, which would
            otherwise evict the integrator's working set) */

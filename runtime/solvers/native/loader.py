@@ -86,6 +86,8 @@ def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
     lib.kv_newton.restype = D
     lib.kv_interp.argtypes = [I, I, I, D, P, P, P, P, P]
     lib.kv_interp.restype = None
+    lib.kv_interp_at_tn.argtypes = [I, I, P, P, P]
+    lib.kv_interp_at_tn.restype = None
     lib.kv_cond_factor.argtypes = [P, P]
     lib.kv_cond_factor.restype = I
     lib.kv_cond_solve.argtypes = [P, P, P]

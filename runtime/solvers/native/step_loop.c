@@ -1193,6 +1193,16 @@ static void interp(const kv_ida *S, int m, const double *ts, double *oy, double 
     kv_interp(k, S->n, m, S->t, S->psi, S->phi, ts, oy, oyp);
 }
 
+/* the audit's states at ts (m of them): at the step's end alone and without y' (en_no_yp),
+   interp's y at t there, read off the history's first row (kv_interp_at_tn) */
+static void audit_states(const kv_ida *S, int m, const double *ts, double *oy, double *oyp)
+{
+    if (m == 1 && S->en_no_yp && ts[0] == S->t)
+        kv_interp_at_tn(S->kused > 1 ? S->kused : 1, S->n, S->psi, S->phi, oy);
+    else
+        interp(S, m, ts, oy, S->en_no_yp ? NULL : oyp);
+}
+
 /* a node of the audit: 2D and P of m states (ys, yps: m rows of n) at ts, the oldest node
    dropped beyond KV_AUDIT_NODES, and the polynomial of the step [t0, t0 + h] through them */
 static int audit_node(kv_run *R, int m, const double *ts, const double *ys,
@@ -1233,7 +1243,7 @@ static int audit_step(kv_run *R)
     if (h == 0.0) return 0;
     const int first = S->nh == 0, m = first ? 2 : 1;
     double tq[2] = {t0, t1};
-    interp(S, m, first ? tq : tq + 1, S->wy, S->en_no_yp ? NULL : S->wyp);
+    audit_states(S, m, first ? tq : tq + 1, S->wy, S->wyp);
     return audit_node(R, m, first ? tq : tq + 1, S->wy, S->wyp, t0, h);
 }
 
@@ -1471,7 +1481,7 @@ static int async_after_step(kv_run *R)
         const int m = A->primed ? 1 : 2;
         kv_job J = {JOB_AUDIT, m, -1, {m == 2 ? t0 : t1, t1}, t0, t1};
         double *slot = async_slot(A);
-        interp(S, m, J.ts, slot, S->en_no_yp ? NULL : slot + 2 * n);
+        audit_states(S, m, J.ts, slot, slot + 2 * n);
         if (async_push(A, &J)) return 1;
         A->primed = 1;
     }
