@@ -164,6 +164,24 @@ class RodStatics:
         self._add_gauge_stiffness(core.band)
         return core.factor()
 
+    def static_newton_trial(self, y: np.ndarray, res: np.ndarray):
+        """One full Newton trial from y in one compiled call, where there is a native core
+        and no gauge (else None: the caller goes step by step): ``(factor, dx, y_try)``
+        with dx = -J(y)^-1 res (res: the residual at y), y_try = y retracted by dx, and
+        ``res`` <- the residual at y_try; what :meth:`static_factor`, its ``solve``,
+        :meth:`static_retract` and :meth:`static_residual` give, the same bits. ``factor``
+        (``info``, ``solve``) is valid until the next factorisation; ``factor.info != 0``
+        (J singular) or a dx that is not finite leave y_try None."""
+        core = self._native
+        if not core or self.gauge is not None:
+            return None
+        self.model._time(self.time)
+        code, aux, lu, dx, y_try = core.trial(np.ascontiguousarray(y, dtype=float), res, res)
+        if code in (1, 4):
+            what = "kvrod_jacobian_band" if code == 1 else "kvrod_residual"
+            raise GeneratedCodeError(f"{what} failed (code {aux})")
+        return lu, dx, (y_try if code == 0 else None)
+
     def _add_gauge_stiffness(self, ab: np.ndarray) -> None:
         """The gauge's stiffness into a static band (LAPACK storage), if there is one."""
         if self.gauge is not None:

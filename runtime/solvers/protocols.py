@@ -79,6 +79,9 @@ class StaticProblem(Protocol):
 
     # optional: ``constrain(y) -> y`` moves prescribed unknowns (held nodes) to their
     # targets at the current load factor; solve_static calls it after every change of it
+    # optional: ``static_newton_trial(y, res) -> (factor, dx, y_try) | None``: a full
+    # Newton trial in one call (res: the residual at y, overwritten by that at y_try), the
+    # same bits as the steps above one after another; None where it cannot
 
 
 def band_storage(n: int, kl: int, ku: int) -> np.ndarray:

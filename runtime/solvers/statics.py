@@ -187,12 +187,20 @@ def solve_static(
     inv_scale = 1.0 / scale
     constrain = getattr(problem, "constrain", None)
 
-    def rnorm(y: np.ndarray) -> float:
-        problem.static_residual(y, res)
-        counts["fev"] += 1
+    def res_norm() -> float:
         r = res * inv_scale
         v = float(np.sqrt(np.dot(r, r) / n)) if n else 0.0
         return v if math.isfinite(v) else math.inf
+
+    def rnorm(y: np.ndarray) -> float:
+        problem.static_residual(y, res)
+        counts["fev"] += 1
+        return res_norm()
+
+    #: the problem's full Newton trial in one call (factor, dx, y_try; ``res`` <- the
+    #: residual at y_try), or None where it has none: the same arithmetic as the steps
+    #: below (a rod on its compiled kernels: RodStatics.static_newton_trial)
+    fused = getattr(problem, "static_newton_trial", None)
 
     def newton(y: np.ndarray) -> tuple[np.ndarray, int, float]:
         """Newton at the current load; returns (y, iterations, scaled norm).
@@ -213,27 +221,40 @@ def solve_static(
                 return y, it, r
             if it >= max_iter:
                 raise _NewtonFailure(f"no convergence in {max_iter} iterations", r)
-            f = res.copy()
-            if own_factor is not None:      # the problem factorises (sparse; a rod's C core)
-                lu = own_factor(y)
+            trial = fused(y, res) if fused is not None else None
+            first: tuple[np.ndarray, float] | None = None   # (y + dx, its norm) if formed
+            if trial is not None:
+                lu, dx, y_full = trial
+                if lu.info != 0:
+                    raise _NewtonFailure("singular Jacobian", r)
+                if y_full is None:
+                    raise _NewtonFailure("non-finite Newton step", r)
+                counts["fev"] += 1
+                first = y_full, res_norm()
             else:
-                ab.fill(0.0)
-                problem.static_jacobian_band(y, ab)
-                lu = BandLU(ab, kl, ku)
-            if lu.info != 0:
-                raise _NewtonFailure("singular Jacobian", r)
-            dx = -lu.solve(f)
-            if not np.all(np.isfinite(dx)):
-                raise _NewtonFailure("non-finite Newton step", r)
+                f = res.copy()
+                if own_factor is not None:  # the problem factorises (sparse; a rod's C core)
+                    lu = own_factor(y)
+                else:
+                    ab.fill(0.0)
+                    problem.static_jacobian_band(y, ab)
+                    lu = BandLU(ab, kl, ku)
+                if lu.info != 0:
+                    raise _NewtonFailure("singular Jacobian", r)
+                dx = -lu.solve(f)
+                if not np.all(np.isfinite(dx)):
+                    raise _NewtonFailure("non-finite Newton step", r)
             it += 1
             counts["iters"] += 1
             ndx = math.sqrt(float(np.dot(dx, dx)) / n)
             if ndx <= step_tol:
+                if first is not None:
+                    return first[0], it, first[1]
                 y = problem.static_retract(y, dx)
                 return y, it, rnorm(y)
             if not damped:
-                y_try = problem.static_retract(y, dx)
-                r_try = rnorm(y_try)
+                y_try, r_try = first if first is not None else (
+                    (y_try := problem.static_retract(y, dx)), rnorm(y_try))
                 if r_try <= (1.0 - armijo) * ref_r:
                     y, r = y_try, r_try
                     ref_y, ref_r, left = y, r, watchdog
@@ -250,8 +271,11 @@ def solve_static(
                 continue
             alpha = 1.0
             while True:
-                y_try = problem.static_retract(y, alpha * dx)
-                r_try = rnorm(y_try)
+                if alpha == 1.0 and first is not None:      # formed by the trial
+                    y_try, r_try = first
+                else:
+                    y_try = problem.static_retract(y, alpha * dx)
+                    r_try = rnorm(y_try)
                 if not math.isfinite(r_try):
                     alpha *= 0.1
                 elif natural:

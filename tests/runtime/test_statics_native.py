@@ -94,6 +94,36 @@ def test_a_static_solve_is_the_same_with_and_without_the_c_core(name, overrides,
     assert _same(native.y, plain.y, rotations=True)
 
 
+@pytest.mark.parametrize("name, overrides", [
+    ("cantilever", {"rod.elements": 6}),
+    ("bathe_bolourchi", {"rod.elements": 8}),         # large rotations, damped steps
+    ("maxwell_cantilever", {"rod.elements": 5}),
+])
+def test_the_fused_newton_trial_is_the_step_by_step_one(name, overrides, monkeypatch):
+    """solve_static's full Newton trial in one compiled call (static_newton_trial) gives
+    what its steps one call after another give: the same states, iterations, residual
+    evaluations, line-search and watchdog counts, bit for bit."""
+    from runtime.solvers import statics as solver
+
+    results = {}
+    for fused in (True, False):
+        p = load_problem(name, overrides)
+        m = build_model(p)
+        with monkeypatch.context() as mp:
+            if not fused:
+                mp.setattr(RodStatics, "static_newton_trial", None)
+            calls = []
+            solve = solver.solve_static
+            mp.setattr(S, "solve_static",
+                       lambda *a, **k: calls.append(solve(*a, **k)) or calls[-1])
+            results[fused] = (S.static_equilibrium(p, m), calls[0])
+    (a, ra), (b, rb) = results[True], results[False]
+    assert np.array_equal(a.y, b.y) and a.per_step == b.per_step
+    for key in ("total_iterations", "line_search_backtracks", "watchdog_restarts",
+                "load_cuts", "residual_norm"):
+        assert getattr(ra, key) == getattr(rb, key), key
+
+
 def test_the_factor_solves_the_static_band_system():
     model = build_model(load_problem("cantilever", {"rod.elements": 6}))
     rng = np.random.default_rng(2)

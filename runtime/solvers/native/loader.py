@@ -113,6 +113,8 @@ def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
     lib.kv_static_solve.restype = None
     lib.kv_static_retract.argtypes = [P, P, P, P]
     lib.kv_static_retract.restype = None
+    lib.kv_static_trial.argtypes = [P, P, P, P, P, P, P]
+    lib.kv_static_trial.restype = I
     lib.kv_ida_sizeof.argtypes = []
     lib.kv_ida_sizeof.restype = ctypes.c_size_t
     lib.kv_ida_advance.argtypes = [P, D, ctypes.c_longlong]

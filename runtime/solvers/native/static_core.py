@@ -134,6 +134,20 @@ class NativeStatics:
         """LU of :attr:`band` in place."""
         return NativeFactor(self, int(self.lib.kv_static_factor(self.ptr)))
 
+    def trial(self, y: np.ndarray, f: np.ndarray, res: np.ndarray
+              ) -> tuple[int, int, NativeFactor, np.ndarray, np.ndarray]:
+        """One full Newton trial (``kv_static_trial``): ``(code, aux, factor, dx,
+        y_try)`` with dx = -J(y)^-1 f, y_try = the retraction of y by dx and ``res`` (n_s)
+        <- the residual at y_try (no gauge). code 0; 1: the Jacobian's kernel failed, 2:
+        J singular, 3: dx not finite, 4: the residual's kernel failed (aux: the kernel's
+        code or LAPACK's info)."""
+        s = self.s
+        dx, y1, aux = np.empty(s.ns), np.empty(s.n), np.zeros(1, dtype=np.int32)
+        code = int(self.lib.kv_static_trial(self.ptr, self._data(y, s.n), self._data(f, s.ns),
+                                            dx.ctypes.data, y1.ctypes.data,
+                                            self._data(res, s.ns), aux.ctypes.data))
+        return code, int(aux[0]), NativeFactor(self, int(aux[0]) if code == 2 else 0), dx, y1
+
     def retract(self, y: np.ndarray, dx: np.ndarray) -> np.ndarray:
         """A new state: positions moved by dx, quaternions rotated by its angles."""
         y1 = np.empty(self.s.n)

@@ -111,3 +111,31 @@ void kv_static_retract(kv_static *P, const double *y, const double *dx, double *
         for (int c = 0; c < 4; ++c) y1[pi[c]] = o[c] / nrm;
     }
 }
+
+/* One full Newton trial in one call (solve_static's common case: no gauge): the static
+   band Jacobian at y and its LU (kept for more solves, as kv_static_factor), dx =
+   -J^-1 f (f: the residual at y, n_s), y_try = the retraction of y by dx and res = the
+   residual at y_try: what RodStatics' methods compute one NumPy call after another, the
+   same operations (the same bits); the norms stay with solve_static. Returns 0; 1: the
+   Jacobian's kernel failed, 2: J singular, 3: dx not finite (y_try and res not formed),
+   4: the residual's kernel failed; aux[0]: the kernel's code or LAPACK's info. */
+int kv_static_trial(kv_static *P, const double *y, const double *f, double *dx,
+                    double *y_try, double *res, int *aux)
+{
+    int rc = kv_static_jacobian(P, y);
+    if (rc) { aux[0] = rc; return 1; }
+    rc = kv_static_factor(P);
+    if (rc) { aux[0] = rc; return 2; }
+    memcpy(dx, f, sizeof(double) * (size_t)P->ns);
+    kv_static_solve(P, dx);
+    int finite = 1;
+    for (int i = 0; i < P->ns; ++i) {
+        dx[i] = -dx[i];
+        finite &= isfinite(dx[i]) != 0;
+    }
+    if (!finite) return 3;
+    kv_static_retract(P, y, dx, y_try);
+    rc = kv_static_residual(P, y_try, res);
+    if (rc) { aux[0] = rc; return 4; }
+    return 0;
+}
