@@ -112,10 +112,13 @@ def test_the_fused_newton_trial_is_the_step_by_step_one(name, overrides, monkeyp
         with monkeypatch.context() as mp:
             if not fused:
                 mp.setattr(RodStatics, "static_newton_trial", None)
-            calls = []
-            solve = solver.solve_static
-            mp.setattr(S, "solve_static",
-                       lambda *a, **k: calls.append(solve(*a, **k)) or calls[-1])
+            calls: list = []
+
+            def kept(*a, _calls=calls, **k):
+                _calls.append(solver.solve_static(*a, **k))
+                return _calls[-1]
+
+            mp.setattr(S, "solve_static", kept)
             results[fused] = (S.static_equilibrium(p, m), calls[0])
     (a, ra), (b, rb) = results[True], results[False]
     assert np.array_equal(a.y, b.y) and a.per_step == b.per_step
