@@ -453,13 +453,15 @@ class RodModel:
                 rotates = getattr(self.drive, "rotates", None)
                 timed = varies and (rotates is None or rotates(end))
                 q = np.empty((m, 4))
-                for j in range(m):
-                    if timed or j == 0:
+                if timed:
+                    for j in range(m):
                         self.at(float(ts[j]))
-                        pc = self.arrays.param("p_" + end).copy()
-                    q[j] = pc
-                if varies and not timed:     # the arrays where the loop over ts leaves them
-                    self.at(float(ts[-1]))
+                        q[j] = self.arrays.param("p_" + end)
+                elif m:                      # one clamp frame for every time
+                    self.at(float(ts[0]))
+                    q[:] = self.arrays.param("p_" + end)
+                    if varies:               # the arrays where a loop over ts leaves them
+                        self.at(float(ts[-1]))
             elif k == 1:
                 q = segs[:, 0]
             else:
