@@ -393,6 +393,9 @@ class Maxima:
 
     name = "maxima"
     sparse = True
+    #: with the compiled loop, a step where the velocity changes sign is kept for a
+    #: replay (runtime.solvers.driver) instead of a return to Python for each maximum
+    replay_watches = True
 
     def __init__(self, position_index: int, velocity_index: int, *,
                  positive_only: bool = True, initial: bool = True,
@@ -402,6 +405,12 @@ class Maxima:
         self.positive_only, self.initial = positive_only, initial
         self.t: list[float] = []
         self.x: list[float] = []
+        self._last_t1 = math.nan         # the step last looked at (a replayed step and a
+        #                                  stop may be the same step)
+
+    def replay_times(self, t_end: float) -> np.ndarray:
+        """No times: the steps it needs are those of its watch (:attr:`replay_watches`)."""
+        return np.zeros(0)
 
     def _keep(self, x: float) -> bool:
         return x > 0 or not self.positive_only
@@ -417,6 +426,9 @@ class Maxima:
         return [(self.iv, -1.0)]
 
     def step(self, run: RunState, dense, t0: float, t1: float) -> None:
+        if t1 == self._last_t1:
+            return
+        self._last_t1 = t1
         v_new = float(run.y[self.iv])
         # the velocity at the step's start, from the step's own interpolant: the previous
         # call may lie many steps back in the compiled loop

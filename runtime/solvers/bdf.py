@@ -507,12 +507,15 @@ class BDF:
         None."""
         return self._core
 
-    def watch(self, watches: list[tuple[int, float]]) -> None:
+    def watch(self, watches: list[tuple[int, float]], kept=()) -> None:
         """Make :meth:`advance` stop after a step in which ``y[index]`` changes sign in
-        ``direction`` (< 0: from > 0 to <= 0, > 0: from < 0 to >= 0); at most 8. No
-        effect without the compiled loop (which stops after every step anyway)."""
+        ``direction`` (< 0: from > 0 to <= 0, > 0: from < 0 to >= 0); at most 8. The
+        watches flagged in ``kept`` (booleans, one per watch) keep such a step for the
+        replayed steps' sink instead, where those are enabled
+        (``CoreLink.enable_replay``). No effect without the compiled loop (which stops
+        after every step anyway)."""
         if self._core is not None:
-            self._core.set_watches(watches)
+            self._core.set_watches(watches, kept)
 
     def extend(self, t_bound: float) -> None:
         """Move the end of the integration to ``t_bound`` (in the same direction, not

@@ -241,6 +241,33 @@ def test_the_compiled_loop_calls_python_rarely_unless_an_observer_needs_every_st
     assert res.status == "finished" and len(seen) == res.counters["nstep"] > 10
 
 
+def test_maxima_come_from_kept_steps_and_the_loop_runs_to_its_stop(monkeypatch):
+    """The tip's maxima: the steps where its velocity changes sign are kept for a replay
+    (watch_rep) instead of a return to Python each, and a loop that stops on signals
+    itself is not cut into chunks of steps: one call of the compiled loop for the whole
+    run (more than _CHUNK steps, several maxima), with the Python path's maxima bit for
+    bit (such a call ends after its step on Ctrl-C: the test of signals during
+    callbacks)."""
+    from runtime.solvers.native.step_loop import CoreLink
+
+    p = load_problem("cantilever", {"rod.elements": 8, "simulation.t_end": 6.0})
+    calls: list[int] = []
+    advance = CoreLink.advance
+
+    def counted(self, *a):
+        calls.append(self.s.nstep)
+        return advance(self, *a)
+
+    with monkeypatch.context() as mp:
+        mp.setattr(CoreLink, "advance", counted)
+        a = simulate(p)
+    b = _simulate(p, True, monkeypatch)
+    assert a.counters == b.counters and a.counters["nstep"] > driver._CHUNK
+    assert a.peaks_t.size >= 4 and len(calls) == 1
+    assert np.array_equal(a.peaks_t, b.peaks_t) and np.array_equal(a.peaks_x, b.peaks_x)
+    assert np.array_equal(a.maxima_t, b.maxima_t)
+
+
 def test_frames_and_snapshots_come_from_kept_steps_not_stops(monkeypatch):
     """The snapshots are taken on copies of the steps that reach their times, handed to
     Python in batches (a 2-row buffer here), the centreline frames inside the compiled

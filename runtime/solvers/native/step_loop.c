@@ -167,9 +167,10 @@ typedef struct {
     /* steps kept for Python observers that need a step's interpolant at given times (the
        deformed centreline, snapshots), instead of a stop at each: the first step reaching
        t_rep[k_rep] (direction * (t - t_rep) >= 0, the stop condition) is copied into rep
-       as a row [t_old, t, k, psi[0..KV_NH), phi_0 .. phi_k (n each)] (rep_w doubles);
-       rep_flush() hands the rows to Python when rep_cap are filled (Python flushes them
-       itself at every stop, so they are replayed in step order) */
+       as a row [t_old, t, k, psi[0..KV_NH), phi_0 .. phi_k (n each), the sensitivities'
+       history (KV_NH nsens n), y at t (n)] (rep_w doubles); rep_flush() hands the rows to
+       Python when rep_cap are filled (Python flushes them itself at every stop, so they
+       are replayed in step order). A step is kept once, whatever asked for it. */
     int m_rep, k_rep, rep_w, rep_cap, rep_n;
     const double *t_rep;
     double *rep;
@@ -232,6 +233,12 @@ typedef struct {
        CKernels.energies_read_rates): the audit's and the samples' states are
        interpolated without it (the same y, bit for bit; ~40 % less work) */
     int en_no_yp;
+    /* bit mask of the watches whose sign changes are kept as replayed steps (rep, for
+       the observer's step hook at the next flush) instead of stopping the loop (a
+       return to Python costs ~0.5 ms: the tip's maxima of a vibration); rep_nstep: the
+       step last kept (nstep), so that no step is kept twice */
+    int watch_rep;
+    long long rep_nstep;
 } kv_ida;
 
 enum { SEC_RES, SEC_JAC, SEC_LU, SEC_NEWTON, SEC_EN, SEC_DRIVE };
@@ -1574,12 +1581,12 @@ static int async_stop(kv_run *R)
 }
 #endif
 
-static int replay_step(kv_run *R)
+/* the step just taken as a row of rep (once), the buffer handed to Python first when
+   full; 1 when that failed */
+static int replay_keep(kv_run *R)
 {
     kv_ida *S = R->S;
-    if (S->direction * (S->t - S->t_rep[S->k_rep]) < 0.0) return 0;
-    while (S->k_rep < S->m_rep && S->direction * (S->t - S->t_rep[S->k_rep]) >= 0.0)
-        S->k_rep++;
+    if (S->rep_nstep == S->nstep) return 0;
     if (S->rep_n == S->rep_cap) {
         /* Python may move the loads (a snapshot's diagnostics drive the model to its
            time): the audit's thread must not evaluate meanwhile */
@@ -1599,7 +1606,20 @@ static int replay_step(kv_run *R)
     if (S->nsens)          /* and the sensitivities' history, after the state's rows */
         memcpy(row + 3 + KV_NH + (size_t)KV_NH * S->n, S->sphi,
                sizeof(double) * (size_t)(k + 1) * (size_t)S->nsens * (size_t)S->n);
+    memcpy(row + 3 + KV_NH + (size_t)KV_NH * (size_t)S->n * (size_t)(1 + S->nsens), S->y,
+           sizeof(double) * (size_t)S->n);
+    S->rep_nstep = S->nstep;
     return 0;
+}
+
+/* the step, kept if it reaches the next of the replay times */
+static int replay_step(kv_run *R)
+{
+    kv_ida *S = R->S;
+    if (S->direction * (S->t - S->t_rep[S->k_rep]) < 0.0) return 0;
+    while (S->k_rep < S->m_rep && S->direction * (S->t - S->t_rep[S->k_rep]) >= 0.0)
+        S->k_rep++;
+    return replay_keep(R);
 }
 
 /* the outputs of the grid that this step reaches, on its interpolant (IDAGetDky; what
@@ -1648,6 +1668,10 @@ static int after_step(kv_run *R)
             (S->watch_dir[k] > 0 && v_old < 0.0 && v_new >= 0.0))
             S->watch_hit |= 1 << k;
         S->watch_old[k] = v_new;
+    }
+    if ((S->watch_hit & S->watch_rep) && S->rep_cap > 0) {   /* kept, not a stop */
+        if (replay_keep(R)) return 1;
+        S->watch_hit &= ~S->watch_rep;
     }
     return 0;
 }

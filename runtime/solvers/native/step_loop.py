@@ -162,7 +162,8 @@ class CoreStruct(ctypes.Structure):
         + _fields(_I, "grid_nidx", "grid_slack")
         + _fields(_I, "audit_async", "async_cap", "async_runs")
         + _fields(_P, "async_buf")
-        + _fields(_I, "en_no_yp")
+        + _fields(_I, "en_no_yp", "watch_rep")
+        + [("rep_nstep", ctypes.c_longlong)]
     )
     #: names of the entries of ``sec`` (seconds per part when ``timing`` is set)
     SECTIONS = ("residual", "jacobian", "lu", "newton_solve_update", "energies", "drive")
@@ -412,6 +413,13 @@ class CoreLink:
                 setattr(sens, name, getattr(s, name))
         solver._lu_stamp = s.lu_stamp
 
+    @property
+    def stops_on_signals(self) -> bool:
+        """Whether :meth:`advance` returns after the current step when SIGINT or SIGTERM
+        arrives (it holds them while the loop may call back into Python, on the main
+        thread); otherwise a signal is seen only when the call returns."""
+        return self._callbacks and threading.current_thread() is threading.main_thread()
+
     def advance(self, t_stop: float, max_steps: int) -> int:
         """Run kv_ida_advance and copy the state back into the solver; returns the code
         (``TSTOP`` ...). Re-raises the exception of a callback, then delivers the
@@ -525,19 +533,21 @@ class CoreLink:
 
     def enable_replay(self, times: np.ndarray, sink) -> None:
         """Keep the first step reaching each of ``times`` (sorted in the direction of
-        integration) for ``sink(t_old, t, k, psi, phi)`` (psi (k+1,), phi (k+1, n): the
-        step's interpolant, :meth:`~runtime.solvers.bdf.BDF.dense_output`; views, valid
-        during the call), called in step order when the buffer is full and at
-        :meth:`flush_replay`. With sensitivities the sink gets their history too, as a
+        integration), and the steps of kept watches (:meth:`set_watches`), for
+        ``sink(t_old, t, k, psi, phi, y=y)`` (psi (k+1,), phi (k+1, n): the step's
+        interpolant, :meth:`~runtime.solvers.bdf.BDF.dense_output`; y (n,): the state at
+        t; views, valid during the call), called in step order when the buffer is full and
+        at :meth:`flush_replay`. With sensitivities the sink gets their history too, as a
         sixth argument ``sphi`` (k+1, k_s n)."""
         s, n = self.s, self._solver.n
         self._t_rep = np.ascontiguousarray(times, dtype=float)
-        w = 3 + NH + NH * n + NH * s.nsens * n
+        w = 3 + NH + NH * n + NH * s.nsens * n + n          # ... and y at the step's end
         cap = int(max(1, min(self.REPLAY_ROWS, self.REPLAY_BYTES // (8 * w))))
         self._rep = np.zeros((cap, w))
         self._rep_sink = sink
         s.t_rep, s.rep = self._t_rep.ctypes.data, self._rep.ctypes.data
         s.m_rep, s.k_rep, s.rep_w, s.rep_cap, s.rep_n = self._t_rep.size, 0, w, cap, 0
+        s.rep_nstep = -1
         cb = DRIVE_FN(self._guard(lambda t: self.flush_replay()))
         self._keep.append(cb)
         self._callbacks = True
@@ -551,6 +561,7 @@ class CoreLink:
         n, rows = self._solver.n, self._rep[:s.rep_n]
         s.rep_n = 0
         ns = s.nsens * n
+        oy = 3 + NH + NH * n + NH * ns
         for row in rows:
             k = int(row[2])
             args = (float(row[0]), float(row[1]), k, row[3:4 + k],
@@ -558,7 +569,7 @@ class CoreLink:
             if ns:
                 o = 3 + NH + NH * n
                 args += (row[o:o + (k + 1) * ns].reshape(k + 1, ns),)
-            self._rep_sink(*args)
+            self._rep_sink(*args, y=row[oy:oy + n])
 
     def enable_grid(self, t_grid: np.ndarray, k: int, out_y: np.ndarray,
                     out_yp: np.ndarray) -> None:
@@ -611,13 +622,16 @@ class CoreLink:
         :meth:`enable_frames`)."""
         return int(self.s.k_grid)
 
-    def set_watches(self, watches: list[tuple[int, float]]) -> None:
+    def set_watches(self, watches: list[tuple[int, float]], kept=()) -> None:
         """Stop after any step in which ``y[index]`` changes sign in ``direction`` (< 0:
-        from > 0 to <= 0; > 0: from < 0 to >= 0)."""
+        from > 0 to <= 0; > 0: from < 0 to >= 0); or, for the watches flagged in ``kept``
+        (booleans, one per watch) while replayed steps are enabled
+        (:meth:`enable_replay`), keep such a step for the replay's sink instead."""
         if len(watches) > MAXWATCH:
             raise ValueError(f"at most {MAXWATCH} watched components")
         s = self.s
         s.nwatch = len(watches)
+        s.watch_rep = sum(1 << k for k, keep in enumerate(kept) if keep)
         for k, (i, d) in enumerate(watches):
             s.watch_idx[k], s.watch_dir[k] = int(i), float(d)
         self._lib.kv_ida_watch_reset(self.ptr)
