@@ -535,9 +535,8 @@ def test_the_output_grid_in_the_compiled_loop_backwards_and_at_the_start():
         np.testing.assert_allclose(a.y[0], np.cos(2.0 * (t_eval - span[0])), atol=1e-6)
 
 
-def _runs_with_and_without_the_audit_thread(problem, monkeypatch, **kw):
-    """(one-thread run, two-thread run, CoreLinks of the latter) of ``simulate`` (the
-    thread asked for whatever the machine's CPUs)."""
+def _kept_links(monkeypatch) -> list:
+    """The list that every CoreLink made from now on (in this test) is appended to."""
     from runtime.solvers.native import step_loop
 
     links: list = []
@@ -548,6 +547,15 @@ def _runs_with_and_without_the_audit_thread(problem, monkeypatch, **kw):
         links.append(self)
 
     monkeypatch.setattr(step_loop.CoreLink, "__init__", kept)
+    return links
+
+
+def _runs_with_and_without_the_audit_thread(problem, monkeypatch, **kw):
+    """(one-thread run, two-thread run, CoreLinks of the latter) of ``simulate`` (the
+    thread asked for whatever the machine's CPUs)."""
+    from runtime.solvers.native import step_loop
+
+    links = _kept_links(monkeypatch)
     monkeypatch.setattr(step_loop, "audit_thread_wanted", lambda: False)
     one = simulate(problem, **kw)
     assert links and all(link.s.async_runs == 0 for link in links)
@@ -726,14 +734,7 @@ def test_the_audit_interpolates_without_rates_where_the_energies_ignore_them(
     from runtime.solvers.native import step_loop
 
     p = load_problem(name, overrides)
-    links: list = []
-    init = step_loop.CoreLink.__init__
-
-    def kept(self, *a, **k):
-        init(self, *a, **k)
-        links.append(self)
-
-    monkeypatch.setattr(step_loop.CoreLink, "__init__", kept)
+    links = _kept_links(monkeypatch)
     runs = {}
     for thread in (False, True):
         monkeypatch.setattr(step_loop, "audit_thread_wanted", lambda t=thread: t)

@@ -217,11 +217,11 @@ typedef struct {
     kv_en_fn en_audit;
     /* frames of chosen components instead (the deformed centreline, Centreline in
        observers.py): with grid_idx set, rows of grid_y hold y[grid_idx[0..grid_nidx)] and
-       grid_yp is not written (grid_wy, grid_wyp: work, n each); with grid_slack, a time
+       grid_yp is not written (grid_wy: work, n); with grid_slack, a time
        up to 1e-12 max(1, |t|) past the step's end counts as reached and is taken at the
        end (forward runs: the Python observer's rule) */
     const int *grid_idx;
-    double *grid_wy, *grid_wyp;
+    double *grid_wy;
     int grid_nidx, grid_slack;
     /* the energy audit and the output samples on a second thread while the steps go on
        (1: asked for; taken by an advance call only as async_start allows): jobs in a

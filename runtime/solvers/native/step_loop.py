@@ -158,7 +158,7 @@ class CoreStruct(ctypes.Structure):
         + _fields(_I, "m_grid", "k_grid")
         + _fields(_P, "t_grid", "grid_y", "grid_yp")
         + _fields(_P, "en_audit")
-        + _fields(_P, "grid_idx", "grid_wy", "grid_wyp")
+        + _fields(_P, "grid_idx", "grid_wy")
         + _fields(_I, "grid_nidx", "grid_slack")
         + _fields(_I, "audit_async", "async_cap", "async_runs")
         + _fields(_P, "async_buf")
@@ -609,10 +609,10 @@ class CoreLink:
         if idx.size and not (0 <= idx.min() and idx.max() < n):
             raise ValueError(f"frame components must be state indices 0 ... {n - 1}")
         self._t_grid = np.ascontiguousarray(t_frames, dtype=float)
-        self._grid = (out, idx, np.zeros(n), np.zeros(n))
+        self._grid = (out, idx, np.zeros(n))
         s.t_grid, s.grid_y, s.grid_yp = self._t_grid.ctypes.data, out.ctypes.data, None
         s.grid_idx, s.grid_nidx, s.grid_slack = idx.ctypes.data, idx.size, 1
-        s.grid_wy, s.grid_wyp = self._grid[2].ctypes.data, self._grid[3].ctypes.data
+        s.grid_wy = self._grid[2].ctypes.data
         s.m_grid, s.k_grid = self._t_grid.size, int(k)
         return True
 
