@@ -645,7 +645,7 @@ def test_the_audit_stays_in_the_loop_while_the_loads_move(monkeypatch):
 @needs_threads
 def test_a_failure_of_the_energies_on_the_audits_thread_fails_the_run(monkeypatch):
     """Energies that return an error code (at their 801st call, after the worker has
-    started: step_loop.c, KV_ASYNC_AFTER) on the worker: the run fails with the compiled
+    started: step_loop.c, async_after) on the worker: the run fails with the compiled
     functions' message and keeps the samples of the one-thread run's failure, no more
     (the loop may take a few more steps before it sees it)."""
     import ctypes

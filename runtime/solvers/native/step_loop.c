@@ -1366,9 +1366,19 @@ static int sample_step(kv_run *R)
    (KV_CALLBACK), with the audit up to the failing job. */
 #ifdef KV_THREADS
 #define KV_ASYNC_BATCH 32
-/* the worker starts once the run has taken this many steps: a short run (a sweep's tiny
-   point: ~60 steps) would pay more for the thread (~1 ms of CPU) than it gains */
-#define KV_ASYNC_AFTER 200
+/* the worker starts once the run has taken KV_ASYNC_WORK / n steps (at least
+   KV_ASYNC_MIN): the audit's work per step grows with the state's length n, the
+   thread's cost (~1 ms of CPU) does not, so a short run of a small rod (a sweep's tiny
+   point: n = 58, ~60 steps) keeps its audit on the loop's thread, and the paper's
+   cantilever (n = 656) hands it over after 18 steps instead of 200 (~1.7 ms of
+   audit off the loop's thread) */
+#define KV_ASYNC_WORK 12000
+#define KV_ASYNC_MIN 16
+static long long async_after(const kv_ida *S)
+{
+    const long long k = KV_ASYNC_WORK / (S->n > 0 ? S->n : 1);
+    return k > KV_ASYNC_MIN ? k : KV_ASYNC_MIN;
+}
 enum { JOB_AUDIT, JOB_SAMPLE, JOB_STEP };
 typedef struct { int kind, m, row; double ts[2], t0, t1; } kv_job;
 typedef struct kv_async_s {
@@ -1689,7 +1699,8 @@ int kv_ida_advance(kv_ida *S, double t_stop, long long max_steps)
 #ifdef KV_THREADS
     kv_async A;
     A.S = NULL;
-    if (S->nstep >= KV_ASYNC_AFTER) async_start(&R, &A);
+    const long long after = async_after(S);
+    if (S->nstep >= after) async_start(&R, &A);
 #endif
     int rc = KV_MAXSTEPS;
     for (long long k = 0; k < max_steps; ++k) {
@@ -1698,7 +1709,7 @@ int kv_ida_advance(kv_ida *S, double t_stop, long long max_steps)
         if (r) { rc = r; break; }
         if (after_step(&R)) { rc = KV_CALLBACK; break; }
 #ifdef KV_THREADS
-        if (!R.A && S->nstep == KV_ASYNC_AFTER) async_start(&R, &A);
+        if (!R.A && S->nstep == after) async_start(&R, &A);
 #endif
         if (S->direction * (S->t - S->t_bound) >= 0.0) { rc = KV_FINISHED; break; }
         if (S->watch_hit) { rc = KV_WATCH; break; }
