@@ -26,21 +26,21 @@ def test_maxwell_run_interrupted_after_a_checkpoint_resumes(tmp_path, monkeypatc
     """A Ctrl-C right after a real checkpoint of a generalized Maxwell run (internal
     strains in the state): --resume continues to t_end and ends where an uninterrupted
     run ends."""
-    import runtime.io.results as results
+    from runtime.io.runs import CheckpointWriter
 
     argv = ["simulate", "maxwell_cantilever", "--n-elements", "4", "--t-end", "3"]
     ref = tmp_path / "ref"
     assert _main([*argv, "--out", ref]) == 0
     out = tmp_path / "run"
-    original = results.write_checkpoint
+    original = CheckpointWriter.submit
 
-    def write_then_interrupt(*a, **k):
-        original(*a, **k)
+    def write_then_interrupt(self, state):     # on the run's thread, as a signal comes
+        original(self, state)
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(results, "write_checkpoint", write_then_interrupt)
+    monkeypatch.setattr(CheckpointWriter, "submit", write_then_interrupt)
     assert _main([*argv, "--out", out]) == 130
-    monkeypatch.setattr(results, "write_checkpoint", original)
+    monkeypatch.setattr(CheckpointWriter, "submit", original)
     s = json.loads((out / "summary.json").read_text())
     assert s["status"] == "interrupted" and 0 < s["t_reached"] < 3
     with np.load(out / "checkpoint.npz") as f:

@@ -1,0 +1,86 @@
+"""Checkpoints written on a thread while the run goes on (runtime/io/runs.py,
+``CheckpointWriter``): in order, never overtaking the final summary, their errors
+raised on the run's thread."""
+
+from __future__ import annotations
+
+import json
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from runtime.io.runs import CheckpointWriter
+
+ARGV = ["simulate", "cantilever", "--n-elements", "4", "--t-end", "2.5"]
+
+
+def _main(argv) -> int:
+    from kvrod.cli import main
+
+    return main([str(a) for a in argv])
+
+
+def test_the_writer_copies_the_state_and_keeps_the_order():
+    written, threads = [], set()
+
+    def write(st):
+        time.sleep(0.02)
+        threads.add(threading.get_ident())
+        written.append((st["t"], st["y"].copy()))
+
+    w = CheckpointWriter(write)
+    y = np.arange(3.0)
+    w.submit({"t": 1.0, "y": y})
+    y[:] = -1.0                       # the run goes on changing its arrays
+    w.submit({"t": 2.0, "y": y})
+    w.wait()
+    assert [t for t, _ in written] == [1.0, 2.0]
+    assert np.array_equal(written[0][1], [0.0, 1.0, 2.0])
+    assert np.array_equal(written[1][1], [-1.0, -1.0, -1.0])
+    assert threading.get_ident() not in threads
+
+
+def test_an_error_of_the_writer_is_raised_by_the_next_call():
+    def write(st):
+        raise OSError(28, "No space left on device")
+
+    w = CheckpointWriter(write)
+    w.submit({"t": 1.0})
+    with pytest.raises(OSError, match="No space left"):
+        w.wait()
+    w.wait()                          # raised once, then the writer is clean
+    w.submit({"t": 2.0})
+    assert "No space left" in w.wait_noting("ValueError: boom")
+
+
+def test_a_slow_checkpoint_does_not_overtake_the_final_summary(tmp_path, monkeypatch):
+    import runtime.io.results as results
+
+    original = results.write_checkpoint
+
+    def slow(*a, **k):
+        time.sleep(0.5)               # far longer than the rest of the run
+        return original(*a, **k)
+
+    monkeypatch.setattr(results, "write_checkpoint", slow)
+    out = tmp_path / "run"
+    assert _main([*ARGV, "--out", out]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    assert s["status"] == "finished" and s["t_reached"] == pytest.approx(2.5)
+    assert not (out / "checkpoint.npz").exists()
+
+
+def test_a_checkpoint_that_cannot_be_written_fails_the_run_and_says_why(tmp_path,
+                                                                        monkeypatch):
+    import runtime.io.results as results
+
+    def full(*a, **k):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(results, "write_checkpoint", full)
+    out = tmp_path / "run"
+    assert _main([*ARGV, "--out", out]) != 0
+    s = json.loads((out / "summary.json").read_text())
+    assert s["status"] == "failed" and "No space left" in s["message"]
