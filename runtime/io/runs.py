@@ -219,8 +219,10 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
             summary = write_run(out, run, extra=extra)
         except BaseException as exc:   # e.g. disk full: do not leave "running" behind
             with contextlib.suppress(Exception):
-                write_status(out, params, "failed", run.t_last,
-                             f"the results could not be written: {exc}")
+                # (a signal inside the wait for the checkpoint: finish waiting first, so
+                # that its "running" status cannot land after this one)
+                write_status(out, params, "failed", run.t_last, writer.wait_noting(
+                    f"the results could not be written: {exc}"))
             raise
         if run.status == "finished":
             (out / CHECKPOINT).unlink(missing_ok=True)
@@ -344,8 +346,10 @@ def run_assembly_and_write(problem, out: Path, label: str, plots: bool = False,
             summary = write_assembly_run(out, run, extra=extra)
         except BaseException as exc:
             with contextlib.suppress(Exception):
-                write_status(out, params, "failed", run.t_last,
-                             f"the results could not be written: {exc}")
+                # (a signal inside the wait for the checkpoint: finish waiting first, so
+                # that its "running" status cannot land after this one)
+                write_status(out, params, "failed", run.t_last, writer.wait_noting(
+                    f"the results could not be written: {exc}"))
             raise
         if run.status == "finished":
             (out / CHECKPOINT).unlink(missing_ok=True)
