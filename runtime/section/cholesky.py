@@ -31,9 +31,14 @@ import scipy.sparse.linalg as spla
 from scipy.linalg import blas, lapack
 from scipy.sparse.csgraph import connected_components
 
+from runtime.section import multifrontal
+
 #: amalgamation: a merged supernode of at most this many nodes is always accepted, a
 #: larger one while its explicit zeros are at most ZERO_SHARE of its entries
 SMALL_NODES = 4
+#: the numeric phase in C where it can be compiled (multifrontal.c; the same factor as
+#: the NumPy loop, bit for bit); False: the NumPy loop
+NATIVE = True
 ZERO_SHARE = ((16, 0.8), (48, 0.1), (np.inf, 0.05))
 
 
@@ -253,6 +258,44 @@ def _factor_block(A: sp.csr_matrix, idx: np.ndarray, rank: np.ndarray,
     front_of = np.repeat(np.arange(len(sym.below)), [b.size for b in sym.below])
     per = np.bincount(front_of, weights=size, minlength=len(sym.below)).astype(np.int64)
     uptr = np.concatenate([[0], np.cumsum(per)])
+    lib = multifrontal.load() if NATIVE else None
+    if lib is not None:
+        fronts = _numeric_native(lib, sym, start, upd_all, uptr, Ap, n)
+    else:
+        fronts = _numeric_numpy(sym, start, upd_all, uptr, Ap, row, n)
+    return _Block(order=idx[order], fronts=fronts)
+
+
+def _numeric_native(lib, sym: _Symbolic, start: np.ndarray, upd_all: np.ndarray,
+                    uptr: np.ndarray, Ap: sp.csr_matrix, n: int) -> list[_Front]:
+    """The fronts by multifrontal.c (:func:`_numeric_numpy`'s factor, bit for bit)."""
+    code, k, off, out, (s, info) = multifrontal.factor_fronts(
+        lib, sym.bounds, start, upd_all, uptr, sym.parent, Ap, n)
+    if code == 1:
+        raise NotPositiveDefinite(
+            f"the matrix is not positive definite (pivot {int(start[sym.bounds[s]]) + info}"
+            f" of a block of {n} unknowns)")
+    if code == 2:
+        raise RuntimeError("the symbolic factor misses an entry of the matrix")
+    if code == 3:
+        raise RuntimeError("a child front's update unknowns are not in its parent")
+    if code != 0:
+        raise MemoryError("the multifrontal factorization ran out of memory")
+    fronts = []
+    for g in np.flatnonzero(k > 0).tolist():
+        kg, o = int(k[g]), int(off[g])
+        upd = upd_all[uptr[g]:uptr[g + 1]]
+        r0 = int(start[sym.bounds[g]])
+        U11 = out[o:o + kg * kg].reshape(kg, kg, order="F")
+        X = out[o + kg * kg:o + kg * (kg + upd.size)].reshape(kg, upd.size, order="F")
+        fronts.append(_Front(r0=r0, r1=r0 + kg, upd=upd, U11=U11, X=X))
+    return fronts
+
+
+def _numeric_numpy(sym: _Symbolic, start: np.ndarray, upd_all: np.ndarray,
+                   uptr: np.ndarray, Ap: sp.csr_matrix, row: np.ndarray,
+                   n: int) -> list[_Front]:
+    """The fronts in NumPy (the fallback without a compiler, and the C code's oracle)."""
     loc = np.empty(n, dtype=np.int64)
     stamp = np.full(n, -1, dtype=np.int64)
     fronts: list[_Front] = []
@@ -295,4 +338,4 @@ def _factor_block(A: sp.csr_matrix, idx: np.ndarray, rank: np.ndarray,
         else:
             X = np.zeros((k, 0))
         fronts.append(_Front(r0=r0, r1=r1, upd=upd, U11=U11, X=X))
-    return _Block(order=idx[order], fronts=fronts)
+    return fronts

@@ -86,3 +86,51 @@ def test_not_positive_definite_raises():
     A = (A - 50.0 * sp.eye(A.shape[0])).tocsr()
     with pytest.raises(NotPositiveDefinite, match="not positive definite"):
         cholesky(A, node)
+
+
+def _both_paths(monkeypatch, A, node):
+    from runtime.section import cholesky as C
+
+    out = {}
+    for native in (False, True):
+        monkeypatch.setattr(C, "NATIVE", native)
+        out[native] = cholesky(A, node)
+    return out[False], out[True]
+
+
+@pytest.mark.parametrize("case", ["coupled", "uncoupled", "pinned"])
+def test_the_compiled_numeric_phase_is_the_numpy_loop_bit_for_bit(case, monkeypatch):
+    """multifrontal.c factors every front as the NumPy loop does (same assembly order,
+    SciPy's own LAPACK and BLAS): the same factors and solutions, bit for bit."""
+    from runtime.section import multifrontal
+
+    if multifrontal.load() is None:
+        pytest.skip("no C compiler: the NumPy loop is the only path")
+    A, node = _grid_matrix(19, 13, 3, coupled=case != "uncoupled", seed=7)
+    if case == "pinned":
+        keep = np.setdiff1d(np.arange(A.shape[0]), [0, 1, 2, 40, 41, 77, 300])
+        A, node = A[keep][:, keep].tocsr(), node[keep]
+    ref, got = _both_paths(monkeypatch, A, node)
+    assert len(ref._blocks) == len(got._blocks) == (3 if case == "uncoupled" else 1)
+    for rb, gb in zip(ref._blocks, got._blocks, strict=True):
+        assert np.array_equal(rb.order, gb.order)
+        assert len(rb.fronts) == len(gb.fronts) > 10
+        for rf, gf in zip(rb.fronts, gb.fronts, strict=True):
+            assert (rf.r0, rf.r1) == (gf.r0, gf.r1) and np.array_equal(rf.upd, gf.upd)
+            assert np.array_equal(rf.U11, gf.U11) and np.array_equal(rf.X, gf.X)
+    b = np.random.default_rng(8).standard_normal((A.shape[0], 3))
+    assert np.array_equal(ref.solve(b), got.solve(b))
+
+
+def test_both_numeric_phases_refuse_an_indefinite_matrix_alike(monkeypatch):
+    from runtime.section import cholesky as C
+
+    A, node = _grid_matrix(8, 8, 2, coupled=True, seed=5)
+    A = (A - 50.0 * sp.eye(A.shape[0])).tocsr()
+    messages = []
+    for native in (False, True):
+        monkeypatch.setattr(C, "NATIVE", native)
+        with pytest.raises(NotPositiveDefinite, match="not positive definite") as err:
+            cholesky(A, node)
+        messages.append(str(err.value))
+    assert messages[0] == messages[1]

@@ -1,0 +1,99 @@
+"""The numeric phase of the section's multifrontal Cholesky in C (``multifrontal.c``):
+compiled on first use (cached by source, flags and host CPU, like the integrator's
+library), with SciPy's own LAPACK and BLAS (``dpotrf``, ``dtrsm``, ``dsyrk`` from
+``scipy.linalg.cython_lapack`` / ``cython_blas``) handed over as function pointers, so
+that it factors exactly as the NumPy loop of :func:`runtime.section.cholesky._factor_block`
+does (bit for bit; that loop stays the fallback without a compiler and the tests' oracle).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import subprocess
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from runtime import native
+
+SOURCE_FILE = Path(__file__).with_name("multifrontal.c")
+_lib: ctypes.CDLL | None = None
+_tried = False
+
+
+def _capsule_pointer(module, name: str) -> int:
+    """The C function behind ``module.__pyx_capi__[name]`` (a Cython capsule)."""
+    api = ctypes.pythonapi
+    api.PyCapsule_GetName.restype = ctypes.c_char_p
+    api.PyCapsule_GetName.argtypes = [ctypes.py_object]
+    api.PyCapsule_GetPointer.restype = ctypes.c_void_p
+    api.PyCapsule_GetPointer.argtypes = [ctypes.py_object, ctypes.c_char_p]
+    cap = module.__pyx_capi__[name]
+    return int(api.PyCapsule_GetPointer(cap, api.PyCapsule_GetName(cap)))
+
+
+def load() -> ctypes.CDLL | None:
+    """The compiled numeric phase with SciPy's routines attached, or None (no compiler,
+    ``KVROD_NO_COMPILER=1``, a failed build, or a SciPy without the Cython interfaces)."""
+    global _lib, _tried
+    if _tried:
+        return _lib
+    _tried = True
+    cc = native.find_compiler()
+    if cc is None:
+        return None
+    source = SOURCE_FILE.read_text()
+    key = hashlib.sha256((source + " ".join(native.compile_command(cc))
+                          + native.host_id()).encode()).hexdigest()[:16]
+    path = native.cache_dir() / f"kvrod_multifrontal_{key}.so"
+    try:
+        from scipy.linalg import cython_blas, cython_lapack
+
+        routines = (_capsule_pointer(cython_lapack, "dpotrf"),
+                    _capsule_pointer(cython_blas, "dtrsm"),
+                    _capsule_pointer(cython_blas, "dsyrk"))
+        if not path.exists():
+            path.parent.mkdir(parents=True, exist_ok=True)
+            with tempfile.TemporaryDirectory(dir=path.parent) as tmp:
+                out = Path(tmp) / path.name
+                proc = native.run_compiler([str(SOURCE_FILE), "-o", str(out)], cc)
+                if proc.returncode != 0:
+                    raise subprocess.SubprocessError(proc.stderr)
+                os.replace(out, path)
+        lib = ctypes.CDLL(str(path))
+    except (OSError, subprocess.SubprocessError, ImportError, KeyError, AttributeError):
+        return None
+    P, I = ctypes.c_void_p, ctypes.c_int
+    lib.kv_mf_factor.argtypes = [I] + [P] * 16
+    lib.kv_mf_factor.restype = I
+    lib.routines = routines
+    _lib = lib
+    return lib
+
+
+def factor_fronts(lib: ctypes.CDLL, bounds: np.ndarray, start: np.ndarray,
+                  upd_all: np.ndarray, uptr: np.ndarray, parent: np.ndarray, Ap,
+                  n: int) -> tuple[int, np.ndarray, np.ndarray, np.ndarray, tuple[int, int]]:
+    """Factor every front (see multifrontal.c). Returns (code, k and off per front, the
+    buffer holding each front's U11 then X at off, (front, info) of a failure)."""
+    ns = len(bounds) - 1
+    i64 = lambda a: np.ascontiguousarray(a, dtype=np.int64)  # noqa: E731
+    bounds, start, upd_all, uptr, parent = map(i64, (bounds, start, upd_all, uptr, parent))
+    k = start[bounds[1:]] - start[bounds[:-1]]
+    u = np.diff(uptr)
+    size = np.where(k > 0, k * k + k * u, 0)
+    off = np.concatenate([[0], np.cumsum(size)[:-1]]).astype(np.int64)
+    out = np.empty(max(int(size.sum()), 1))
+    loc = np.empty(max(n, 1), dtype=np.int64)
+    stamp = np.full(max(n, 1), -1, dtype=np.int64)
+    err = np.zeros(2, dtype=np.int64)
+    indptr, indices = i64(Ap.indptr), i64(Ap.indices)
+    data = np.ascontiguousarray(Ap.data, dtype=float)
+    ptr = lambda a: a.ctypes.data  # noqa: E731
+    code = lib.kv_mf_factor(ns, ptr(bounds), ptr(start), ptr(upd_all), ptr(uptr),
+                            ptr(parent), ptr(indptr), ptr(indices), ptr(data), ptr(off),
+                            ptr(out), ptr(loc), ptr(stamp), *lib.routines, ptr(err))
+    return int(code), k, off, out, (int(err[0]), int(err[1]))
