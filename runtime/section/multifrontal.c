@@ -123,3 +123,58 @@ done:
     free(pend); free(first); free(last); free(next);
     return rc;
 }
+
+typedef void (*kv_gemm_t)(char *, char *, int *, int *, int *, double *, double *, int *,
+                          double *, int *, double *, double *, int *);
+
+/* y (n x r, column-major) <- A^-1 y = U^-1 U^-T y through the fronts of kv_mf_factor:
+ * the operations of CholeskyFactor.solve's NumPy loop (dtrsm on a copy of the pivot
+ * rows, dgemm into a work array, then the subtraction), bit for bit. Front g (nf of them,
+ * those with pivots): rows r0[g] .. r0[g] + k[g] - 1, update unknowns upd_all[uptr[g] ..
+ * uptr[g+1]), U11 and X at out + off[g]. work: (k + u) r doubles of the largest front. */
+void kv_mf_solve(int nf, const long long *r0, const long long *k, const long long *upd_all,
+                 const long long *uptr, const long long *off, const double *out, double *y,
+                 long long n, int r, void *trsm_p, void *gemm_p, double *work)
+{
+    kv_trsm_t trsm = (kv_trsm_t)trsm_p;
+    kv_gemm_t gemm = (kv_gemm_t)gemm_p;
+    char side = 'L', up = 'U', tr = 'T', nt = 'N';
+    double one = 1.0, zero = 0.0;
+    for (int g = 0; g < nf; ++g) {                                  /* U^T z = y */
+        const long long kk = k[g], u = uptr[g + 1] - uptr[g], *upd = upd_all + uptr[g];
+        double *U11 = (double *)out + off[g], *X = U11 + kk * kk, *B = work;
+        double *yr = y + r0[g];
+        int ki = (int)kk, ri = r, ui = (int)u;
+        const size_t row = sizeof(double) * (size_t)kk;
+        for (int j = 0; j < r; ++j) memcpy(B + j * kk, yr + j * n, row);
+        trsm(&side, &up, &tr, &nt, &ki, &ri, &one, U11, &ki, B, &ki);
+        for (int j = 0; j < r; ++j) memcpy(yr + j * n, B + j * kk, row);
+        if (u > 0) {
+            double *C = work + kk * r;
+            gemm(&tr, &nt, &ui, &ri, &ki, &one, X, &ki, B, &ki, &zero, C, &ui);
+            for (int j = 0; j < r; ++j)
+                for (long long i = 0; i < u; ++i) y[upd[i] + j * n] -= C[i + j * u];
+        }
+    }
+    for (int g = nf - 1; g >= 0; --g) {                             /* U x = z */
+        const long long kk = k[g], u = uptr[g + 1] - uptr[g], *upd = upd_all + uptr[g];
+        double *U11 = (double *)out + off[g], *X = U11 + kk * kk, *T = work;
+        double *yr = y + r0[g];
+        int ki = (int)kk, ri = r, ui = (int)u;
+        if (u > 0) {
+            double *Yu = work + kk * r;
+            for (int j = 0; j < r; ++j)
+                for (long long i = 0; i < u; ++i) Yu[i + j * u] = y[upd[i] + j * n];
+            gemm(&nt, &nt, &ki, &ri, &ui, &one, X, &ki, Yu, &ui, &zero, T, &ki);
+            for (int j = 0; j < r; ++j)
+                for (long long i = 0; i < kk; ++i)
+                    T[i + j * kk] = yr[i + j * n] - T[i + j * kk];
+        } else {
+            for (int j = 0; j < r; ++j)
+                memcpy(T + j * kk, yr + j * n, sizeof(double) * (size_t)kk);
+        }
+        trsm(&side, &up, &nt, &nt, &ki, &ri, &one, U11, &ki, T, &ki);
+        for (int j = 0; j < r; ++j)
+            memcpy(yr + j * n, T + j * kk, sizeof(double) * (size_t)kk);
+    }
+}
