@@ -16,11 +16,10 @@ supernodal multifrontal Cholesky whose fronts are dense LAPACK calls (potrf, trs
    few, so that the fronts are large enough for dense BLAS.
 4. *Numeric*: in elimination-tree order each front gathers its columns of A and its
    children's update matrices (extend-add), factors its pivot block L11 = chol(F11),
-   L21 = F21 L11^-T, and passes F22 - L21 L21^T to its parent. This loop, and the
-   solves' loops over the fronts, run in C (``multifrontal.c``) where a compiler is at
-   hand, with SciPy's own LAPACK and BLAS routines: the same factor and solutions bit
-   for bit, without NumPy's per-call overhead (two thirds of the loop's time); the NumPy
-   loops are the fallback and the tests' oracle.
+   L21 = F21 L11^-T, and passes F22 - L21 L21^T to its parent. This loop runs in C
+   (``multifrontal.c``) where a compiler is at hand, with SciPy's own LAPACK and BLAS
+   routines: the same factor bit for bit, without NumPy's per-call overhead (two thirds
+   of the loop's time); the NumPy loop is the fallback and the tests' oracle.
 
 No pivoting: the matrix must be symmetric positive definite (a failed pivot raises).
 """
@@ -61,12 +60,10 @@ class _Front:
 
 @dataclass
 class _Block:
-    """A connected component: its unknowns in elimination order and its fronts (with
-    ``native``, the compiled factor's arrays: the solve runs in C too)."""
+    """A connected component: its unknowns in elimination order and its fronts."""
 
     order: np.ndarray
     fronts: list[_Front]
-    native: tuple | None = None
 
 
 @dataclass
@@ -107,28 +104,18 @@ class CholeskyFactor:
         x = np.empty_like(b)
         for blk in self._blocks:
             y = np.asfortranarray(b[blk.order].reshape(blk.order.size, -1))
-            if blk.native is not None:
-                multifrontal.solve_fronts(blk.native, y)
-            else:
-                _solve_numpy(blk.fronts, y)
+            for f in blk.fronts:                             # L y = b
+                yo = blas.dtrsm(1.0, f.U11, y[f.r0:f.r1], lower=0, trans_a=1)
+                y[f.r0:f.r1] = yo
+                if f.upd.size:
+                    y[f.upd] -= f.X.T @ yo
+            for f in reversed(blk.fronts):                   # L^T x = y
+                rhs = y[f.r0:f.r1]
+                if f.upd.size:
+                    rhs = rhs - f.X @ y[f.upd]
+                y[f.r0:f.r1] = blas.dtrsm(1.0, f.U11, rhs, lower=0, trans_a=0)
             x[blk.order] = y.reshape((blk.order.size,) + b.shape[1:])
         return x
-
-
-def _solve_numpy(fronts: list[_Front], y: np.ndarray) -> None:
-    """y (F order) <- the block's A^-1 y through its fronts (BLAS's dgemm for the
-    products, not NumPy's matmul, which may take another BLAS path: the C solve,
-    multifrontal.c, does the same operations bit for bit)."""
-    for f in fronts:                                     # L y = b
-        yo = blas.dtrsm(1.0, f.U11, y[f.r0:f.r1], lower=0, trans_a=1)
-        y[f.r0:f.r1] = yo
-        if f.upd.size:
-            y[f.upd] -= blas.dgemm(1.0, f.X, yo, trans_a=1)
-    for f in reversed(fronts):                           # L^T x = y
-        rhs = y[f.r0:f.r1]
-        if f.upd.size:
-            rhs = rhs - blas.dgemm(1.0, f.X, y[f.upd])
-        y[f.r0:f.r1] = blas.dtrsm(1.0, f.U11, rhs, lower=0, trans_a=0)
 
 
 def cholesky(A: sp.spmatrix, node: np.ndarray) -> CholeskyFactor:
@@ -276,17 +263,15 @@ def _factor_block(A: sp.csr_matrix, idx: np.ndarray, rank: np.ndarray,
     uptr = np.concatenate([[0], np.cumsum(per)])
     lib = multifrontal.load() if NATIVE else None
     if lib is not None:
-        fronts, native = _numeric_native(lib, sym, start, upd_all, uptr, Ap, n)
-        return _Block(order=idx[order], fronts=fronts, native=native)
-    fronts = _numeric_numpy(sym, start, upd_all, uptr, Ap, row, n)
+        fronts = _numeric_native(lib, sym, start, upd_all, uptr, Ap, n)
+    else:
+        fronts = _numeric_numpy(sym, start, upd_all, uptr, Ap, row, n)
     return _Block(order=idx[order], fronts=fronts)
 
 
 def _numeric_native(lib, sym: _Symbolic, start: np.ndarray, upd_all: np.ndarray,
-                    uptr: np.ndarray, Ap: sp.csr_matrix,
-                    n: int) -> tuple[list[_Front], tuple]:
-    """The fronts by multifrontal.c (:func:`_numeric_numpy`'s factor, bit for bit), and
-    the arrays of :func:`multifrontal.solve_fronts`."""
+                    uptr: np.ndarray, Ap: sp.csr_matrix, n: int) -> list[_Front]:
+    """The fronts by multifrontal.c (:func:`_numeric_numpy`'s factor, bit for bit)."""
     code, k, off, out, (s, info) = multifrontal.factor_fronts(
         lib, sym.bounds, start, upd_all, uptr, sym.parent, Ap, n)
     if code == 1:
@@ -300,17 +285,14 @@ def _numeric_native(lib, sym: _Symbolic, start: np.ndarray, upd_all: np.ndarray,
     if code != 0:
         raise MemoryError("the multifrontal factorization ran out of memory")
     fronts = []
-    live = np.flatnonzero(k > 0)
-    for g in live.tolist():
+    for g in np.flatnonzero(k > 0).tolist():
         kg, o = int(k[g]), int(off[g])
         upd = upd_all[uptr[g]:uptr[g + 1]]
         r0 = int(start[sym.bounds[g]])
         U11 = out[o:o + kg * kg].reshape(kg, kg, order="F")
         X = out[o + kg * kg:o + kg * (kg + upd.size)].reshape(kg, upd.size, order="F")
         fronts.append(_Front(r0=r0, r1=r0 + kg, upd=upd, U11=U11, X=X))
-    native = multifrontal.solve_arrays(lib, start[sym.bounds[live]], k[live], upd_all,
-                                       uptr[live], uptr[live + 1], off[live], out)
-    return fronts, native
+    return fronts
 
 
 def _numeric_numpy(sym: _Symbolic, start: np.ndarray, upd_all: np.ndarray,

@@ -55,7 +55,6 @@ def load() -> ctypes.CDLL | None:
         routines = (_capsule_pointer(cython_lapack, "dpotrf"),
                     _capsule_pointer(cython_blas, "dtrsm"),
                     _capsule_pointer(cython_blas, "dsyrk"))
-        gemm = _capsule_pointer(cython_blas, "dgemm")
         if not path.exists():
             path.parent.mkdir(parents=True, exist_ok=True)
             with tempfile.TemporaryDirectory(dir=path.parent) as tmp:
@@ -70,10 +69,7 @@ def load() -> ctypes.CDLL | None:
     P, I = ctypes.c_void_p, ctypes.c_int
     lib.kv_mf_factor.argtypes = [I] + [P] * 16
     lib.kv_mf_factor.restype = I
-    lib.kv_mf_solve.argtypes = [I] + [P] * 7 + [ctypes.c_longlong, I, P, P, P]
-    lib.kv_mf_solve.restype = None
     lib.routines = routines
-    lib.trsm_gemm = (routines[1], gemm)
     _lib = lib
     return lib
 
@@ -101,27 +97,3 @@ def factor_fronts(lib: ctypes.CDLL, bounds: np.ndarray, start: np.ndarray,
                             ptr(parent), ptr(indptr), ptr(indices), ptr(data), ptr(off),
                             ptr(out), ptr(loc), ptr(stamp), *lib.routines, ptr(err))
     return int(code), k, off, out, (int(err[0]), int(err[1]))
-
-
-def solve_arrays(lib: ctypes.CDLL, r0: np.ndarray, k: np.ndarray, upd_all: np.ndarray,
-                 ustart: np.ndarray, uend: np.ndarray, off: np.ndarray,
-                 out: np.ndarray) -> tuple:
-    """What :func:`solve_fronts` needs of the fronts with pivots (r0, k, their update
-    unknowns upd_all[ustart:uend], their factors at off in out), packed once."""
-    i64 = lambda a: np.ascontiguousarray(a, dtype=np.int64)  # noqa: E731
-    upd = np.concatenate([upd_all[a:b] for a, b in zip(ustart.tolist(), uend.tolist(),
-                                                       strict=True)] + [np.zeros(0, np.int64)])
-    uptr = np.concatenate([[0], np.cumsum(uend - ustart)])
-    largest = int(np.max(k + (uend - ustart), initial=0))
-    return (lib, i64(r0), i64(k), i64(upd), i64(uptr), i64(off), out, largest)
-
-
-def solve_fronts(packed: tuple, y: np.ndarray) -> None:
-    """y (n x r, F order) <- A^-1 y through the fronts of ``packed``
-    (:func:`solve_arrays`), as ``cholesky._solve_numpy`` does, bit for bit."""
-    lib, r0, k, upd, uptr, off, out, largest = packed
-    n, r = y.shape
-    work = np.empty(max(largest * r, 1))
-    ptr = lambda a: a.ctypes.data  # noqa: E731
-    lib.kv_mf_solve(len(k), ptr(r0), ptr(k), ptr(upd), ptr(uptr), ptr(off), ptr(out),
-                    ptr(y), n, r, *lib.trsm_gemm, ptr(work))
