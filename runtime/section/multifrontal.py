@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from runtime import native
+import runtime.native as native
 
 SOURCE_FILE = Path(__file__).with_name("multifrontal.c")
 _lib: ctypes.CDLL | None = None
