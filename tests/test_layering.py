@@ -105,7 +105,7 @@ def test_every_runtime_package_has_a_floor():
 #: numeric phase (runtime/section/multifrontal.py, through runtime.native)
 SECTION_ALLOWED = {"numpy", "scipy", "shapely", "cytriangle", "runtime", "__future__",
                    "math", "dataclasses", "collections", "typing", "importlib", "ctypes",
-                   "hashlib", "os", "pathlib", "subprocess", "tempfile"}
+                   "hashlib", "os", "pathlib", "subprocess", "tempfile", "threading"}
 SECTION_RUNTIME = ("runtime.errors", "runtime.signals", "runtime.native")
 
 

@@ -46,6 +46,20 @@ class CheckpointWriter:
         self._thread = None
         self._error: BaseException | None = None
 
+    def __enter__(self) -> CheckpointWriter:
+        return self
+
+    def __exit__(self, kind, exc, tb) -> bool:
+        """Wait for the checkpoint in flight; on an exception already on its way, the
+        checkpoint's own failure (if any) is added to it as a note, not lost."""
+        if exc is None:
+            self.wait()
+        else:
+            note = self.wait_noting("")
+            if note:
+                exc.add_note(note.removeprefix("; "))
+        return False
+
     def submit(self, state: dict) -> None:
         import copy
         import threading
@@ -177,61 +191,62 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
             write_checkpoint(out, params, st)
             write_status(out, params, "running", st["t"])
 
-        writer = CheckpointWriter(write_ckpt)
+        # the folder (and its lock) is never left with a checkpoint in flight
+        with CheckpointWriter(write_ckpt) as writer:
 
-        def on_checkpoint(st):
-            if series is not None:       # the frames so far survive a kill after this
-                series.write_collection()
-            writer.submit(st)
+            def on_checkpoint(st):
+                if series is not None:       # the frames so far survive a kill after this
+                    series.write_collection()
+                writer.submit(st)
 
-        series = None
-        model = None
-        if vtk_every is not None:
-            from runtime.io.vtk import VtkSeries
-            from runtime.problem.assemble import build_model
+            series = None
+            model = None
+            if vtk_every is not None:
+                from runtime.io.vtk import VtkSeries
+                from runtime.problem.assemble import build_model
 
-            model = build_model(problem)          # one model: the run's and the frames'
-            series = VtkSeries(out / "vtk", model, resume_from=t_start if state else None)
-        cb, close = (progress(problem.simulation.t_end, label) if progress is not None
-                     else (None, lambda: None))
-        try:
-            run = simulate(problem, progress=cb, checkpoint=on_checkpoint,
-                           checkpoint_every=checkpoint_every,
-                           checkpoint_wall=CHECKPOINT_WALL, resume=state,
-                           snapshot_every=vtk_every,
-                           snapshot_sink=series.add if series else None, model=model,
-                           sensitivity=sens_run)
-        except BaseException as exc:   # a bug or resource error: say so, keep the checkpoint
-            write_status(out, params, "failed", t_start,
-                         writer.wait_noting(f"{type(exc).__name__}: {exc}"))
-            raise
-        finally:
-            close()
-            if series is not None:
-                series.close()
-        extra = {"resumed_from_t": t_start} if state else None
-        if sens_run is not None and sens_run.collected is not None:
-            extra = {**(extra or {}), "sensitivities": sens_run.collected.summary()}
-        try:
-            writer.wait()
+                model = build_model(problem)          # one model: the run's and the frames'
+                series = VtkSeries(out / "vtk", model, resume_from=t_start if state else None)
+            cb, close = (progress(problem.simulation.t_end, label) if progress is not None
+                         else (None, lambda: None))
+            try:
+                run = simulate(problem, progress=cb, checkpoint=on_checkpoint,
+                               checkpoint_every=checkpoint_every,
+                               checkpoint_wall=CHECKPOINT_WALL, resume=state,
+                               snapshot_every=vtk_every,
+                               snapshot_sink=series.add if series else None, model=model,
+                               sensitivity=sens_run)
+            except BaseException as exc:   # a bug or resource error: say so, keep the checkpoint
+                write_status(out, params, "failed", t_start,
+                             writer.wait_noting(f"{type(exc).__name__}: {exc}"))
+                raise
+            finally:
+                close()
+                if series is not None:
+                    series.close()
+            extra = {"resumed_from_t": t_start} if state else None
             if sens_run is not None and sens_run.collected is not None:
-                write_sensitivities(out, sens_run.collected)
-            summary = write_run(out, run, extra=extra)
-        except BaseException as exc:   # e.g. disk full: do not leave "running" behind
-            with contextlib.suppress(Exception):
-                # (a signal inside the wait for the checkpoint: finish waiting first, so
-                # that its "running" status cannot land after this one)
-                write_status(out, params, "failed", run.t_last, writer.wait_noting(
-                    f"the results could not be written: {exc}"))
-            raise
-        if run.status == "finished":
-            (out / CHECKPOINT).unlink(missing_ok=True)
-        if run.interrupt is not None:
-            raise run.interrupt
-        if plots and run.t.size > 1:
-            from runtime.io.plots import plot_run
+                extra = {**(extra or {}), "sensitivities": sens_run.collected.summary()}
+            try:
+                writer.wait()
+                if sens_run is not None and sens_run.collected is not None:
+                    write_sensitivities(out, sens_run.collected)
+                summary = write_run(out, run, extra=extra)
+            except BaseException as exc:   # e.g. disk full: do not leave "running" behind
+                with contextlib.suppress(Exception):
+                    # (a signal inside the wait for the checkpoint: finish waiting first, so
+                    # that its "running" status cannot land after this one)
+                    write_status(out, params, "failed", run.t_last, writer.wait_noting(
+                        f"the results could not be written: {exc}"))
+                raise
+            if run.status == "finished":
+                (out / CHECKPOINT).unlink(missing_ok=True)
+            if run.interrupt is not None:
+                raise run.interrupt
+            if plots and run.t.size > 1:
+                from runtime.io.plots import plot_run
 
-            plot_run(run, out)
+                plot_run(run, out)
     return run, summary
 
 
@@ -307,58 +322,59 @@ def run_assembly_and_write(problem, out: Path, label: str, plots: bool = False,
             write_checkpoint(out, params, st)
             write_status(out, params, "running", st["t"])
 
-        writer = CheckpointWriter(write_ckpt)
+        # the folder (and its lock) is never left with a checkpoint in flight
+        with CheckpointWriter(write_ckpt) as writer:
 
-        def on_checkpoint(st):
-            if series is not None:       # the frames so far survive a kill after this
-                series.write_collection()
-            writer.submit(st)
+            def on_checkpoint(st):
+                if series is not None:       # the frames so far survive a kill after this
+                    series.write_collection()
+                writer.submit(st)
 
-        series = None
-        if vtk_every is not None:
-            from runtime.io.assembly_vtk import AssemblyVtk
+            series = None
+            if vtk_every is not None:
+                from runtime.io.assembly_vtk import AssemblyVtk
 
-            series = AssemblyVtk(out / "vtk", amap.model,
-                                 resume_from=t_start if state else None)
-        cb, close = (progress(problem.simulation.t_end, label) if progress is not None
-                     else (None, lambda: None))
-        try:
-            run = simulate_assembly(problem, progress=cb, checkpoint=on_checkpoint,
-                                    checkpoint_every=checkpoint_every, resume=state,
-                                    amap=amap, sensitivity=sens_run,
-                                    snapshot_every=vtk_every,
-                                    snapshot_sink=series.add if series else None)
-        except BaseException as exc:
-            write_status(out, params, "failed", t_start,
-                         writer.wait_noting(f"{type(exc).__name__}: {exc}"))
-            raise
-        finally:
-            close()
-            if series is not None:
-                series.close()
-        extra = {"resumed_from_t": t_start} if state else None
-        if sens_run is not None and sens_run.collected is not None:
-            extra = {**(extra or {}), "sensitivities": sens_run.collected.summary()}
-        try:
-            writer.wait()
+                series = AssemblyVtk(out / "vtk", amap.model,
+                                     resume_from=t_start if state else None)
+            cb, close = (progress(problem.simulation.t_end, label) if progress is not None
+                         else (None, lambda: None))
+            try:
+                run = simulate_assembly(problem, progress=cb, checkpoint=on_checkpoint,
+                                        checkpoint_every=checkpoint_every, resume=state,
+                                        amap=amap, sensitivity=sens_run,
+                                        snapshot_every=vtk_every,
+                                        snapshot_sink=series.add if series else None)
+            except BaseException as exc:
+                write_status(out, params, "failed", t_start,
+                             writer.wait_noting(f"{type(exc).__name__}: {exc}"))
+                raise
+            finally:
+                close()
+                if series is not None:
+                    series.close()
+            extra = {"resumed_from_t": t_start} if state else None
             if sens_run is not None and sens_run.collected is not None:
-                write_sensitivities(out, sens_run.collected)
-            summary = write_assembly_run(out, run, extra=extra)
-        except BaseException as exc:
-            with contextlib.suppress(Exception):
-                # (a signal inside the wait for the checkpoint: finish waiting first, so
-                # that its "running" status cannot land after this one)
-                write_status(out, params, "failed", run.t_last, writer.wait_noting(
-                    f"the results could not be written: {exc}"))
-            raise
-        if run.status == "finished":
-            (out / CHECKPOINT).unlink(missing_ok=True)
-        if run.interrupt is not None:
-            raise run.interrupt
-        if plots and run.t.size > 1:
-            from runtime.io.assembly_plots import plot_assembly_run_folder
+                extra = {**(extra or {}), "sensitivities": sens_run.collected.summary()}
+            try:
+                writer.wait()
+                if sens_run is not None and sens_run.collected is not None:
+                    write_sensitivities(out, sens_run.collected)
+                summary = write_assembly_run(out, run, extra=extra)
+            except BaseException as exc:
+                with contextlib.suppress(Exception):
+                    # (a signal inside the wait for the checkpoint: finish waiting first, so
+                    # that its "running" status cannot land after this one)
+                    write_status(out, params, "failed", run.t_last, writer.wait_noting(
+                        f"the results could not be written: {exc}"))
+                raise
+            if run.status == "finished":
+                (out / CHECKPOINT).unlink(missing_ok=True)
+            if run.interrupt is not None:
+                raise run.interrupt
+            if plots and run.t.size > 1:
+                from runtime.io.assembly_plots import plot_assembly_run_folder
 
-            plot_assembly_run_folder(out)
+                plot_assembly_run_folder(out)
     return run, summary
 
 

@@ -129,7 +129,8 @@ def cholesky(A: sp.spmatrix, node: np.ndarray) -> CholeskyFactor:
     NotPositiveDefinite
         A pivot block is not positive definite (A is not, or is too ill-conditioned).
     """
-    A = sp.csr_matrix(A, dtype=float)            # duplicates summed
+    A = sp.csr_matrix(A, dtype=float)
+    A.sum_duplicates()                           # (a CSR or CSC input keeps them)
     A.eliminate_zeros()
     n = A.shape[0]
     node = np.asarray(node, dtype=np.int64)

@@ -13,6 +13,7 @@ import hashlib
 import os
 import subprocess
 import tempfile
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +23,7 @@ import runtime.native as native
 SOURCE_FILE = Path(__file__).with_name("multifrontal.c")
 _lib: ctypes.CDLL | None = None
 _tried = False
+_lock = threading.Lock()     # the analysis runs in a worker thread; sweeps may run several
 
 
 def _capsule_pointer(module, name: str) -> int:
@@ -38,18 +40,26 @@ def _capsule_pointer(module, name: str) -> int:
 def load() -> ctypes.CDLL | None:
     """The compiled numeric phase with SciPy's routines attached, or None (no compiler,
     ``KVROD_NO_COMPILER=1``, a failed build, or a SciPy without the Cython interfaces)."""
-    global _lib, _tried
-    if _tried:
-        return _lib
-    _tried = True
+    global _tried
+    with _lock:
+        if not _tried:
+            _tried = True
+            _load()
+    return _lib
+
+
+def _load() -> None:
+    """Compile (or find in the cache) and load the library into ``_lib``; leave it None
+    on any failure (the NumPy loop then runs)."""
+    global _lib
     cc = native.find_compiler()
     if cc is None:
-        return None
-    source = SOURCE_FILE.read_text()
-    key = hashlib.sha256((source + " ".join(native.compile_command(cc))
-                          + native.host_id()).encode()).hexdigest()[:16]
-    path = native.cache_dir() / f"kvrod_multifrontal_{key}.so"
+        return
     try:
+        source = SOURCE_FILE.read_text()
+        key = hashlib.sha256((source + " ".join(native.compile_command(cc))
+                              + native.host_id()).encode()).hexdigest()[:16]
+        path = native.cache_dir() / f"kvrod_multifrontal_{key}.so"
         from scipy.linalg import cython_blas, cython_lapack
 
         routines = (_capsule_pointer(cython_lapack, "dpotrf"),
@@ -65,13 +75,12 @@ def load() -> ctypes.CDLL | None:
                 os.replace(out, path)
         lib = ctypes.CDLL(str(path))
     except (OSError, subprocess.SubprocessError, ImportError, KeyError, AttributeError):
-        return None
+        return
     P, I = ctypes.c_void_p, ctypes.c_int
     lib.kv_mf_factor.argtypes = [I] + [P] * 16
     lib.kv_mf_factor.restype = I
     lib.routines = routines
     _lib = lib
-    return lib
 
 
 def factor_fronts(lib: ctypes.CDLL, bounds: np.ndarray, start: np.ndarray,

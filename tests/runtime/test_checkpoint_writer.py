@@ -84,3 +84,19 @@ def test_a_checkpoint_that_cannot_be_written_fails_the_run_and_says_why(tmp_path
     assert _main([*ARGV, "--out", out]) != 0
     s = json.loads((out / "summary.json").read_text())
     assert s["status"] == "failed" and "No space left" in s["message"]
+
+
+def test_as_a_context_it_waits_and_keeps_a_failed_checkpoint_on_the_exception():
+    def full(st):
+        time.sleep(0.05)
+        raise OSError(28, "No space left on device")
+
+    with pytest.raises(KeyboardInterrupt) as err:
+        with CheckpointWriter(full) as w:
+            w.submit({"t": 1.0})
+            raise KeyboardInterrupt
+    assert any("No space left" in n for n in getattr(err.value, "__notes__", []))
+    assert w._thread is None                     # waited for before leaving
+    with pytest.raises(OSError, match="No space left"):
+        with CheckpointWriter(full) as w:
+            w.submit({"t": 1.0})

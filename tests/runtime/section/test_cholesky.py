@@ -134,3 +134,37 @@ def test_both_numeric_phases_refuse_an_indefinite_matrix_alike(monkeypatch):
             cholesky(A, node)
         messages.append(str(err.value))
     assert messages[0] == messages[1]
+
+
+def _halves(M):
+    """M (CSR or CSC, canonical) with every stored entry split into two stored halves,
+    duplicates in the same format (SciPy keeps them until summed)."""
+    line = np.repeat(np.arange(M.shape[0] if M.format == "csr" else M.shape[1]),
+                     np.diff(M.indptr))
+    order = np.argsort(np.r_[line, line], kind="stable")
+    data = np.r_[0.5 * M.data, 0.5 * M.data][order]
+    indices = np.r_[M.indices, M.indices][order]
+    kind = sp.csr_matrix if M.format == "csr" else sp.csc_matrix
+    out = kind((data, indices, 2 * M.indptr), shape=M.shape)
+    assert not out.has_canonical_format
+    return out
+
+
+@pytest.mark.parametrize("fmt", ["csr", "csc", "coo"])
+@pytest.mark.parametrize("native", [False, True])
+def test_duplicate_entries_add_in_every_format(fmt, native, monkeypatch):
+    """A matrix given with each entry split in two stored halves (duplicates) is the
+    matrix of their sums, in every SciPy format."""
+    from runtime.section import cholesky as C
+
+    monkeypatch.setattr(C, "NATIVE", native)
+    A, node = _grid_matrix(10, 8, 3, coupled=True, seed=9)
+    if fmt == "coo":
+        Ac = A.tocoo()
+        dup = sp.coo_matrix((np.r_[0.5 * Ac.data, 0.5 * Ac.data],
+                             (np.r_[Ac.row, Ac.row], np.r_[Ac.col, Ac.col])), shape=A.shape)
+    else:
+        dup = _halves(A.asformat(fmt))
+    b = np.random.default_rng(10).standard_normal(A.shape[0])
+    x = cholesky(dup, node).solve(b)
+    assert np.abs(x - spla.spsolve(A.tocsc(), b)).max() <= 1e-10 * np.abs(x).max()
