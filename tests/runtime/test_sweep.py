@@ -287,11 +287,15 @@ def test_worker_killed_mid_study(tmp_path):
         def kill_one(pr) -> None:
             if killed:
                 return
-            busy = [a for a, keys in c.processing().items() if keys and a in pids]
-            addr = busy[0] if busy else next(iter(pids))
-            os.kill(pids[addr], signal.SIGKILL)
-            killed.append(pids[addr])
-            lost.extend(c.processing().get(addr, ()))
+            # one snapshot (a second call may find the task done meanwhile), and only a
+            # worker that holds tasks: none busy at this report, wait for the next
+            processing = c.processing()
+            busy = [a for a, keys in processing.items() if keys and a in pids]
+            if not busy:
+                return
+            os.kill(pids[busy[0]], signal.SIGKILL)
+            killed.append(pids[busy[0]])
+            lost.extend(processing[busy[0]])
 
         t0 = time.monotonic()
         report = run_study_dask(s, tmp_path, client=c, progress=kill_one,
