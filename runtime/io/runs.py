@@ -98,6 +98,39 @@ class CheckpointWriter:
         return message
 
 
+def _folder_checkpoints(out: Path, params: dict) -> CheckpointWriter:
+    """The writer of a run's checkpoints into results folder ``out``: the checkpoint,
+    then the "running" status at its time."""
+    from runtime.io.results import write_checkpoint, write_status
+
+    def write(state: dict) -> None:
+        write_checkpoint(out, params, state)
+        write_status(out, params, "running", state["t"])
+
+    return CheckpointWriter(write)
+
+
+def _write_results(out: Path, params: dict, run, writer: CheckpointWriter, sens_run,
+                   write: Callable[[], dict]) -> dict:
+    """After the checkpoint in flight: the sensitivities (if any), then ``write()`` (the
+    run's files; its summary returned). On any failure summary.json says "failed" and
+    why (e.g. a full disk: never "running" left behind), and the error is raised."""
+    try:
+        writer.wait()
+        if sens_run is not None and sens_run.collected is not None:
+            write_sensitivities(out, sens_run.collected)
+        return write()
+    except BaseException as exc:
+        from runtime.io.results import write_status
+
+        with contextlib.suppress(Exception):
+            # (a signal inside the wait for the checkpoint: finish waiting first, so that
+            # its "running" status cannot land after this one)
+            write_status(out, params, "failed", run.t_last, writer.wait_noting(
+                f"the results could not be written: {exc}"))
+        raise
+
+
 #: a progress display of a run: ``progress(t_end, label) -> (callback(t), close())`` (the
 #: callback None: nothing to show, e.g. not on a terminal)
 ProgressDisplay = Callable[[float, str], tuple[Callable[[float], object], Callable[[], object]]]
@@ -128,7 +161,6 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
         CHECKPOINT,
         jsonable,
         load_checkpoint,
-        write_checkpoint,
         write_run,
         write_status,
     )
@@ -187,12 +219,8 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
         write_status(out, params, "running", t_start)
         claimed.keep()
 
-        def write_ckpt(st):
-            write_checkpoint(out, params, st)
-            write_status(out, params, "running", st["t"])
-
         # the folder (and its lock) is never left with a checkpoint in flight
-        with CheckpointWriter(write_ckpt) as writer:
+        with _folder_checkpoints(out, params) as writer:
 
             def on_checkpoint(st):
                 if series is not None:       # the frames so far survive a kill after this
@@ -227,18 +255,8 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
             extra = {"resumed_from_t": t_start} if state else None
             if sens_run is not None and sens_run.collected is not None:
                 extra = {**(extra or {}), "sensitivities": sens_run.collected.summary()}
-            try:
-                writer.wait()
-                if sens_run is not None and sens_run.collected is not None:
-                    write_sensitivities(out, sens_run.collected)
-                summary = write_run(out, run, extra=extra)
-            except BaseException as exc:   # e.g. disk full: do not leave "running" behind
-                with contextlib.suppress(Exception):
-                    # (a signal inside the wait for the checkpoint: finish waiting first, so
-                    # that its "running" status cannot land after this one)
-                    write_status(out, params, "failed", run.t_last, writer.wait_noting(
-                        f"the results could not be written: {exc}"))
-                raise
+            summary = _write_results(out, params, run, writer, sens_run,
+                                     lambda: write_run(out, run, extra=extra))
             if run.status == "finished":
                 (out / CHECKPOINT).unlink(missing_ok=True)
             if run.interrupt is not None:
@@ -274,7 +292,6 @@ def run_assembly_and_write(problem, out: Path, label: str, plots: bool = False,
         CheckpointError,
         jsonable,
         load_checkpoint,
-        write_checkpoint,
         write_status,
     )
     from runtime.model import build
@@ -318,12 +335,8 @@ def run_assembly_and_write(problem, out: Path, label: str, plots: bool = False,
         write_status(out, params, "running", t_start)
         claimed.keep()
 
-        def write_ckpt(st):
-            write_checkpoint(out, params, st)
-            write_status(out, params, "running", st["t"])
-
         # the folder (and its lock) is never left with a checkpoint in flight
-        with CheckpointWriter(write_ckpt) as writer:
+        with _folder_checkpoints(out, params) as writer:
 
             def on_checkpoint(st):
                 if series is not None:       # the frames so far survive a kill after this
@@ -355,18 +368,8 @@ def run_assembly_and_write(problem, out: Path, label: str, plots: bool = False,
             extra = {"resumed_from_t": t_start} if state else None
             if sens_run is not None and sens_run.collected is not None:
                 extra = {**(extra or {}), "sensitivities": sens_run.collected.summary()}
-            try:
-                writer.wait()
-                if sens_run is not None and sens_run.collected is not None:
-                    write_sensitivities(out, sens_run.collected)
-                summary = write_assembly_run(out, run, extra=extra)
-            except BaseException as exc:
-                with contextlib.suppress(Exception):
-                    # (a signal inside the wait for the checkpoint: finish waiting first, so
-                    # that its "running" status cannot land after this one)
-                    write_status(out, params, "failed", run.t_last, writer.wait_noting(
-                        f"the results could not be written: {exc}"))
-                raise
+            summary = _write_results(out, params, run, writer, sens_run,
+                                     lambda: write_assembly_run(out, run, extra=extra))
             if run.status == "finished":
                 (out / CHECKPOINT).unlink(missing_ok=True)
             if run.interrupt is not None:
