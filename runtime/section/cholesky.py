@@ -39,8 +39,9 @@ from runtime.section import multifrontal
 #: amalgamation: a merged supernode of at most this many nodes is always accepted, a
 #: larger one while its explicit zeros are at most ZERO_SHARE of its entries
 SMALL_NODES = 4
-#: the numeric phase in C where it can be compiled (multifrontal.c; the same factor as
-#: the NumPy loop, bit for bit); False: the NumPy loop
+#: the supernodes and the numeric phase in C where they can be compiled (multifrontal.c;
+#: the same supernodes and factor as the Python and NumPy loops, bit for bit); False: those
+#: loops
 NATIVE = True
 ZERO_SHARE = ((16, 0.8), (48, 0.1), (np.inf, 0.05))
 
@@ -70,11 +71,13 @@ class _Block:
 class _Symbolic:
     """The node graph's ordering and supernodes: ``rank`` the elimination position of
     each node, supernode g holding positions bounds[g]:bounds[g + 1] with the nodes
-    ``below[g]`` (positions, sorted) in its update set, ``parent[g]`` (-1 at a root)."""
+    ``below[below_ptr[g]:below_ptr[g + 1]]`` (positions, sorted) in its update set,
+    ``parent[g]`` (-1 at a root)."""
 
     rank: np.ndarray
     bounds: np.ndarray
-    below: list[np.ndarray]
+    below: np.ndarray
+    below_ptr: np.ndarray
     parent: np.ndarray
 
 
@@ -148,6 +151,29 @@ def _symbolic(A: sp.csr_matrix, node: np.ndarray, m: int) -> _Symbolic:
     """Ordering and supernodes of the node graph (an edge for every entry (i, j) of A
     between node[i] and node[j]), shared by all blocks: a block's fill under the same
     ordering is part of the whole graph's."""
+    L, perm = _node_factor(A, node, m)
+    order, bounds, tops = _supernodes(L)
+    newpos = np.empty(m, dtype=np.int64)
+    newpos[order] = np.arange(m)
+    # each supernode's update set: its top column's structure below the diagonal, in new
+    # positions, sorted (all supernodes at once: a sort by (supernode, position))
+    lo, hi = L.indptr[tops] + 1, L.indptr[tops + 1]
+    size = hi - lo
+    ptr = np.concatenate([[0], np.cumsum(size)])
+    seg = np.repeat(np.arange(tops.size), size)
+    pos = newpos[L.indices[np.repeat(lo - ptr[:-1], size) + np.arange(ptr[-1])]]
+    below = pos[np.lexsort((pos, seg))]
+    owner = np.repeat(np.arange(bounds.size - 1), np.diff(bounds))
+    parent = np.where(size > 0, owner[below[np.minimum(ptr[:-1], below.size - 1)]]
+                      if below.size else -1, -1)
+    return _Symbolic(rank=newpos[perm], bounds=bounds, below=below, below_ptr=ptr,
+                     parent=parent.astype(np.int64))
+
+
+def _node_factor(A: sp.csr_matrix, node: np.ndarray, m: int
+                 ) -> tuple[sp.csc_matrix, np.ndarray]:
+    """The node graph's factor L (CSC, sorted; columns in elimination order) and the
+    ordering (node perm[j] is eliminated j-th)."""
     # the graph as the pattern of P^T |A| P (P: unknown -> node), sparse products in C
     # (not one COO entry per entry of A: 4.2 M of them on a 20k-element mesh)
     n = A.shape[0]
@@ -167,16 +193,20 @@ def _symbolic(A: sp.csr_matrix, node: np.ndarray, m: int) -> _Symbolic:
         raise RuntimeError("the node ordering pivoted off the diagonal")
     L = lu.L.tocsc()
     L.sort_indices()
-    order, bounds, tops = _supernodes(L)
-    newpos = np.empty(m, dtype=np.int64)
-    newpos[order] = np.arange(m)
-    below = [np.sort(newpos[L.indices[L.indptr[t] + 1:L.indptr[t + 1]]]) for t in tops]
-    owner = np.repeat(np.arange(bounds.size - 1), np.diff(bounds))
-    parent = np.array([owner[r[0]] if r.size else -1 for r in below], dtype=np.int64)
-    return _Symbolic(rank=newpos[lu.perm_c], bounds=bounds, below=below, parent=parent)
+    return L, lu.perm_c
 
 
 def _supernodes(L: sp.csc_matrix) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_supernodes_python` in C where it is compiled (``multifrontal.c``: the same
+    integers; its Python loops cost ~60 ms a factorization of a 20k-element mesh)."""
+    lib = multifrontal.load() if NATIVE else None
+    if lib is None:
+        return _supernodes_python(L)
+    return multifrontal.supernodes(lib, L.indptr, L.indices, L.shape[0], SMALL_NODES,
+                                   ZERO_SHARE)
+
+
+def _supernodes_python(L: sp.csc_matrix) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Supernodes of the node factor L (columns in elimination order): fundamental ones
     (chains j -> j + 1 of nested structure), then each child merged into its parent while
     the merged front stays small or its explicit zeros few (CHOLMOD's relaxed
@@ -256,11 +286,12 @@ def _factor_block(A: sp.csr_matrix, idx: np.ndarray, rank: np.ndarray,
     Ap = sp.csr_matrix((B.data[up], B.indices[up], indptr), shape=(n, n))
     row = row[up]
     # every supernode's update unknowns, at once: upd of s = upd_all[uptr[s]:uptr[s + 1]]
-    below = np.concatenate(sym.below)
+    below = sym.below
     size = start[below + 1] - start[below]
     upd_all = np.repeat(start[below] - np.cumsum(size) + size, size) + np.arange(size.sum())
-    front_of = np.repeat(np.arange(len(sym.below)), [b.size for b in sym.below])
-    per = np.bincount(front_of, weights=size, minlength=len(sym.below)).astype(np.int64)
+    nfront = sym.below_ptr.size - 1
+    front_of = np.repeat(np.arange(nfront), np.diff(sym.below_ptr))
+    per = np.bincount(front_of, weights=size, minlength=nfront).astype(np.int64)
     uptr = np.concatenate([[0], np.cumsum(per)])
     lib = multifrontal.load() if NATIVE else None
     if lib is not None:

@@ -259,7 +259,9 @@ def solve(mesh: Mesh, stiff: ElementMaterial, visc: ElementMaterial) -> Solution
         return np.bincount(flat, weights=ue.ravel(), minlength=n * k).reshape(n, k)
 
     pins = _pins(mesh.nodes)
-    free = np.setdiff1d(np.arange(n), pins)
+    pinned = np.zeros(n, dtype=bool)
+    pinned[pins] = True
+    free = np.flatnonzero(~pinned)            # (setdiff1d sorts all n: 30 ms at n = 125k)
     index = np.full(n, -1)
     index[free] = np.arange(free.size)
     rows = np.repeat(index[dofs], 18, axis=1).ravel()

@@ -1,4 +1,5 @@
-"""The numeric phase of the section's multifrontal Cholesky in C (``multifrontal.c``):
+"""The numeric phase of the section's multifrontal Cholesky in C (``multifrontal.c``), and
+its symbolic phase's supernode amalgamation (:func:`supernodes`):
 compiled on first use (cached by source, flags and host CPU, like the integrator's
 library), with SciPy's own LAPACK and BLAS (``dpotrf``, ``dtrsm``, ``dsyrk`` from
 ``scipy.linalg.cython_lapack`` / ``cython_blas``) handed over as function pointers, so
@@ -79,6 +80,9 @@ def _load() -> None:
     P, I = ctypes.c_void_p, ctypes.c_int
     lib.kv_mf_factor.argtypes = [I] + [P] * 16
     lib.kv_mf_factor.restype = I
+    L = ctypes.c_longlong
+    lib.kv_mf_supernodes.argtypes = [L, P, P, L, I, P, P, P, P, P]
+    lib.kv_mf_supernodes.restype = L
     lib.routines = routines
     _lib = lib
 
@@ -106,3 +110,24 @@ def factor_fronts(lib: ctypes.CDLL, bounds: np.ndarray, start: np.ndarray,
                             ptr(parent), ptr(indptr), ptr(indices), ptr(data), ptr(off),
                             ptr(out), ptr(loc), ptr(stamp), *lib.routines, ptr(err))
     return int(code), k, off, out, (int(err[0]), int(err[1]))
+
+
+def supernodes(lib: ctypes.CDLL, indptr: np.ndarray, indices: np.ndarray, m: int,
+               small_nodes: int, zero_share: tuple[tuple[float, float], ...]
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`runtime.section.cholesky._supernodes` of the node factor L (m columns, CSC
+    ``indptr``/``indices``, sorted, diagonal first) by ``kv_mf_supernodes``: the same
+    (order, bounds, tops), integer for integer."""
+    i64 = lambda a: np.ascontiguousarray(a, dtype=np.int64)  # noqa: E731
+    indptr, indices = i64(indptr), i64(indices)
+    size = np.array([s for s, _ in zero_share], dtype=float)
+    limit = np.array([z for _, z in zero_share], dtype=float)
+    order = np.empty(max(m, 1), dtype=np.int64)
+    bounds = np.empty(m + 1, dtype=np.int64)
+    tops = np.empty(max(m, 1), dtype=np.int64)
+    ptr = lambda a: a.ctypes.data  # noqa: E731
+    ns = lib.kv_mf_supernodes(m, ptr(indptr), ptr(indices), small_nodes, len(zero_share),
+                              ptr(size), ptr(limit), ptr(order), ptr(bounds), ptr(tops))
+    if ns < 0:
+        raise MemoryError("the supernodes of the section's factor ran out of memory")
+    return order[:m], bounds[:ns + 1].copy(), tops[:ns].copy()

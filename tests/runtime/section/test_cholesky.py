@@ -168,3 +168,86 @@ def test_duplicate_entries_add_in_every_format(fmt, native, monkeypatch):
     b = np.random.default_rng(10).standard_normal(A.shape[0])
     x = cholesky(dup, node).solve(b)
     assert np.abs(x - spla.spsolve(A.tocsc(), b)).max() <= 1e-10 * np.abs(x).max()
+
+
+def _random_graph_matrix(m: int, degree: float, seed: int):
+    """A random symmetric pattern on m nodes (about ``degree`` neighbours each, some
+    isolated nodes and several components), as an SPD matrix with one unknown a node."""
+    rng = np.random.default_rng(seed)
+    k = int(degree * m / 2)
+    i, j = rng.integers(0, m, k), rng.integers(0, m, k)
+    keep = (i != j) & (i < 0.9 * m) & (j < 0.9 * m)       # the last tenth isolated
+    G = sp.coo_matrix((np.ones(keep.sum()), (i[keep], j[keep])), shape=(m, m)).tocsr()
+    G = G + G.T
+    G.data[:] = 1.0
+    A = (sp.diags(np.asarray(G.sum(axis=1)).ravel() + 1.0) - 0.4 * G).tocsr()
+    return A, np.arange(m)
+
+
+@pytest.mark.parametrize("case", ["grid", "grid3", "sparse", "dense", "path", "one"])
+def test_the_compiled_supernodes_are_the_python_loop_integer_for_integer(case):
+    """kv_mf_supernodes (multifrontal.c) gives _supernodes_python's columns, bounds and
+    tops on node factors of every shape: a mesh's grid, a random graph with isolated
+    nodes and several components, a nearly dense graph (large merged fronts), a path
+    (one chain) and a single node; and the symbolic phase built on it the same ranks,
+    update sets and tree."""
+    from runtime.section import cholesky as C
+    from runtime.section import multifrontal
+
+    lib = multifrontal.load()
+    if lib is None:
+        pytest.skip("no C compiler: the Python loop is the only path")
+    if case == "grid":
+        A, node = _grid_matrix(31, 23, 1, coupled=True, seed=3)
+    elif case == "grid3":
+        A, node = _grid_matrix(17, 11, 3, coupled=True, seed=4)
+    elif case == "sparse":
+        A, node = _random_graph_matrix(3000, 3.0, seed=5)
+    elif case == "dense":
+        A, node = _random_graph_matrix(120, 60.0, seed=6)
+    elif case == "path":
+        m = 500
+        A = sp.diags([np.full(m - 1, -1.0), np.full(m, 3.0), np.full(m - 1, -1.0)],
+                     [-1, 0, 1]).tocsr()
+        node = np.arange(m)
+    else:
+        A, node = sp.csr_matrix(np.array([[2.0]])), np.array([0])
+    m = int(node.max()) + 1
+    L, _ = C._node_factor(A, node, m)
+    ref = C._supernodes_python(L)
+    got = multifrontal.supernodes(lib, L.indptr, L.indices, m, C.SMALL_NODES, C.ZERO_SHARE)
+    assert len(ref[1]) > (1 if case == "one" else 3) or case in ("path", "one")
+    for r, g in zip(ref, got, strict=True):
+        assert r.dtype.kind == g.dtype.kind == "i" and np.array_equal(r, g)
+    # the whole symbolic phase on either path (the update sets and the tree built on them)
+    syms = []
+    for native in (False, True):
+        C.NATIVE = native
+        try:
+            syms.append(C._symbolic(A, node, m))
+        finally:
+            C.NATIVE = True
+    for field in ("rank", "bounds", "below", "below_ptr", "parent"):
+        assert np.array_equal(getattr(syms[0], field), getattr(syms[1], field)), field
+
+
+def test_the_update_sets_are_the_top_columns_structure():
+    """_symbolic's update set of every supernode is its top column's structure below the
+    diagonal (new positions, sorted) and its parent the supernode owning the first of
+    them, as the per-supernode loop built them before."""
+    from runtime.section import cholesky as C
+
+    A, node = _grid_matrix(23, 19, 2, coupled=True, seed=9)
+    m = int(node.max()) + 1
+    L, perm = C._node_factor(A, node, m)
+    sym = C._symbolic(A, node, m)
+    order, bounds, tops = C._supernodes_python(L)
+    newpos = np.empty(m, dtype=np.int64)
+    newpos[order] = np.arange(m)
+    owner = np.repeat(np.arange(bounds.size - 1), np.diff(bounds))
+    assert np.array_equal(sym.rank, newpos[perm])
+    for g, t in enumerate(tops):
+        want = np.sort(newpos[L.indices[L.indptr[t] + 1:L.indptr[t + 1]]])
+        got = sym.below[sym.below_ptr[g]:sym.below_ptr[g + 1]]
+        assert np.array_equal(got, want)
+        assert sym.parent[g] == (owner[want[0]] if want.size else -1)
