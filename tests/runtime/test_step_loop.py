@@ -425,13 +425,15 @@ def test_interpolation_in_c_sums_like_numpy_at_every_size_and_alignment(n, k):
     assert np.array_equal(y_only, y)
     # at t = tn itself (ts[2] = 0), read off phi_0 where it is not zero: the same bits,
     # signed zeros included (phi_0 = -0.0 stays -0.0 only if every term is -0.0)
+    # and non-finite values summed as kv_interp sums them
     phi[0, ::3], phi[0, 1::7] = 0.0, -0.0
+    phi[0, 2::11], phi[0, 4::13] = np.inf, np.nan
     phi[1:, ::5] = -np.abs(phi[1:, ::5])
     at = np.full(n, np.nan)
     lib.kv_interp(k, n, 1, ctypes.c_double(0.0), P(psi), P(phi), P(ts[2:]), P(y_only), None)
     lib.kv_interp_at_tn(k, n, P(psi), P(phi), P(at))
     assert np.array_equal(np.signbit(at), np.signbit(y_only[0]))
-    assert np.array_equal(at, y_only[0])
+    assert np.array_equal(at, y_only[0], equal_nan=True)
 
 
 @pytest.mark.parametrize("moving", [False, True])
