@@ -198,7 +198,7 @@ def _node_factor(A: sp.csr_matrix, node: np.ndarray, m: int
 
 def _supernodes(L: sp.csc_matrix) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`_supernodes_python` in C where it is compiled (``multifrontal.c``: the same
-    integers; its Python loops cost ~60 ms a factorization of a 20k-element mesh)."""
+    integers; its Python loops cost ~70 ms a factorization of a 20k-element mesh)."""
     lib = multifrontal.load() if NATIVE else None
     if lib is None:
         return _supernodes_python(L)
