@@ -164,10 +164,11 @@ def _symbolic(A: sp.csr_matrix, node: np.ndarray, m: int) -> _Symbolic:
     pos = newpos[L.indices[np.repeat(lo - ptr[:-1], size) + np.arange(ptr[-1])]]
     below = pos[np.lexsort((pos, seg))]
     owner = np.repeat(np.arange(bounds.size - 1), np.diff(bounds))
-    parent = np.where(size > 0, owner[below[np.minimum(ptr[:-1], below.size - 1)]]
-                      if below.size else -1, -1)
+    parent = np.full(tops.size, -1, dtype=np.int64)      # the owner of the first below
+    has = size > 0
+    parent[has] = owner[below[ptr[:-1][has]]]
     return _Symbolic(rank=newpos[perm], bounds=bounds, below=below, below_ptr=ptr,
-                     parent=parent.astype(np.int64))
+                     parent=parent)
 
 
 def _node_factor(A: sp.csr_matrix, node: np.ndarray, m: int
