@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 
 def already_finished(problem, out: Path) -> bool:
@@ -136,6 +137,79 @@ def _write_results(out: Path, params: dict, run, writer: CheckpointWriter, sens_
 ProgressDisplay = Callable[[float, str], tuple[Callable[[float], object], Callable[[], object]]]
 
 
+def _check_resume_state(state: dict, n: int, out: Path, what: str) -> None:
+    """Refuse (CheckpointError) a checkpoint whose y or y' is not n finite values (the
+    state of this ``what``, "problem" or "assembly")."""
+    import numpy as np
+
+    from runtime.io.results import CHECKPOINT, CheckpointError
+
+    for key in ("y", "yp"):
+        if np.shape(state[key]) != (n,) or not np.all(np.isfinite(state[key])):
+            raise CheckpointError(f"--resume: checkpoint {str(out / CHECKPOINT)!r} holds a "
+                                  f"state {key} of shape {np.shape(state[key])}, this "
+                                  f"{what} needs ({n},) finite values; start again with "
+                                  "--overwrite")
+
+
+def _run_in_folder(out: Path, params: dict, state: dict | None, overwrite: bool, problem,
+                   label: str, progress: ProgressDisplay | None, sens_run,
+                   frames: Callable[[float | None], Any] | None,
+                   run_it: Callable[[Any, Callable, Any], Any],
+                   write: Callable[[Any, dict | None], dict],
+                   plot: Callable[[Any], None] | None) -> tuple:
+    """The folder's part of a run, the same for a rod and an assembly (everything is
+    checked before): the folder claimed and locked, "running" in summary.json, the VTK
+    series from ``frames(resume_from)`` (None: none), ``run_it(progress callback,
+    on_checkpoint, series)``, checkpoints written on a thread, "failed" with the reason on
+    any error (the checkpoint kept), then the results by ``write(run, extra)``, the
+    checkpoint removed when finished, an interrupt raised again, ``plot(run)``. Returns
+    (run, summary)."""
+    from runtime.io import folder as F
+    from runtime.io.results import CHECKPOINT, write_status
+
+    with F.claim(out, "simulate", overwrite=overwrite) as claimed:
+        t_start = float(state["t"]) if state else 0.0
+        write_status(out, params, "running", t_start)
+        claimed.keep()
+
+        # the folder (and its lock) is never left with a checkpoint in flight
+        with _folder_checkpoints(out, params) as writer:
+
+            def on_checkpoint(st):
+                if series is not None:       # the frames so far survive a kill after this
+                    series.write_collection()
+                writer.submit(st)
+
+            series = None
+            if frames is not None:
+                series = frames(t_start if state else None)
+            cb, close = (progress(problem.simulation.t_end, label) if progress is not None
+                         else (None, lambda: None))
+            try:
+                run = run_it(cb, on_checkpoint, series)
+            except BaseException as exc:   # a bug or resource error: say so, keep the checkpoint
+                write_status(out, params, "failed", t_start,
+                             writer.wait_noting(f"{type(exc).__name__}: {exc}"))
+                raise
+            finally:
+                close()
+                if series is not None:
+                    series.close()
+            extra = {"resumed_from_t": t_start} if state else None
+            if sens_run is not None and sens_run.collected is not None:
+                extra = {**(extra or {}), "sensitivities": sens_run.collected.summary()}
+            summary = _write_results(out, params, run, writer, sens_run,
+                                     lambda: write(run, extra))
+            if run.status == "finished":
+                (out / CHECKPOINT).unlink(missing_ok=True)
+            if run.interrupt is not None:
+                raise run.interrupt
+            if plot is not None and run.t.size > 1:
+                plot(run)
+    return run, summary
+
+
 def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: bool = False,
                   vtk_every: float | None = None, checkpoint_every: float = 1.0,
                   overwrite: bool = False, progress: ProgressDisplay | None = None,
@@ -157,13 +231,7 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
     """
     from runtime.io import folder as F
     from runtime.io.assembly_results import is_assembly
-    from runtime.io.results import (
-        CHECKPOINT,
-        jsonable,
-        load_checkpoint,
-        write_run,
-        write_status,
-    )
+    from runtime.io.results import jsonable, load_checkpoint, write_run
     from runtime.model import build
     from runtime.simulate.simulate import simulate
 
@@ -191,21 +259,12 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
         F.refuse_existing(out, "simulate", overwrite=overwrite, resumable=True)
     state = load_checkpoint(out, params) if resume else None
     if state is not None:
-        import numpy as np
-
         from generated import rod_layout
-        from runtime.io.results import CheckpointError
 
         # the state holds the internal strains of a generalized Maxwell rod's relaxation
         # terms too (as many as runtime.problem.assemble gives the rod's arrays)
-        terms = problem.relaxation_terms()
-        n = rod_layout.n_state(problem.rod.elements, terms)
-        for key in ("y", "yp"):
-            if np.shape(state[key]) != (n,) or not np.all(np.isfinite(state[key])):
-                raise CheckpointError(f"--resume: checkpoint {str(out / CHECKPOINT)!r} holds a "
-                                      f"state {key} of shape {np.shape(state[key])}, this "
-                                      f"problem needs ({n},) finite values; start again with "
-                                      "--overwrite")
+        n = rod_layout.n_state(problem.rod.elements, problem.relaxation_terms())
+        _check_resume_state(state, n, out, "problem")
     build.require_generated()
     if (state is None and problem.simulation.initial == "static"
             and not (problem.start.clamped or problem.end.clamped)):
@@ -214,58 +273,32 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
         from runtime.problem.assemble import build_model
 
         check_statics(build_model(problem))
-    with F.claim(out, "simulate", overwrite=overwrite and not resume) as claimed:
-        t_start = float(state["t"]) if state else 0.0
-        write_status(out, params, "running", t_start)
-        claimed.keep()
+    model = None
 
-        # the folder (and its lock) is never left with a checkpoint in flight
-        with _folder_checkpoints(out, params) as writer:
+    def frames(resume_from: float | None):
+        nonlocal model
+        from runtime.io.vtk import VtkSeries
+        from runtime.problem.assemble import build_model
 
-            def on_checkpoint(st):
-                if series is not None:       # the frames so far survive a kill after this
-                    series.write_collection()
-                writer.submit(st)
+        model = build_model(problem)          # one model: the run's and the frames'
+        return VtkSeries(out / "vtk", model, resume_from=resume_from)
 
-            series = None
-            model = None
-            if vtk_every is not None:
-                from runtime.io.vtk import VtkSeries
-                from runtime.problem.assemble import build_model
+    def run_it(cb, on_checkpoint, series):
+        return simulate(problem, progress=cb, checkpoint=on_checkpoint,
+                        checkpoint_every=checkpoint_every, checkpoint_wall=CHECKPOINT_WALL,
+                        resume=state, snapshot_every=vtk_every,
+                        snapshot_sink=series.add if series else None, model=model,
+                        sensitivity=sens_run)
 
-                model = build_model(problem)          # one model: the run's and the frames'
-                series = VtkSeries(out / "vtk", model, resume_from=t_start if state else None)
-            cb, close = (progress(problem.simulation.t_end, label) if progress is not None
-                         else (None, lambda: None))
-            try:
-                run = simulate(problem, progress=cb, checkpoint=on_checkpoint,
-                               checkpoint_every=checkpoint_every,
-                               checkpoint_wall=CHECKPOINT_WALL, resume=state,
-                               snapshot_every=vtk_every,
-                               snapshot_sink=series.add if series else None, model=model,
-                               sensitivity=sens_run)
-            except BaseException as exc:   # a bug or resource error: say so, keep the checkpoint
-                write_status(out, params, "failed", t_start,
-                             writer.wait_noting(f"{type(exc).__name__}: {exc}"))
-                raise
-            finally:
-                close()
-                if series is not None:
-                    series.close()
-            extra = {"resumed_from_t": t_start} if state else None
-            if sens_run is not None and sens_run.collected is not None:
-                extra = {**(extra or {}), "sensitivities": sens_run.collected.summary()}
-            summary = _write_results(out, params, run, writer, sens_run,
-                                     lambda: write_run(out, run, extra=extra))
-            if run.status == "finished":
-                (out / CHECKPOINT).unlink(missing_ok=True)
-            if run.interrupt is not None:
-                raise run.interrupt
-            if plots and run.t.size > 1:
-                from runtime.io.plots import plot_run
+    def plot(run) -> None:
+        from runtime.io.plots import plot_run
 
-                plot_run(run, out)
-    return run, summary
+        plot_run(run, out)
+
+    return _run_in_folder(out, params, state, overwrite and not resume, problem, label,
+                          progress, sens_run, frames if vtk_every is not None else None,
+                          run_it, lambda run, extra: write_run(out, run, extra=extra),
+                          plot if plots else None)
 
 
 def write_sensitivities(out: Path, sens) -> Path:
@@ -288,11 +321,8 @@ def run_assembly_and_write(problem, out: Path, label: str, plots: bool = False,
     from runtime.io import folder as F
     from runtime.io.assembly_results import write_assembly_run
     from runtime.io.results import (
-        CHECKPOINT,
-        CheckpointError,
         jsonable,
         load_checkpoint,
-        write_status,
     )
     from runtime.model import build
     from runtime.problem.assemble_system import build_system
@@ -321,64 +351,27 @@ def run_assembly_and_write(problem, out: Path, label: str, plots: bool = False,
 
         check_rod_names(amap.rod_names)
     if state is not None:
-        import numpy as np
+        _check_resume_state(state, amap.model.n, out, "assembly")
+    def frames(resume_from: float | None):
+        from runtime.io.assembly_vtk import AssemblyVtk
 
-        n = amap.model.n
-        for key in ("y", "yp"):
-            if np.shape(state[key]) != (n,) or not np.all(np.isfinite(state[key])):
-                raise CheckpointError(f"--resume: checkpoint {str(out / CHECKPOINT)!r} holds "
-                                      f"a state {key} of shape {np.shape(state[key])}, this "
-                                      f"assembly needs ({n},) finite values; start again "
-                                      "with --overwrite")
-    with F.claim(out, "simulate", overwrite=overwrite and not resume) as claimed:
-        t_start = float(state["t"]) if state else 0.0
-        write_status(out, params, "running", t_start)
-        claimed.keep()
+        return AssemblyVtk(out / "vtk", amap.model, resume_from=resume_from)
 
-        # the folder (and its lock) is never left with a checkpoint in flight
-        with _folder_checkpoints(out, params) as writer:
+    def run_it(cb, on_checkpoint, series):
+        return simulate_assembly(problem, progress=cb, checkpoint=on_checkpoint,
+                                 checkpoint_every=checkpoint_every, resume=state, amap=amap,
+                                 sensitivity=sens_run, snapshot_every=vtk_every,
+                                 snapshot_sink=series.add if series else None)
 
-            def on_checkpoint(st):
-                if series is not None:       # the frames so far survive a kill after this
-                    series.write_collection()
-                writer.submit(st)
+    def plot(run) -> None:
+        from runtime.io.assembly_plots import plot_assembly_run_folder
 
-            series = None
-            if vtk_every is not None:
-                from runtime.io.assembly_vtk import AssemblyVtk
+        plot_assembly_run_folder(out)
 
-                series = AssemblyVtk(out / "vtk", amap.model,
-                                     resume_from=t_start if state else None)
-            cb, close = (progress(problem.simulation.t_end, label) if progress is not None
-                         else (None, lambda: None))
-            try:
-                run = simulate_assembly(problem, progress=cb, checkpoint=on_checkpoint,
-                                        checkpoint_every=checkpoint_every, resume=state,
-                                        amap=amap, sensitivity=sens_run,
-                                        snapshot_every=vtk_every,
-                                        snapshot_sink=series.add if series else None)
-            except BaseException as exc:
-                write_status(out, params, "failed", t_start,
-                             writer.wait_noting(f"{type(exc).__name__}: {exc}"))
-                raise
-            finally:
-                close()
-                if series is not None:
-                    series.close()
-            extra = {"resumed_from_t": t_start} if state else None
-            if sens_run is not None and sens_run.collected is not None:
-                extra = {**(extra or {}), "sensitivities": sens_run.collected.summary()}
-            summary = _write_results(out, params, run, writer, sens_run,
-                                     lambda: write_assembly_run(out, run, extra=extra))
-            if run.status == "finished":
-                (out / CHECKPOINT).unlink(missing_ok=True)
-            if run.interrupt is not None:
-                raise run.interrupt
-            if plots and run.t.size > 1:
-                from runtime.io.assembly_plots import plot_assembly_run_folder
-
-                plot_assembly_run_folder(out)
-    return run, summary
+    return _run_in_folder(out, params, state, overwrite and not resume, problem, label,
+                          progress, sens_run, frames if vtk_every is not None else None,
+                          run_it, lambda run, extra: write_assembly_run(out, run, extra=extra),
+                          plot if plots else None)
 
 
 def check_statics(model) -> None:
