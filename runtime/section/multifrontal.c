@@ -255,3 +255,89 @@ done:
     free(mem_head); free(mem_tail); free(mem_next); free(stack); free(ranges);
     return rc;
 }
+
+/* ---- The solve with the factor (cholesky.CholeskyFactor.solve, bit for bit) ----
+ * Written by hand for the same reason as kv_mf_factor: the Python loop over the fronts
+ * (two sweeps of 3307 fronts on the 20k-element laminate: a dtrsm, a gather, a product
+ * and a scatter each) spends half its ~0.1 s a call in per-call overhead. Forward, per
+ * front in order: y[r0:r1] <- U11^-T y[r0:r1], then y[upd] -= X^T y[r0:r1]; backward, in
+ * reverse order: y[r0:r1] <- U11^-1 (y[r0:r1] - X y[upd]). The triangular solves are
+ * SciPy's dtrsm on a contiguous copy, as its wrapper makes one. The products are formed
+ * as NumPy's matmul forms `X.T @ yo` and `X @ y[upd]` (y[upd] a C-ordered gather) with
+ * the same BLAS operation on the same memory layout: a row-major product is the
+ * column-major one of the transposes (dgemm), a one-row operand makes it a dgemv, an
+ * inner dimension of 1 exact products; the same operation in the same layout gives the
+ * same bits (SciPy's and NumPy's OpenBLAS take the same kernels; checked, not assumed:
+ * the tests compare this solve with the Python loop). y: the block's right-hand sides in
+ * its elimination order, n x k (k >= 2), column-major. Fronts: r0, kf, off (U11 at
+ * out + off, X after it), their un[g] update unknowns upd_all[ulo[g] ..]. Returns 0, or 4
+ * when out of memory (y untouched). */
+typedef void (*kv_gemm_t)(char *, char *, int *, int *, int *, double *, double *, int *,
+                          double *, int *, double *, double *, int *);
+typedef void (*kv_gemv_t)(char *, int *, int *, double *, double *, int *, double *, int *,
+                          double *, double *, int *);
+
+int kv_mf_solve(long long nf, const long long *r0, const long long *kf,
+                const long long *off, const long long *upd_all, const long long *ulo,
+                const long long *un, const double *out, double *y, long long n, long long k,
+                void *trsm_p, void *gemm_p, void *gemv_p)
+{
+    kv_trsm_t trsm = (kv_trsm_t)trsm_p;
+    kv_gemm_t gemm = (kv_gemm_t)gemm_p;
+    kv_gemv_t gemv = (kv_gemv_t)gemv_p;
+    long long umax = 0, kmax = 0;
+    for (long long g = 0; g < nf; ++g) {
+        if (un[g] > umax) umax = un[g];
+        if (kf[g] > kmax) kmax = kf[g];
+    }
+    const long long wmax = (umax > kmax ? umax : kmax) * k;
+    double *w = malloc(sizeof(double) * (size_t)(wmax > 0 ? wmax : 1));
+    double *t = malloc(sizeof(double) * (size_t)(wmax > 0 ? wmax : 1));
+    if (!w || !t) { free(w); free(t); return 4; }
+    char side = 'L', up = 'U', tr = 'T', nt = 'N', nd = 'N';
+    double one = 1.0, zero = 0.0;
+    int ki = (int)k, inc = 1;
+    for (long long g = 0; g < nf; ++g) {             /* L y = b */
+        const long long a = r0[g], m = kf[g], u = un[g];
+        const long long *upd = upd_all + ulo[g];
+        const double *U11 = out + off[g], *X = U11 + m * m;
+        int mi = (int)m, ui = (int)u;
+        for (long long j = 0; j < k; ++j)
+            memcpy(w + j * m, y + a + j * n, sizeof(double) * (size_t)m);
+        trsm(&side, &up, &tr, &nd, &mi, &ki, &one, (double *)U11, &mi, w, &mi);
+        for (long long j = 0; j < k; ++j)
+            memcpy(y + a + j * n, w + j * m, sizeof(double) * (size_t)m);
+        if (u == 0) continue;
+        if (u == 1)            /* X.T @ yo with one row: t = yo^T x */
+            gemv(&tr, &mi, &ki, &one, w, &mi, (double *)X, &inc, &zero, t, &inc);
+        else                   /* row-major (u x k) = its transpose (k x u) column-major */
+            gemm(&tr, &nt, &ki, &ui, &mi, &one, w, &mi, (double *)X, &mi, &zero, t, &ki);
+        for (long long i = 0; i < u; ++i)
+            for (long long j = 0; j < k; ++j) y[upd[i] + j * n] -= t[j + i * k];
+    }
+    for (long long g = nf - 1; g >= 0; --g) {         /* L^T x = y */
+        const long long a = r0[g], m = kf[g], u = un[g];
+        const long long *upd = upd_all + ulo[g];
+        const double *U11 = out + off[g], *X = U11 + m * m;
+        int mi = (int)m, ui = (int)u;
+        if (u > 0) {
+            for (long long i = 0; i < u; ++i)        /* y[upd], row-major (k x u col-major) */
+                for (long long j = 0; j < k; ++j) w[j + i * k] = y[upd[i] + j * n];
+            if (m == 1)        /* X @ y[upd] with one row: t = y[upd]^T x */
+                gemv(&nt, &ki, &ui, &one, w, &ki, (double *)X, &inc, &zero, t, &inc);
+            else
+                gemm(&nt, &tr, &ki, &mi, &ui, &one, w, &ki, (double *)X, &mi, &zero, t, &ki);
+            for (long long j = 0; j < k; ++j)
+                for (long long i = 0; i < m; ++i)
+                    w[i + j * m] = y[a + i + j * n] - t[j + i * k];
+        } else {
+            for (long long j = 0; j < k; ++j)
+                memcpy(w + j * m, y + a + j * n, sizeof(double) * (size_t)m);
+        }
+        trsm(&side, &up, &nt, &nd, &mi, &ki, &one, (double *)U11, &mi, w, &mi);
+        for (long long j = 0; j < k; ++j)
+            memcpy(y + a + j * n, w + j * m, sizeof(double) * (size_t)m);
+    }
+    free(w); free(t);
+    return 0;
+}

@@ -1,10 +1,13 @@
-"""The numeric phase of the section's multifrontal Cholesky in C (``multifrontal.c``), and
-its symbolic phase's supernode amalgamation (:func:`supernodes`):
+"""The numeric phase of the section's multifrontal Cholesky in C (``multifrontal.c``), its
+solve with the factor (:func:`solve_fronts`), and its symbolic phase's supernode
+amalgamation (:func:`supernodes`):
 compiled on first use (cached by source, flags and host CPU, like the integrator's
-library), with SciPy's own LAPACK and BLAS (``dpotrf``, ``dtrsm``, ``dsyrk`` from
-``scipy.linalg.cython_lapack`` / ``cython_blas``) handed over as function pointers, so
-that it factors exactly as the NumPy loop of :func:`runtime.section.cholesky._factor_block`
-does (bit for bit; that loop stays the fallback without a compiler and the tests' oracle).
+library), with SciPy's own LAPACK and BLAS (``dpotrf``, ``dtrsm``, ``dsyrk``, ``dgemm``, ``dgemv``
+from ``scipy.linalg.cython_lapack`` / ``cython_blas``) handed over as function pointers,
+so that it factors and solves as the NumPy loops of
+:func:`runtime.section.cholesky._factor_block` and
+:meth:`runtime.section.cholesky.CholeskyFactor.solve` do (those loops stay the fallback
+without a compiler and the tests' oracle).
 """
 
 from __future__ import annotations
@@ -66,6 +69,9 @@ def _load() -> None:
         routines = (_capsule_pointer(cython_lapack, "dpotrf"),
                     _capsule_pointer(cython_blas, "dtrsm"),
                     _capsule_pointer(cython_blas, "dsyrk"))
+        solve_routines = (_capsule_pointer(cython_blas, "dtrsm"),
+                          _capsule_pointer(cython_blas, "dgemm"),
+                          _capsule_pointer(cython_blas, "dgemv"))
         if not path.exists():
             path.parent.mkdir(parents=True, exist_ok=True)
             with tempfile.TemporaryDirectory(dir=path.parent) as tmp:
@@ -83,7 +89,10 @@ def _load() -> None:
     L = ctypes.c_longlong
     lib.kv_mf_supernodes.argtypes = [L, P, P, L, I, P, P, P, P, P]
     lib.kv_mf_supernodes.restype = L
+    lib.kv_mf_solve.argtypes = [L] + [P] * 8 + [L, L, P, P, P]
+    lib.kv_mf_solve.restype = I
     lib.routines = routines
+    lib.solve_routines = solve_routines
     _lib = lib
 
 
@@ -131,3 +140,21 @@ def supernodes(lib: ctypes.CDLL, indptr: np.ndarray, indices: np.ndarray, m: int
     if ns < 0:
         raise MemoryError("the supernodes of the section's factor ran out of memory")
     return order[:m], bounds[:ns + 1].copy(), tops[:ns].copy()
+
+
+def solve_fronts(lib: ctypes.CDLL, r0: np.ndarray, kf: np.ndarray, off: np.ndarray,
+                 upd_all: np.ndarray, ulo: np.ndarray, un: np.ndarray, out: np.ndarray,
+                 y: np.ndarray) -> None:
+    """Overwrite ``y`` (n x k, Fortran order: a block's right-hand sides in its elimination
+    order) with the solution of L L^T x = y by ``kv_mf_solve``; the fronts with k > 0 in
+    factor order: first unknown ``r0``, ``kf`` pivots, U11 then X at ``out[off:]``, ``un``
+    update unknowns at ``upd_all[ulo:]`` (int64 arrays)."""
+    if not (y.flags.f_contiguous and y.dtype == np.float64 and y.ndim == 2
+            and y.shape[1] >= 2):
+        raise ValueError("y must be a float64 array in Fortran order with >= 2 columns")
+    ptr = lambda a: a.ctypes.data  # noqa: E731
+    code = lib.kv_mf_solve(r0.size, ptr(r0), ptr(kf), ptr(off), ptr(upd_all), ptr(ulo),
+                           ptr(un), ptr(out), ptr(y), y.shape[0], y.shape[1],
+                           *lib.solve_routines)
+    if code != 0:
+        raise MemoryError("the solve with the section's factor ran out of memory")

@@ -119,7 +119,74 @@ def test_the_compiled_numeric_phase_is_the_numpy_loop_bit_for_bit(case, monkeypa
             assert (rf.r0, rf.r1) == (gf.r0, gf.r1) and np.array_equal(rf.upd, gf.upd)
             assert np.array_equal(rf.U11, gf.U11) and np.array_equal(rf.X, gf.X)
     b = np.random.default_rng(8).standard_normal((A.shape[0], 3))
-    assert np.array_equal(ref.solve(b), got.solve(b))
+    x = ref.solve(b)
+    assert np.allclose(got.solve(b), x, rtol=0, atol=1e-13 * np.abs(x).max())
+
+
+def _tridiagonal(n: int):
+    A = sp.diags([np.full(n - 1, -1.0), np.full(n, 2.5), np.full(n - 1, -1.0)], [-1, 0, 1])
+    return A.tocsr(), np.arange(n)
+
+
+@pytest.mark.parametrize("case, amalgamate, shapes", [
+    ("grid, 3 per node", True, None),
+    ("grid, 1 per node", False, "one pivot, many updates"),
+    ("tridiagonal", True, "many pivots, one update"),
+    ("tridiagonal", False, "one pivot, one update"),
+])
+def test_the_compiled_solve_is_the_python_loop(case, amalgamate, shapes, monkeypatch):
+    """multifrontal.c's solve (kv_mf_solve) against the Python loop on the same factor,
+    with the fronts where NumPy's matmul leaves the matrix-matrix product (one pivot, one
+    update unknown: a matrix-vector product or plain products) among them. The two agree
+    bit for bit where NumPy's and SciPy's OpenBLAS take the same kernels (this project's
+    machines); the test allows round-off, as other CPUs may differ there."""
+    from runtime.section import cholesky as C
+    from runtime.section import multifrontal
+
+    if multifrontal.load() is None:
+        pytest.skip("no C compiler: the Python loop is the only path")
+    monkeypatch.setattr(C, "NATIVE", True)
+    if not amalgamate:                   # fundamental supernodes only: fronts of one node
+        monkeypatch.setattr(C, "SMALL_NODES", 0)
+        monkeypatch.setattr(C, "ZERO_SHARE", ((np.inf, -1.0),))
+    if case.startswith("grid"):
+        A, node = _grid_matrix(21, 14, 3 if "3" in case else 1, coupled=True, seed=11)
+    else:
+        A, node = _tridiagonal(200)
+    f = cholesky(A, node)
+    assert all(b.packed is not None for b in f._blocks)
+    kinds = [(fr.r1 - fr.r0, fr.upd.size) for b in f._blocks for fr in b.fronts]
+    want = {"one pivot, many updates": lambda m, u: m == 1 and u > 1,
+            "many pivots, one update": lambda m, u: m > 1 and u == 1,
+            "one pivot, one update": lambda m, u: m == 1 and u == 1}
+    if shapes:
+        assert sum(want[shapes](m, u) for m, u in kinds) >= 10
+    b = np.random.default_rng(12).standard_normal((A.shape[0], 6))
+    calls = []
+    real = multifrontal.solve_fronts
+    monkeypatch.setattr(multifrontal, "solve_fronts",
+                        lambda *a: calls.append(1) or real(*a))
+    got = f.solve(b)
+    assert calls, "the compiled solve did not run"
+    for blk in f._blocks:
+        monkeypatch.setattr(blk, "packed", None)
+    ref = f.solve(b)
+    assert len(calls) == 1
+    assert np.allclose(got, ref, rtol=0, atol=1e-13 * np.abs(ref).max())
+    assert np.abs(A @ got - b).max() <= 1e-10 * np.abs(b).max() * np.abs(A).max()
+
+
+def test_the_compiled_solve_refuses_a_wrong_layout():
+    from runtime.section import multifrontal
+
+    lib = multifrontal.load()
+    if lib is None:
+        pytest.skip("no C compiler")
+    z = np.zeros(1, dtype=np.int64)
+    for y in (np.zeros((4, 3)), np.zeros((4, 1), order="F"),
+              np.zeros((4, 3), dtype=np.float32, order="F")):
+        with pytest.raises(ValueError, match="Fortran order with >= 2 columns"):
+            multifrontal.solve_fronts(lib, z, z, z, z, z, z, np.zeros(1), y)
 
 
 def test_both_numeric_phases_refuse_an_indefinite_matrix_alike(monkeypatch):
