@@ -166,13 +166,32 @@ def cholesky(A: sp.spmatrix, node: np.ndarray) -> CholeskyFactor:
     n = A.shape[0]
     node = np.asarray(node, dtype=np.int64)
     sym = _symbolic(A, node, int(node.max()) + 1)
-    ncomp, label = connected_components(A, directed=False)
+    ncomp, label = _components(A)
     rank = sym.rank[node]
     blocks = []
     for c in range(ncomp):
         idx = np.flatnonzero(label == c)
         blocks.append(_factor_block(A, idx, rank[idx], sym))
     return CholeskyFactor(n, blocks)
+
+
+def _components(A: sp.csr_matrix) -> tuple[int, np.ndarray]:
+    """The connected components of A's graph, numbered in the order of their smallest
+    unknown (as ``connected_components(A, directed=False)`` numbers them).
+
+    A's pattern is symmetric but for entries that summed to an exact zero in one triangle
+    only: its strong components (no transpose: SciPy's undirected search builds A^T
+    first, half its time on a 20k-element mesh) are then its components when no entry
+    links two of them, which is checked; otherwise the undirected search runs."""
+    ncomp, label = connected_components(A, directed=True, connection="strong")
+    row = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
+    if ncomp > 1 and not np.array_equal(label[row], label[A.indices]):
+        return connected_components(A, directed=False)
+    first = np.full(ncomp, A.shape[0])
+    np.minimum.at(first, label, np.arange(A.shape[0]))
+    relabel = np.empty(ncomp, dtype=label.dtype)
+    relabel[np.argsort(first)] = np.arange(ncomp)
+    return ncomp, relabel[label]
 
 
 def _symbolic(A: sp.csr_matrix, node: np.ndarray, m: int) -> _Symbolic:

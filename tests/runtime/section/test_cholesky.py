@@ -318,3 +318,28 @@ def test_the_update_sets_are_the_top_columns_structure():
         got = sym.below[sym.below_ptr[g]:sym.below_ptr[g + 1]]
         assert np.array_equal(got, want)
         assert sym.parent[g] == (owner[want[0]] if want.size else -1)
+
+
+def test_the_components_are_the_undirected_ones():
+    """cholesky's components (strong components of the pattern, no transpose) numbered as
+    SciPy's undirected search numbers them: an uncoupled grid (three components), a
+    matrix with isolated unknowns, and a pattern whose only link between two blocks
+    is an entry in one triangle (an exact zero in the other: the undirected search)."""
+    from scipy.sparse.csgraph import connected_components
+
+    from runtime.section.cholesky import _components
+
+    A, _ = _grid_matrix(9, 7, 3, coupled=False, seed=2)
+    rng = np.random.default_rng(3)
+    p = rng.permutation(A.shape[0])
+    cases = [A, A[p][:, p].tocsr(), sp.eye(5, format="csr")]
+    B = sp.block_diag([sp.csr_matrix(np.ones((3, 3))), sp.csr_matrix(np.ones((2, 2)))])
+    B = B.tolil()
+    B[4, 0] = 1.0                          # row 4 reaches block 0, row 0 does not reach 4
+    cases.append(B.tocsr())
+    for M in cases:
+        M = sp.csr_matrix(M)
+        ncomp, label = _components(M)
+        ref_n, ref = connected_components(M, directed=False)
+        assert ncomp == ref_n and np.array_equal(label, ref)
+    assert _components(cases[-1])[0] == 1
