@@ -45,7 +45,8 @@ CODEGEN_OPTIONS = {"with_header": True, "indent": 2, "casadi_int": "long long in
 #: residual, of the Jacobian and of the energies (evaluated three times a step by the
 #: energy audit)
 X4_KERNELS = ("rod_segment_forces", "rod_joint_torques", "rod_segment_forces_jac",
-              "rod_joint_torques_jac", "rod_segment_diagnostics", "rod_joint_diagnostics")
+              "rod_joint_torques_jac", "rod_segment_diagnostics", "rod_joint_diagnostics",
+              "rod_segment_forces_strain", "rod_joint_torques_strain")
 
 
 def _signature(f: ca.Function) -> dict:

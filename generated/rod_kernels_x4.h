@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive.codegen_lanes.header
 // derivation step: discrete_rod
-// inputs sha256: 7ab5be8b38eefc2c19c7aed93af1783e17ea6796b011a15544287f85d6a537e5
+// inputs sha256: 6eb00fc027cee9671700c247060ef0799b9dad63cd1710356316451ffa69e5f5
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /* 4 elements per call: arg[4 * i + l] = input i of lane l,
@@ -18,6 +18,8 @@ int rod_joint_torques_x4(const double* const* arg, double* const* res);
 int rod_joint_torques_jac_x4(const double* const* arg, double* const* res);
 int rod_segment_diagnostics_x4(const double* const* arg, double* const* res);
 int rod_joint_diagnostics_x4(const double* const* arg, double* const* res);
+int rod_segment_forces_strain_x4(const double* const* arg, double* const* res);
+int rod_joint_torques_strain_x4(const double* const* arg, double* const* res);
 #ifdef __cplusplus
 }
 #endif

@@ -1,7 +1,7 @@
 // GENERATED FILE - do not edit; regenerate with `kvrod generate`.
 // source: derive/templates/rod_layout.h.jinja
 // derivation step: discrete_rod
-// inputs sha256: 9c9b70e5d9770d28544d6f7b6f1e0bb9597c451679e3d9d4afab06bf81c211bd
+// inputs sha256: 25df1564f3a0d773f3a7ae1e3e39ae5f91c53c454787a0c96f858d6488be6c5f
 // tools: sympy 1.14.0, casadi 3.8.2, jinja2 3.1.6
 
 /*

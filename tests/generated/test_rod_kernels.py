@@ -251,6 +251,44 @@ def test_four_lane_kernels_equal_the_scalar_kernel_bit_for_bit(name):
             assert np.allclose(outs[lane][o], want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
 
 
+@pytest.mark.parametrize("combined, forces, strain", [
+    ("rod_segment_forces_strain", "rod_segment_forces", "rod_segment_branch"),
+    ("rod_joint_torques_strain", "rod_joint_torques", "rod_joint_branch"),
+])
+def test_the_combined_maxwell_kernels_are_the_separate_ones_bit_for_bit(combined, forces,
+                                                                         strain):
+    """A generalized Maxwell rod's residual takes forces and relaxation strains from one
+    kernel (rod_assembly.c, residual_own): both outputs must be, bit for bit, what the
+    force kernel gives and the strain the branch kernel (the Jacobian's) gives (compiled
+    C, random inputs)."""
+    import ctypes
+
+    m = _model(3, "clamped", "free")
+    if m.backend != "c":
+        pytest.skip("no C compiler")
+    fns = {k.name(): k for k in dr.kernels()}
+    f, g, h = fns[combined], fns[forces], fns[strain]
+    P = ctypes.c_void_p
+    rng = np.random.default_rng(7)
+
+    def call(fn, inputs):
+        outs = [np.full(fn.nnz_out(o), np.nan) for o in range(fn.n_out())]
+        a = (P * fn.n_in())(*[x.ctypes.data for x in inputs])
+        r = (P * fn.n_out())(*[o.ctypes.data for o in outs])
+        w = (ctypes.c_double * max(fn.sz_w(), 1))()
+        assert getattr(m._lib, fn.name())(a, r, None, w, 0) == 0
+        return outs
+
+    for _ in range(20):
+        ins = {f.name_in(i): rng.uniform(0.5, 1.5, f.nnz_in(i)) * rng.choice([-1, 1],
+                                                                           f.nnz_in(i))
+               for i in range(f.n_in())}
+        both = call(f, [ins[f.name_in(i)] for i in range(f.n_in())])
+        alone = call(g, [ins[g.name_in(i)] for i in range(g.n_in())])
+        strains = call(h, [ins[h.name_in(i)] for i in range(h.n_in())])
+        assert np.array_equal(both[0], alone[0]) and np.array_equal(both[1], strains[0])
+
+
 def test_coupled_kernel_closed_forms_equal_casadi_ad_of_the_functionals():
     """The coupled segment's forces and torques (closed form through its resultant and
     its joints' moments) and the coupled joint's torques equal the CasADi AD of their W

@@ -271,7 +271,7 @@ static int residual_own(const kvrod_rod* rod, const double* y, const double* yp,
   const int N = rod->N;
   if (check_rod(rod)) return check_rod(rod);
   work_t W;
-  double T[6], f[3], m, held, dV[3];
+  double T[6], f[3], m, held;
   int i, j, k, l, nl;
   /* nodes: kinematics and momentum, or the prescribed position and velocity */
   for (i = 0; i <= N; ++i) {
@@ -300,32 +300,34 @@ static int residual_own(const kvrod_rod* rod, const double* y, const double* yp,
    * four segments per kernel call (rod_segment_forces_x4: bit for bit the scalar
    * kernel), then added segment by segment in order */
   const int free0 = !(node_held(rod, 0) > 0.5), freeN = !(node_held(rod, N) > 0.5);
-  double Q4[4][9], nq4[4][3];
+  /* a generalized Maxwell rod (nb > 0) takes the strains of its relaxation rows from the
+   * force (torque) kernels' second output (rod_segment_forces_strain: the same values as
+   * the branch kernels' dV; a strain kernel of its own formed them again) */
+  double Q4[4][9], nq4[4][3], dV4[4][3];
   const double* a4[4 * 8];
-  double* r4[4];
+  double* r4[8];
   for (i = 1; i <= N; i += nl) {
     nl = N - i + 1 >= 4 ? 4 : 1;
     if (nl == 4) {
       for (l = 0; l < 4; ++l) {
         seg_args(rod, i + l, y, a4 + l, 4, nq4[l]);
         r4[l] = Q4[l];
+        r4[4 + l] = dV4[l];
       }
-      if (rod_segment_forces_x4(a4, r4)) return -3;
+      if (rod->nb ? rod_segment_forces_strain_x4(a4, r4) : rod_segment_forces_x4(a4, r4))
+        return -3;
     } else {
       seg_args(rod, i, y, W.arg, 1, nq4[0]);
       W.res[0] = Q4[0];
-      if (rod_segment_forces(W.arg, W.res, W.iw, W.w, 0)) return -3;
+      W.res[1] = dV4[0];
+      if (rod->nb ? rod_segment_forces_strain(W.arg, W.res, W.iw, W.w, 0)
+                  : rod_segment_forces(W.arg, W.res, W.iw, W.w, 0))
+        return -3;
     }
     for (l = 0; l < nl; ++l) {
       const int s = i + l;
       const double* Q = Q4[l];
-      if (rod->nb) {
-        W.arg[0] = y + i_phi(rod, s - 1); W.arg[1] = y + i_phi(rod, s);
-        W.arg[2] = y + i_p(rod, s); W.arg[3] = segp(rod, s);
-        W.res[0] = dV;
-        if (rod_segment_strain(W.arg, W.res, W.iw, W.w, 0)) return -3;
-        relax_rows(rod, i_qs(rod, s), dV, y, yp, res);
-      }
+      if (rod->nb) relax_rows(rod, i_qs(rod, s), dV4[l], y, yp, res);
       double* ra = res + i_v(rod, s - 1);
       double* rb = res + i_v(rod, s);
       double* ro = res + i_om(rod, s);
@@ -344,8 +346,10 @@ static int residual_own(const kvrod_rod* rod, const double* y, const double* yp,
       for (l = 0; l < 4; ++l) {
         jnt_lane(rod, j + l, y, a4, l, mq4[l]);
         r4[l] = T4[l];
+        r4[4 + l] = dV4[l];
       }
-      if (rod_joint_torques_x4(a4, r4)) return -3;
+      if (rod->nb ? rod_joint_torques_strain_x4(a4, r4) : rod_joint_torques_x4(a4, r4))
+        return -3;
     } else {
       if (!joint_args(rod, j, y, &W)) {
         relax_rows(rod, i_qj(rod, j), 0, y, yp, res);
@@ -354,22 +358,17 @@ static int residual_own(const kvrod_rod* rod, const double* y, const double* yp,
       jnt_mq(rod, j, y, mq4[0]);
       W.arg[5] = mq4[0];
       W.res[0] = T4[0];
-      if (rod_joint_torques(W.arg, W.res, W.iw, W.w, 0)) return -3;
+      W.res[1] = dV4[0];
+      if (rod->nb ? rod_joint_torques_strain(W.arg, W.res, W.iw, W.w, 0)
+                  : rod_joint_torques(W.arg, W.res, W.iw, W.w, 0))
+        return -3;
     }
     for (l = 0; l < nl; ++l) {
       const int jj = j + l;
       const double* T = T4[l];
       if (jj >= 1) for (k = 0; k < 3; ++k) res[i_om(rod, jj) + k] -= T[k];
       if (jj + 1 <= N) for (k = 0; k < 3; ++k) res[i_om(rod, jj + 1) + k] -= T[3 + k];
-      if (rod->nb) {
-        if (nl == 4) {
-          W.arg[0] = y + i_p(rod, jj); W.arg[1] = y + i_p(rod, jj + 1);
-        }                              /* else (p_a, p_b) are still in arg[0], arg[1] */
-        W.arg[2] = jntp(rod, jj);
-        W.res[0] = dV;
-        if (rod_joint_strain(W.arg, W.res, W.iw, W.w, 0)) return -3;
-        relax_rows(rod, i_qj(rod, jj), dV, y, yp, res);
-      }
+      if (rod->nb) relax_rows(rod, i_qj(rod, jj), dV4[l], y, yp, res);
     }
   }
   return 0;
