@@ -184,9 +184,10 @@ def _components(A: sp.csr_matrix) -> tuple[int, np.ndarray]:
     first, half its time on a 20k-element mesh) are then its components when no entry
     links two of them, which is checked; otherwise the undirected search runs."""
     ncomp, label = connected_components(A, directed=True, connection="strong")
-    row = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
-    if ncomp > 1 and not np.array_equal(label[row], label[A.indices]):
-        return connected_components(A, directed=False)
+    if ncomp > 1:
+        row = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
+        if not np.array_equal(label[row], label[A.indices]):
+            return connected_components(A, directed=False)
     first = np.full(ncomp, A.shape[0])
     np.minimum.at(first, label, np.arange(A.shape[0]))
     relabel = np.empty(ncomp, dtype=label.dtype)
