@@ -729,7 +729,7 @@ class BDF:
             ab.fill(0.0)
             self.problem.jacobian_band(t, self._yy, self._ypw, self._cj, ab)
             self.njev += 1
-            info = self._newton.factor()
+            info = self._newton.factor(self._cj)
         self.nlu += 1
         self._lu_stamp = self.nstep
         self._cjold = self._cj

@@ -8,12 +8,17 @@ One interface, three implementations by what is available:
 * :class:`BandSystem`: the compiled band LU of the full matrix (``native/band.c``);
 * :class:`LapackSystem`: SciPy's LAPACK and NumPy (no C compiler).
 
-``correct(res, scale, ewt, ee, yy, ypw, cj)`` solves ``J d = res``, scales ``d`` by
-``scale`` (IDA's 2/(1 + cj/cj_old) after a change of cj), subtracts it from the
-correction ``ee`` and the iterate ``yy``, ``cj d`` from ``ypw``, and returns the weighted
-RMS norm of ``d``; ``res`` is overwritten. The compiled two fuse all of that in one call
-(with flush-to-zero, see ``native/__init__.py``); every implementation rounds alike, so
-the compiled step loop and the NumPy path take the same steps.
+``factor(cj)`` factorises J formed at ``cj``; ``correct(res, scale, ewt, ee, yy, ypw,
+cj)`` solves ``J d = res``, scales ``d`` by ``scale`` (IDA's 2/(1 + cj/cj_old) after a
+change of cj), subtracts it from the correction ``ee`` and the iterate ``yy``, ``cj d``
+from ``ypw``, and returns the weighted RMS norm of ``d``; ``res`` is overwritten. The
+compiled two fuse all of that in one call (with flush-to-zero, see
+``native/__init__.py``); the compiled step loop and the NumPy path call the same code, so
+they take the same steps. One exception to "solves J d = res": the condensed system
+solves a generalized Maxwell rod's relaxation rows (linear in the internal strains q,
+their coefficient of q' is 1) at the current cj, not the factorised one, for the scaled
+correction it applies: ``d_q = (r_q - J[q, x] d_x) / (D + cj - cj_f)``, so that those
+rows hold to first order after every update (``kv_cond.q_cjf`` in native/condensed.c).
 """
 
 from __future__ import annotations
@@ -36,8 +41,8 @@ class NewtonSystem:
     def __init__(self, ab: np.ndarray, kl: int, ku: int) -> None:
         self.ab, self.kl, self.ku, self.n = ab, kl, ku, ab.shape[1]
 
-    def factor(self) -> int:
-        """Factorise ``ab`` in place; LAPACK's info (0: regular)."""
+    def factor(self, cj: float) -> int:
+        """Factorise ``ab`` (J formed at ``cj``) in place; LAPACK's info (0: regular)."""
         raise NotImplementedError
 
     def correct(self, res: np.ndarray, scale: float, ewt: np.ndarray, ee: np.ndarray,
@@ -73,7 +78,7 @@ class LapackSystem(NewtonSystem):
         self._tmp = np.empty(self.n)
         self._piv: np.ndarray | None = None
 
-    def factor(self) -> int:
+    def factor(self, cj: float) -> int:
         from scipy.linalg.lapack import dgbtrf
 
         self._piv = None  # free the old pivots first (dgbtrf allocates new ones)
@@ -107,7 +112,7 @@ class BandSystem(NewtonSystem):
         self.prof = np.zeros(2 * max(self.n, 1), dtype=np.int32)
         self._p = _Addresses()
 
-    def factor(self) -> int:
+    def factor(self, cj: float) -> int:
         p = self._p
         return int(self._lib.kv_gbtrf(self.n, self.kl, self.ku, p(self.ab), self.ab.shape[0],
                                       p(self.ipiv), p(self.prof)))
@@ -132,8 +137,8 @@ class CondensedSystem(NewtonSystem):
         self.prof = np.zeros(2 * max(self.n, 1), dtype=np.int32)
         self._p = _Addresses()
 
-    def factor(self) -> int:
-        return int(self.cond.factor(self.ab))
+    def factor(self, cj: float) -> int:
+        return int(self.cond.factor(self.ab, cj))
 
     def correct(self, res, scale, ewt, ee, yy, ypw, cj) -> float:
         p = self._p
@@ -161,7 +166,7 @@ class BlocksSystem(NewtonSystem):
         self.problem.system_jacobian(t, y, yp, cj)
         return self.blocks.factor()
 
-    def factor(self) -> int:
+    def factor(self, cj: float) -> int:
         raise RuntimeError("BlocksSystem: the Jacobian is the problem's (use setup)")
 
     def correct(self, res, scale, ewt, ee, yy, ypw, cj) -> float:

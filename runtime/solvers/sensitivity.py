@@ -186,7 +186,7 @@ class StaggeredSensitivities:
         own = self.own
         own.ab.fill(0.0)
         solver.problem.jacobian_band(tnew, solver._yy, solver._ypw, solver._cj, own.ab)
-        self.own_ok = own.factor() == 0
+        self.own_ok = own.factor(solver._cj) == 0
         self.own_cj = solver._cj
         self.own_stamp = solver.nstep
         return self.own_ok

@@ -24,15 +24,50 @@ ENDS = [dict(), dict(end="clamped"), dict(start="pinned", end="pinned"),
         dict(start="free", end="clamped"), dict(start="free", end="free")]
 
 
-def _rod_system(kw, cj, seed=2, N=9):
+def _rod_system_at(kw, cj, seed=2, N=9):
+    """A rod model, its J at cj and a random state (band), the generator, the state."""
     rng = np.random.default_rng(seed)
     m = rod_model(N, **kw)
     y = random_state(m, rng)
     if m.branches:
         y = with_internal_strains(m, y, rng)
+    yp = rng.standard_normal(m.n)
     ab = np.zeros((m.ldab, m.n), order="F")
-    m.jacobian_band(0.0, y, rng.standard_normal(m.n), cj, ab)
-    return m, ab, rng
+    m.jacobian_band(0.0, y, yp, cj, ab)
+    return m, ab, rng, y, yp
+
+
+def _rod_system(kw, cj, seed=2, N=9):
+    return _rod_system_at(kw, cj, seed, N)[:3]
+
+
+def _dense(ab, kl, ku):
+    """The matrix of band storage ``ab`` (rows kl .. 2 kl + ku)."""
+    n = ab.shape[1]
+    A = np.zeros((n, n))
+    for j in range(n):
+        for i in range(max(0, j - ku), min(n, j + kl + 1)):
+            A[i, j] = ab[kl + ku + i - j, j]
+    return A
+
+
+def _fused_update_reference(A, qrows, b, scale, dcj):
+    """The correction the fused Newton update applies, written out densely: the kept
+    and kinematic unknowns x from the Schur complement of the factorised A (its
+    relaxation diagonal D) with the right-hand side at the current cj's diagonal
+    D + dcj, the relaxation unknowns q from their own rows at that diagonal for the
+    applied (scaled) dx: ``d_q = (b_q - A[q, x] d_x) / (D + dcj)``."""
+    n = A.shape[0]
+    Q = np.asarray(qrows)
+    X = np.setdiff1d(np.arange(n), Q)
+    D = np.diag(A)[Q]
+    Dc = D + dcj
+    S = A[np.ix_(X, X)] - A[np.ix_(X, Q)] @ (A[np.ix_(Q, X)] / D[:, None])
+    dx = scale * np.linalg.solve(S, b[X] - A[np.ix_(X, Q)] @ (b[Q] / Dc))
+    d = np.empty(n)
+    d[X] = dx
+    d[Q] = (b[Q] - A[np.ix_(Q, X)] @ dx) / Dc
+    return d
 
 
 @pytest.mark.parametrize("kw", ENDS + [dict(tau=None, **MAXWELL)])
@@ -348,20 +383,31 @@ def test_relaxation_blocks_are_eliminated_on_a_hand_made_system(q_size):
                            pattern=pattern, relaxation_blocks=relax)
     assert cond.block_tridiagonal and cond.relaxation_reason is None
     assert cond.relaxation_eliminated == len(relax) and cond.nc == 6 * 7
-    assert cond.factor(ab) == 0
+    cjf = 5.0                                   # the cj the matrix stands for
+    assert cond.factor(ab, cjf) == 0
     b = rng.standard_normal(A.shape[0])
     want = np.linalg.solve(A, b)
     np.testing.assert_allclose(cond.solve(ab, b), want, rtol=1e-10, atol=1e-12)
-    ewt = rng.uniform(0.5, 2.0, A.shape[0])
-    ee, yy, ypw = (rng.standard_normal(A.shape[0]) for _ in range(3))
-    r, e, y_, yp_ = b.copy(), ee.copy(), yy.copy(), ypw.copy()
+    qrows = np.concatenate([np.arange(o, o + z) for o, z in relax])
     P = lambda a: a.ctypes.data  # noqa: E731
-    nrm = cond._lib.kv_cond_newton(cond.ptr, P(ab), P(r), 0.7, P(ewt), P(e), P(y_),
-                                   P(yp_), 5.0)
-    d = 0.7 * want
-    np.testing.assert_allclose(nrm, np.sqrt(np.mean((d * ewt) ** 2)), rtol=1e-10)
-    for got, ref in zip((r, e, y_, yp_), (d, ee - d, yy - d, ypw - 5.0 * d), strict=True):
-        np.testing.assert_allclose(got, ref, rtol=1e-10, atol=1e-12)
+    # at the factorised cj with scale 1: the Newton correction J^-1 b; at another cj
+    # (IDA's scale 2 / (1 + cj / cj_f)): the relaxation rows hold at the current cj
+    for cj, scale in ((cjf, 1.0), (4.0, 2.0 / (1.0 + 4.0 / cjf)), (6.5, 0.7)):
+        ewt = rng.uniform(0.5, 2.0, A.shape[0])
+        ee, yy, ypw = (rng.standard_normal(A.shape[0]) for _ in range(3))
+        r, e, y_, yp_ = b.copy(), ee.copy(), yy.copy(), ypw.copy()
+        nrm = cond._lib.kv_cond_newton(cond.ptr, P(ab), P(r), scale, P(ewt), P(e), P(y_),
+                                       P(yp_), cj)
+        d = _fused_update_reference(A, qrows, b, scale, cj - cjf)
+        if cj == cjf:
+            np.testing.assert_allclose(d, want, rtol=1e-10, atol=1e-12)
+        A_now = A.copy()
+        A_now[qrows, qrows] += cj - cjf
+        np.testing.assert_allclose((A_now @ r)[qrows], b[qrows], rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(nrm, np.sqrt(np.mean((d * ewt) ** 2)), rtol=1e-10)
+        for got, ref in zip((r, e, y_, yp_), (d, ee - d, yy - d, ypw - cj * d),
+                            strict=True):
+            np.testing.assert_allclose(got, ref, rtol=1e-10, atol=1e-12)
 
 
 @pytest.mark.parametrize("bad,why", [("offdiagonal", "not diagonal"),
@@ -397,8 +443,9 @@ def test_a_singular_relaxation_block_is_reported():
 def test_maxwell_rod_with_and_without_relaxation_blocks():
     """The Maxwell rod's internal strains eliminated (6 kept unknowns per cell, the
     fixed-size path) or kept (the path before: 6 + 6B per cell) give the same Newton
-    corrections, to rounding; its fused update equals the solve and the update."""
-    m, ab, rng = _rod_system(dict(tau=None, **MAXWELL), 3e2, seed=9, N=12)
+    corrections, to rounding; its fused update at a later cj solves the relaxation rows
+    at that cj (a dense reference of the update, and J formed there)."""
+    m, ab, rng, y, yp = _rod_system_at(dict(tau=None, **MAXWELL), 3e2, seed=9, N=12)
     with_q = CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
     kept = CondensedNewton(with_q._lib, m.n, m.kl, m.ku, m.ldab, m.condensation_blocks(),
                            cells=m.condensation_cells(), pattern=m.band_pattern())
@@ -406,16 +453,27 @@ def test_maxwell_rod_with_and_without_relaxation_blocks():
     assert with_q.nc == 6 * m.N + 3 and kept.nc == (6 + 6 * m.branches) * m.N + 3 + 3 * m.branches
     assert with_q._keep["kv6"].sum() == m.N - 2 and not kept._keep["kv6"].any()
     b = rng.standard_normal(m.n)
-    assert with_q.factor(ab) == 0 and kept.factor(ab) == 0
+    assert with_q.factor(ab, 3e2) == 0 and kept.factor(ab, 3e2) == 0
     x, x0 = with_q.solve(ab, b), kept.solve(ab, b)
     np.testing.assert_allclose(x, x0, rtol=1e-9, atol=1e-11 * np.abs(x0).max())
     ewt = rng.uniform(0.5, 2.0, m.n)
     ee, yy, ypw = (rng.standard_normal(m.n) for _ in range(3))
     r, e, y_, yp_ = b.copy(), ee.copy(), yy.copy(), ypw.copy()
     P = lambda a: a.ctypes.data  # noqa: E731
-    nrm = with_q._lib.kv_cond_newton(with_q.ptr, P(ab), P(r), 0.5, P(ewt), P(e), P(y_),
-                                     P(yp_), 3e2)
-    d = 0.5 * x
-    np.testing.assert_allclose(nrm, np.sqrt(np.mean((d * ewt) ** 2)), rtol=1e-12)
-    for got, ref in zip((r, e, y_, yp_), (d, ee - d, yy - d, ypw - 3e2 * d), strict=True):
-        np.testing.assert_allclose(got, ref, rtol=1e-12, atol=1e-14 * np.abs(ref).max())
+    # a later cj (2.4e2 against the factorised 3e2) and IDA's scale for it: the
+    # relaxation rows are solved at the current cj (the dense reference, J rebuilt
+    # there for the check that they hold)
+    cj = 2.4e2
+    scale = 2.0 / (1.0 + cj / 3e2)
+    nrm = with_q._lib.kv_cond_newton(with_q.ptr, P(ab), P(r), scale, P(ewt), P(e), P(y_),
+                                     P(yp_), cj)
+    qrows = np.concatenate([np.arange(o, o + z)
+                            for o, z in m.condensation_relaxation_blocks()])
+    d = _fused_update_reference(_dense(ab, m.kl, m.ku), qrows, b, scale, cj - 3e2)
+    ab_now = np.zeros_like(ab)
+    m.jacobian_band(0.0, y, yp, cj, ab_now)
+    np.testing.assert_allclose((_dense(ab_now, m.kl, m.ku) @ r)[qrows], b[qrows],
+                               rtol=1e-9, atol=1e-10 * np.abs(b).max())
+    np.testing.assert_allclose(nrm, np.sqrt(np.mean((d * ewt) ** 2)), rtol=1e-9)
+    for got, ref in zip((r, e, y_, yp_), (d, ee - d, yy - d, ypw - cj * d), strict=True):
+        np.testing.assert_allclose(got, ref, rtol=1e-9, atol=1e-11 * np.abs(ref).max())

@@ -165,7 +165,9 @@ int blocks_factor_raw(kv_blocks *B)
     for (int b = 0; b < B->nb; ++b) {
         const int n = B->off[b + 1] - B->off[b];
         if (n == 0) continue;
-        const int info = B->cond[b] ? cond_factor_raw(B->cond[b], B->ab[b])
+        /* cj 0: a block's solves are plain J^-1 (cond_solve_raw), which does not read
+           the factorised cj (kv_cond.q_cjf) */
+        const int info = B->cond[b] ? cond_factor_raw(B->cond[b], B->ab[b], 0.0)
             : gbtrf_raw(n, B->kl[b], B->ku[b], B->ab[b], B->ldab[b], B->ipiv[b],
                         B->prof[b]);
         if (info) return info;

@@ -83,7 +83,7 @@ typedef struct {
        .. q_so[q+1]-1], full columns; q_tgt: the condensed column of a kept one, else
        -1 - its position in ecol): D dq + A dx = r_q, so dq = g_q - A' dx with
        g_q = D^-1 r_q (q_g + q_eo[q]), A' = D^-1 A (q_A + q_ao[q], column s at s q_sz,
-       D^-1 in q_dinv + q_eo[q]). The kept rows that involve q see J[kept, x] -
+       D^-1 in q_dinv + q_eo[q]; q_rho + q_eo[q]: D / (D + cj - q_cjf), below). The kept rows that involve q see J[kept, x] -
        J[kept, q] A' and r - J[kept, q] g_q: the first stage then runs unchanged on
        them. Tables per cell k (ncell + 1 long, offsets into lists):
          q_cb: the blocks lying in cell k (their g_q is formed a cell ahead of the
@@ -97,14 +97,20 @@ typedef struct {
          q_bk/q_bl: the blocks whose dq the backward sweep finishes at cell k (the
                lowest cell of their sources);
        and q_ucell/q_ustep: the cells in the order of the fused Newton update, each after
-       the backward step q_ustep (its last access). */
+       the backward step q_ustep (its last access).
+       q_cjf: the cj of the factorised J. A relaxation row's coefficient of q' is 1 (the
+       rod's q_b' - (strain - q_b)/theta_b), so its D at another cj is D + (cj - q_cjf):
+       the fused Newton update (cond_solve_bt_q) solves the relaxation rows with the
+       current cj's D, exactly for the correction it applies (see there); the plain
+       solve (cond_solve_raw) is J^-1 of the factorised J. */
     int nq;
     const int *q_off, *q_sz, *q_eo, *q_so, *q_src, *q_tgt, *q_ao;
-    double *q_A, *q_dinv, *q_g;
+    double *q_A, *q_dinv, *q_g, *q_rho;
     const int *q_cb, *q_fk, *q_fl, *q_kb, *q_kco, *q_kcol;
     const long long *q_kwo;
     double *q_W;
     const int *q_bk, *q_bl, *q_ucell, *q_ustep;
+    double q_cjf;
 } kv_cond;
 
 
@@ -332,15 +338,25 @@ KV_INLINE void q_fill_cell(kv_cond *c, const double *ab, int k, int mp, int m, i
     }
 }
 
-/* g_q = D^-1 r_q of the relaxation blocks of cell k */
-KV_INLINE void q_g_cell(kv_cond *c, const double *restrict res, int k)
+/* g_q = D^-1 r_q of the relaxation blocks of cell k; with dcj = cj - q_cjf != 0, D at
+   the current cj: g_q = rho D^-1 r_q, rho = D / (D + dcj) = 1 / (1 + dcj D^-1) (kept in
+   q_rho for q_finish_n) */
+KV_INLINE void q_g_cell(kv_cond *c, const double *restrict res, int k, double dcj)
 {
     const int q0 = c->q_cb[k], q1 = c->q_cb[k + 1];
     for (int q = q0; q < q1; ++q) {
         const int o = c->q_off[q], sz = c->q_sz[q];
         const double *restrict di = c->q_dinv + c->q_eo[q];
         double *restrict g = c->q_g + c->q_eo[q];
-        for (int u = 0; u < sz; ++u) g[u] = di[u] * res[o + u];
+        if (dcj == 0.0) {
+            for (int u = 0; u < sz; ++u) g[u] = di[u] * res[o + u];
+        } else {
+            double *restrict rho = c->q_rho + c->q_eo[q];
+            for (int u = 0; u < sz; ++u) {
+                rho[u] = 1.0 / (1.0 + dcj * di[u]);
+                g[u] = rho[u] * (di[u] * res[o + u]);
+            }
+        }
     }
 }
 
@@ -354,36 +370,55 @@ KV_INLINE void q_forward_cell(const kv_cond *c, int k, int m, double *restrict t
            tmp, tmp);
 }
 
-/* d (sz) = g - A x, A (sz x ns, column-major); sz a literal for the common sizes */
+/* d (sz) = g - A x, A (sz x ns, column-major); sz a literal for the common sizes. With
+   rho (the current cj's, q_g_cell) or iscale = 1/scale != 1: d = iscale g - rho A x, so
+   that the scaled correction scale d solves the relaxation rows at the current cj for
+   the scaled dx (cond_solve_bt_q). */
 KV_INLINE void q_finish_n(int sz, int ns, const double *restrict A, const double *restrict x,
-                          const double *restrict g, double *restrict d)
+                          const double *restrict g, double *restrict d,
+                          const double *restrict rho, double iscale)
 {
     double acc[KV_QMAX];
-    for (int u = 0; u < sz; ++u) acc[u] = g[u];
+    if (!rho && iscale == 1.0) {
+        for (int u = 0; u < sz; ++u) acc[u] = g[u];
+        for (int s = 0; s < ns; ++s) {
+            const double t = x[s];
+            const double *restrict a = A + (size_t)s * sz;
+            for (int u = 0; u < sz; ++u) acc[u] -= a[u] * t;
+        }
+        for (int u = 0; u < sz; ++u) d[u] = acc[u];
+        return;
+    }
+    for (int u = 0; u < sz; ++u) acc[u] = 0.0;
     for (int s = 0; s < ns; ++s) {
         const double t = x[s];
         const double *restrict a = A + (size_t)s * sz;
-        for (int u = 0; u < sz; ++u) acc[u] -= a[u] * t;
+        for (int u = 0; u < sz; ++u) acc[u] += a[u] * t;
     }
-    for (int u = 0; u < sz; ++u) d[u] = acc[u];
+    if (rho)
+        for (int u = 0; u < sz; ++u) d[u] = iscale * g[u] - rho[u] * acc[u];
+    else
+        for (int u = 0; u < sz; ++u) d[u] = iscale * g[u] - acc[u];
 }
 
 /* dq = g_q - A' dx into res, for the blocks finished at backward step k (their sources
    are in res) */
-KV_INLINE void q_backward_cell(const kv_cond *c, int k, double *res)
+KV_INLINE void q_backward_cell(const kv_cond *c, int k, double *res, int cur,
+                               double iscale)
 {
     double x[KV_QMAX_SRC];
     for (int l = c->q_bk[k]; l < c->q_bk[k + 1]; ++l) {
         const int q = c->q_bl[l], sz = c->q_sz[q], so = c->q_so[q];
         const int ns = c->q_so[q + 1] - so;
         const double *A = c->q_A + c->q_ao[q], *g = c->q_g + c->q_eo[q];
+        const double *rho = cur ? c->q_rho + c->q_eo[q] : NULL;
         for (int s = 0; s < ns; ++s) x[s] = res[c->q_src[so + s]];
         double *d = res + c->q_off[q];
-        if (sz == 9) q_finish_n(9, ns, A, x, g, d);
-        else if (sz == 6) q_finish_n(6, ns, A, x, g, d);
-        else if (sz == 12) q_finish_n(12, ns, A, x, g, d);
-        else if (sz == 3) q_finish_n(3, ns, A, x, g, d);
-        else q_finish_n(sz, ns, A, x, g, d);
+        if (sz == 9) q_finish_n(9, ns, A, x, g, d, rho, iscale);
+        else if (sz == 6) q_finish_n(6, ns, A, x, g, d, rho, iscale);
+        else if (sz == 12) q_finish_n(12, ns, A, x, g, d, rho, iscale);
+        else if (sz == 3) q_finish_n(3, ns, A, x, g, d, rho, iscale);
+        else q_finish_n(sz, ns, A, x, g, d, rho, iscale);
     }
 }
 
@@ -795,13 +830,18 @@ static double cond_solve_bt_q(kv_cond *c, double *res, int upd, double scale,
                               double cj)
 {
     double tmp6[6];
+    /* the relaxation rows at the current cj (kv_cond.q_cjf) for the correction applied,
+       scale d: dq_applied = (r_q - J[q, x] dx_applied) / (D + cj - q_cjf); a plain solve
+       (upd = 0) is J^-1 */
+    const double dcj = upd ? cj - c->q_cjf : 0.0;
+    const double iscale = upd && scale != 1.0 ? 1.0 / scale : 1.0;
     bt_g_cell(c, res, 0, 0);
-    q_g_cell(c, res, 0);
+    q_g_cell(c, res, 0, dcj);
     for (int k = 0; k < c->ncell; ++k) {
         if (k + 1 < c->ncell) {
             if (c->kv6[k + 1]) bt_g_cell(c, res, k + 1, 1);
             else bt_g_cell(c, res, k + 1, 0);
-            q_g_cell(c, res, k + 1);
+            q_g_cell(c, res, k + 1, dcj);
         }
         BT_SIZES(c, k)
         (void)mn;
@@ -815,7 +855,7 @@ static double cond_solve_bt_q(kv_cond *c, double *res, int upd, double scale,
         (void)mp; (void)ne3;
         if (c->kv6[k]) bt_backward_cell(c, res, k, 6, 6, 1);
         else bt_backward_cell(c, res, k, m, mn, 0);
-        q_backward_cell(c, k, res);
+        q_backward_cell(c, k, res, dcj != 0.0, iscale);
         for (; upd && u < c->ncell && c->q_ustep[u] == k; ++u) {
             const int f0 = c->cf[c->q_ucell[u]], len = c->cf[c->q_ucell[u] + 1] - f0;
             s += newton_update4(len, res + f0, scale, ewt + f0, ee + f0, yy + f0, ypw + f0,
@@ -869,8 +909,9 @@ KV_INLINE double cond_solve_bt(kv_cond *c, double *res, int upd, double scale,
    loop that #includes this file). Returns 0; > 0 when Jc is singular (LAPACK's info on
    the band path; on the block path the 1-based condensed index of a zero or non-finite
    pivot of a diagonal block); -1 when a kinematic block M_b is singular. */
-int cond_factor_raw(kv_cond *c, const double *ab)
+int cond_factor_raw(kv_cond *c, const double *ab, double cj)
 {
+    c->q_cjf = cj;
     return c->bt ? cond_factor_bt(c, ab) : cond_factor_band(c, ab);
 }
 
@@ -902,10 +943,10 @@ double cond_newton_raw(kv_cond *c, const double *ab, double *res, double scale,
 }
 
 /* cond_factor_raw with flush-to-zero. */
-int kv_cond_factor(kv_cond *c, const double *ab)
+int kv_cond_factor(kv_cond *c, const double *ab, double cj)
 {
     FTZ_ON
-    const int info = cond_factor_raw(c, ab);
+    const int info = cond_factor_raw(c, ab, cj);
     FTZ_OFF
     return info;
 }

@@ -5,6 +5,7 @@ tridiagonal in the rod's cells, else a band LU of the condensed matrix."""
 from __future__ import annotations
 
 import ctypes
+import math
 
 import numpy as np
 
@@ -14,8 +15,8 @@ from .loader import load
 
 #: the relaxation blocks' tables (relaxation.py), in the order of ``kv_cond``
 _Q_FIELDS = ("q_off", "q_sz", "q_eo", "q_so", "q_src", "q_tgt", "q_ao", "q_A", "q_dinv",
-             "q_g", "q_cb", "q_fk", "q_fl", "q_kb", "q_kco", "q_kcol", "q_kwo", "q_W", "q_bk",
-             "q_bl", "q_ucell", "q_ustep")
+             "q_g", "q_rho", "q_cb", "q_fk", "q_fl", "q_kb", "q_kco", "q_kcol", "q_kwo",
+             "q_W", "q_bk", "q_bl", "q_ucell", "q_ustep")
 
 
 class _CondStruct(ctypes.Structure):
@@ -30,7 +31,7 @@ class _CondStruct(ctypes.Structure):
         (name, ctypes.c_void_p) for name in
         ("cf", "cs", "cb", "ce", "eo", "fo", "xo", "F", "X", "ge", "T", "rp", "run", "ecol",
          "kv6", "diag")] + [("col0", ctypes.c_int), ("nq", ctypes.c_int)] + [
-        (name, ctypes.c_void_p) for name in _Q_FIELDS]
+        (name, ctypes.c_void_p) for name in _Q_FIELDS] + [("q_cjf", ctypes.c_double)]
 
 
 class CondensedNewton:
@@ -154,8 +155,9 @@ class CondensedNewton:
         self._keep.update({k: v for k, v in bt.items() if k not in ("ncell", "mmax")})
         self._keep["diag"] = diag
         if qt is None:
+            real = ("q_A", "q_dinv", "q_g", "q_rho", "q_W")
             qt = {k: np.zeros(1, np.int64 if k == "q_kwo" else
-                              np.float64 if k in ("q_A", "q_dinv", "q_g", "q_W") else np.int32)
+                              np.float64 if k in real else np.int32)
                   for k in _Q_FIELDS}
         self._keep.update({k: qt[k] for k in _Q_FIELDS})
         ptrs = (self._keep[k].ctypes.data for k in (
@@ -200,10 +202,15 @@ class CondensedNewton:
                    pattern=pattern() if pattern else None,
                    relaxation_blocks=relax() if relax else None)
 
-    def factor(self, ab) -> int:
+    def factor(self, ab, cj: float = math.nan) -> int:
         """Condense J (band ``ab``, unchanged) and factorise: LAPACK's info (-1: a
-        kinematic block is singular)."""
-        return int(self._lib.kv_cond_factor(self.ptr, ab.ctypes.data))
+        kinematic block is singular).
+
+        ``cj``: the cj J was formed with (1/s). The fused Newton update
+        (``kv_cond_newton``) solves the relaxation rows at its own cj from it (see
+        ``kv_cond.q_cjf``); without it (NaN) that update of a system with relaxation blocks
+        is NaN, and the integrator stops on it. Plain solves do not read it."""
+        return int(self._lib.kv_cond_factor(self.ptr, ab.ctypes.data, cj))
 
     def solve(self, ab, b):
         """``J^-1 b`` (a new array) through the condensed factors."""

@@ -88,7 +88,7 @@ def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:
     lib.kv_interp.restype = None
     lib.kv_interp_at_tn.argtypes = [I, I, P, P, P]
     lib.kv_interp_at_tn.restype = None
-    lib.kv_cond_factor.argtypes = [P, P]
+    lib.kv_cond_factor.argtypes = [P, P, D]
     lib.kv_cond_factor.restype = I
     lib.kv_cond_solve.argtypes = [P, P, P]
     lib.kv_cond_solve.restype = None

@@ -489,6 +489,7 @@ static int jac_factor_cells(kv_run *R, double t, double cj)
     const int *cf = c->cf;
     int el = 0, fac = 0, lo = 0, info = 0;
     if (drive_to(R, t)) return -2;
+    c->q_cjf = cj;                      /* as cond_factor_raw */
     while (fac < ncell) {
         const int i1 = el + chunk - 1 < ncell - 1 ? el + chunk - 1 : ncell - 1;
         const int hi = i1 + 2 < ncell ? i1 + 2 : ncell;   /* the columns written reach cell i1+1 */
@@ -560,7 +561,7 @@ static int setup(kv_run *R, double t)
     } else {
         if (call_jac(R, t, S->cj)) return -1;
         TIC(S);
-        if (S->cond) info = kv_cond_factor(S->cond, S->ab);   /* J stays in ab */
+        if (S->cond) info = kv_cond_factor(S->cond, S->ab, S->cj);   /* J stays in ab */
         else info = kv_gbtrf(S->n, S->kl, S->ku, S->ab, S->ldab, S->ipiv, S->prof);
         TOC(S, SEC_LU);
     }
@@ -855,7 +856,7 @@ static int sens_setup(kv_run *R, double t)
     if (rc) return -1;
     {
         TIC(S);
-        if (S->s_cond) info = kv_cond_factor(S->s_cond, S->s_ab);
+        if (S->s_cond) info = kv_cond_factor(S->s_cond, S->s_ab, S->cj);
         else info = kv_gbtrf(S->n, S->kl, S->ku, S->s_ab, S->ldab, S->s_ipiv, S->s_prof);
         TOC(S, SEC_LU);
     }
