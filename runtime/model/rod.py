@@ -32,6 +32,7 @@ from runtime.model.quaternion import end_quaternion, quat_mul, quat_rotation
 from runtime.solvers.native.pointers import PointerCache as _PointerCache
 from runtime.solvers.native.pointers import data_address as _ptr
 from runtime.solvers.native.pointers import function_address
+from runtime.solvers.native.relaxation import RelaxationBlock
 
 #: the self-contact couplings' capacity: at most this many doubles of the Woodbury
 #: columns Z (rows x n; beyond, a rod's pairs are left out of the Jacobian) and the
@@ -495,16 +496,20 @@ class RodModel:
             assert e0 >= 0 and r0 >= 0 and k0 >= 0 and es <= 4 and ks <= 4
         return blocks
 
-    def condensation_relaxation_blocks(self) -> list[tuple[int, int]]:
+    def condensation_relaxation_blocks(self) -> list[RelaxationBlock]:
         """The internal strains of a generalized Maxwell rod as relaxation blocks of the
         condensed Newton systems (``runtime.solvers.native.relaxation``): per segment and
-        per joint, its 3B strains ``(offset, 3B)``, whose rows ``q_b' - (strain -
-        q_b)/theta_b`` are diagonal in them; none for B = 0."""
+        per joint, its 3B strains (term-major, as the state), whose rows ``q_b' -
+        (strain - q_b)/theta_b`` are diagonal in them, with the rates 1/theta_b and the
+        moduli of its terms (``segb``, ``jntb``); none for B = 0."""
         if not self.branches:
             return []
-        B3 = 3 * self.branches
-        return ([(int(i), B3) for i in self.q_segment_index[:, 0, 0]]
-                + [(int(j), B3) for j in self.q_joint_index[:, 0, 0]])
+        a = self.arrays
+        rates = np.repeat(1.0 / np.asarray(a.theta, float), 3)
+        return ([RelaxationBlock(int(i), 3, rates, a.segb[s].ravel().copy())
+                 for s, i in enumerate(self.q_segment_index[:, 0, 0])]
+                + [RelaxationBlock(int(j), 3, rates, a.jntb[s].ravel().copy())
+                   for s, j in enumerate(self.q_joint_index[:, 0, 0])])
 
     def condensation_cells(self) -> list[int]:
         """First state index of each cell of the layout (cell 0: node 0 and joint 0; cell
@@ -813,7 +818,7 @@ class RodModel:
         """
         if self._band_pattern is None:
             rng = _Scatter(12345)
-            acc = np.zeros((self.ldab, self.n), order="F")
+            pat = np.zeros((self.ldab, self.n), dtype=bool, order="F")
             ab = np.zeros((self.ldab, self.n), order="F")
             saved = self.arrays.copy()
             driven = (self._key, self._steady)   # what the restored arrays hold
@@ -833,14 +838,16 @@ class RodModel:
                 for _ in range(2):
                     y = self.reference + 0.1 * rng.uniform(-1.0, 1.0, self.n)
                     self.jacobian_band2(0.0, y, rng.uniform(-1.0, 1.0, self.n), 1.0, 1.0, ab)
-                    acc[self.kl:] += np.abs(ab[self.kl:])
+                    # whole (contiguous) arrays: rows 0..kl-1 are never written
+                    np.logical_or(pat, ab != 0.0, out=pat)
             finally:
                 if struct is not None:
                     struct.self = self_ptr
                 for name in ("par", "seg", "jnt", "nload", "sload"):
                     getattr(a, name)[...] = getattr(saved, name)
                 self._key, self._steady = driven
-            self._band_pattern = acc != 0.0
+            pat[:self.kl] = False
+            self._band_pattern = pat
         return self._band_pattern.copy(order="F")
 
     def sparsity(self) -> sp.csc_matrix:

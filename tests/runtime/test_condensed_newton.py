@@ -16,6 +16,7 @@ import pytest
 from runtime.solvers.native.band import band_solve
 from runtime.solvers.native.condensed import CondensedNewton
 from runtime.solvers.native.loader import load
+from runtime.solvers.native.relaxation import RelaxationBlock
 from tests.rods import MAXWELL, random_state, rod_model, with_internal_strains
 
 pytestmark = pytest.mark.skipif(load() is None, reason="no C compiler")
@@ -312,10 +313,13 @@ def test_singular_hand_made_system_is_reported_on_the_block_path():
 
 # ---- relaxation blocks (the second stage) ------------------------------------------------
 
-def _relaxation_system(ncell, rng, q_size=4, bad=None):
+def _relaxation_system(ncell, rng, channels=3, terms=1, bad=None):
     """A random system of ``ncell`` cells, each: a kinematic block (rows 0..2 involve
     columns 0..2, eliminated, and 3..5, kept), 3 more kept unknowns (6..8) and two
-    relaxation blocks of ``q_size`` unknowns (rows diagonal in them): a "segment" block
+    relaxation blocks of ``terms`` x ``channels`` unknowns (rows diagonal in them) with
+    the structure of RelaxationBlock (the rows of a strain are multiples of one row by
+    the terms' rates, its columns multiples of one column by the terms' moduli; strain 1
+    of every second block has no moduli, so its columns are zero): a "segment" block
     whose rows involve the kept columns 3..5 of the cell and of the cell before and the
     eliminated column 0 of the cell, involved by the kept rows of both cells; and a
     "joint" block whose rows involve the eliminated columns of the cell and the next,
@@ -323,6 +327,7 @@ def _relaxation_system(ncell, rng, q_size=4, bad=None):
     relaxation row involves another unknown of its block), "far" (a relaxation row
     involves a column two cells away). Returns as _cell_system, and the relaxation
     blocks."""
+    q_size = channels * terms
     z = 9 + 2 * q_size
     n = ncell * z
     A = np.zeros((n, n))
@@ -340,27 +345,29 @@ def _relaxation_system(ncell, rng, q_size=4, bad=None):
         s = c * z
         kept = np.r_[s + 3:s + 9]
         qs, qj = s + 9, s + 9 + q_size
-        for q0 in (qs, qj):
+        src_s = [s + 3, s + 4, s + 5, s] + ([s - z + 3, s - z + 4, s - z + 5] if c else [])
+        rows_s = np.r_[kept, kept - z] if c else kept
+        src_j = [s, s + 1, s + 2] + ([s + z, s + z + 1, s + z + 2] if c + 1 < ncell else [])
+        rows_j = np.r_[kept, kept + z] if c + 1 < ncell else kept
+        for q0, src, rows in ((qs, src_s, rows_s), (qj, src_j, rows_j)):
             A[q0:q0 + q_size, :] = 0.0
             A[:, q0:q0 + q_size] = 0.0
-            A[np.arange(q0, q0 + q_size), np.arange(q0, q0 + q_size)] = rng.uniform(1.0, 3.0,
-                                                                                  q_size)
-            relax.append((q0, q_size))
-        src_s = [s + 3, s + 4, s + 5, s] + ([s - z + 3, s - z + 4, s - z + 5] if c else [])
-        A[qs:qs + q_size, src_s] = rng.standard_normal((q_size, len(src_s)))
-        rows_s = np.r_[kept, kept - z] if c else kept
-        A[rows_s[:, None], np.arange(qs, qs + q_size)] = rng.standard_normal(
-            (rows_s.size, q_size))
-        src_j = [s, s + 1, s + 2] + ([s + z, s + z + 1, s + z + 2] if c + 1 < ncell else [])
-        A[qj:qj + q_size, src_j] = rng.standard_normal((q_size, len(src_j)))
-        rows_j = np.r_[kept, kept + z] if c + 1 < ncell else kept
-        A[rows_j[:, None], np.arange(qj, qj + q_size)] = rng.standard_normal(
-            (rows_j.size, q_size))
+            u = np.arange(q0, q0 + q_size)
+            A[u, u] = rng.uniform(1.0, 3.0, q_size)
+            rates = np.repeat(rng.uniform(0.5, 2.0, terms), channels)
+            moduli = rng.uniform(-2.0, 2.0, (terms, channels))
+            if channels > 1 and len(relax) % 2:
+                moduli[:, 1] = 0.0
+            E = rng.standard_normal((channels, len(src)))         # -dstrain/dx
+            G = rng.standard_normal((rows.size, channels))
+            A[q0:q0 + q_size, src] = rates[:, None] * np.tile(E, (terms, 1))
+            A[rows[:, None], u] = np.tile(G, (1, terms)) * moduli.ravel()
+            relax.append(RelaxationBlock(q0, channels, rates, moduli.ravel()))
     if bad == "offdiagonal":
-        q0 = relax[3][0]
+        q0 = relax[3].offset
         A[q0, q0 + 1] = 0.5
     elif bad == "far":
-        q0 = relax[2][0]
+        q0 = relax[2].offset
         A[q0, 3 * z + 4] = 0.5
     rows, cols = np.nonzero(A)
     kl, ku = int((rows - cols).max()), int((cols - rows).max())
@@ -371,14 +378,15 @@ def _relaxation_system(ncell, rng, q_size=4, bad=None):
     return A, ab, kl, ku, blocks, [c * z for c in range(ncell)], pattern, relax
 
 
-@pytest.mark.parametrize("q_size", [3, 4, 9])
-def test_relaxation_blocks_are_eliminated_on_a_hand_made_system(q_size):
-    """Relaxation blocks of several sizes (the literal 3, 9 and the generic kernels),
-    their sources kept and eliminated unknowns in two cells: the condensed system keeps
-    6 unknowns per cell, and its solve, the fused Newton update and the band LU of the
-    full matrix agree."""
+@pytest.mark.parametrize("channels,terms", [(3, 1), (2, 2), (3, 3), (4, 2)])
+def test_relaxation_blocks_are_eliminated_on_a_hand_made_system(channels, terms):
+    """Relaxation blocks of several shapes (the literal 3 strains and the generic
+    kernels), their sources kept and eliminated unknowns in two cells: the condensed
+    system keeps 6 unknowns per cell, and its solve, the fused Newton update and the
+    dense solve of the full matrix agree."""
     rng = np.random.default_rng(21)
-    A, ab, kl, ku, blocks, cells, pattern, relax = _relaxation_system(7, rng, q_size)
+    A, ab, kl, ku, blocks, cells, pattern, relax = _relaxation_system(7, rng, channels,
+                                                                      terms)
     cond = CondensedNewton(load(), A.shape[0], kl, ku, ab.shape[0], blocks, cells=cells,
                            pattern=pattern, relaxation_blocks=relax)
     assert cond.block_tridiagonal and cond.relaxation_reason is None
@@ -388,7 +396,7 @@ def test_relaxation_blocks_are_eliminated_on_a_hand_made_system(q_size):
     b = rng.standard_normal(A.shape[0])
     want = np.linalg.solve(A, b)
     np.testing.assert_allclose(cond.solve(ab, b), want, rtol=1e-10, atol=1e-12)
-    qrows = np.concatenate([np.arange(o, o + z) for o, z in relax])
+    qrows = np.concatenate([np.arange(r.offset, r.offset + r.size) for r in relax])
     P = lambda a: a.ctypes.data  # noqa: E731
     # at the factorised cj with scale 1: the Newton correction J^-1 b; at another cj
     # (IDA's scale 2 / (1 + cj / cj_f)): the relaxation rows hold at the current cj
@@ -416,7 +424,7 @@ def test_relaxation_blocks_that_do_not_qualify_stay_kept(bad, why):
     """A relaxation row that is not diagonal in its block, or whose fill would reach two
     cells away: the blocks stay kept unknowns (said why), and the solve is still right."""
     rng = np.random.default_rng(22)
-    A, ab, kl, ku, blocks, cells, pattern, relax = _relaxation_system(6, rng, 3, bad=bad)
+    A, ab, kl, ku, blocks, cells, pattern, relax = _relaxation_system(6, rng, bad=bad)
     cond = CondensedNewton(load(), A.shape[0], kl, ku, ab.shape[0], blocks, cells=cells,
                            pattern=pattern, relaxation_blocks=relax)
     assert cond.relaxation_eliminated == 0
@@ -429,11 +437,11 @@ def test_relaxation_blocks_that_do_not_qualify_stay_kept(bad, why):
 
 def test_a_singular_relaxation_block_is_reported():
     rng = np.random.default_rng(23)
-    A, ab, kl, ku, blocks, cells, pattern, relax = _relaxation_system(5, rng, 3)
+    A, ab, kl, ku, blocks, cells, pattern, relax = _relaxation_system(5, rng)
     cond = CondensedNewton(load(), A.shape[0], kl, ku, ab.shape[0], blocks, cells=cells,
                            pattern=pattern, relaxation_blocks=relax)
     assert cond.relaxation_eliminated == len(relax)
-    q0 = relax[4][0] + 1
+    q0 = relax[4].offset + 1
     bad = ab.copy(order="F")
     bad[kl + ku, q0] = 0.0                         # its diagonal entry
     assert cond.factor(bad) == -1
@@ -467,8 +475,8 @@ def test_maxwell_rod_with_and_without_relaxation_blocks():
     scale = 2.0 / (1.0 + cj / 3e2)
     nrm = with_q._lib.kv_cond_newton(with_q.ptr, P(ab), P(r), scale, P(ewt), P(e), P(y_),
                                      P(yp_), cj)
-    qrows = np.concatenate([np.arange(o, o + z)
-                            for o, z in m.condensation_relaxation_blocks()])
+    qrows = np.concatenate([np.arange(r.offset, r.offset + r.size)
+                            for r in m.condensation_relaxation_blocks()])
     d = _fused_update_reference(_dense(ab, m.kl, m.ku), qrows, b, scale, cj - 3e2)
     ab_now = np.zeros_like(ab)
     m.jacobian_band(0.0, y, yp, cj, ab_now)
@@ -477,3 +485,53 @@ def test_maxwell_rod_with_and_without_relaxation_blocks():
     np.testing.assert_allclose(nrm, np.sqrt(np.mean((d * ewt) ** 2)), rtol=1e-9)
     for got, ref in zip((r, e, y_, yp_), (d, ee - d, yy - d, ypw - cj * d), strict=True):
         np.testing.assert_allclose(got, ref, rtol=1e-9, atol=1e-11 * np.abs(ref).max())
+
+
+@pytest.mark.parametrize("kw", [dict(tau=None, **MAXWELL),
+                                dict(tau=None, end="clamped", **MAXWELL)])
+def test_the_rod_has_the_structure_of_its_relaxation_blocks(kw):
+    """The elimination relies on RelaxationBlock's structure; the rod's Jacobian at a
+    random state has it: the rows of a strain are the first term's times rate_b/rate_0,
+    its columns (outside the block) the reference term's times the moduli's ratio."""
+    m, ab, rng, y, yp = _rod_system_at(kw, 7e2, seed=31, N=6)
+    J = _dense(ab, m.kl, m.ku)
+    coupled = 0
+    for r in m.condensation_relaxation_blocks():
+        c, u = r.channels, np.arange(r.offset, r.offset + r.size)
+        rows = J[u].copy()
+        rows[:, u] = 0.0
+        cols = J[:, u].copy()
+        cols[u, :] = 0.0
+        R, M = r.rates.reshape(-1, c), r.moduli.reshape(-1, c)
+        assert rows.any() == cols.any()     # none: a clamp's joint (its terms only decay)
+        coupled += rows.any()
+        for b in range(R.shape[0]):
+            for k in range(c):
+                np.testing.assert_allclose(rows[b * c + k], R[b, k] / R[0, k] * rows[k],
+                                           rtol=1e-14, atol=1e-300)
+                ref = int(np.argmax(np.abs(M[:, k])))
+                np.testing.assert_allclose(cols[:, b * c + k],
+                                           M[b, k] / M[ref, k] * cols[:, ref * c + k],
+                                           rtol=1e-14, atol=1e-300)
+    assert coupled >= 2 * m.N - 1
+
+
+@pytest.mark.parametrize("rates,moduli,why", [
+    ([1.0, -1.0, 1.0], [1.0, 1.0, 1.0], "positive"),
+    ([1.0, 1.0, 1.0, 1.0], [1.0, 1.0, 1.0, 1.0], "B x strains"),
+    ([1.0, 1.0, 1.0], [1.0, np.nan, 1.0], "finite")])
+def test_relaxation_blocks_without_the_structure_stay_kept(rates, moduli, why):
+    """Blocks whose rates or moduli cannot carry the structure are not eliminated, said
+    why, and the solve is still J^-1."""
+    rng = np.random.default_rng(24)
+    A, ab, kl, ku, blocks, cells, pattern, relax = _relaxation_system(4, rng)
+    relax[1] = RelaxationBlock(relax[1].offset, 3, np.array(rates, float),
+                               np.array(moduli, float))
+    cond = CondensedNewton(load(), A.shape[0], kl, ku, ab.shape[0], blocks, cells=cells,
+                           pattern=pattern, relaxation_blocks=relax)
+    assert cond.relaxation_eliminated == 0
+    assert why in cond.relaxation_reason, cond.relaxation_reason
+    assert cond.factor(ab) == 0
+    b = rng.standard_normal(A.shape[0])
+    np.testing.assert_allclose(cond.solve(ab, b), np.linalg.solve(A, b), rtol=1e-9,
+                               atol=1e-11)

@@ -21,24 +21,26 @@
 #include "rod_contact.h"
 
 
+/* -sum_b C_b q_b over nb terms of 3 (C and q term after term), into out; the sums in
+ * locals (out may alias C or q as far as the compiler knows: a store and a reload per
+ * term otherwise), in the same order */
+static inline void relax_resultant(int nb, const double* C, const double* q, double* out) {
+  double a0 = 0.0, a1 = 0.0, a2 = 0.0;
+  int b;
+  for (b = 0; b < nb; ++b, C += 3, q += 3) {
+    a0 -= C[0] * q[0];
+    a1 -= C[1] * q[1];
+    a2 -= C[2] * q[2];
+  }
+  out[0] = a0; out[1] = a1; out[2] = a2;
+}
+
 /* the resultant of the relaxation terms of segment i (joint: jq): -sum_b C_b q_b */
 static void seg_nq(const kvrod_rod* r, int i, const double* y, double* nq) {
-  int b, k;
-  nq[0] = nq[1] = nq[2] = 0.0;
-  for (b = 0; b < r->nb; ++b) {
-    const double* C = segb(r, i, b);
-    const double* q = y + i_qs(r, i) + 3 * b;
-    for (k = 0; k < 3; ++k) nq[k] -= C[k] * q[k];
-  }
+  relax_resultant(r->nb, segb(r, i, 0), y + i_qs(r, i), nq);
 }
 static void jnt_mq(const kvrod_rod* r, int j, const double* y, double* mq) {
-  int b, k;
-  mq[0] = mq[1] = mq[2] = 0.0;
-  for (b = 0; b < r->nb; ++b) {
-    const double* C = jntb(r, j, b);
-    const double* q = y + i_qj(r, j) + 3 * b;
-    for (k = 0; k < 3; ++k) mq[k] -= C[k] * q[k];
-  }
+  relax_resultant(r->nb, jntb(r, j, 0), y + i_qj(r, j), mq);
 }
 
 static const double kZero3[3] = {0.0, 0.0, 0.0};

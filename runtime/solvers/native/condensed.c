@@ -82,18 +82,31 @@ typedef struct {
        (D), and else involving only first-stage unknowns, its sources x (q_src[q_so[q]
        .. q_so[q+1]-1], full columns; q_tgt: the condensed column of a kept one, else
        -1 - its position in ecol): D dq + A dx = r_q, so dq = g_q - A' dx with
-       g_q = D^-1 r_q (q_g + q_eo[q]), A' = D^-1 A (q_A + q_ao[q], column s at s q_sz,
-       D^-1 in q_dinv + q_eo[q]; q_rho + q_eo[q]: D / (D + cj - q_cjf), below). The kept rows that involve q see J[kept, x] -
+       g_q = D^-1 r_q, A' = D^-1 A. The kept rows that involve q see J[kept, x] -
        J[kept, q] A' and r - J[kept, q] g_q: the first stage then runs unchanged on
-       them. Tables per cell k (ncell + 1 long, offsets into lists):
+       them.
+       The structure of a block (relaxation.RelaxationBlock; the rod's internal strains
+       q_bk' = (strain_k(x) - q_bk) / theta_b): q_sz = B c unknowns, row u = b c + k
+       (c = q_nch[q] strains k, B terms b); the rows of strain k are multiples of its
+       first row: A[u, :] = nu_u A[k, :] (q_nu: theta_0 / theta_b), and the columns of
+       strain k multiples of one: J[r, u] = mu_u J[r, ref_k] (q_mu: the term's modulus
+       over that of ref_k, the term of the largest modulus) for every other row r. So
+       A' = kappa E, kappa_u = nu_u / D_u, E = A[0 .. c-1, :] (c x ns, the first term's
+       rows: q_A + q_ao[q], column s at s c), and J[kept, q] A' = J[kept, ref] sigma E
+       with sigma_k = sum_b mu_bk kappa_bk; J[kept, q] g_q = J[kept, ref] gh,
+       gh_k = sum_b mu_bk g_bk. Per row (at q_eo[q]): q_nu, q_mu (from the tables),
+       q_dinv (D^-1), q_kap (kappa), q_g (g_q), q_rho (D / (D + cj - q_cjf), below);
+       per strain (at q_co[q], c each): q_gh.
+       Tables per cell k (ncell + 1 long, offsets into lists):
          q_cb: the blocks lying in cell k (their g_q is formed a cell ahead of the
                forward sweep);
-         q_fk/q_fl: the blocks whose D^-1, A' the factorisation forms at cell k (the
-               first cell whose rows involve them: all they read is in its window);
+         q_fk/q_fl: the blocks whose D^-1, kappa, E the factorisation forms at cell k
+               (the first cell whose rows involve them: all they read is in its window);
          q_kb: the range of blocks [q_kb[2k], q_kb[2k+1]) that the cell's kept rows
-               involve, their columns q_kcol[q_kco[k] .. q_kco[k+1]-1] (in block order,
-               so that their g_q are consecutive) and q_W + q_kwo[k]: J[the cell's
-               kept rows, those columns] (m_k x their number, column-major);
+               involve, their reference columns q_kcol[q_kco[k] .. q_kco[k+1]-1] (c per
+               block, in block order, so that their gh are consecutive) and q_W +
+               q_kwo[k]: J[the cell's kept rows, those columns] (m_k x their number,
+               column-major);
          q_bk/q_bl: the blocks whose dq the backward sweep finishes at cell k (the
                lowest cell of their sources);
        and q_ucell/q_ustep: the cells in the order of the fused Newton update, each after
@@ -104,8 +117,9 @@ typedef struct {
        current cj's D, exactly for the correction it applies (see there); the plain
        solve (cond_solve_raw) is J^-1 of the factorised J. */
     int nq;
-    const int *q_off, *q_sz, *q_eo, *q_so, *q_src, *q_tgt, *q_ao;
-    double *q_A, *q_dinv, *q_g, *q_rho;
+    const int *q_off, *q_sz, *q_nch, *q_eo, *q_co, *q_so, *q_src, *q_tgt, *q_ao;
+    const double *q_nu, *q_mu;
+    double *q_A, *q_dinv, *q_kap, *q_g, *q_rho, *q_gh;
     const int *q_cb, *q_fk, *q_fl, *q_kb, *q_kco, *q_kcol;
     const long long *q_kwo;
     double *q_W;
@@ -279,38 +293,52 @@ KV_INLINE double kv_at(const kv_cond *c, const double *ab, int i, int j)
     return (i - j > c->kl || j - i > c->ku) ? 0.0 : ab[kv_col(c, j, i)];
 }
 
-/* D^-1 and A' of the relaxation blocks formed at cell k (q_fk); -1 when a D is
+/* D^-1, kappa and E of the relaxation blocks formed at cell k (q_fk); -1 when a D is
    singular (a zero or non-finite diagonal entry). */
 static int q_elim_cell(kv_cond *c, const double *ab, int k)
 {
     for (int l = c->q_fk[k]; l < c->q_fk[k + 1]; ++l) {
-        const int q = c->q_fl[l], o = c->q_off[q], sz = c->q_sz[q], s0 = c->q_so[q];
-        const int ns = c->q_so[q + 1] - s0;
-        double *di = c->q_dinv + c->q_eo[q], *A = c->q_A + c->q_ao[q];
+        const int q = c->q_fl[l], o = c->q_off[q], sz = c->q_sz[q], nch = c->q_nch[q];
+        const int s0 = c->q_so[q], ns = c->q_so[q + 1] - s0;
+        double *di = c->q_dinv + c->q_eo[q], *kap = c->q_kap + c->q_eo[q];
+        const double *nu = c->q_nu + c->q_eo[q];
+        double *E = c->q_A + c->q_ao[q];
         for (int u = 0; u < sz; ++u) {
             const double d = ab[kv_col(c, o + u, o + u)];
             if (!(d != 0.0) || !isfinite(d)) return -1;
             di[u] = 1.0 / d;
+            kap[u] = nu[u] * di[u];
         }
         for (int s = 0; s < ns; ++s) {
             const int j = c->q_src[s0 + s];
-            double *restrict a = A + (size_t)s * sz;
-            if (o - j >= -c->ku && o + sz - 1 - j <= c->kl) {  /* the rows in the band */
+            double *restrict e = E + (size_t)s * nch;
+            if (o - j >= -c->ku && o + nch - 1 - j <= c->kl) {  /* the rows in the band */
                 const double *restrict col = ab + kv_col(c, j, o);
-                for (int u = 0; u < sz; ++u) a[u] = col[u] * di[u];
+                for (int u = 0; u < nch; ++u) e[u] = col[u];
             } else {
-                for (int u = 0; u < sz; ++u) a[u] = kv_at(c, ab, o + u, j) * di[u];
+                for (int u = 0; u < nch; ++u) e[u] = kv_at(c, ab, o + u, j);
             }
         }
     }
     return 0;
 }
 
+/* sum over the terms of the strains of a block: out_k = sum_b a_bk b_bk (c strains, sz
+   unknowns, row u = b c + k) */
+KV_INLINE void q_strain_sums(int nch, int sz, const double *restrict a,
+                             const double *restrict b, double *restrict out)
+{
+    for (int k = 0; k < nch; ++k) out[k] = a[k] * b[k];
+    for (int u = nch; u < sz; u += nch)
+        for (int k = 0; k < nch; ++k) out[k] += a[u + k] * b[u + k];
+}
+
 /* The relaxation blocks' fill on the gathered columns of cell k (bt_factor_cell: T =
    [L_k | A_k] over the kept columns from condensed column s0, Cu = C_k, W = W_k over
    the eliminated columns from position e0; m rows in nrun runs, rl as gather_cols):
-   Wq <- J[kept rows, q], then J[kept rows, x] -= J[kept rows, q] A' for every block q
-   that the cell's rows involve, one source column at a time. */
+   Wq <- J[kept rows, reference columns], then J[kept rows, x] -= J[kept rows, ref]
+   sigma E for every block q that the cell's rows involve, one source column at a
+   time. */
 KV_INLINE void q_fill_cell(kv_cond *c, const double *ab, int k, int mp, int m, int s0,
                            int e0, int nrun, const int *run, int rl, double *T, double *Cu,
                            double *W)
@@ -318,12 +346,15 @@ KV_INLINE void q_fill_cell(kv_cond *c, const double *ab, int k, int mp, int m, i
     const int b0 = c->q_kb[2 * k], b1 = c->q_kb[2 * k + 1];
     if (b1 <= b0) return;
     double *Wq = c->q_W + c->q_kwo[k];
-    const int qe0 = c->q_eo[b0];
+    const int co0 = c->q_co[b0];
     gather_cols(c, ab, c->q_kco[k + 1] - c->q_kco[k], c->q_kcol + c->q_kco[k], nrun, run, rl,
                 m, Wq);
     for (int q = b0; q < b1; ++q) {
-        const int sz = c->q_sz[q], so = c->q_so[q], ns = c->q_so[q + 1] - so;
-        const double *w = Wq + (size_t)(c->q_eo[q] - qe0) * m, *A = c->q_A + c->q_ao[q];
+        const int nch = c->q_nch[q], sz = c->q_sz[q], so = c->q_so[q];
+        const int ns = c->q_so[q + 1] - so;
+        const double *w = Wq + (size_t)(c->q_co[q] - co0) * m, *E = c->q_A + c->q_ao[q];
+        double sig[KV_QMAX], a[KV_QMAX];
+        q_strain_sums(nch, sz, c->q_mu + c->q_eo[q], c->q_kap + c->q_eo[q], sig);
         for (int s = 0; s < ns; ++s) {
             const int tg = c->q_tgt[so + s];
             double *t;
@@ -333,14 +364,15 @@ KV_INLINE void q_fill_cell(kv_cond *c, const double *ab, int k, int mp, int m, i
             } else {
                 t = W + (size_t)(-1 - tg - e0) * m;
             }
-            mv_acc(m, sz, w, A + (size_t)s * sz, 0, t, t);
+            for (int u = 0; u < nch; ++u) a[u] = sig[u] * E[(size_t)s * nch + u];
+            mv_acc(m, nch, w, a, 0, t, t);
         }
     }
 }
 
-/* g_q = D^-1 r_q of the relaxation blocks of cell k; with dcj = cj - q_cjf != 0, D at
-   the current cj: g_q = rho D^-1 r_q, rho = D / (D + dcj) = 1 / (1 + dcj D^-1) (kept in
-   q_rho for q_finish_n) */
+/* g_q = D^-1 r_q and gh of the relaxation blocks of cell k; with dcj = cj - q_cjf != 0,
+   D at the current cj: g_q = rho D^-1 r_q, rho = D / (D + dcj) = 1 / (1 + dcj D^-1)
+   (kept in q_rho for q_finish_n) */
 KV_INLINE void q_g_cell(kv_cond *c, const double *restrict res, int k, double dcj)
 {
     const int q0 = c->q_cb[k], q1 = c->q_cb[k + 1];
@@ -357,68 +389,58 @@ KV_INLINE void q_g_cell(kv_cond *c, const double *restrict res, int k, double dc
                 g[u] = rho[u] * (di[u] * res[o + u]);
             }
         }
+        q_strain_sums(c->q_nch[q], sz, c->q_mu + c->q_eo[q], g, c->q_gh + c->q_co[q]);
     }
 }
 
-/* tmp (the kept residual of cell k, m rows) -= J[kept rows, q] g_q over the blocks the
-   cell's rows involve */
+/* tmp (the kept residual of cell k, m rows) -= J[kept rows, q] g_q = J[kept rows, ref]
+   gh over the blocks the cell's rows involve */
 KV_INLINE void q_forward_cell(const kv_cond *c, int k, int m, double *restrict tmp)
 {
     const int b0 = c->q_kb[2 * k], b1 = c->q_kb[2 * k + 1];
     if (b1 <= b0) return;
-    mv_acc(m, c->q_kco[k + 1] - c->q_kco[k], c->q_W + c->q_kwo[k], c->q_g + c->q_eo[b0], 0,
+    mv_acc(m, c->q_kco[k + 1] - c->q_kco[k], c->q_W + c->q_kwo[k], c->q_gh + c->q_co[b0], 0,
            tmp, tmp);
 }
 
-/* d (sz) = g - A x, A (sz x ns, column-major); sz a literal for the common sizes. With
-   rho (the current cj's, q_g_cell) or iscale = 1/scale != 1: d = iscale g - rho A x, so
-   that the scaled correction scale d solves the relaxation rows at the current cj for
-   the scaled dx (cond_solve_bt_q). */
-KV_INLINE void q_finish_n(int sz, int ns, const double *restrict A, const double *restrict x,
-                          const double *restrict g, double *restrict d,
-                          const double *restrict rho, double iscale)
+/* d (sz) = iscale g - rho kappa (E x) (rho 1 when NULL), E (nch x ns, column-major),
+   row u = b nch + k; nch a literal for the rod's 3. With rho the current cj's
+   (q_g_cell) and iscale = 1/scale, the scaled correction scale d solves the relaxation
+   rows at the current cj for the scaled dx (cond_solve_bt_q). */
+KV_INLINE void q_finish_n(int nch, int sz, int ns, const double *restrict E,
+                          const double *restrict x, const double *restrict g,
+                          const double *restrict kap, const double *restrict rho,
+                          double iscale, double *restrict d)
 {
-    double acc[KV_QMAX];
-    if (!rho && iscale == 1.0) {
-        for (int u = 0; u < sz; ++u) acc[u] = g[u];
-        for (int s = 0; s < ns; ++s) {
-            const double t = x[s];
-            const double *restrict a = A + (size_t)s * sz;
-            for (int u = 0; u < sz; ++u) acc[u] -= a[u] * t;
-        }
-        for (int u = 0; u < sz; ++u) d[u] = acc[u];
-        return;
-    }
-    for (int u = 0; u < sz; ++u) acc[u] = 0.0;
+    double e[KV_QMAX];
+    for (int k = 0; k < nch; ++k) e[k] = 0.0;
     for (int s = 0; s < ns; ++s) {
         const double t = x[s];
-        const double *restrict a = A + (size_t)s * sz;
-        for (int u = 0; u < sz; ++u) acc[u] += a[u] * t;
+        const double *restrict a = E + (size_t)s * nch;
+        for (int k = 0; k < nch; ++k) e[k] += a[k] * t;
     }
-    if (rho)
-        for (int u = 0; u < sz; ++u) d[u] = iscale * g[u] - rho[u] * acc[u];
-    else
-        for (int u = 0; u < sz; ++u) d[u] = iscale * g[u] - acc[u];
+    for (int u = 0; u < sz; u += nch)
+        for (int k = 0; k < nch; ++k) {
+            const double r = kap[u + k] * e[k];
+            d[u + k] = iscale * g[u + k] - (rho ? rho[u + k] * r : r);
+        }
 }
 
 /* dq = g_q - A' dx into res, for the blocks finished at backward step k (their sources
-   are in res) */
+   are in res); cur: at the current cj (q_rho), iscale as q_finish_n */
 KV_INLINE void q_backward_cell(const kv_cond *c, int k, double *res, int cur,
                                double iscale)
 {
     double x[KV_QMAX_SRC];
     for (int l = c->q_bk[k]; l < c->q_bk[k + 1]; ++l) {
-        const int q = c->q_bl[l], sz = c->q_sz[q], so = c->q_so[q];
-        const int ns = c->q_so[q + 1] - so;
-        const double *A = c->q_A + c->q_ao[q], *g = c->q_g + c->q_eo[q];
-        const double *rho = cur ? c->q_rho + c->q_eo[q] : NULL;
+        const int q = c->q_bl[l], sz = c->q_sz[q], so = c->q_so[q], nch = c->q_nch[q];
+        const int ns = c->q_so[q + 1] - so, eo = c->q_eo[q];
+        const double *E = c->q_A + c->q_ao[q], *g = c->q_g + eo, *kap = c->q_kap + eo;
+        const double *rho = cur ? c->q_rho + eo : NULL;
         for (int s = 0; s < ns; ++s) x[s] = res[c->q_src[so + s]];
         double *d = res + c->q_off[q];
-        if (sz == 9) q_finish_n(9, ns, A, x, g, d, rho, iscale);
-        else if (sz == 6) q_finish_n(6, ns, A, x, g, d, rho, iscale);
-        else if (sz == 12) q_finish_n(12, ns, A, x, g, d, rho, iscale);
-        else if (sz == 3) q_finish_n(3, ns, A, x, g, d, rho, iscale);
-        else q_finish_n(sz, ns, A, x, g, d, rho, iscale);
+        if (nch == 3) q_finish_n(3, sz, ns, E, x, g, kap, rho, iscale, d);
+        else q_finish_n(nch, sz, ns, E, x, g, kap, rho, iscale, d);
     }
 }
 

@@ -14,9 +14,12 @@ from runtime.sorted_sets import sorted_unique
 from .loader import load
 
 #: the relaxation blocks' tables (relaxation.py), in the order of ``kv_cond``
-_Q_FIELDS = ("q_off", "q_sz", "q_eo", "q_so", "q_src", "q_tgt", "q_ao", "q_A", "q_dinv",
-             "q_g", "q_rho", "q_cb", "q_fk", "q_fl", "q_kb", "q_kco", "q_kcol", "q_kwo",
-             "q_W", "q_bk", "q_bl", "q_ucell", "q_ustep")
+_Q_FIELDS = ("q_off", "q_sz", "q_nch", "q_eo", "q_co", "q_so", "q_src", "q_tgt", "q_ao",
+             "q_nu", "q_mu", "q_A", "q_dinv", "q_kap", "q_g", "q_rho", "q_gh", "q_cb",
+             "q_fk", "q_fl", "q_kb", "q_kco", "q_kcol", "q_kwo", "q_W", "q_bk", "q_bl",
+             "q_ucell", "q_ustep")
+#: its real-valued ones (the rest int32, q_kwo int64)
+_Q_REAL = ("q_nu", "q_mu", "q_A", "q_dinv", "q_kap", "q_g", "q_rho", "q_gh", "q_W")
 
 
 class _CondStruct(ctypes.Structure):
@@ -54,10 +57,11 @@ class CondensedNewton:
     otherwise, or without cells, by the band LU of the condensed band
     (``block_tridiagonal`` False, ``band_reason`` says why).
 
-    ``relaxation_blocks`` (optional, the block path with a pattern only): ``(offset,
-    size)`` ranges of unknowns whose rows (the same range) are diagonal in them and
-    otherwise involve only the unknowns of the kinematic stage (a Maxwell rod's internal
-    strains: ``relaxation.py``). They are eliminated first, into the rows that involve
+    ``relaxation_blocks`` (optional, the block path with a pattern only):
+    :class:`~runtime.solvers.native.relaxation.RelaxationBlock` ranges of unknowns whose
+    rows (the same range) are diagonal in them and otherwise involve only the unknowns of
+    the kinematic stage, with the structure of a Maxwell rod's internal strains
+    (``relaxation.py``). They are eliminated first, into the rows that involve
     them, when J's pattern shows that their fill stays between neighbouring cells
     (``relaxation_eliminated`` blocks); otherwise they stay kept unknowns
     (``relaxation_reason`` says why).
@@ -84,26 +88,25 @@ class CondensedNewton:
         if pattern is not None:
             _check_block_rows(pattern, kl, ku, b, entries)
         diag = _diagonal_blocks(pattern, kl, ku, b)
-        rq = np.asarray(relaxation_blocks if relaxation_blocks is not None else [],
-                        dtype=np.int64).reshape(-1, 2)
-        rq = rq[np.argsort(rq[:, 0], kind="stable")]
+        rblocks = sorted(relaxation_blocks or [], key=lambda r: r.offset)
+        rq = np.array([(r.offset, r.size) for r in rblocks], dtype=np.int64).reshape(-1, 2)
         self.relaxation_reason: str | None = None
         qt = None
         if len(rq) and (cells is None or pattern is None):
             self.relaxation_reason = "relaxation blocks need the cells and the pattern"
-            rq = rq[:0]
+            rq, rblocks = rq[:0], []
         while True:
             keep_row, keep_col, row2c, col2c = _kept(n, b, rq)
             bt, self.band_reason = _cell_tables(n, kl, ku, b, keep_row, keep_col, col2c, cells,
                                                 pattern, diag, rq, entries)
             if len(rq) and bt is not None:
-                qt, self.relaxation_reason = _relaxation(n, b, rq, bt, keep_row, col2c,
-                                                         entries)
+                qt, self.relaxation_reason = _relaxation(n, b, rblocks, bt, keep_row,
+                                                         col2c, entries)
             elif len(rq):
                 self.relaxation_reason = "the condensed matrix is not block tridiagonal"
             if not len(rq) or qt is not None:
                 break
-            rq = rq[:0]                  # the relaxation blocks stay kept unknowns
+            rq, rblocks = rq[:0], []     # the relaxation blocks stay kept unknowns
         nc = keep_row.size
         #: relaxation blocks eliminated (the second stage: relaxation.py)
         self.relaxation_eliminated = len(rq)
@@ -155,9 +158,8 @@ class CondensedNewton:
         self._keep.update({k: v for k, v in bt.items() if k not in ("ncell", "mmax")})
         self._keep["diag"] = diag
         if qt is None:
-            real = ("q_A", "q_dinv", "q_g", "q_rho", "q_W")
             qt = {k: np.zeros(1, np.int64 if k == "q_kwo" else
-                              np.float64 if k in real else np.int32)
+                              np.float64 if k in _Q_REAL else np.int32)
                   for k in _Q_FIELDS}
         self._keep.update({k: qt[k] for k in _Q_FIELDS})
         ptrs = (self._keep[k].ctypes.data for k in (
@@ -246,7 +248,7 @@ def _kept(n: int, b, rq):
     return keep_row, keep_col, row2c, col2c
 
 
-def _relaxation(n: int, b, rq, bt, keep_row, col2c, entries):
+def _relaxation(n: int, b, rblocks, bt, keep_row, col2c, entries):
     """relaxation.relaxation_tables on the block path's cells."""
     import numpy as np
 
@@ -258,7 +260,7 @@ def _relaxation(n: int, b, rq, bt, keep_row, col2c, entries):
                                                                       strict=True)])
         ecol_pos[ecol] = np.arange(ecol.size)
     i, j = entries
-    return relaxation_tables(n, rq, bt["cf"].astype(np.int64), keep_row,
+    return relaxation_tables(n, rblocks, bt["cf"].astype(np.int64), keep_row,
                              col2c.astype(np.int64), ecol_pos, i, j)
 
 

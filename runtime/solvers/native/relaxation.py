@@ -17,12 +17,76 @@ strains on the two frames of the joint).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 #: most unknowns and sources of one block (KV_QMAX, KV_QMAX_SRC in condensed.c; the rod:
 #: 3 per relaxation term, at most 24 terms; 10 sources)
 MAX_SIZE = 72
 MAX_SOURCES = 32
+
+
+@dataclass(frozen=True)
+class RelaxationBlock:
+    """One relaxation block: the unknowns ``offset .. offset + size - 1`` of B terms of
+    ``channels`` = c strains each, unknown u = b c + k for term b, strain k (size = B c),
+    with the structure of a generalized Maxwell rod's internal strains,
+    ``q_bk' = (strain_k(x) - q_bk) / theta_b`` in the rows and ``- sum_b C_bk q_bk`` in
+    the resultants that the other rows see (runtime/model/native/rod_assembly.c):
+
+    * row u: diagonal in the block (``cj + rates[u]``), and on the other unknowns
+      ``-rates[u] dstrain_k/dx``: the rows of one strain differ by the factor
+      ``rates[u]`` (1/theta_b) only;
+    * column u: ``moduli[u] G[r, k]`` in every other row r (G from the state): the
+      columns of one strain differ by the factor ``moduli[u]`` (C_bk) only.
+
+    The elimination (condensed.c, ``kv_cond``) forms the products of a block per strain,
+    not per unknown, from these factors; the rates must be positive and finite, the
+    moduli finite.
+    """
+
+    offset: int
+    channels: int
+    rates: np.ndarray
+    moduli: np.ndarray
+
+    @property
+    def size(self) -> int:
+        return int(np.size(self.rates))
+
+
+def _structure(blocks) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | str:
+    """Per block its strains c; per unknown nu = its rate / the first term's and mu = its
+    modulus / the reference term's (the q_nu, q_mu tables); per strain the reference
+    unknown (the term of the largest modulus), ``b c + k``; or why the blocks do not
+    have the structure. Blocks of one shape (the rod's) are done together."""
+    nch = np.array([b.channels for b in blocks], dtype=np.int64)
+    nu, mu, ref = [], [], []
+    shapes = {(int(b.channels), np.shape(b.rates), np.shape(b.moduli)) for b in blocks}
+    groups = ([blocks] if len(shapes) == 1 else [[b] for b in blocks])
+    for grp in groups:
+        b0 = grp[0]
+        c = int(b0.channels)
+        r = np.array([np.asarray(b.rates, float) for b in grp])
+        mdl = np.array([np.asarray(b.moduli, float) for b in grp])
+        if c < 1 or r.ndim != 2 or mdl.shape != r.shape or r.shape[1] % c:
+            return (f"relaxation block at {b0.offset}: {r.shape[-1]} rates, "
+                    f"{mdl.shape[-1]} moduli, {c} strains: expected B x strains of each")
+        if not (np.all(np.isfinite(r)) and np.all(r > 0.0) and np.all(np.isfinite(mdl))):
+            return (f"relaxation block at {b0.offset}: rates must be positive and finite, "
+                    "moduli finite")
+        R, M = r.reshape(len(grp), -1, c), mdl.reshape(len(grp), -1, c)
+        # rows of strain k: multiples of the first term's (A[u] = nu_u A[k])
+        nu.append((R / R[:, :1]).ravel())
+        # columns of strain k: multiples of the reference term's (its largest modulus;
+        # a strain without any modulus has columns of zeros: mu 0)
+        kb = np.argmax(np.abs(M), axis=1)                                  # (blocks, c)
+        Mr = np.take_along_axis(M, kb[:, None, :], axis=1)
+        mu.append(np.divide(M, Mr, out=np.zeros_like(M), where=Mr != 0.0).ravel())
+        ref.append((kb * c + np.arange(c)).ravel())
+    cat = lambda a: np.concatenate(a) if a else np.zeros(0)  # noqa: E731
+    return nch, cat(nu), cat(mu), cat(ref).astype(np.int64)
 
 
 def _ranges(starts, lengths):
@@ -35,7 +99,7 @@ def _ranges(starts, lengths):
 def relaxation_tables(n: int, blocks, cf, keep_row, col2c, ecol_pos,
                       i, j):
     """The tables of the ``q_`` fields of ``kv_cond`` for the relaxation ``blocks``
-    (``(offset, size)`` rows, sorted by offset) on cells ``cf`` (first index of each cell
+    (:class:`RelaxationBlock`, sorted by offset) on cells ``cf`` (first index of each cell
     and n), and None; or None and why the blocks cannot be eliminated on the block path.
 
     ``keep_row``/``col2c``: the kept rows and the condensed index of each column (-1:
@@ -43,8 +107,12 @@ def relaxation_tables(n: int, blocks, cf, keep_row, col2c, ecol_pos,
     first-stage eliminated column in the block order (-1 for others); ``i, j``: J's
     structural nonzeros.
     """
-    q = np.asarray(blocks, dtype=np.int64).reshape(-1, 2)
+    q = np.array([(b.offset, b.size) for b in blocks], dtype=np.int64).reshape(-1, 2)
     nq = len(q)
+    st = _structure(blocks)
+    if isinstance(st, str):
+        return None, st
+    nch, q_nu, q_mu, qref = st
     ncell = len(cf) - 1
     cell = np.repeat(np.arange(ncell), np.diff(cf))
     qid = np.full(n, -1, np.int64)
@@ -134,23 +202,28 @@ def relaxation_tables(n: int, blocks, cf, keep_row, col2c, ecol_pos,
         k0[k1 == 0] = 0
     kb = np.stack([k0, k1], axis=1)
     bsel = _ranges(k0, k1 - k0)
+    # ... their reference columns (one per strain)
+    co = np.concatenate(([0], np.cumsum(nch)))
     kn = np.zeros(ncell, np.int64)
-    np.add.at(kn, np.repeat(np.arange(ncell), k1 - k0), q[bsel, 1])
-    kcol = _ranges(q[bsel, 0], q[bsel, 1])
+    np.add.at(kn, np.repeat(np.arange(ncell), k1 - k0), nch[bsel])
+    kcol = np.repeat(q[bsel, 0], nch[bsel]) + qref[_ranges(co[bsel], nch[bsel])]
     m = np.diff(np.searchsorted(keep_row, cf))
     kco = np.concatenate(([0], np.cumsum(kn)))
     kwo = np.concatenate(([0], np.cumsum(m * kn)[:-1])).astype(np.int64)
     ns = np.diff(so)
-    ao = np.concatenate(([0], np.cumsum(q[:, 1] * ns)[:-1]))
+    ao = np.concatenate(([0], np.cumsum(nch * ns)[:-1]))
     eo = np.concatenate(([0], np.cumsum(q[:, 1])[:-1]))
+    nqe = int(q[:, 1].sum())
     by_fac = np.argsort(fac, kind="stable")
     by_fin = np.argsort(fin, kind="stable")
     i32 = lambda a: np.ascontiguousarray(a, dtype=np.int32)  # noqa: E731
     return dict(
-        q_off=i32(q[:, 0]), q_sz=i32(q[:, 1]), q_eo=i32(eo), q_so=i32(so), q_src=i32(sj),
-        q_tgt=i32(tgt), q_ao=i32(ao), q_A=np.zeros(max(int((q[:, 1] * ns).sum()), 1)),
-        q_dinv=np.zeros(int(q[:, 1].sum())), q_g=np.zeros(int(q[:, 1].sum())),
-        q_rho=np.zeros(int(q[:, 1].sum())),
+        q_off=i32(q[:, 0]), q_sz=i32(q[:, 1]), q_nch=i32(nch), q_eo=i32(eo), q_co=i32(co),
+        q_so=i32(so), q_src=i32(sj), q_tgt=i32(tgt), q_ao=i32(ao),
+        q_nu=np.ascontiguousarray(q_nu), q_mu=np.ascontiguousarray(q_mu),
+        q_A=np.zeros(max(int((nch * ns).sum()), 1)), q_dinv=np.zeros(nqe),
+        q_kap=np.zeros(nqe), q_g=np.zeros(nqe), q_rho=np.zeros(nqe),
+        q_gh=np.zeros(max(int(nch.sum()), 1)),
         q_cb=i32(np.searchsorted(qcell, np.arange(ncell + 1))),
         q_fk=i32(np.searchsorted(fac[by_fac], np.arange(ncell + 1))), q_fl=i32(by_fac),
         q_kb=i32(kb.ravel()), q_kco=i32(kco), q_kcol=i32(np.append(kcol, 0)),

@@ -1106,9 +1106,17 @@ static int complete_step(kv_ida *S, double tnew, double err_k, double err_km1)
 #define KV_HISTORY(K) history_update(K, n, ph, ee)
     KV_ORDER_SWITCH(ku, KV_HISTORY)
 #undef KV_HISTORY
-    for (int q = 0; q < n; ++q) ewt[q] = 1.0 / (fabs(y[q]) * rtol + atol[q]);
-    if (S->errmask)
-        for (int q = 0; q < n; ++q) S->ewt_err[q] = ewt[q] * S->errmask[q];
+    if (S->errmask) {                   /* one pass for both (the same values) */
+        const double *restrict mask = S->errmask;
+        double *restrict werr = S->ewt_err;
+        for (int q = 0; q < n; ++q) {
+            const double w = 1.0 / (fabs(y[q]) * rtol + atol[q]);
+            ewt[q] = w;
+            werr[q] = w * mask[q];
+        }
+    } else {
+        for (int q = 0; q < n; ++q) ewt[q] = 1.0 / (fabs(y[q]) * rtol + atol[q]);
+    }
     const int errw_rc = S->errw ? S->errw(S->ctx, S->y, rtol, atol, S->ewt_err) : 0;
     if (S->nsens) sens_complete(S, ku);
     S->t_old = S->t;
