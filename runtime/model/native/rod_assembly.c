@@ -215,11 +215,12 @@ static void cin_args(const kvrod_rod* r, int i, const double* y, const double* y
 
 /* the relaxation rows of one element: res = q' - (strain - q)/theta for each term
  * (strain = 0 for an absent clamp joint, whose terms then just decay) */
-static void relax_rows(const kvrod_rod* rod, int q0, const double* strain, const double* y,
-                       const double* yp, double* res) {
+static void relax_rows(const kvrod_rod* rod, const double* rates, int q0,
+                       const double* strain, const double* y, const double* yp,
+                       double* res) {
   int b, k;
   for (b = 0; b < rod->nb; ++b) {
-    const double rate = 1.0 / rod->theta[b];
+    const double rate = rates[b];
     for (k = 0; k < 3; ++k) {
       const int o = q0 + 3 * b + k;
       res[o] = yp[o] - rate * ((strain ? strain[k] : 0.0) - y[o]);
@@ -308,6 +309,8 @@ static int residual_own(const kvrod_rod* rod, const double* y, const double* yp,
   double Q4[4][9], nq4[4][3], dV4[4][3];
   const double* a4[4 * 8];
   double* r4[8];
+  double rates[MAX_NB];       /* 1/theta_b once, not per element (the same values) */
+  for (k = 0; k < rod->nb; ++k) rates[k] = 1.0 / rod->theta[k];
   for (i = 1; i <= N; i += nl) {
     nl = N - i + 1 >= 4 ? 4 : 1;
     if (nl == 4) {
@@ -329,7 +332,7 @@ static int residual_own(const kvrod_rod* rod, const double* y, const double* yp,
     for (l = 0; l < nl; ++l) {
       const int s = i + l;
       const double* Q = Q4[l];
-      if (rod->nb) relax_rows(rod, i_qs(rod, s), dV4[l], y, yp, res);
+      if (rod->nb) relax_rows(rod, rates, i_qs(rod, s), dV4[l], y, yp, res);
       double* ra = res + i_v(rod, s - 1);
       double* rb = res + i_v(rod, s);
       double* ro = res + i_om(rod, s);
@@ -354,7 +357,7 @@ static int residual_own(const kvrod_rod* rod, const double* y, const double* yp,
         return -3;
     } else {
       if (!joint_args(rod, j, y, &W)) {
-        relax_rows(rod, i_qj(rod, j), 0, y, yp, res);
+        relax_rows(rod, rates, i_qj(rod, j), 0, y, yp, res);
         continue;
       }
       jnt_mq(rod, j, y, mq4[0]);
@@ -370,7 +373,7 @@ static int residual_own(const kvrod_rod* rod, const double* y, const double* yp,
       const double* T = T4[l];
       if (jj >= 1) for (k = 0; k < 3; ++k) res[i_om(rod, jj) + k] -= T[k];
       if (jj + 1 <= N) for (k = 0; k < 3; ++k) res[i_om(rod, jj + 1) + k] -= T[3 + k];
-      if (rod->nb) relax_rows(rod, i_qj(rod, jj), dV4[l], y, yp, res);
+      if (rod->nb) relax_rows(rod, rates, i_qj(rod, jj), dV4[l], y, yp, res);
     }
   }
   return 0;

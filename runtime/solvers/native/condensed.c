@@ -125,6 +125,7 @@ typedef struct {
     double *q_W;
     const int *q_bk, *q_bl, *q_ucell, *q_ustep;
     double q_cjf;
+    double q_rdcj;    /* the cj - q_cjf that q_rho holds (NaN: none; set by the solve) */
 } kv_cond;
 
 
@@ -297,6 +298,7 @@ KV_INLINE double kv_at(const kv_cond *c, const double *ab, int i, int j)
    singular (a zero or non-finite diagonal entry). */
 static int q_elim_cell(kv_cond *c, const double *ab, int k)
 {
+    c->q_rdcj = NAN;                            /* q_rho is of the D^-1 before */
     for (int l = c->q_fk[k]; l < c->q_fk[k + 1]; ++l) {
         const int q = c->q_fl[l], o = c->q_off[q], sz = c->q_sz[q], nch = c->q_nch[q];
         const int s0 = c->q_so[q], ns = c->q_so[q + 1] - s0;
@@ -328,6 +330,16 @@ static int q_elim_cell(kv_cond *c, const double *ab, int k)
 KV_INLINE void q_strain_sums(int nch, int sz, const double *restrict a,
                              const double *restrict b, double *restrict out)
 {
+    if (nch == 3) {           /* the rod's: the sums in registers, not through out */
+        double s0 = a[0] * b[0], s1 = a[1] * b[1], s2 = a[2] * b[2];
+        for (int u = 3; u < sz; u += 3) {
+            s0 += a[u] * b[u];
+            s1 += a[u + 1] * b[u + 1];
+            s2 += a[u + 2] * b[u + 2];
+        }
+        out[0] = s0; out[1] = s1; out[2] = s2;
+        return;
+    }
     for (int k = 0; k < nch; ++k) out[k] = a[k] * b[k];
     for (int u = nch; u < sz; u += nch)
         for (int k = 0; k < nch; ++k) out[k] += a[u + k] * b[u + k];
@@ -370,24 +382,54 @@ KV_INLINE void q_fill_cell(kv_cond *c, const double *ab, int k, int mp, int m, i
     }
 }
 
-/* g_q = D^-1 r_q and gh of the relaxation blocks of cell k; with dcj = cj - q_cjf != 0,
-   D at the current cj: g_q = rho D^-1 r_q, rho = D / (D + dcj) = 1 / (1 + dcj D^-1)
-   (kept in q_rho for q_finish_n) */
-KV_INLINE void q_g_cell(kv_cond *c, const double *restrict res, int k, double dcj)
+/* q_rho = D / (D + dcj) = 1 / (1 + dcj D^-1) of every relaxation row, dcj = cj - q_cjf
+   != 0 (the current cj's D), unless it holds them for this dcj already (the corrector's
+   iterations at one cj): one pass that vectorises */
+KV_INLINE void q_rho_at(kv_cond *c, double dcj)
+{
+    if (dcj == c->q_rdcj) return;
+    const int nqe = c->q_eo[c->nq - 1] + c->q_sz[c->nq - 1];
+    const double *restrict di = c->q_dinv;
+    double *restrict rho = c->q_rho;
+    for (int u = 0; u < nqe; ++u) rho[u] = 1.0 / (1.0 + dcj * di[u]);
+    c->q_rdcj = dcj;
+}
+
+/* g_q = D^-1 r_q and gh of the relaxation blocks of cell k; cur: D at the current cj,
+   g_q = rho D^-1 r_q (q_rho_at) */
+KV_INLINE void q_g_cell(kv_cond *c, const double *restrict res, int k, int cur)
 {
     const int q0 = c->q_cb[k], q1 = c->q_cb[k + 1];
     for (int q = q0; q < q1; ++q) {
         const int o = c->q_off[q], sz = c->q_sz[q];
         const double *restrict di = c->q_dinv + c->q_eo[q];
         double *restrict g = c->q_g + c->q_eo[q];
-        if (dcj == 0.0) {
+        const double *restrict rho = c->q_rho + c->q_eo[q];
+        if (c->q_nch[q] == 3) {
+            /* the rod's: g and its sums gh together, in registers (g read back from
+               memory at once stalled on the store forwarding); q_strain_sums' order */
+            const double *restrict mu = c->q_mu + c->q_eo[q];
+            const double *restrict r = res + o;
+            double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+            for (int u = 0; u < sz; u += 3) {
+                double g0 = di[u] * r[u], g1 = di[u + 1] * r[u + 1];
+                double g2 = di[u + 2] * r[u + 2];
+                if (cur) { g0 = rho[u] * g0; g1 = rho[u + 1] * g1; g2 = rho[u + 2] * g2; }
+                g[u] = g0; g[u + 1] = g1; g[u + 2] = g2;
+                if (u == 0) {
+                    s0 = mu[0] * g0; s1 = mu[1] * g1; s2 = mu[2] * g2;
+                } else {
+                    s0 += mu[u] * g0; s1 += mu[u + 1] * g1; s2 += mu[u + 2] * g2;
+                }
+            }
+            double *gh = c->q_gh + c->q_co[q];
+            gh[0] = s0; gh[1] = s1; gh[2] = s2;
+            continue;
+        }
+        if (!cur) {
             for (int u = 0; u < sz; ++u) g[u] = di[u] * res[o + u];
         } else {
-            double *restrict rho = c->q_rho + c->q_eo[q];
-            for (int u = 0; u < sz; ++u) {
-                rho[u] = 1.0 / (1.0 + dcj * di[u]);
-                g[u] = rho[u] * (di[u] * res[o + u]);
-            }
+            for (int u = 0; u < sz; ++u) g[u] = rho[u] * (di[u] * res[o + u]);
         }
         q_strain_sums(c->q_nch[q], sz, c->q_mu + c->q_eo[q], g, c->q_gh + c->q_co[q]);
     }
@@ -857,13 +899,15 @@ static double cond_solve_bt_q(kv_cond *c, double *res, int upd, double scale,
        (upd = 0) is J^-1 */
     const double dcj = upd ? cj - c->q_cjf : 0.0;
     const double iscale = upd && scale != 1.0 ? 1.0 / scale : 1.0;
+    const int cur = dcj != 0.0;
+    if (cur) q_rho_at(c, dcj);
     bt_g_cell(c, res, 0, 0);
-    q_g_cell(c, res, 0, dcj);
+    q_g_cell(c, res, 0, cur);
     for (int k = 0; k < c->ncell; ++k) {
         if (k + 1 < c->ncell) {
             if (c->kv6[k + 1]) bt_g_cell(c, res, k + 1, 1);
             else bt_g_cell(c, res, k + 1, 0);
-            q_g_cell(c, res, k + 1, dcj);
+            q_g_cell(c, res, k + 1, cur);
         }
         BT_SIZES(c, k)
         (void)mn;
@@ -877,7 +921,7 @@ static double cond_solve_bt_q(kv_cond *c, double *res, int upd, double scale,
         (void)mp; (void)ne3;
         if (c->kv6[k]) bt_backward_cell(c, res, k, 6, 6, 1);
         else bt_backward_cell(c, res, k, m, mn, 0);
-        q_backward_cell(c, k, res, dcj != 0.0, iscale);
+        q_backward_cell(c, k, res, cur, iscale);
         for (; upd && u < c->ncell && c->q_ustep[u] == k; ++u) {
             const int f0 = c->cf[c->q_ucell[u]], len = c->cf[c->q_ucell[u] + 1] - f0;
             s += newton_update4(len, res + f0, scale, ewt + f0, ee + f0, yy + f0, ypw + f0,

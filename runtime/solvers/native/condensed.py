@@ -34,7 +34,8 @@ class _CondStruct(ctypes.Structure):
         (name, ctypes.c_void_p) for name in
         ("cf", "cs", "cb", "ce", "eo", "fo", "xo", "F", "X", "ge", "T", "rp", "run", "ecol",
          "kv6", "diag")] + [("col0", ctypes.c_int), ("nq", ctypes.c_int)] + [
-        (name, ctypes.c_void_p) for name in _Q_FIELDS] + [("q_cjf", ctypes.c_double)]
+        (name, ctypes.c_void_p) for name in _Q_FIELDS] + [
+        (name, ctypes.c_double) for name in ("q_cjf", "q_rdcj")]
 
 
 class CondensedNewton:

@@ -115,11 +115,12 @@ def relaxation_tables(n: int, blocks, cf, keep_row, col2c, ecol_pos,
     nch, q_nu, q_mu, qref = st
     ncell = len(cf) - 1
     cell = np.repeat(np.arange(ncell), np.diff(cf))
+    # disjoint ranges inside the state (sorted by offset: each ends before the next)
+    if nq and (np.any(q[:, 1] < 1) or q[0, 0] < 0 or np.any(q[:, 0] + q[:, 1] > n)
+               or np.any(q[:-1, 0] + q[:-1, 1] > q[1:, 0])):
+        return None, "relaxation blocks are not disjoint ranges of the state"
     qid = np.full(n, -1, np.int64)
-    for b, (o, s) in enumerate(q):
-        if s < 1 or o < 0 or o + s > n or np.any(qid[o:o + s] >= 0):
-            return None, "relaxation blocks are not disjoint ranges of the state"
-        qid[o:o + s] = b
+    qid[_ranges(q[:, 0], q[:, 1])] = np.repeat(np.arange(nq), q[:, 1])
     if np.any(q[:, 1] > MAX_SIZE):
         return None, f"a relaxation block has more than {MAX_SIZE} unknowns"
     qcell = cell[q[:, 0]]
