@@ -330,16 +330,6 @@ static int q_elim_cell(kv_cond *c, const double *ab, int k)
 KV_INLINE void q_strain_sums(int nch, int sz, const double *restrict a,
                              const double *restrict b, double *restrict out)
 {
-    if (nch == 3) {           /* the rod's: the sums in registers, not through out */
-        double s0 = a[0] * b[0], s1 = a[1] * b[1], s2 = a[2] * b[2];
-        for (int u = 3; u < sz; u += 3) {
-            s0 += a[u] * b[u];
-            s1 += a[u + 1] * b[u + 1];
-            s2 += a[u + 2] * b[u + 2];
-        }
-        out[0] = s0; out[1] = s1; out[2] = s2;
-        return;
-    }
     for (int k = 0; k < nch; ++k) out[k] = a[k] * b[k];
     for (int u = nch; u < sz; u += nch)
         for (int k = 0; k < nch; ++k) out[k] += a[u + k] * b[u + k];
@@ -406,8 +396,9 @@ KV_INLINE void q_g_cell(kv_cond *c, const double *restrict res, int k, int cur)
         double *restrict g = c->q_g + c->q_eo[q];
         const double *restrict rho = c->q_rho + c->q_eo[q];
         if (c->q_nch[q] == 3) {
-            /* the rod's: g and its sums gh together, in registers (g read back from
-               memory at once stalled on the store forwarding); q_strain_sums' order */
+            /* the rod's (the hot path; q_strain_sums serves the rest): g and its sums
+               gh together, in registers (g read back from memory at once stalled on the
+               store forwarding); q_strain_sums' order */
             const double *restrict mu = c->q_mu + c->q_eo[q];
             const double *restrict r = res + o;
             double s0 = 0.0, s1 = 0.0, s2 = 0.0;
