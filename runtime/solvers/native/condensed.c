@@ -95,7 +95,8 @@ typedef struct {
        rows: q_A + q_ao[q], column s at s c), and J[kept, q] A' = J[kept, ref] sigma E
        with sigma_k = sum_b mu_bk kappa_bk; J[kept, q] g_q = J[kept, ref] gh,
        gh_k = sum_b mu_bk g_bk. Per row (at q_eo[q]): q_nu, q_mu (from the tables),
-       q_dinv (D^-1), q_kap (kappa), q_g (g_q), q_rho (D / (D + cj - q_cjf), below);
+       q_dinv (D^-1), q_kap (kappa), q_g (g_q), q_dc and q_kc (D^-1 and kappa at the
+       current cj, D + cj - q_cjf: below);
        per strain (at q_co[q], c each): q_gh.
        Tables per cell k (ncell + 1 long, offsets into lists):
          q_cb: the blocks lying in cell k (their g_q is formed a cell ahead of the
@@ -119,13 +120,13 @@ typedef struct {
     int nq;
     const int *q_off, *q_sz, *q_nch, *q_eo, *q_co, *q_so, *q_src, *q_tgt, *q_ao;
     const double *q_nu, *q_mu;
-    double *q_A, *q_dinv, *q_kap, *q_g, *q_rho, *q_gh;
+    double *q_A, *q_dinv, *q_kap, *q_g, *q_dc, *q_kc, *q_gh;
     const int *q_cb, *q_fk, *q_fl, *q_kb, *q_kco, *q_kcol;
     const long long *q_kwo;
     double *q_W;
     const int *q_bk, *q_bl, *q_ucell, *q_ustep;
     double q_cjf;
-    double q_rdcj;    /* the cj - q_cjf that q_rho holds (NaN: none; set by the solve) */
+    double q_rdcj;    /* the cj - q_cjf that q_dc, q_kc hold (NaN: none; set by the solve) */
 } kv_cond;
 
 
@@ -298,7 +299,7 @@ KV_INLINE double kv_at(const kv_cond *c, const double *ab, int i, int j)
    singular (a zero or non-finite diagonal entry). */
 static int q_elim_cell(kv_cond *c, const double *ab, int k)
 {
-    c->q_rdcj = NAN;                            /* q_rho is of the D^-1 before */
+    c->q_rdcj = NAN;                            /* q_dc, q_kc are of the D^-1 before */
     for (int l = c->q_fk[k]; l < c->q_fk[k + 1]; ++l) {
         const int q = c->q_fl[l], o = c->q_off[q], sz = c->q_sz[q], nch = c->q_nch[q];
         const int s0 = c->q_so[q], ns = c->q_so[q + 1] - s0;
@@ -372,29 +373,32 @@ KV_INLINE void q_fill_cell(kv_cond *c, const double *ab, int k, int mp, int m, i
     }
 }
 
-/* q_rho = D / (D + dcj) = 1 / (1 + dcj D^-1) of every relaxation row, dcj = cj - q_cjf
-   != 0 (the current cj's D), unless it holds them for this dcj already (the corrector's
-   iterations at one cj): one pass that vectorises */
-KV_INLINE void q_rho_at(kv_cond *c, double dcj)
+/* q_dc = (D + dcj)^-1 = D^-1 / (1 + dcj D^-1) and q_kc = nu q_dc, D^-1 and kappa of every
+   relaxation row at the current cj, dcj = cj - q_cjf != 0, unless they are held for
+   this dcj already (the corrector's iterations at one cj): one pass that vectorises */
+KV_INLINE void q_current_at(kv_cond *c, double dcj)
 {
     if (dcj == c->q_rdcj) return;
     const int nqe = c->q_eo[c->nq - 1] + c->q_sz[c->nq - 1];
-    const double *restrict di = c->q_dinv;
-    double *restrict rho = c->q_rho;
-    for (int u = 0; u < nqe; ++u) rho[u] = 1.0 / (1.0 + dcj * di[u]);
+    const double *restrict di = c->q_dinv, *restrict nu = c->q_nu;
+    double *restrict dc = c->q_dc, *restrict kc = c->q_kc;
+    for (int u = 0; u < nqe; ++u) {
+        const double v = di[u] / (1.0 + dcj * di[u]);
+        dc[u] = v;
+        kc[u] = nu[u] * v;
+    }
     c->q_rdcj = dcj;
 }
 
-/* g_q = D^-1 r_q and gh of the relaxation blocks of cell k; cur: D at the current cj,
-   g_q = rho D^-1 r_q (q_rho_at) */
+/* g_q = D^-1 r_q and gh of the relaxation blocks of cell k; cur: D at the current cj
+   (q_dc, q_current_at) */
 KV_INLINE void q_g_cell(kv_cond *c, const double *restrict res, int k, int cur)
 {
     const int q0 = c->q_cb[k], q1 = c->q_cb[k + 1];
     for (int q = q0; q < q1; ++q) {
         const int o = c->q_off[q], sz = c->q_sz[q];
-        const double *restrict di = c->q_dinv + c->q_eo[q];
+        const double *restrict di = (cur ? c->q_dc : c->q_dinv) + c->q_eo[q];
         double *restrict g = c->q_g + c->q_eo[q];
-        const double *restrict rho = c->q_rho + c->q_eo[q];
         if (c->q_nch[q] == 3) {
             /* the rod's (the hot path; q_strain_sums serves the rest): g and its sums
                gh together, in registers (g read back from memory at once stalled on the
@@ -403,9 +407,8 @@ KV_INLINE void q_g_cell(kv_cond *c, const double *restrict res, int k, int cur)
             const double *restrict r = res + o;
             double s0 = 0.0, s1 = 0.0, s2 = 0.0;
             for (int u = 0; u < sz; u += 3) {
-                double g0 = di[u] * r[u], g1 = di[u + 1] * r[u + 1];
-                double g2 = di[u + 2] * r[u + 2];
-                if (cur) { g0 = rho[u] * g0; g1 = rho[u + 1] * g1; g2 = rho[u + 2] * g2; }
+                const double g0 = di[u] * r[u], g1 = di[u + 1] * r[u + 1];
+                const double g2 = di[u + 2] * r[u + 2];
                 g[u] = g0; g[u + 1] = g1; g[u + 2] = g2;
                 if (u == 0) {
                     s0 = mu[0] * g0; s1 = mu[1] * g1; s2 = mu[2] * g2;
@@ -417,11 +420,7 @@ KV_INLINE void q_g_cell(kv_cond *c, const double *restrict res, int k, int cur)
             gh[0] = s0; gh[1] = s1; gh[2] = s2;
             continue;
         }
-        if (!cur) {
-            for (int u = 0; u < sz; ++u) g[u] = di[u] * res[o + u];
-        } else {
-            for (int u = 0; u < sz; ++u) g[u] = rho[u] * (di[u] * res[o + u]);
-        }
+        for (int u = 0; u < sz; ++u) g[u] = di[u] * res[o + u];
         q_strain_sums(c->q_nch[q], sz, c->q_mu + c->q_eo[q], g, c->q_gh + c->q_co[q]);
     }
 }
@@ -436,15 +435,39 @@ KV_INLINE void q_forward_cell(const kv_cond *c, int k, int m, double *restrict t
            tmp, tmp);
 }
 
-/* d (sz) = iscale g - rho kappa (E x) (rho 1 when NULL), E (nch x ns, column-major),
-   row u = b nch + k; nch a literal for the rod's 3. With rho the current cj's
-   (q_g_cell) and iscale = 1/scale, the scaled correction scale d solves the relaxation
-   rows at the current cj for the scaled dx (cond_solve_bt_q). */
+/* d (sz) = iscale g - kappa (E x), E (nch x ns, column-major), row u = b nch + k; nch a
+   literal for the rod's 3. With g and kappa the current cj's (q_g_cell, q_kc) and
+   iscale = 1/scale, the scaled correction scale d solves the relaxation rows at the
+   current cj for the scaled dx (cond_solve_bt_q). */
 KV_INLINE void q_finish_n(int nch, int sz, int ns, const double *restrict E,
                           const double *restrict x, const double *restrict g,
-                          const double *restrict kap, const double *restrict rho,
-                          double iscale, double *restrict d)
+                          const double *restrict kap, double iscale, double *restrict d)
 {
+    if (nch == 3) {
+        /* the rod's: E x in registers, even and odd sources in two sets of sums (the
+           product is a chain of dependent adds per strain, ~10 sources long, and this
+           runs once per block and Newton iteration) */
+        double a0 = 0.0, a1 = 0.0, a2 = 0.0, b0 = 0.0, b1 = 0.0, b2 = 0.0;
+        int s = 0;
+        for (; s + 1 < ns; s += 2) {
+            const double t = x[s], v = x[s + 1];
+            const double *restrict a = E + (size_t)s * 3;
+            a0 += a[0] * t; a1 += a[1] * t; a2 += a[2] * t;
+            b0 += a[3] * v; b1 += a[4] * v; b2 += a[5] * v;
+        }
+        if (s < ns) {
+            const double t = x[s];
+            const double *restrict a = E + (size_t)s * 3;
+            a0 += a[0] * t; a1 += a[1] * t; a2 += a[2] * t;
+        }
+        const double e0 = a0 + b0, e1 = a1 + b1, e2 = a2 + b2;
+        for (int u = 0; u < sz; u += 3) {
+            d[u] = iscale * g[u] - kap[u] * e0;
+            d[u + 1] = iscale * g[u + 1] - kap[u + 1] * e1;
+            d[u + 2] = iscale * g[u + 2] - kap[u + 2] * e2;
+        }
+        return;
+    }
     double e[KV_QMAX];
     for (int k = 0; k < nch; ++k) e[k] = 0.0;
     for (int s = 0; s < ns; ++s) {
@@ -453,14 +476,11 @@ KV_INLINE void q_finish_n(int nch, int sz, int ns, const double *restrict E,
         for (int k = 0; k < nch; ++k) e[k] += a[k] * t;
     }
     for (int u = 0; u < sz; u += nch)
-        for (int k = 0; k < nch; ++k) {
-            const double r = kap[u + k] * e[k];
-            d[u + k] = iscale * g[u + k] - (rho ? rho[u + k] * r : r);
-        }
+        for (int k = 0; k < nch; ++k) d[u + k] = iscale * g[u + k] - kap[u + k] * e[k];
 }
 
 /* dq = g_q - A' dx into res, for the blocks finished at backward step k (their sources
-   are in res); cur: at the current cj (q_rho), iscale as q_finish_n */
+   are in res); cur: at the current cj (q_kc), iscale as q_finish_n */
 KV_INLINE void q_backward_cell(const kv_cond *c, int k, double *res, int cur,
                                double iscale)
 {
@@ -468,12 +488,12 @@ KV_INLINE void q_backward_cell(const kv_cond *c, int k, double *res, int cur,
     for (int l = c->q_bk[k]; l < c->q_bk[k + 1]; ++l) {
         const int q = c->q_bl[l], sz = c->q_sz[q], so = c->q_so[q], nch = c->q_nch[q];
         const int ns = c->q_so[q + 1] - so, eo = c->q_eo[q];
-        const double *E = c->q_A + c->q_ao[q], *g = c->q_g + eo, *kap = c->q_kap + eo;
-        const double *rho = cur ? c->q_rho + eo : NULL;
+        const double *E = c->q_A + c->q_ao[q], *g = c->q_g + eo;
+        const double *kap = (cur ? c->q_kc : c->q_kap) + eo;
         for (int s = 0; s < ns; ++s) x[s] = res[c->q_src[so + s]];
         double *d = res + c->q_off[q];
-        if (nch == 3) q_finish_n(3, sz, ns, E, x, g, kap, rho, iscale, d);
-        else q_finish_n(nch, sz, ns, E, x, g, kap, rho, iscale, d);
+        if (nch == 3) q_finish_n(3, sz, ns, E, x, g, kap, iscale, d);
+        else q_finish_n(nch, sz, ns, E, x, g, kap, iscale, d);
     }
 }
 
@@ -891,7 +911,7 @@ static double cond_solve_bt_q(kv_cond *c, double *res, int upd, double scale,
     const double dcj = upd ? cj - c->q_cjf : 0.0;
     const double iscale = upd && scale != 1.0 ? 1.0 / scale : 1.0;
     const int cur = dcj != 0.0;
-    if (cur) q_rho_at(c, dcj);
+    if (cur) q_current_at(c, dcj);
     bt_g_cell(c, res, 0, 0);
     q_g_cell(c, res, 0, cur);
     for (int k = 0; k < c->ncell; ++k) {

@@ -15,11 +15,11 @@ from .loader import load
 
 #: the relaxation blocks' tables (relaxation.py), in the order of ``kv_cond``
 _Q_FIELDS = ("q_off", "q_sz", "q_nch", "q_eo", "q_co", "q_so", "q_src", "q_tgt", "q_ao",
-             "q_nu", "q_mu", "q_A", "q_dinv", "q_kap", "q_g", "q_rho", "q_gh", "q_cb",
+             "q_nu", "q_mu", "q_A", "q_dinv", "q_kap", "q_g", "q_dc", "q_kc", "q_gh", "q_cb",
              "q_fk", "q_fl", "q_kb", "q_kco", "q_kcol", "q_kwo", "q_W", "q_bk", "q_bl",
              "q_ucell", "q_ustep")
 #: its real-valued ones (the rest int32, q_kwo int64)
-_Q_REAL = ("q_nu", "q_mu", "q_A", "q_dinv", "q_kap", "q_g", "q_rho", "q_gh", "q_W")
+_Q_REAL = ("q_nu", "q_mu", "q_A", "q_dinv", "q_kap", "q_g", "q_dc", "q_kc", "q_gh", "q_W")
 
 
 class _CondStruct(ctypes.Structure):
