@@ -39,7 +39,8 @@ class RodStruct(ctypes.Structure):
                 ("sload", ctypes.c_void_p), ("theta", ctypes.c_void_p),
                 ("segb", ctypes.c_void_p), ("jntb", ctypes.c_void_p),
                 ("coupled", ctypes.c_int), ("segc", ctypes.c_void_p),
-                ("jntc", ctypes.c_void_p), ("contact", ctypes.c_void_p)]
+                ("jntc", ctypes.c_void_p), ("contact", ctypes.c_void_p),
+                ("relax_need", ctypes.c_void_p)]
 
 
 def _view(arr: np.ndarray, offsets: dict[str, int], fields, name: str) -> np.ndarray:

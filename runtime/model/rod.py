@@ -678,6 +678,10 @@ class RodModel:
                         n_energies=self.n_energies)
         if self.contact is not None:
             kern.max_step = function_address(self._clib.kvrod_max_step)
+        if self.branches and not self.coupled:
+            kern.jacobian_cells_relaxed = (
+                function_address(lib.kvrod_jacobian_band_cells_relaxed),
+                self._set_relaxation_need)
         if self.self_contact is None:
             kern.audit_energies = function_address(lib.kvrod_audit_powers)
         # without obstacles the energies only read the rod's struct and the state (the
@@ -692,6 +696,15 @@ class RodModel:
             self.blocks  # noqa: B018 (attached before the first Jacobian)
             kern.system_jacobian = function_address(lib.kvrod_jacobian_system)
         return kern
+
+    def _set_relaxation_need(self, need: np.ndarray) -> None:
+        """The relaxation rows and columns ``kvrod_jacobian_band_cells_relaxed`` forms in
+        full (``kvrod_rod.relax_need``; CKernels.jacobian_cells_relaxed)."""
+        need = np.ascontiguousarray(need, dtype=np.uint8)
+        if need.shape != (self.n,):
+            raise ValueError(f"relaxation need of shape {need.shape}; expected ({self.n},)")
+        self._relax_need = need
+        self._struct.relax_need = need.ctypes.data
 
     # -- self-contact: the coupled band block (runtime/solvers/native/blocks.py) --------------
     @property

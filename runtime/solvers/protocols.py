@@ -204,7 +204,14 @@ class CKernels:
 
     ``energies_read_rates`` (default True): the energies read y' (a rod with coupled
     sections); False lets the step loop interpolate the audit's and the samples' states
-    without y'."""
+    without y'.
+
+    ``jacobian_cells_relaxed`` (optional, None if none): ``(function, set_need)`` for a
+    condensation that eliminates relaxation blocks by their declared structure:
+    ``function`` is ``jacobian_cells`` forming only the relaxation rows and columns that
+    ``set_need(need)`` marks (``need``: uint8 per state index, bit 0 the column, bit 1 the
+    row in full, else only the diagonal entry; ``kvrod_jacobian_band_cells_relaxed``),
+    every entry it forms bit for bit as ``jacobian_cells``."""
 
     def __init__(self, residual: int, jacobian: int, energies: int, ctx: int,
                  drive=None, keep: Any = None, jacobian_cells: int = 0,
@@ -224,3 +231,4 @@ class CKernels:
         self.audit_energies = 0
         self.energies_reentrant = False
         self.energies_read_rates = True
+        self.jacobian_cells_relaxed = None

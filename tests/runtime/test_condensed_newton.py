@@ -535,3 +535,66 @@ def test_relaxation_blocks_without_the_structure_stay_kept(rates, moduli, why):
     b = rng.standard_normal(A.shape[0])
     np.testing.assert_allclose(cond.solve(ab, b), np.linalg.solve(A, b), rtol=1e-9,
                                atol=1e-11)
+
+
+@pytest.mark.parametrize("kw", [dict(tau=None, **MAXWELL),
+                                dict(tau=None, end="clamped", **MAXWELL)])
+def test_the_relaxed_jacobian_forms_what_the_factorisation_reads(kw):
+    """kvrod_jacobian_band_cells_relaxed (the step loop's Jacobian of a Maxwell rod)
+    forms, of the internal strains' rows and columns, the diagonal, the first term's rows
+    and the reference columns that CondensedNewton.relaxation_need marks, each entry bit
+    for bit as the full Jacobian; the rest of those columns it leaves as it found it
+    (NaN here). Factorised from it, every Newton solve equals the full Jacobian's bit
+    for bit: a read of an entry it did not form would be NaN."""
+    m, ab, rng, y, yp = _rod_system_at(kw, 4e2, seed=5, N=11)
+    cond = CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
+    need = cond.relaxation_need()
+    q = np.zeros(m.n, bool)
+    for r in m.condensation_relaxation_blocks():
+        q[r.offset:r.offset + r.size] = True
+        first = np.arange(r.offset, r.offset + r.channels)
+        assert np.all(need[first] & 2) and not np.any(need[r.offset + r.channels:
+                                                          r.offset + r.size] & 2)
+    assert np.all(need[~q] == 3)
+    B = m.branches
+    assert 0 < np.count_nonzero(need[q] & 1) <= q.sum() // B     # one term per strain
+    assert np.count_nonzero(need[q] & 2) == q.sum() // B
+    kern = m.c_kernels()
+    fn, set_need = kern.jacobian_cells_relaxed
+    set_need(need)
+    relaxed = np.full_like(ab, np.nan)
+    P = lambda a: a.ctypes.data  # noqa: E731
+    proto = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_double, ctypes.c_void_p,
+                             ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_int,
+                             ctypes.c_void_p, ctypes.c_int, ctypes.c_int, ctypes.c_int)
+    assert proto(fn)(kern.ctx, 0.0, P(y), P(yp), 1.0, 4e2, m.ldab, P(relaxed), 0, 0, m.N) == 0
+    full, got = _dense(ab, m.kl, m.ku), _dense(np.where(np.isnan(relaxed), 7.0, relaxed),
+                                                m.kl, m.ku)
+    band = np.abs(np.subtract.outer(np.arange(m.n), np.arange(m.n)))
+    inband = (np.subtract.outer(np.arange(m.n), np.arange(m.n)) <= m.kl) & (
+        np.subtract.outer(np.arange(m.n), np.arange(m.n)) >= -m.ku)
+    col_full = (need & 1).astype(bool)
+    row_full = (need & 2).astype(bool)
+    diag = band == 0
+    formed = inband & ((col_full[None, :] & row_full[:, None]) | diag)
+    assert np.array_equal(got[formed], full[formed])                   # bit for bit
+    # rows not needed: zero in the columns that are (cleared, not formed)
+    assert not got[inband & col_full[None, :] & ~row_full[:, None] & ~diag].any()
+    # columns not needed: untouched off the diagonal
+    untouched = inband & ~col_full[None, :] & ~diag
+    assert untouched.any() and np.all(got[untouched] == 7.0)
+    c_full = CondensedNewton.build(m, m.n, m.kl, m.ku, m.ldab)
+    assert c_full.factor(ab, 4e2) == 0 and cond.factor(relaxed, 4e2) == 0
+    b = rng.standard_normal(m.n)
+    assert np.array_equal(cond.solve(relaxed, b), c_full.solve(ab, b))
+    ewt = rng.uniform(0.5, 2.0, m.n)
+    outs = []
+    for c, a in ((c_full, ab), (cond, relaxed)):
+        r, e, yy_, yp_ = b.copy(), *(np.linspace(-1.0, 1.0, m.n) for _ in range(3))
+        nrm = c._lib.kv_cond_newton(c.ptr, P(a), P(r), 0.8, P(ewt), P(e), P(yy_), P(yp_),
+                                    3.3e2)
+        outs.append((nrm, r, e, yy_, yp_))
+    assert outs[0][0] == outs[1][0]
+    for u, v in zip(outs[0][1:], outs[1][1:], strict=True):
+        assert np.array_equal(u, v)
+    assert np.isfinite(outs[1][1]).all()

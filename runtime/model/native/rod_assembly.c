@@ -380,11 +380,17 @@ static int residual_own(const kvrod_rod* rod, const double* y, const double* yp,
 }
 
 /* the caller's band storage: columns col0 .. of J from ab (J(i, j) in column j - col0,
- * row kl + ku + i - j) */
+ * row kl + ku + i - j); need: kvrod_rod.relax_need for kvrod_jacobian_band_cells_relaxed,
+ * else NULL (every entry formed) */
 typedef struct {
   double* ab;
   int ldab, col0;
+  const unsigned char* need;
 } band_t;
+
+/* whether column (row) k of the relaxation terms is formed in full */
+#define NEED_COL(B, k) (!(B)->need || ((B)->need[k] & 1))
+#define NEED_ROW(B, k) (!(B)->need || ((B)->need[k] & 2))
 
 #define AB(r, c) \
   B->ab[(size_t)(rod->kl + rod->ku + (r) - (c)) + (size_t)((c) - B->col0) * (size_t)B->ldab]
@@ -498,18 +504,20 @@ static int jac_segment(const kvrod_rod* rod, int i, const double* y, double cy, 
     const int q0 = i_qs(rod, i) + 3 * b;
     for (k = 0; k < 3; ++k) {
       /* forces on the q columns: res -= Q, dQ/dq_bk = -C_bk G[:, k] */
-      for (r = 0; r < 6; ++r) {
-        const double val = cy * C[k] * G[r + 6 * k];
-        if (rb[r] >= 0) AB(rb[r], q0 + k) += val;
-        if (r < 3 && ra[r] >= 0) AB(ra[r], q0 + k) -= val;
-      }
+      if (NEED_COL(B, q0 + k))
+        for (r = 0; r < 6; ++r) {
+          const double val = cy * C[k] * G[r + 6 * k];
+          if (rb[r] >= 0) AB(rb[r], q0 + k) += val;
+          if (r < 3 && ra[r] >= 0) AB(ra[r], q0 + k) -= val;
+        }
       /* relaxation row: d/dq = rate, d/dq' = 1, d/d(phi_b, p) = -rate d dV/d(phi_b, p) */
       AB(q0 + k, q0 + k) += cy * rate + cj;
-      for (c = 0; c < 7; ++c) {
-        const double val = -cy * rate * dVx[k + 3 * c];
-        AB(q0 + k, c < 3 ? i_phi(rod, i) + c : i_p(rod, i) + c - 3) += val;
-        if (c < 3) AB(q0 + k, i_phi(rod, i - 1) + c) -= val;
-      }
+      if (NEED_ROW(B, q0 + k))
+        for (c = 0; c < 7; ++c) {
+          const double val = -cy * rate * dVx[k + 3 * c];
+          AB(q0 + k, c < 3 ? i_phi(rod, i) + c : i_p(rod, i) + c - 3) += val;
+          if (c < 3) AB(q0 + k, i_phi(rod, i - 1) + c) -= val;
+        }
     }
   }
   return 0;
@@ -572,11 +580,13 @@ static int jac_joint(const kvrod_rod* rod, int j, const double* y, double cy, do
     const double rate = 1.0 / rod->theta[b];
     const int q0 = i_qj(rod, j) + 3 * b;
     for (k = 0; k < 3; ++k) {
-      for (r = 0; r < 6; ++r)
-        if (jrows[r] >= 0) AB(jrows[r], q0 + k) += cy * C[k] * G[r + 6 * k];
+      if (NEED_COL(B, q0 + k))
+        for (r = 0; r < 6; ++r)
+          if (jrows[r] >= 0) AB(jrows[r], q0 + k) += cy * C[k] * G[r + 6 * k];
       AB(q0 + k, q0 + k) += cy * rate + cj;
-      for (c = 0; c < 8; ++c)
-        if (jcols[c] >= 0) AB(q0 + k, jcols[c]) -= cy * rate * dUx[k + 3 * c];
+      if (NEED_ROW(B, q0 + k))
+        for (c = 0; c < 8; ++c)
+          if (jcols[c] >= 0) AB(q0 + k, jcols[c]) -= cy * rate * dUx[k + 3 * c];
     }
   }
   return 0;
@@ -668,22 +678,28 @@ static int jac_cjoint(const kvrod_rod* rod, int j, const double* y, double cy,
 static void zero_cell(const kvrod_rod* rod, int i, const band_t* B) {
   const int c0 = cs(rod, i), c1 = i == 0 ? c0size(rod) : c0 + csize(rod);
   int c;
-  /* band rows kl .. 2kl+ku only; rows 0 .. kl-1 are dgbtrf workspace */
-  for (c = c0; c < c1; ++c)
+  /* band rows kl .. 2kl+ku only; rows 0 .. kl-1 are dgbtrf workspace; of a column not
+   * needed in full (relax_need) only the diagonal entry, the one formed */
+  for (c = c0; c < c1; ++c) {
+    if (!NEED_COL(B, c)) {
+      AB(c, c) = 0.0;
+      continue;
+    }
     memset(B->ab + (size_t)(c - B->col0) * (size_t)B->ldab + rod->kl, 0,
            sizeof(double) * (rod->kl + rod->ku + 1));
+  }
 }
 
 static int jacobian_cells_own(const kvrod_rod* rod, const double* y, const double* yp,
                              double cy, double cj, int ldab, double* ab, int col0, int i0,
-                             int i1) {
+                             int i1, const unsigned char* need) {
   const int N = rod->N;
   if (check_rod(rod)) return check_rod(rod);
   if (ldab < 2 * rod->kl + rod->ku + 1) return -2;
   if (i0 < 0 || i1 > N || col0 < 0 || col0 > cs(rod, i0 > 0 ? i0 - 1 : 0)) return -4;
   work_t W;
   double J[MAXJAC];
-  const band_t band = {ab, ldab, col0}, *B = &band;
+  const band_t band = {ab, ldab, col0, need}, *B = &band;
   int i, b, k, l, g0 = -1, gj = 0;
   /* the segment and joint kernels of elements g0..g0+3, four per call (x4, bit for bit
    * the scalar kernels); their terms are then added element by element as without */
@@ -756,7 +772,17 @@ int kvrod_jacobian_band_cells(const kvrod_rod* rod, double t, const double* y,
                               const double* yp, double cy, double cj, int ldab, double* ab,
                               int col0, int i0, int i1) {
   (void) t;
-  const int rc = jacobian_cells_own(rod, y, yp, cy, cj, ldab, ab, col0, i0, i1);
+  const int rc = jacobian_cells_own(rod, y, yp, cy, cj, ldab, ab, col0, i0, i1, NULL);
+  return rc || !has_contact(rod) ? rc
+                                 : rod->contact->jacobian(rod, y, cy, ldab, ab, col0, i0, i1);
+}
+
+int kvrod_jacobian_band_cells_relaxed(const kvrod_rod* rod, double t, const double* y,
+                                      const double* yp, double cy, double cj, int ldab,
+                                      double* ab, int col0, int i0, int i1) {
+  (void) t;
+  const int rc = jacobian_cells_own(rod, y, yp, cy, cj, ldab, ab, col0, i0, i1,
+                                    rod->relax_need);
   return rc || !has_contact(rod) ? rc
                                  : rod->contact->jacobian(rod, y, cy, ldab, ab, col0, i0, i1);
 }

@@ -44,6 +44,10 @@ typedef struct {
   const kvrod_contact* contact;   /* obstacles the rod touches (NULL: none; rod_contact.h):
                                      their forces are part of the residual, the Jacobian
                                      and the energies below */
+  const unsigned char* relax_need; /* read by kvrod_jacobian_band_cells_relaxed only: per
+                                      state index, bit 0: its column, bit 1: its row is
+                                      wanted in full (else only its diagonal entry);
+                                      NULL: everything in full */
 } kvrod_rod;
 
 int kvrod_n_state(int N, int nb);
@@ -70,6 +74,17 @@ int kvrod_jacobian_band(const kvrod_rod* rod, double t, const double* y, const d
 int kvrod_jacobian_band_cells(const kvrod_rod* rod, double t, const double* y,
                               const double* yp, double cy, double cj, int ldab, double* ab,
                               int col0, int i0, int i1);
+
+/* kvrod_jacobian_band_cells for a caller that eliminates a generalized Maxwell rod's
+ * internal strains by their declared structure (runtime/solvers/native/relaxation.py:
+ * of an internal strain's row and column it reads the diagonal entry, the first term's
+ * rows and one reference column per strain, the rows and columns marked in
+ * rod->relax_need): the entries of the unmarked rows and columns off the diagonal are
+ * neither formed nor cleared (their storage keeps what it held). Every entry it forms
+ * is that of kvrod_jacobian_band_cells, bit for bit. */
+int kvrod_jacobian_band_cells_relaxed(const kvrod_rod* rod, double t, const double* y,
+                                      const double* yp, double cy, double cj, int ldab,
+                                      double* ab, int col0, int i0, int i1);
 
 /* out <- [the NDIAG scalars: kinetic, elastic, 2D, external power, boundary power, then the
  *         supports' force and moment at s = 0 and s = L (12, spatial); V (3N), F (3N),

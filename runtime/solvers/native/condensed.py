@@ -73,6 +73,7 @@ class CondensedNewton:
                  pattern=None, relaxation_blocks=None) -> None:
         import numpy as np
 
+        self.n = n
         b = np.asarray(blocks, dtype=np.int32).reshape(-1, 5)
         # by position: the blocks of a cell are then consecutive (the block path)
         b = b[np.argsort(b[:, 0], kind="stable")]
@@ -176,6 +177,25 @@ class CondensedNewton:
         self._struct = s
         self.ptr = ctypes.addressof(s)
         self._lib = lib
+
+    def relaxation_need(self):
+        """What the factorisation reads of the eliminated relaxation blocks' rows and
+        columns, per state index (uint8, n): bit 0 the column, bit 1 the row in full, else
+        only its diagonal entry (the D of the block). It reads the first term's rows
+        (E, ``q_elim_cell``) and the reference columns at kept rows (``q_fill_cell``);
+        every other unknown is read in full. None when no relaxation block is
+        eliminated. (``kvrod_jacobian_band_cells_relaxed`` forms no more than this.)"""
+        import numpy as np
+
+        if not self.relaxation_eliminated:
+            return None
+        k = self._keep
+        need = np.full(self.n, 3, np.uint8)
+        for o, sz, nch in zip(k["q_off"], k["q_sz"], k["q_nch"], strict=True):
+            need[o:o + sz] = 0
+            need[o:o + nch] = 2
+        need[k["q_kcol"][:k["q_kco"][-1]]] |= 1
+        return need
 
     @property
     def cell_starts(self) -> np.ndarray | None:

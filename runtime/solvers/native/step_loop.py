@@ -230,7 +230,15 @@ class CoreLink:
             s.blocks, s.sysjac = blocks, sysjac
         if kern is not None and kern.jacobian_cells and cond is not None \
                 and cond.block_tridiagonal:
-            self._jacobian_by_cells(kern.jacobian_cells, cond.cell_starts)
+            jac_cells = kern.jacobian_cells
+            need = cond.relaxation_need()
+            relaxed = getattr(kern, "jacobian_cells_relaxed", None)
+            if need is not None and relaxed is not None:
+                # the relaxation blocks' rows and columns only as far as the
+                # factorisation reads them (the Jacobian is never read beyond it here)
+                jac_cells, set_need = relaxed
+                set_need(need)
+            self._jacobian_by_cells(jac_cells, cond.cell_starts)
         p = lambda a: a.ctypes.data if a is not None else None  # noqa: E731
         s.phi = p(solver._phi)
         s.y, s.yp, s.yy, s.ypw = p(solver._y), p(solver._yp), p(solver._yy), p(solver._ypw)
