@@ -1399,6 +1399,7 @@ static int sample_step(kv_run *R)
    (KV_CALLBACK), with the audit up to the failing job. */
 #ifdef KV_THREADS
 #define KV_ASYNC_BATCH 32
+#define KV_ASYNC_TAKE 16    /* jobs the worker takes per visit to the lock */
 /* the worker starts once the run has taken KV_ASYNC_WORK / n steps (at least
    KV_ASYNC_MIN): the audit's work per step grows with the state's length n, the
    thread's cost (~1 ms of CPU) does not, so a short run of a small rod (a sweep's tiny
@@ -1460,19 +1461,31 @@ static void *async_worker(void *arg)
             A->sleeping = 0;
         }
         if (A->head == A->tail) break;                 /* told to quit, nothing left */
-        const long long k = A->head;
-        const kv_job J = A->jobs[k % A->S->async_cap];
-        const int failed = A->err;
+        /* up to KV_ASYNC_TAKE jobs per visit to the lock: a lock taken per job met the
+           loop's pushes so often (a Maxwell rod's jobs are longer) that the two threads
+           woke each other through the kernel hundreds of times a run; the jobs before
+           tail and their slots are the loop's no more until head passes them */
+        const long long k0 = A->head;
+        const long long k1 = A->tail - k0 > KV_ASYNC_TAKE ? k0 + KV_ASYNC_TAKE : A->tail;
+        int failed = A->err, bad = -1;
         pthread_mutex_unlock(&A->mu);
-        const int rc = failed ? 1 : async_run_job(&R, &J, async_slot_at(A, k));
-        pthread_mutex_lock(&A->mu);
-        if (rc) {                   /* this job and every later one are not done */
-            A->err = 1;
-            if (J.kind == JOB_SAMPLE && (A->bad_row < 0 || J.row < A->bad_row))
-                A->bad_row = J.row;
+        for (long long k = k0; k < k1; ++k) {
+            const kv_job J = A->jobs[k % A->S->async_cap];
+            /* a failed job and every later one are not done */
+            failed = failed || async_run_job(&R, &J, async_slot_at(A, k));
+            if (failed && J.kind == JOB_SAMPLE && (bad < 0 || J.row < bad)) bad = J.row;
         }
-        A->head = k + 1;
-        if (A->waiting) pthread_cond_signal(&A->done);
+        pthread_mutex_lock(&A->mu);
+        if (failed) {
+            A->err = 1;
+            if (bad >= 0 && (A->bad_row < 0 || bad < A->bad_row)) A->bad_row = bad;
+        }
+        A->head = k1;
+        if (A->waiting) {           /* as async_push: signalled outside the lock */
+            pthread_mutex_unlock(&A->mu);
+            pthread_cond_signal(&A->done);
+            pthread_mutex_lock(&A->mu);
+        }
     }
     pthread_mutex_unlock(&A->mu);
     return NULL;
@@ -1493,15 +1506,19 @@ static double *async_slot(kv_async *A)
     return slot;
 }
 
-/* hand the job of the slot async_slot gave over; nonzero: the worker has failed */
+/* hand the job of the slot async_slot gave over; nonzero: the worker has failed. The
+   worker is woken once (sleeping cleared here), after the lock is released: woken
+   under it, it would wake only to wait for the lock (two trips through the kernel) */
 static int async_push(kv_async *A, const kv_job *J)
 {
     pthread_mutex_lock(&A->mu);
     A->jobs[A->tail % A->S->async_cap] = *J;
     A->tail++;
-    if (A->sleeping && A->tail - A->head >= KV_ASYNC_BATCH) pthread_cond_signal(&A->wake);
+    const int wake = A->sleeping && A->tail - A->head >= KV_ASYNC_BATCH;
+    if (wake) A->sleeping = 0;
     const int err = A->err;
     pthread_mutex_unlock(&A->mu);
+    if (wake) pthread_cond_signal(&A->wake);
     return err;
 }
 
