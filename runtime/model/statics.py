@@ -145,10 +145,24 @@ class RodStatics:
                 weight_sign=self._weight_sign, phi=self._phi_flat,
                 phi_cols=self._phi_cols_flat, p_index=m.p_index, theta=self._theta_flat)
 
+            jac, ctx, keep = m._lib.kvrod_jacobian_band, m._struct, m
+            if m.branches and not m.coupled:
+                # the static band reads no row or column of the internal strains: their
+                # branch kernels need not run and their columns not be cleared
+                # (kvrod_jacobian_band_relaxed on a copy of the rod's struct that marks
+                # none of them; the same entries elsewhere, bit for bit)
+                from runtime.model.arrays import RodStruct
+
+                need = np.full(m.n, 3, np.uint8)
+                need[np.ravel(m.q_segment_index)] = 0
+                need[np.ravel(m.q_joint_index)] = 0
+                ctx = RodStruct.from_buffer_copy(m._struct)
+                ctx.relax_need = need.ctypes.data
+                jac, keep = m._lib.kvrod_jacobian_band_relaxed, (m, ctx, need)
             core = NativeStatics.build(layout, self.time,
                                        function_address(m._lib.kvrod_residual),
-                                       function_address(m._lib.kvrod_jacobian_band),
-                                       ctypes.addressof(m._struct), keep=m)
+                                       function_address(jac), ctypes.addressof(ctx),
+                                       keep=keep)
             self._native = core if core is not None else False
         return self._native or None
 

@@ -12,6 +12,7 @@ from runtime.model.statics import RodStatics
 from runtime.problem.assemble import build_model
 from runtime.problem.registry import load_problem
 from runtime.simulate import simulate as S
+from runtime.solvers.native.pointers import function_address
 from runtime.solvers.protocols import band_storage
 
 CASES = [("cantilever", {"rod.elements": 6}),
@@ -53,6 +54,10 @@ def test_residual_jacobian_and_retraction_are_numpys_bits(name, overrides):
         st = RodStatics(model)
         core = st._native
         assert core, "the compiled static core is used on the C backend"
+        # a Maxwell rod's: the Jacobian without its internal strains' rows and columns
+        # (kvrod_jacobian_band_relaxed), checked against the full one below
+        relaxed = function_address(model._lib.kvrod_jacobian_band_relaxed)
+        assert (core.s.jac == relaxed) == bool(model.branches)
         st.load_scale = 1.0
         for _ in range(3):
             y = model.reference + 0.05 * rng.standard_normal(model.n)
@@ -82,6 +87,7 @@ def test_residual_jacobian_and_retraction_are_numpys_bits(name, overrides):
     ("bathe_bolourchi", {"rod.elements": 8}),
     ("simply_supported", {"rod.elements": 6}),       # its gauge holds a rigid rotation
     ("rollup", {"rod.elements": 8}),
+    ("maxwell_cantilever", {"rod.elements": 6}),
 ])
 def test_a_static_solve_is_the_same_with_and_without_the_c_core(name, overrides,
                                                                 monkeypatch):

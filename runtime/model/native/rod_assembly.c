@@ -398,6 +398,16 @@ typedef struct {
 #define NEED_COL(B, k) (!(B)->need || ((B)->need[k] & 1))
 #define NEED_ROW(B, k) (!(B)->need || ((B)->need[k] & 2))
 
+/* whether any of the m relaxation unknowns from q0 is wanted beyond its diagonal (else
+ * their branch kernel need not run: statics reads no relaxation row or column) */
+static int need_any(const band_t* B, int q0, int m) {
+  int k;
+  if (!B->need) return 1;
+  for (k = 0; k < m; ++k)
+    if (B->need[q0 + k]) return 1;
+  return 0;
+}
+
 #define AB(r, c) \
   B->ab[(size_t)(rod->kl + rod->ku + (r) - (c)) + (size_t)((c) - B->col0) * (size_t)B->ldab]
 
@@ -499,6 +509,14 @@ static int jac_segment(const kvrod_rod* rod, int i, const double* y, double cy, 
     }
   }
   if (!rod->nb) return 0;
+  if (!need_any(B, i_qs(rod, i), 3 * rod->nb)) {     /* only the diagonal */
+    for (b = 0; b < rod->nb; ++b)
+      for (k = 0; k < 3; ++k) {
+        const int o = i_qs(rod, i) + 3 * b + k;
+        AB(o, o) += cy * (1.0 / rod->theta[b]) + cj;
+      }
+    return 0;
+  }
   double dV[3], dVx[21], G[18];
   W->arg[0] = y + i_phi(rod, i - 1); W->arg[1] = y + i_phi(rod, i);
   W->arg[2] = y + i_p(rod, i); W->arg[3] = segp(rod, i);
@@ -577,6 +595,14 @@ static int jac_joint(const kvrod_rod* rod, int j, const double* y, double cy, do
   }
   scatter_joint(rod, j, cy, B, Jk, jrows, jcols);
   if (!rod->nb) return 0;
+  if (!need_any(B, i_qj(rod, j), 3 * rod->nb)) {     /* only the diagonal */
+    for (b = 0; b < rod->nb; ++b)
+      for (k = 0; k < 3; ++k) {
+        const int o = i_qj(rod, j) + 3 * b + k;
+        AB(o, o) += cy * (1.0 / rod->theta[b]) + cj;
+      }
+    return 0;
+  }
   double dU[3], dUx[24], G[18];
   W->arg[2] = jntp(rod, j);                 /* (p_a, p_b) are still in arg[0], arg[1] */
   W->res[0] = dU; W->res[1] = dUx; W->res[2] = G;
@@ -781,6 +807,11 @@ int kvrod_jacobian_band_cells(const kvrod_rod* rod, double t, const double* y,
   const int rc = jacobian_cells_own(rod, y, yp, cy, cj, ldab, ab, col0, i0, i1, NULL);
   return rc || !has_contact(rod) ? rc
                                  : rod->contact->jacobian(rod, y, cy, ldab, ab, col0, i0, i1);
+}
+
+int kvrod_jacobian_band_relaxed(const kvrod_rod* rod, double t, const double* y,
+                                const double* yp, double cy, double cj, int ldab, double* ab) {
+  return kvrod_jacobian_band_cells_relaxed(rod, t, y, yp, cy, cj, ldab, ab, 0, 0, rod->N);
 }
 
 int kvrod_jacobian_band_cells_relaxed(const kvrod_rod* rod, double t, const double* y,

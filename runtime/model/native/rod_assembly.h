@@ -85,6 +85,10 @@ int kvrod_jacobian_band_cells(const kvrod_rod* rod, double t, const double* y,
 int kvrod_jacobian_band_cells_relaxed(const kvrod_rod* rod, double t, const double* y,
                                       const double* yp, double cy, double cj, int ldab,
                                       double* ab, int col0, int i0, int i1);
+/* kvrod_jacobian_band_cells_relaxed over the whole rod (statics: it reads no relaxation
+ * row or column, relax_need 0 on them; an element's branch kernel then does not run) */
+int kvrod_jacobian_band_relaxed(const kvrod_rod* rod, double t, const double* y,
+                                const double* yp, double cy, double cj, int ldab, double* ab);
 
 /* out <- [the NDIAG scalars: kinetic, elastic, 2D, external power, boundary power, then the
  *         supports' force and moment at s = 0 and s = L (12, spatial); V (3N), F (3N),
