@@ -12,6 +12,7 @@ import numpy as np
 from runtime.sorted_sets import sorted_unique
 
 from .loader import load
+from .relaxation import _ranges
 
 #: the relaxation blocks' tables (relaxation.py), in the order of ``kv_cond``
 _Q_FIELDS = ("q_off", "q_sz", "q_nch", "q_eo", "q_co", "q_so", "q_src", "q_tgt", "q_ao",
@@ -91,7 +92,8 @@ class CondensedNewton:
             _check_block_rows(pattern, kl, ku, b, entries)
         diag = _diagonal_blocks(pattern, kl, ku, b)
         rblocks = sorted(relaxation_blocks or [], key=lambda r: r.offset)
-        rq = np.array([(r.offset, r.size) for r in rblocks], dtype=np.int64).reshape(-1, 2)
+        rq = np.array([(r.offset, r.rates.size) for r in rblocks],
+                      dtype=np.int64).reshape(-1, 2)
         self.relaxation_reason: str | None = None
         qt = None
         if len(rq) and (cells is None or pattern is None):
@@ -252,12 +254,13 @@ def _kept(n: int, b, rq):
 
     elim_rows = np.zeros(n, bool)
     elim_cols = np.zeros(n, bool)
-    for e0, es, r0, _k0, _ks in b:
-        elim_cols[e0:e0 + es] = True
-        elim_rows[r0:r0 + es] = True
-    for o, sz in rq:
-        elim_cols[o:o + sz] = True
-        elim_rows[o:o + sz] = True
+    if len(b):
+        elim_cols[_ranges(b[:, 0], b[:, 1])] = True
+        elim_rows[_ranges(b[:, 2], b[:, 1])] = True
+    if len(rq):
+        q = _ranges(rq[:, 0], rq[:, 1])
+        elim_cols[q] = True
+        elim_rows[q] = True
     keep_row = np.flatnonzero(~elim_rows).astype(np.int32)
     keep_col = np.flatnonzero(~elim_cols).astype(np.int32)
     if keep_row.size != keep_col.size:
@@ -277,8 +280,7 @@ def _relaxation(n: int, b, rblocks, bt, keep_row, col2c, entries):
 
     ecol_pos = np.full(n, -1, np.int64)
     if len(b):
-        ecol = np.concatenate([np.arange(e, e + z) for e, z in zip(b[:, 0], b[:, 1],
-                                                                      strict=True)])
+        ecol = _ranges(b[:, 0], b[:, 1])
         ecol_pos[ecol] = np.arange(ecol.size)
     i, j = entries
     return relaxation_tables(n, rblocks, bt["cf"].astype(np.int64), keep_row,
@@ -402,7 +404,7 @@ def _cell_tables(n: int, kl: int, ku: int, b, keep_row, keep_col, col2c, cells, 
     rp = np.searchsorted(starts, cs)
     cell_of_run = np.searchsorted(cs, starts, side="right") - 1
     run = np.stack([keep_row[starts], starts - cs[cell_of_run], lens], axis=1)
-    ecol = np.concatenate([np.arange(e, e + z) for e, z in zip(e0, es, strict=True)] or [[0]])
+    ecol = _ranges(e0, es) if len(b) else np.zeros(1, np.int64)
     nrun = np.diff(rp)
     two3 = (nrun == 2) & (lens[np.minimum(rp[:-1], lens.size - 1)] == 3) & (
         lens[np.minimum(rp[:-1] + 1, lens.size - 1)] == 3)
@@ -416,8 +418,8 @@ def _cell_tables(n: int, kl: int, ku: int, b, keep_row, keep_col, col2c, cells, 
     pv = np.broadcast_to(pv, (ncell,))
     pv3 = pv & np.concatenate(([False], pv[:-1])) & np.concatenate((pv[1:], [False]))
     nrelax = np.zeros(ncell, np.int64)         # unknowns of relaxation blocks per cell
-    for o, sz in rq:
-        nrelax[cell[o]] += sz
+    if len(rq):
+        np.add.at(nrelax, cell[rq[:, 0]], rq[:, 1])
     kv6 = ((mp == 6) & (m == 6) & (mn == 6) & (ne_p == 7) & (ne == 7) & (ne_n == 7)
            & (np.diff(cf) - nrelax == 13) & two3 & pv3)
     i32 = lambda a: np.ascontiguousarray(a, dtype=np.int32)  # noqa: E731

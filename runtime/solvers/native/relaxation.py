@@ -107,7 +107,8 @@ def relaxation_tables(n: int, blocks, cf, keep_row, col2c, ecol_pos,
     first-stage eliminated column in the block order (-1 for others); ``i, j``: J's
     structural nonzeros.
     """
-    q = np.array([(b.offset, b.size) for b in blocks], dtype=np.int64).reshape(-1, 2)
+    q = np.array([(b.offset, np.size(b.rates)) for b in blocks],
+                 dtype=np.int64).reshape(-1, 2)
     nq = len(q)
     st = _structure(blocks)
     if isinstance(st, str):
