@@ -22,3 +22,12 @@ settings.register_profile("deterministic", derandomize=True, database=None)
 settings.register_profile("explore")
 settings.load_profile("explore" if os.environ.get("KVROD_HYPOTHESIS") == "explore"
                       else "deterministic")
+
+# Ctrl-C: the tests that interrupt a run send SIGINT and expect KeyboardInterrupt, which
+# Python raises only through the handler it installs at start-up, and it installs none
+# when it starts with SIGINT ignored (a background job of a non-interactive shell, as some
+# CI runners start their steps). The suite then puts the default handler in place.
+import signal  # noqa: E402
+
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
