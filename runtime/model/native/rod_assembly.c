@@ -411,6 +411,17 @@ static int need_any(const band_t* B, int q0, int m) {
 #define AB(r, c) \
   B->ab[(size_t)(rod->kl + rod->ku + (r) - (c)) + (size_t)((c) - B->col0) * (size_t)B->ldab]
 
+/* only the diagonal of an element's relaxation rows from q0 (need_any: none wanted
+ * beyond it), as the full rows form it: cy / theta_b + cj */
+static void relax_diagonal(const kvrod_rod* rod, int q0, double cy, double cj,
+                           const band_t* B) {
+  int b, k;
+  for (b = 0; b < rod->nb; ++b) {
+    const double rate = 1.0 / rod->theta[b];
+    for (k = 0; k < 3; ++k) AB(q0 + 3 * b + k, q0 + 3 * b + k) += cy * rate + cj;
+  }
+}
+
 /* the contributions of one element to cy dF/dy + cj dF/dy' (band storage) */
 static int jac_node(const kvrod_rod* rod, int i, const double* y, const double* yp,
                     double cy, double cj, const band_t* B, work_t* W, double* J) {
@@ -509,12 +520,8 @@ static int jac_segment(const kvrod_rod* rod, int i, const double* y, double cy, 
     }
   }
   if (!rod->nb) return 0;
-  if (!need_any(B, i_qs(rod, i), 3 * rod->nb)) {     /* only the diagonal */
-    for (b = 0; b < rod->nb; ++b)
-      for (k = 0; k < 3; ++k) {
-        const int o = i_qs(rod, i) + 3 * b + k;
-        AB(o, o) += cy * (1.0 / rod->theta[b]) + cj;
-      }
+  if (!need_any(B, i_qs(rod, i), 3 * rod->nb)) {
+    relax_diagonal(rod, i_qs(rod, i), cy, cj, B);
     return 0;
   }
   double dV[3], dVx[21], G[18];
@@ -595,12 +602,8 @@ static int jac_joint(const kvrod_rod* rod, int j, const double* y, double cy, do
   }
   scatter_joint(rod, j, cy, B, Jk, jrows, jcols);
   if (!rod->nb) return 0;
-  if (!need_any(B, i_qj(rod, j), 3 * rod->nb)) {     /* only the diagonal */
-    for (b = 0; b < rod->nb; ++b)
-      for (k = 0; k < 3; ++k) {
-        const int o = i_qj(rod, j) + 3 * b + k;
-        AB(o, o) += cy * (1.0 / rod->theta[b]) + cj;
-      }
+  if (!need_any(B, i_qj(rod, j), 3 * rod->nb)) {
+    relax_diagonal(rod, i_qj(rod, j), cy, cj, B);
     return 0;
   }
   double dU[3], dUx[24], G[18];
