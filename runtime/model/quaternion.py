@@ -47,30 +47,39 @@ def quat_rotation(p: np.ndarray) -> np.ndarray:
 
 def quat_from_matrix(R: np.ndarray) -> np.ndarray:
     """Unit quaternion (scalar first, p0 >= 0) of rotation matrices (..., 3, 3)
-    (Shepperd's method: the largest of the four candidates is computed first)."""
+    (Shepperd's method: the largest of the four candidates is computed first). All
+    matrices at once, grouped by the candidate taken: element by element the same
+    operations as one matrix at a time (a model build converts every segment's frame)."""
     R = np.asarray(R, dtype=float)
     shape = R.shape[:-2]
-    R = R.reshape(-1, 3, 3)
-    out = np.empty((R.shape[0], 4))
-    for k, m in enumerate(R):
-        tr = np.trace(m)
-        cand = np.array([tr, m[0, 0], m[1, 1], m[2, 2]])
-        i = int(np.argmax(cand))
-        if i == 0:
-            s = 2 * np.sqrt(1 + tr)
-            q = [s / 4, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
-        elif i == 1:
-            s = 2 * np.sqrt(1 + m[0, 0] - m[1, 1] - m[2, 2])
-            q = [(m[2, 1] - m[1, 2]) / s, s / 4, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s]
-        elif i == 2:
-            s = 2 * np.sqrt(1 - m[0, 0] + m[1, 1] - m[2, 2])
-            q = [(m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, s / 4, (m[1, 2] + m[2, 1]) / s]
+    m = R.reshape(-1, 3, 3)
+    m00, m11, m22 = m[:, 0, 0], m[:, 1, 1], m[:, 2, 2]
+    tr = m00 + m11 + m22
+    first = np.argmax(np.stack([tr, m00, m11, m22], axis=1), axis=1)
+    out = np.empty((m.shape[0], 4))
+    for k in range(4):
+        t = first == k
+        if not t.any():
+            continue
+        a, b, c = m00[t], m11[t], m22[t]
+        d10, d02, d21 = (m[t, 1, 0] - m[t, 0, 1], m[t, 0, 2] - m[t, 2, 0],
+                         m[t, 2, 1] - m[t, 1, 2])
+        s01, s02, s12 = (m[t, 0, 1] + m[t, 1, 0], m[t, 0, 2] + m[t, 2, 0],
+                         m[t, 1, 2] + m[t, 2, 1])
+        if k == 0:
+            s = 2 * np.sqrt(1 + tr[t])
+            q = (s / 4, d21 / s, d02 / s, d10 / s)
+        elif k == 1:
+            s = 2 * np.sqrt(1 + a - b - c)
+            q = (d21 / s, s / 4, s01 / s, s02 / s)
+        elif k == 2:
+            s = 2 * np.sqrt(1 - a + b - c)
+            q = (d02 / s, s01 / s, s / 4, s12 / s)
         else:
-            s = 2 * np.sqrt(1 - m[0, 0] - m[1, 1] + m[2, 2])
-            q = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, s / 4]
-        q = np.array(q)
-        out[k] = q if q[0] >= 0 else -q
-    return out.reshape(shape + (4,))
+            s = 2 * np.sqrt(1 - a - b + c)
+            q = (d10 / s, s02 / s, s12 / s, s / 4)
+        out[t] = np.stack(q, axis=1)
+    return np.where(out[:, :1] >= 0, out, -out).reshape(shape + (4,))
 
 
 def quat_angle(p: np.ndarray) -> np.ndarray:

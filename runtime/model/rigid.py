@@ -36,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from runtime.errors import IllPosedError
+from runtime.model.layout_tables import layout_blocks
 from runtime.model.quaternion import quat_mul, quat_rotation
 
 __all__ = ["RigidMotions", "StaticGauge", "check_stiffness", "external_wrench",
@@ -136,9 +137,8 @@ def rigid_motions(model, y: np.ndarray, static_layout: tuple | None = None) -> R
     a = model.arrays
     N = model.N
     if static_layout is None:
-        phi_cols = np.array([RL.static_phi(i) for i in range(N + 1)])[:, None] + np.arange(3)
-        theta_cols = np.array([RL.static_theta(i) for i in range(1, N + 1)])[:, None] + \
-            np.arange(3)
+        phi_cols = layout_blocks(RL.static_phi, 0, N, 3)
+        theta_cols = layout_blocks(RL.static_theta, 1, N, 3)
         n_static = RL.n_static(N)
     else:
         n_static, phi_cols, theta_cols = static_layout

@@ -28,6 +28,7 @@ from runtime.errors import GeneratedCodeError, ParameterError
 from runtime.model import build
 from runtime.model.arrays import RodArrays
 from runtime.model.contact import N_VALUES, SELF_VALUE_NAMES, VALUE_NAMES
+from runtime.model.layout_tables import layout_blocks, layout_table
 from runtime.model.quaternion import end_quaternion, quat_mul, quat_rotation
 from runtime.solvers.native.pointers import PointerCache as _PointerCache
 from runtime.solvers.native.pointers import data_address as _ptr
@@ -169,16 +170,14 @@ class RodModel:
         #: the pairs' (SELF_VALUE_NAMES)
         self.n_energies = len(L.DIAG_SCALARS) + len(self.contact_value_names())
         self._energy = np.zeros(self.n_energies)
-        nodes, segs = np.arange(N + 1), np.arange(1, N + 1)
-        self.phi_index = np.array([L.node_phi(i, B) for i in nodes])[:, None] + np.arange(3)
-        self.v_index = np.array([L.node_v(i, B) for i in nodes])[:, None] + np.arange(3)
-        self.p_index = np.array([L.segment_p(i, B) for i in segs])[:, None] + np.arange(4)
-        self.omega_index = (np.array([L.segment_omega(i, B) for i in segs])[:, None]
-                            + np.arange(3))
+        self.phi_index = layout_blocks(lambda i: L.node_phi(i, B), 0, N, 3)
+        self.v_index = layout_blocks(lambda i: L.node_v(i, B), 0, N, 3)
+        self.p_index = layout_blocks(lambda i: L.segment_p(i, B), 1, N, 4)
+        self.omega_index = layout_blocks(lambda i: L.segment_omega(i, B), 1, N, 3)
         #: state indices of the internal strains of the relaxation terms, (N, B, 3) and (N+1, B, 3)
-        self.q_segment_index = (np.array([L.segment_q(i, B) for i in segs], dtype=int)
+        self.q_segment_index = (layout_table(lambda i: L.segment_q(i, B), 1, N)
                                 .reshape(N, 1, 1) + np.arange(3 * B).reshape(1, B, 3))
-        self.q_joint_index = (np.array([L.joint_q(j, B) for j in nodes], dtype=int)
+        self.q_joint_index = (layout_table(lambda j: L.joint_q(j, B), 0, N)
                               .reshape(N + 1, 1, 1) + np.arange(3 * B).reshape(1, B, 3))
         self.velocity_mask = np.zeros(self.n, dtype=bool)
         self.velocity_mask[self.v_index.ravel()] = True
@@ -224,7 +223,7 @@ class RodModel:
             tk = self._key[0] if self._key else None   # arrays of an earlier t still hold
         else:
             tk = t if self.drive.time_dependent else None
-        key = (tk, left, self.load_scale)
+        key = (tk, left, self._scale_key())
         if key != self._key:
             self.drive.apply(self.arrays, t, left=left, scale=self.load_scale,
                              static=self._static)
@@ -290,6 +289,18 @@ class RodModel:
         return lo <= t0 and t1 < hi
 
     _time = at
+
+    def _scale_key(self) -> float | None:
+        """The load factor where the driven arrays depend on it, else None: only in
+        statics, where it scales prescribed end motion and the obstacles' forces
+        (``ProblemDrive.apply``), or with sensitivities (their directions are driven
+        too); external loads read it from the arrays, so a load step of a rod without
+        either need not drive the arrays again (16 calls per static solve of the
+        cantilever)."""
+        if self._static and (self._directions is not None or self.arrays.contact is not None
+                             or getattr(self.drive, "scaled_in_statics", True)):
+            return self.load_scale
+        return None
 
     @contextlib.contextmanager
     def statics(self, t: float = 0.0, relaxed: bool = True) -> Iterator[None]:

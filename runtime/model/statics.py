@@ -13,6 +13,7 @@ rod's spin, a free-free rod) are held by a gauge (:meth:`RodStatics.hold_rigid_m
 
 from __future__ import annotations
 
+import ctypes
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -22,6 +23,7 @@ if TYPE_CHECKING:
 
 from generated import rod_layout as L
 from runtime.errors import GeneratedCodeError
+from runtime.model.layout_tables import layout_blocks
 from runtime.model.rigid import (
     StaticGauge,
     check_stiffness,
@@ -30,6 +32,8 @@ from runtime.model.rigid import (
     rigid_motions,
 )
 from runtime.model.rod import RodModel
+from runtime.solvers.native.pointers import function_address
+from runtime.solvers.native.static_core import NativeStatics, StaticLayout
 
 
 def largest_displacement(model: RodModel, y: np.ndarray) -> dict:
@@ -74,13 +78,11 @@ class RodStatics:
         self.n_static = L.n_static(N)
         self.kl_static, self.ku_static = ((L.COUPLED_STATIC_KL, L.COUPLED_STATIC_KU)
                                           if m.coupled else (L.STATIC_KL, L.STATIC_KU))
-        nodes = np.arange(N + 1)
         # node 0's force rows, then per cell i segment i's torques and node i's forces
         self.static_rows = np.concatenate(
             [m.v_index[0], np.hstack([m.omega_index, m.v_index[1:]]).ravel()])
-        self.phi_cols = np.array([L.static_phi(i) for i in nodes])[:, None] + np.arange(3)
-        self.theta_cols = np.array([L.static_theta(i) for i in range(1, N + 1)])[
-            :, None] + np.arange(3)
+        self.phi_cols = layout_blocks(L.static_phi, 0, N, 3)
+        self.theta_cols = layout_blocks(L.static_theta, 1, N, 3)
         fixed = []
         for end, i in (("start", 0), ("end", N)):
             if m.arrays.held(end):
@@ -129,11 +131,6 @@ class RodStatics:
             m = self.model
             if m._lib is None or m.self_contact is not None:
                 return None
-            import ctypes
-
-            from runtime.solvers.native.pointers import function_address
-            from runtime.solvers.native.static_core import NativeStatics, StaticLayout
-
             if self._plan is None:
                 self._plan = self._gather_plan()
             self._half_L_weights(m.reference)          # the weight tables

@@ -17,6 +17,7 @@ import numpy as np
 
 from runtime.model.arrays import RodArrays, coupled_arrays
 from runtime.model.contact import ContactArrays, SelfContactArrays
+from runtime.model.layout_tables import layout_blocks
 from runtime.model.quaternion import (
     cayley_curvature,
     quat_exp,
@@ -57,6 +58,9 @@ class ProblemDrive:
         self._nodes = [ld.node(N, self.length, s_nodes) for ld in self.loads]
         #: an end has prescribed motion (statics must move the held nodes)
         self.moving_ends = any(e.motion is not None and e.motion.moves for e in self.ends)
+        #: :meth:`apply` in statics reads its ``scale`` (the load factor): prescribed end
+        #: motion is scaled by it (obstacles' forces too: RodModel._scale_key checks those)
+        self.scaled_in_statics = any(e.held and e.motion is not None for e in self.ends)
 
     #: steps per time scale of an active input at most (a ramp's duration, a harmonic's
     #: period, a table piece): the error test sees nothing to control in a rod at rest
@@ -279,10 +283,8 @@ def reference_arrays(problem: Problem) -> tuple[RodArrays, np.ndarray, np.ndarra
         a.contact = contact_arrays(problem, h)
     B = a.branches
     y = np.zeros(L.n_state(N, B))         # at rest, stress free: internal strains 0
-    for i in range(N + 1):
-        y[L.node_phi(i, B):L.node_phi(i, B) + 3] = disc.nodes[i]
-    for i in range(1, N + 1):
-        y[L.segment_p(i, B):L.segment_p(i, B) + 4] = p_seg[i - 1]
+    y[layout_blocks(lambda i: L.node_phi(i, B), 0, N, 3)] = disc.nodes
+    y[layout_blocks(lambda i: L.segment_p(i, B), 1, N, 4)] = p_seg
     return a, y, np.array([disc.nodes[0], disc.nodes[-1]]), np.array([p_start, p_end])
 
 

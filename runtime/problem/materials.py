@@ -146,24 +146,28 @@ class KelvinVoigt:
         k = section.constants(nu, x)
         rho, E = self.at(x)
         out = {n: np.empty((x.size, 3)) for n in ("C_F", "C_M", "V_F", "V_M")}
-        done: dict[tuple, int] = {}       # a uniform rod evaluates the formulas once
-        for i in range(x.size):
-            geo = tuple(float(k[n][i]) for n in ("A", "I1", "I2", "I3", "kappa_1", "kappa_2",
-                                                 "kappa_3"))
-            key = (float(E[i]), *geo)
-            if key in done:
-                for name in out:
-                    out[name][i] = out[name][done[key]]
+        # a uniform rod evaluates the formulas once: segment i takes the values of the
+        # first segment with its (E, geometry)
+        keys = np.column_stack([np.broadcast_to(np.asarray(v, dtype=float), x.shape)
+                                for v in (E, *(k[n] for n in ("A", "I1", "I2", "I3", "kappa_1",
+                                                              "kappa_2", "kappa_3")))])
+        done: dict[tuple, int] = {}
+        source = np.empty(x.size, dtype=int)
+        for i, key in enumerate(map(tuple, keys.tolist())):
+            source[i] = done.setdefault(key, i)
+            if source[i] != i:
                 continue
-            done[key] = i
-            CF, CM = c.stiffness_matrices(float(E[i]), nu, *geo)
-            VF, VM = c.damping_matrices(float(E[i]), nu, self.tau_S, self.tau_B, *geo,
+            geo = key[1:]
+            CF, CM = c.stiffness_matrices(key[0], nu, *geo)
+            VF, VM = c.damping_matrices(key[0], nu, self.tau_S, self.tau_B, *geo,
                                         route=self.damping)
             for name, mat in (("C_F", CF), ("C_M", CM), ("V_F", VF), ("V_M", VM)):
                 mat = np.asarray(mat, dtype=float)
                 if np.any(mat - np.diag(np.diag(mat))):   # pragma: no cover - eq. (7), (9)
                     raise ValueError(f"{name} is not diagonal; the kernels take diagonals")
                 out[name][i] = np.diag(mat)
+        for name in out:
+            out[name][:] = out[name][source]
         out["rhoA"] = rho * k["A"]
         out["rhoI"] = rho[:, None] * np.column_stack([k["I1"], k["I2"], k["I3"]])
         return out

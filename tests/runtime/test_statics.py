@@ -102,3 +102,35 @@ def test_limit_point_raises_with_last_converged_state():
     assert abs(err.y[0] ** 2 - (2.0 - 3.0 * err.load_scale)) < 1e-9
     assert prob.load_scale == err.load_scale
     assert "load_scale" in str(err)
+
+
+def test_load_steps_drive_the_arrays_only_where_the_load_factor_reaches_them(monkeypatch):
+    """A load step of a rod whose inputs do not read the load factor (external loads take
+    it from the arrays) does not drive the arrays again; a prescribed end motion, scaled by
+    it in statics, is driven at every load factor (its end lands where the motion puts
+    it at t = 0-, as it did before)."""
+    from runtime.problem.assemble import ProblemDrive, build_model
+    from runtime.problem.registry import load_problem
+    from runtime.simulate.simulate import static_equilibrium
+
+    calls: list[float] = []
+    original = ProblemDrive.apply
+
+    def counted(self, a, t, **kw):
+        calls.append(kw.get("scale", 1.0))
+        return original(self, a, t, **kw)
+
+    monkeypatch.setattr(ProblemDrive, "apply", counted)
+    p = load_problem("cantilever", {"rod.elements": 6, "statics.load_steps": 5})
+    static_equilibrium(p, build_model(p))
+    assert len(calls) <= 4            # build, the statics block's entry and exit
+
+    calls.clear()
+    p = load_problem("examples/base_excitation.toml", {"rod.elements": 6,
+                                                       "statics.load_steps": 5})
+    m = build_model(p)
+    st = static_equilibrium(p, m)
+    scales = sorted(set(calls))                 # every load factor the steps took
+    assert scales[0] == 0.0 and scales[-1] == 1.0 and len(scales) >= 4, calls
+    held = m.drive.held_positions("start", np.array([0.0]))[:, 0]
+    assert np.array_equal(st.y[m.phi_index[0]], held)
