@@ -234,7 +234,9 @@ def load_checkpoint(out_dir: Path, parameters: dict,
     path = Path(out_dir) / CHECKPOINT
     if not path.exists():
         raise CheckpointError(f"--resume: no checkpoint in {str(out_dir)!r} (nothing to "
-                              "resume)")
+                              "resume: a run writes its first checkpoint after a second of "
+                              "wall time, KVROD_CHECKPOINT_WALL; run it again with "
+                              "--overwrite)")
     try:
         data = read_npz(path)
         saved = json.loads(str(data.pop("parameters_json")))

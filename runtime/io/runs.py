@@ -26,11 +26,38 @@ def already_finished(problem, out: Path) -> bool:
             and data.get("parameters") == jsonable(problem.to_mapping()))
 
 
-#: seconds of wall time at least between a run's checkpoints after its first (its first
-#: is taken at the first ``checkpoint_every``): a checkpoint writes the run's samples so far
-#: and its status (~2.5 ms of CPU at N = 50; ~10 ms compressed), and one every simulated
-#: second was a third of the CPU time of a 10 s cantilever run
+#: seconds of wall time at least between a run's checkpoints, and before its first (the
+#: loop's start stands for the previous one): a checkpoint writes the run's samples so far
+#: and its status (~2.5 ms of CPU at N = 50, and two files on disk while the loop runs:
+#: on a virtual machine's disk the 10 s cantilever's whole run took ~6 ms longer with its
+#: one checkpoint, docs/design.md section 13), and one every simulated second was a third
+#: of the CPU time of a 10 s cantilever run; a run shorter than this writes none (running
+#: it again costs less). ``KVROD_CHECKPOINT_WALL`` (seconds >= 0) sets another; 0: a
+#: checkpoint at every ``checkpoint_every`` of simulated time, the first at the first
 CHECKPOINT_WALL = 1.0
+CHECKPOINT_WALL_ENV = "KVROD_CHECKPOINT_WALL"
+
+
+def checkpoint_wall() -> float:
+    """:data:`CHECKPOINT_WALL`, or the seconds ``KVROD_CHECKPOINT_WALL`` gives (a finite
+    number >= 0; anything else is refused, naming the variable)."""
+    import math
+    import os
+
+    from runtime.errors import ParameterError
+
+    text = os.environ.get(CHECKPOINT_WALL_ENV, "").strip()
+    if not text:
+        return CHECKPOINT_WALL
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value >= 0.0):
+        raise ParameterError(CHECKPOINT_WALL_ENV, text,
+                             "seconds of wall time >= 0 (0: a checkpoint every simulated "
+                             "second)", where="the environment")
+    return value
 
 class CheckpointWriter:
     """A run's checkpoints written on a thread while its loop goes on: a checkpoint
@@ -220,7 +247,8 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
     folder, an existing result, the checkpoint to resume, the generated code). Then the
     folder is locked (``.kvrod.lock``), ``summary.json`` says "running" (with t_reached)
     while the run goes and a checkpoint is written every ``checkpoint_every`` simulated
-    seconds (after the first, at most one per ``CHECKPOINT_WALL`` seconds of wall time);
+    seconds, at most one per :func:`checkpoint_wall` seconds of wall time, the first
+    after that much of the run (a shorter run writes none);
     when the run stops, ``summary.json`` says "finished", "failed" or
     "interrupted" (never "running", except after SIGKILL). ``resume`` continues from
     DIR/checkpoint.npz (VTK frames before the checkpoint are kept); ``overwrite`` replaces
@@ -254,6 +282,7 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
         sens_run = SensitivityRun(problem, resolved, sens_errcon)
     out = Path(out)
     params = jsonable(problem.to_mapping())
+    wall = checkpoint_wall()
     F.check_output_path(out)
     if not resume:
         F.refuse_existing(out, "simulate", overwrite=overwrite, resumable=True)
@@ -285,7 +314,7 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
 
     def run_it(cb, on_checkpoint, series):
         return simulate(problem, progress=cb, checkpoint=on_checkpoint,
-                        checkpoint_every=checkpoint_every, checkpoint_wall=CHECKPOINT_WALL,
+                        checkpoint_every=checkpoint_every, checkpoint_wall=wall,
                         resume=state, snapshot_every=vtk_every,
                         snapshot_sink=series.add if series else None, model=model,
                         sensitivity=sens_run)

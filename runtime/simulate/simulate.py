@@ -755,8 +755,9 @@ def simulate(problem: Problem, *, progress: Callable[[float], object] | None = N
     checkpoint_every : float
         Simulated seconds between checkpoints.
     checkpoint_wall : float
-        After the first checkpoint, the next only once this many seconds of wall time
-        have passed (0: at every ``checkpoint_every``); see
+        A checkpoint only once this many seconds of wall time have passed since the
+        previous one, the first since the integration started (0: at every
+        ``checkpoint_every``; a run that ends sooner writes none); see
         :func:`~runtime.solvers.driver.run_loop`.
     resume : dict, optional
         A checkpoint's state to continue from.

@@ -32,7 +32,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from runtime.errors import INTERRUPTS
+from runtime.errors import INTERRUPTS, ParameterError
 from runtime.solvers.bdf import BDF, IntegrationError
 from runtime.solvers.dense import BDFDenseOutput
 from runtime.solvers.schedule import Pieces, Restart
@@ -174,6 +174,15 @@ def describe_failure(exc: IntegrationError, describe_dof: Callable[[int], str]) 
             f"{describe_dof(exc.worst_index)}: {exc}")
 
 
+def _cadence_point(first: float, at_least: float, every: float, direction: float) -> float:
+    """The first point ``first + k every`` (k >= 0; backwards in time for direction -1)
+    at or past ``at_least``."""
+    gap = direction * (at_least - first)
+    if not gap > 0.0:
+        return first
+    return first + direction * every * math.ceil(gap / every)
+
+
 def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
              rtol: float, atol: float | np.ndarray, observers: Sequence[Any] = (),
              min_step: float = 0.0, max_order: int = 5, max_steps: int = 2_000_000,
@@ -189,12 +198,14 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
     (``runtime.solvers.schedule``): the solver lands on each and restarts where an input
     jumps; observers with a ``restart(run, restart)`` hook are told.
 
-    ``checkpoint_wall``: after the first checkpoint, one is taken at a point of the
-    ``checkpoint_every`` cadence only when at least this many seconds of wall time have
-    passed since the previous one (0: at every point), so that checkpoints cost a bounded
-    share of a run however fast it goes; the loop does not even stop at points that its
-    pace so far says come too early (then a checkpoint may fall after the point, at the
-    loop's next stop, and the cadence goes on from there).
+    ``checkpoint_wall``: a checkpoint is taken at a point of the ``checkpoint_every``
+    cadence only when at least this many seconds of wall time have passed since the
+    previous one, the first since the loop started (0: at every point), so that
+    checkpoints cost a bounded share of a run however fast it goes, and a run that ends
+    within that time writes none (running it again costs less than its checkpoint); the
+    loop does not even stop at points that its pace so far says come too early (then a
+    checkpoint may fall after the point, at the loop's next stop, and the cadence goes on
+    from there).
     ``restored``: the observers were restored from a checkpoint at ``t0`` (their ``begin``
     must not record the start again; they are called with it anyway so that they can pick
     up the state). ``counters0``: counters of the run before the resume.
@@ -202,6 +213,13 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
     (``max_step`` is combined with the pieces' own bounds). See the module docstring for
     checkpoints and failures.
     """
+    if checkpoint is not None:
+        if not (checkpoint_every > 0 and math.isfinite(checkpoint_every)):
+            raise ParameterError("checkpoint_every", checkpoint_every,
+                                 "simulated seconds > 0 (finite)")
+        if not (checkpoint_wall >= 0 and math.isfinite(checkpoint_wall)):
+            raise ParameterError("checkpoint_wall", checkpoint_wall,
+                                 "seconds of wall time >= 0 (finite)")
     wall0 = time.perf_counter()
     counters0 = dict(counters0 or {})
     options = dict(solver_options or {})
@@ -218,23 +236,32 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
     for f in hooks["begin"]:
         f(run)
     next_ckpt = t0 + checkpoint_every * (1.0 if t_end >= t0 else -1.0)
-    last_ckpt = -math.inf          # wall time (perf_counter) of the previous checkpoint
     loop_wall0 = time.perf_counter()
+    # wall time (perf_counter) of the previous checkpoint; the loop's start stands for it
+    # when checkpoints keep a wall-time distance: the first, too, comes only after that
+    # much of the run
+    last_ckpt = loop_wall0 if checkpoint_wall > 0.0 else -math.inf
 
-    def checkpoint_stop(t_c: float) -> bool:
-        """Whether the compiled loop must stop at the checkpoint time t_c: the first
-        checkpoint, or, at the run's pace so far, the wall time when it gets there is at
-        least half of ``checkpoint_wall`` past the previous checkpoint. A stop where the
-        checkpoint would be skipped costs a return to Python (~0.3 ms at N = 50: ten a
-        second of a fast run) and changes no step (the loop completes the step that passes
-        a stop); a run that slows down stops again one cadence point later at most."""
-        if checkpoint_wall <= 0.0 or last_ckpt == -math.inf:
-            return True
+    def checkpoint_time() -> float:
+        """The point of the checkpoint cadence the compiled loop must stop at next: the
+        next one (``next_ckpt``) while the run has no pace yet or checkpoints keep no
+        wall-time distance, else the first one that, at the run's pace so far, comes
+        ``checkpoint_wall`` after the previous checkpoint (or the loop's start), where a
+        checkpoint is due. The points before it would be skipped anyway, and a stop costs
+        a return to Python (~0.3 ms at N = 50); stopping only at ``next_ckpt`` (as this
+        did) let a fast run pass it and go on to its end without a checkpoint. A stop
+        changes no step (the loop completes the step that passes it); where the pace
+        changes, the checkpoint comes at a later stop."""
+        if checkpoint_wall <= 0.0:
+            return next_ckpt
         now, done = time.perf_counter(), abs(solver.t - t0)
-        if done <= 0.0:
-            return True
-        eta = now + (now - loop_wall0) / done * abs(t_c - solver.t)
-        return eta - last_ckpt >= 0.5 * checkpoint_wall
+        if done <= 0.0 or now <= loop_wall0:
+            return next_ckpt
+        pace = (now - loop_wall0) / done            # wall seconds per simulated second
+        ahead = max(0.0, last_ckpt + checkpoint_wall - now) / pace   # simulated seconds
+        return _cadence_point(next_ckpt, solver.t + direction * ahead, checkpoint_every,
+                              direction)
+
     every_step = _needs_every_step(solver, observers)
     timed = [o for o in observers if hasattr(o, "next_time")]
     flush_replay = None
@@ -293,8 +320,7 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
                 # let the compiled loop run to the next time someone needs to see
                 stops = ([t_end, solver.t + direction * tick]
                          + [o.next_time() for o in timed]
-                         + ([next_ckpt] if checkpoint is not None
-                            and checkpoint_stop(next_ckpt) else []))
+                         + ([checkpoint_time()] if checkpoint is not None else []))
                 t_stop = min(stops) if direction > 0 else max(stops)
                 solver.advance(t_stop, max_steps - solver.nstep if prompt
                                else min(max_steps - solver.nstep, _CHUNK))

@@ -387,7 +387,8 @@ class Templates:
     def _make_killed(self, path: Path, extra: Sequence[str] = ()) -> None:
         """A run SIGKILLed after its first checkpoint: summary "running" + checkpoint.npz
         (``extra``: more flags, or a whole command line when it starts with "simulate")."""
-        ctx = Ctx(tmp=self.root, out=path)
+        # a checkpoint at the first simulated second, however short the run's wall time
+        ctx = Ctx(tmp=self.root, out=path, env={"KVROD_CHECKPOINT_WALL": "0"})
         argv = list(extra) if extra[:1] == ("simulate",) else [*KILLED, *extra]
         for _ in range(5):
             shutil.rmtree(path, ignore_errors=True)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -75,8 +76,10 @@ def test_kill_and_resume(tmp_path):
     flags = ["simulate", "cantilever", "--n-elements", "40", "--t-end", "8", "--rtol", "1e-7",
              "--out", str(out)]
     args = KVROD + flags
+    # a checkpoint at the first simulated second, however short the run's wall time
+    env = {**os.environ, "KVROD_CHECKPOINT_WALL": "0"}
     p = subprocess.run([sys.executable, "-c", KILL_AFTER_FIRST_CHECKPOINT, *flags],
-                       capture_output=True, text=True, timeout=300)
+                       capture_output=True, text=True, timeout=300, env=env)
     assert p.returncode == -signal.SIGKILL, p.stderr
     ckpt = out / "checkpoint.npz"
     assert ckpt.exists(), "no checkpoint was written before the kill"

@@ -16,6 +16,14 @@ from runtime.io.runs import CheckpointWriter
 ARGV = ["simulate", "cantilever", "--n-elements", "4", "--t-end", "2.5"]
 
 
+@pytest.fixture(autouse=True)
+def _checkpoint_every_simulated_second(monkeypatch):
+    """The runs here take milliseconds, and kvrod simulate writes no checkpoint in a run
+    shorter than a second of wall time (runs.CHECKPOINT_WALL); these tests are about
+    what happens to a checkpoint, so every simulated second gets one."""
+    monkeypatch.setenv("KVROD_CHECKPOINT_WALL", "0")
+
+
 def _main(argv) -> int:
     from kvrod.cli import main
 
@@ -100,3 +108,37 @@ def test_as_a_context_it_waits_and_keeps_a_failed_checkpoint_on_the_exception():
     with pytest.raises(OSError, match="No space left"):
         with CheckpointWriter(full) as w:
             w.submit({"t": 1.0})
+
+
+def test_a_run_shorter_than_a_checkpoints_worth_writes_none(tmp_path, monkeypatch):
+    """By default (runs.CHECKPOINT_WALL: a second of wall time) a run of milliseconds
+    writes no checkpoint and ends as it does with one every simulated second."""
+    import runtime.io.results as results
+
+    written: list[float] = []
+    original = results.write_checkpoint
+
+    def counted(out, params, state):
+        written.append(float(state["t"]))
+        return original(out, params, state)
+
+    monkeypatch.setattr(results, "write_checkpoint", counted)
+    monkeypatch.delenv("KVROD_CHECKPOINT_WALL")
+    assert _main([*ARGV, "--out", tmp_path / "a"]) == 0
+    assert written == []
+    monkeypatch.setenv("KVROD_CHECKPOINT_WALL", "0")
+    assert _main([*ARGV, "--out", tmp_path / "b"]) == 0
+    assert [round(t) for t in written] == [1, 2]
+    with np.load(tmp_path / "a" / "series.npz") as a, np.load(tmp_path / "b" / "series.npz") as b:
+        assert np.array_equal(a["tip"], b["tip"])
+
+
+@pytest.mark.parametrize("value", ["-1", "soon", "inf"])
+def test_a_bad_checkpoint_wall_is_refused_before_anything_is_written(tmp_path, monkeypatch,
+                                                                    capsys, value):
+    monkeypatch.setenv("KVROD_CHECKPOINT_WALL", value)
+    out = tmp_path / "run"
+    assert _main([*ARGV, "--out", out]) == 2
+    err = capsys.readouterr().err
+    assert "KVROD_CHECKPOINT_WALL" in err and ">= 0" in err
+    assert not out.exists()

@@ -311,20 +311,80 @@ def test_frames_and_snapshots_come_from_kept_steps_not_stops(monkeypatch):
     assert np.array_equal(replayed.centreline, b.centreline)
 
 
-def test_checkpoints_after_the_first_wait_for_their_wall_time():
-    """run_loop's checkpoint_wall: the first checkpoint at the first checkpoint_every, the
-    next only once that much wall time has passed (none more in a run shorter than it); 0:
-    one at every point of the cadence. The run is the same either way."""
+def test_checkpoints_wait_for_their_wall_time(monkeypatch):
+    """run_loop's checkpoint_wall: a checkpoint only once that much wall time has passed
+    since the previous one, the first since the loop started: none in a run shorter than
+    it; 0: one at every point of the cadence. With a clock on which every reading is a
+    second later, every point of the cadence is past the wall time again. The run is the
+    same either way."""
+    import itertools
+
+    from runtime.solvers import driver
+
     p = load_problem("cantilever", {"rod.elements": 6, "simulation.t_end": 2.0})
     every: list[dict] = []
-    once: list[dict] = []
+    none: list[dict] = []
     a = simulate(p, checkpoint=every.append, checkpoint_every=0.25)
-    b = simulate(p, checkpoint=once.append, checkpoint_every=0.25, checkpoint_wall=1e9)
+    b = simulate(p, checkpoint=none.append, checkpoint_every=0.25, checkpoint_wall=1e9)
     ts = [s["t"] for s in every]
     assert len(ts) == 7 and all(t >= 0.25 * (k + 1) for k, t in enumerate(ts))
-    assert [s["t"] for s in once] == ts[:1]
-    assert a.counters == b.counters and np.array_equal(a.tip, b.tip)
-    assert np.array_equal(a.dissipated, b.dissipated)
+    assert none == []
+    clock = itertools.count(0.0, 1.0)
+
+    class SlowClock:
+        @staticmethod
+        def perf_counter() -> float:
+            return float(next(clock))
+
+    monkeypatch.setattr(driver, "time", SlowClock)
+    slow: list[dict] = []
+    c = simulate(p, checkpoint=slow.append, checkpoint_every=0.25, checkpoint_wall=1.0)
+    assert [s["t"] for s in slow] == ts
+    for r in (b, c):
+        assert a.counters == r.counters and np.array_equal(a.tip, r.tip)
+        assert np.array_equal(a.dissipated, r.dissipated)
+
+
+def test_a_fast_long_run_checkpoints_once_per_wall_interval(monkeypatch):
+    """A run whose wall time is long only because its simulated time is: on a clock that
+    gives 0.01 s of wall time per simulated second, checkpoint_wall = 1 s means a
+    checkpoint about every 100 simulated seconds. The loop learns the pace at the first
+    cadence point and then stops where the next checkpoint is due (stopping only at the
+    next cadence point, it ran on to the end after the first). The steps are those of a
+    run without checkpoints."""
+    from runtime.solvers import driver
+
+    p = load_problem("cantilever", {"rod.elements": 4, "simulation.t_end": 250.0})
+    plain = simulate(p)
+    holder = {}
+
+    class Tracked(driver.BDF):
+        def __init__(self, *a, **k):
+            super().__init__(*a, **k)
+            holder["solver"] = self
+
+    class SimulatedClock:
+        @staticmethod
+        def perf_counter() -> float:
+            s = holder.get("solver")
+            return 0.0 if s is None else 0.01 * abs(s.t)
+
+    monkeypatch.setattr(driver, "BDF", Tracked)
+    monkeypatch.setattr(driver, "time", SimulatedClock)
+    got: list[dict] = []
+    r = simulate(p, checkpoint=got.append, checkpoint_every=1.0, checkpoint_wall=1.0)
+    ts = [s["t"] for s in got]
+    assert len(ts) == 2 and ts[0] >= 100.0 and ts[1] - ts[0] >= 100.0, ts
+    assert r.counters == plain.counters and np.array_equal(r.tip, plain.tip)
+
+
+def test_cadence_points():
+    from runtime.solvers.driver import _cadence_point
+
+    assert _cadence_point(1.0, 0.5, 1.0, 1.0) == 1.0
+    assert _cadence_point(1.0, 1.0, 1.0, 1.0) == 1.0
+    assert _cadence_point(1.0, 3.2, 1.0, 1.0) == 4.0
+    assert _cadence_point(-1.0, -3.2, 0.5, -1.0) == -3.5       # backwards in time
 
 
 def test_a_release_holds_no_signals_and_calls_no_drive_back(monkeypatch):
