@@ -235,7 +235,8 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
              for name in ("begin", "step", "restart", "end")}
     for f in hooks["begin"]:
         f(run)
-    next_ckpt = t0 + checkpoint_every * (1.0 if t_end >= t0 else -1.0)
+    direction = 1.0 if t_end >= t0 else -1.0
+    next_ckpt = t0 + checkpoint_every * direction
     loop_wall0 = time.perf_counter()
     # wall time (perf_counter) of the previous checkpoint; the loop's start stands for it
     # when checkpoints keep a wall-time distance: the first, too, comes only after that
@@ -283,7 +284,6 @@ def run_loop(model, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float, *,
         solver.watch(watches, kept)
     tick = abs(t_end - t0) / max([getattr(o, "ticks", 1) for o in observers], default=1)
     prompt = solver.core is not None and solver.core.stops_on_signals
-    direction = 1.0 if t_end >= t0 else -1.0
 
     def total_counters() -> dict[str, int]:
         return {k: counters0.get(k, 0) + v for k, v in solver.counters.items()}
