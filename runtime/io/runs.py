@@ -369,6 +369,7 @@ def run_assembly_and_write(problem, out: Path, label: str, plots: bool = False,
                                           sens_errcon)
     out = Path(out)
     params = jsonable(problem.to_mapping())
+    wall = checkpoint_wall()
     F.check_output_path(out)
     if not resume:
         F.refuse_existing(out, "simulate", overwrite=overwrite, resumable=True)
@@ -388,7 +389,8 @@ def run_assembly_and_write(problem, out: Path, label: str, plots: bool = False,
 
     def run_it(cb, on_checkpoint, series):
         return simulate_assembly(problem, progress=cb, checkpoint=on_checkpoint,
-                                 checkpoint_every=checkpoint_every, resume=state, amap=amap,
+                                 checkpoint_every=checkpoint_every, checkpoint_wall=wall,
+                                 resume=state, amap=amap,
                                  sensitivity=sens_run, snapshot_every=vtk_every,
                                  snapshot_sink=series.add if series else None)
 

@@ -443,7 +443,8 @@ def error_control(problem, amap: AssemblyMap) -> ErrorControl:
 
 
 def simulate_assembly(problem, *, progress=None, checkpoint=None,
-                      checkpoint_every: float = 1.0, resume: dict | None = None,
+                      checkpoint_every: float = 1.0, checkpoint_wall: float = 0.0,
+                      resume: dict | None = None,
                       max_steps: int = 2_000_000, amap: AssemblyMap | None = None,
                       sensitivity=None,
                       snapshot_every: float | None = None,
@@ -457,7 +458,12 @@ def simulate_assembly(problem, *, progress=None, checkpoint=None,
     ``snapshot_every`` (s): the whole state and its rate every this many seconds, handed
     to ``snapshot_sink(t, y, yp)`` as the run reaches them (for VTK:
     :class:`runtime.io.assembly_vtk.AssemblyVtk`; default: kept in
-    ``result.snapshots``); a resumed run continues where the checkpoint's left off."""
+    ``result.snapshots``); a resumed run continues where the checkpoint's left off.
+
+    ``checkpoint(state)`` is called every ``checkpoint_every`` simulated seconds, but only
+    once ``checkpoint_wall`` seconds of wall time have passed since the previous one (the
+    first since the integration started; 0: at every ``checkpoint_every``), as in
+    :func:`runtime.simulate.simulate.simulate` (:func:`~runtime.solvers.driver.run_loop`)."""
     sim = problem.simulation
     res = AssemblyResult(problem=problem)
     wall0 = time.perf_counter()
@@ -538,6 +544,7 @@ def simulate_assembly(problem, *, progress=None, checkpoint=None,
                    observers=observers, min_step=sim.min_step,
                    max_order=sim.max_order or 5, max_steps=max_steps,
                    checkpoint=checkpoint, checkpoint_every=checkpoint_every,
+                   checkpoint_wall=checkpoint_wall,
                    counters0=counters0, describe_dof=model.describe_dof,
                    solver_options={"error_mask": control.error_mask,
                                    "stiff_decay_rate": control.stiff_decay_rate,

@@ -94,6 +94,7 @@ def test_vtk_resume_keeps_the_frames_before_the_checkpoint(tmp_path, monkeypatch
     uninterrupted run puts it."""
     import runtime.io.results as results
 
+    monkeypatch.setenv("KVROD_CHECKPOINT_WALL", "0")     # checkpoints however fast the run
     p = l_frame(**{"simulation.t_end": 0.05})
     full, _ = run_and_write(p, tmp_path / "full", "t", vtk_every=0.01)
     out = tmp_path / "cut"

@@ -133,6 +133,36 @@ def test_a_run_shorter_than_a_checkpoints_worth_writes_none(tmp_path, monkeypatc
         assert np.array_equal(a["tip"], b["tip"])
 
 
+def test_an_assembly_keeps_the_same_checkpoint_rule(tmp_path, monkeypatch):
+    """An assembly's run (runs.run_assembly_and_write) writes its checkpoints by the same
+    wall-time rule as a rod's: none in a run of milliseconds by default, one per
+    ``checkpoint_every`` with KVROD_CHECKPOINT_WALL=0, and the same results either way."""
+    import runtime.io.results as results
+    from runtime.io.runs import run_and_write
+    from runtime.problem.registry import load_problem
+
+    written: list[float] = []
+    original = results.write_checkpoint
+
+    def counted(out, params, state):
+        written.append(float(state["t"]))
+        return original(out, params, state)
+
+    monkeypatch.setattr(results, "write_checkpoint", counted)
+    p = load_problem("examples/assembly_l_frame.toml",
+                     {"rods.column.rod.elements": 4, "rods.beam.rod.elements": 3,
+                      "simulation.t_end": 0.02, "simulation.output_step": 0.001})
+    monkeypatch.delenv("KVROD_CHECKPOINT_WALL")
+    a, _ = run_and_write(p, tmp_path / "a", "t", checkpoint_every=0.005)
+    assert a.status == "finished" and written == []
+    monkeypatch.setenv("KVROD_CHECKPOINT_WALL", "0")
+    b, _ = run_and_write(p, tmp_path / "b", "t", checkpoint_every=0.005)
+    assert b.status == "finished"
+    # at the first step past each cadence point
+    assert [round(t / 0.005) for t in written] == [1, 2, 3]
+    assert np.array_equal(a.kinetic, b.kinetic) and np.array_equal(a.t, b.t)
+
+
 @pytest.mark.parametrize("value", ["-1", "soon", "inf"])
 def test_a_bad_checkpoint_wall_is_refused_before_anything_is_written(tmp_path, monkeypatch,
                                                                     capsys, value):
