@@ -196,13 +196,18 @@ def start_local_cluster(n_workers: int | None = None) -> LocalCluster:
     """A LocalCluster of single-threaded worker processes (scheduler and dashboard on free
     ports) that leave Ctrl-C to this process."""
     # silence_logs: the workers log a warning for every task cancelled by an interrupted
-    # study; keep their logs to errors
+    # study, and, when the cluster closes (at the end or after Ctrl-C), a worker whose
+    # heartbeat meets the scheduler already gone logs an ERROR with two tracebacks
+    # ("Failed to communicate with scheduler during heartbeat": a race, ~1 close in 10
+    # here). Nothing a worker logs is the user's only news of a failure: a point's error,
+    # a killed worker and a timeout come back through its future and go to study.csv
+    # with their message, so the workers of our own cluster log only what is critical
     import dask
 
     with _children_ignore_sigint(), dask.config.set(LOCAL_CLUSTER_CONFIG):
         return LocalCluster(n_workers=n_workers or default_workers(), threads_per_worker=1,
                             processes=True, dashboard_address=":0", scheduler_port=0,
-                            silence_logs=logging.ERROR)
+                            silence_logs=logging.CRITICAL)
 
 
 @contextlib.contextmanager
