@@ -2,8 +2,12 @@
 
 The paper's cantilever (``examples/cantilever.toml``), N = 50, 10 s, rtol 1e-6. Three
 ratios, each taken side by side in one run (the commands run in turn, round after round,
-the order rotated; ratios are per round, then their median, so a slow spell of the shared
-machine spoils one round, not one command):
+in the orders of :data:`ORDERS`; ratios are per round, then their median, so a slow spell
+of the shared machine spoils one round, not one command). ``kvrod simulate`` and the
+integrator alone run back to back in every round, each first in half of them: a shared
+machine changes speed in spells of seconds (both vCPUs of the 2-core VM together, by
+~1.3x), and the IDAS script's second between them put a pair into two spells in a third
+of the rounds.
 
 1. **summary wall / integrator alone**: ``wall_time_s`` of the ``summary.json`` that a whole
    ``kvrod simulate cantilever --n-elements 50 --t-end 10`` process writes (model build,
@@ -52,7 +56,11 @@ from bench.meta import target, targets_md
 
 N, T, RTOL = 50, 10.0, 1e-6
 OUTPUT_STEP = 0.01          # s: the integrator alone's outputs (simulate's own: 5 ms)
-ROUNDS, QUICK_ROUNDS = 9, 2
+ROUNDS, QUICK_ROUNDS = 12, 2
+#: the rounds' orders, in turn: simulate and the integrator alone adjacent, each first in
+#: half of the rounds; the IDAS script before them or after them in half
+ORDERS = (("simulate", "integrator", "idas_script"), ("idas_script", "integrator", "simulate"),
+          ("integrator", "simulate", "idas_script"), ("idas_script", "simulate", "integrator"))
 QUICK_T = 2.0
 SUMMARY_RATIO_MAX = 1.3
 PROCESS_RATIO_MAX = 0.7
@@ -181,7 +189,7 @@ def processes(quick: bool, rounds: int, log=print) -> dict[str, Any]:
             if r["rc"]:
                 errors[name] = r["error"]
         for k in range(rounds):
-            order = names[k % len(names):] + names[:k % len(names)]
+            order = ORDERS[k % len(ORDERS)]
             got: dict[str, dict] = {}
             for name in order:
                 if name in errors:
@@ -320,7 +328,8 @@ def markdown(doc: dict) -> list[str]:
     out = ["## 10. kvrod simulate's own cost beside its integrator and beside IDAS (issue 33)",
            "",
            f"The cantilever, N = {doc['N']}, {doc['t_end']:g} s, rtol {doc['rtol']:g}; "
-           f"{doc['rounds']} rounds of the commands in turn (order rotated), one warm-up "
+           f"{doc['rounds']} rounds of the commands in turn (kvrod simulate and the "
+           "integrator alone back to back, each first in half of the rounds), one warm-up "
            "each; ratios per round, then their median (paired). Machine: "
            f"{m0['cpu_model']}, {m0['cpus']} cores, {m0['memory_gib']} GiB, "
            f"{m0['platform']}; load average {m0['load_average']} before, "
@@ -357,10 +366,26 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--n-elements", type=int, default=N)
     ap.add_argument("--t-end", type=float, default=T)
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--processes-only", metavar="JSON", type=Path,
+                    help="only the rounds of whole processes (ratios 1 and 2; the IDAS "
+                         "script's rounds are left out where CasADi is not installed), "
+                         "with the machine, into this JSON file (a quiet machine's check: "
+                         "python -m bench.sweep_cores's device run)")
+    ap.add_argument("--rounds", type=int, default=ROUNDS)
     args = ap.parse_args(argv)
     if args.integrator_alone:
         wall, counters = time_solve(integrator_alone(args.n_elements, args.t_end))
         print(json.dumps({"solve_s": wall, "counters": counters}))
+        return 0
+    if args.processes_only is not None:
+        m0 = machine()
+        doc = processes(args.quick, args.rounds)
+        doc.update(machine_before=m0, machine_after=machine(),
+                   affinity=sorted(os.sched_getaffinity(0)))
+        args.processes_only.write_text(json.dumps(doc, indent=1) + "\n")
+        so = doc["summary_over_integrator"]
+        print(f"summary wall / integrator alone: {so['median_ratio']} (paired median of "
+              f"{len(so['ratios'])} rounds; per round {[round(r, 3) for r in so['ratios']]})")
         return 0
     print("\n".join(markdown(run(args.quick))))
     return 0
