@@ -130,6 +130,8 @@ def _run_sweep(args, study, out: Path) -> int:
     print(f"{len(report.computed)} points run ({len(report.failed)} failed), "
           f"{len(report.skipped)} already finished, in {report.wall_time_s:.1f} s "
           f"[{report.engine}]")
+    if report.timing_line():
+        print(report.timing_line())
     print(f"wrote {out}/study.csv, {out}/points/<id>/summary.json, series.npz"
           + (f", {out}/summary.png" if (out / "summary.png").exists() else ""))
     if report.failed:

@@ -207,14 +207,15 @@ class SimulationResult:
         """Director frames (n, 3, 3) (columns d1, d2, d3) at s = 0 and s = L."""
         return {end: quat_rotation(q.T) for end, q in self.end_quaternions.items()}
 
-    def end_rotations(self) -> dict[str, np.ndarray]:
+    def end_rotations(self, last: bool = False) -> dict[str, np.ndarray]:
         """Rotation vectors (3, n) (rad, spatial: angle times axis) that take each end's
-        reference frame to its frame at the output times."""
+        reference frame to its frame at the output times; ``last``: at the last output
+        time alone, (3, 1) (the summary's; the same values, sample by sample)."""
         if self.model is None or not self.end_quaternions:
             return {}
         ref = reference_end_quaternions(self.model)
         conj = np.array([1.0, -1.0, -1.0, -1.0])
-        return {end: quat_log(quat_mul(q.T, ref[end] * conj)).T
+        return {end: quat_log(quat_mul((q[:, -1:] if last else q).T, ref[end] * conj)).T
                 for end, q in self.end_quaternions.items()}
 
     def input_warnings(self) -> list[str]:
@@ -341,7 +342,7 @@ class SimulationResult:
                if self.self_contact else {}),
             "end_rotation": {end: {"rotation_vector": [float(v) for v in r[:, -1]],
                                    "angle_deg": float(np.degrees(np.linalg.norm(r[:, -1])))}
-                             for end, r in self.end_rotations().items() if r.size},
+                             for end, r in self.end_rotations(last=True).items() if r.size},
             "warnings": warnings,
             "t_reached": float(self.t_last),
             "wall_time_s": self.wall_time_s,

@@ -66,6 +66,7 @@ import math
 import os
 import signal
 import socket
+import sys
 import threading
 import time
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
@@ -631,6 +632,29 @@ class StudyReport:
     engine: str = ""
     tasks: int = 0
     client_seconds: float = 0.0
+    #: where the run's wall time went (s, :meth:`StudyRecorder.mark`): "engine" (the
+    #: cluster and client ready; Dask only), "first_point" and "last_point" (returned),
+    #: "closed" (the engine shut down, the table complete), "end"; and durations:
+    #: "plots_during_run" (the client drawing summary.png while points ran),
+    #: "final_plots"
+    phases: dict[str, float] = field(default_factory=dict)
+
+    def timing_line(self) -> str:
+        """The phases in one line (the CLI prints it), or "" when there are none."""
+        ph = self.phases
+        if "end" not in ph:
+            return ""
+        parts = []
+        if "engine" in ph:
+            parts.append(f"engine ready at {ph['engine']:.2f} s")
+        if "first_point" in ph:
+            parts.append(f"points returned from {ph['first_point']:.2f} to "
+                         f"{ph['last_point']:.2f} s")
+        if "closed" in ph:
+            parts.append(f"closed at {ph['closed']:.2f} s")
+        parts.append(f"plots {ph.get('final_plots', 0.0):.2f} s at the end, "
+                     f"{ph.get('plots_during_run', 0.0):.2f} s during the run")
+        return "timing: " + "; ".join(parts) + f"; end at {ph['end']:.2f} s"
 
     @property
     def ok(self) -> bool:
@@ -705,7 +729,11 @@ class StudyRecorder:
         self.study, self.out = study, Path(out)
         self.plots, self.plot_interval = plots, plot_interval
         self._last_plot = time.monotonic()   # first refresh after plot_interval
+        self._plot_due = False
         self.started_at = time.time()
+        self._t0 = time.perf_counter()
+        if plots:
+            _preload_pyplot()
         self.out.mkdir(parents=True, exist_ok=True)
         if study.source:
             write_text(self.out / "study.toml", study.source)
@@ -807,11 +835,29 @@ class StudyRecorder:
         self._add(i, point, result.status, result.row)
         self._count()
         self._progress_file.update(self._counts())
-        now = time.monotonic()
-        if self.plots and now - self._last_plot >= self.plot_interval:
-            self._last_plot = now
-            self._plot()
+        self.mark("last_point")
+        self.report.phases.setdefault("first_point", self.report.phases["last_point"])
+        if self.plots and time.monotonic() - self._last_plot >= self.plot_interval:
+            self._plot_due = True
         return self.progress
+
+    def mark(self, phase: str) -> None:
+        """``report.phases[phase]`` <- seconds since this recorder was made."""
+        self.report.phases[phase] = time.perf_counter() - self._t0
+
+    def refresh_plots(self) -> None:
+        """Redraw summary.png if :meth:`record` found it due: the engines call this once
+        their workers have work again (the Dask feeder after topping up its tasks), so
+        that the drawing (~0.3 s; a first one also imports matplotlib) never leaves a
+        worker waiting for the client."""
+        if not self._plot_due:
+            return
+        self._plot_due = False
+        t = time.perf_counter()
+        self._plot()
+        self._last_plot = time.monotonic()
+        ph = self.report.phases
+        ph["plots_during_run"] = ph.get("plots_during_run", 0.0) + time.perf_counter() - t
 
     def _plot(self) -> None:
         write_plots(self.out, self.study,
@@ -832,9 +878,32 @@ class StudyRecorder:
             self._count()
             self.progress.queued = 0
             self._progress_file.close(self._counts())
+        self.mark("closed")
         if self.plots:
+            t = time.perf_counter()
             self._plot()
+            self.report.phases["final_plots"] = time.perf_counter() - t
+        self.mark("end")
         return self.report
+
+
+def _preload_pyplot() -> None:
+    """Import matplotlib's pyplot (``runtime.io.figures.pyplot``: ~0.5 s) on a thread
+    while the first points run, so that the study's plots do not import it on the
+    client's critical path: at the end of the run, or in a refresh while workers wait
+    for tasks. Much of an import holds the GIL, but the client mostly waits on its
+    workers then (a serial study's points run in C, without it). A failed import is
+    left to the plots themselves, which raise it where they always did."""
+    if "matplotlib.pyplot" in sys.modules:
+        return
+
+    def load() -> None:
+        with contextlib.suppress(Exception):
+            from runtime.io.figures import pyplot
+
+            pyplot()
+
+    threading.Thread(target=load, name="kvrod-pyplot", daemon=True).start()
 
 
 @contextlib.contextmanager
@@ -895,6 +964,7 @@ def run_study_serial(study: Study, out: Path,
                 pr = rec.record(PointResult(p.id, summary["status"],
                                             table_row(study, p, summary),
                                             time.perf_counter() - t))
+                rec.refresh_plots()
                 if progress is not None:
                     progress(pr)
     finally:

@@ -357,6 +357,7 @@ def run_study_dask(study: Study, out: Path, *, client: Client | None = None,
                         client = own_client = Client(own_cluster)
             else:
                 engine = f"dask client {client.scheduler.address}"
+            rec.mark("engine")
             link = dashboard_link(client)
             if on_dashboard is not None and link:
                 on_dashboard(link)
@@ -375,6 +376,7 @@ def run_study_dask(study: Study, out: Path, *, client: Client | None = None,
                         if progress is not None:
                             progress(pr)
                 feeder.fill()
+                rec.refresh_plots()          # once the workers have their tasks again
             rec.report.client_seconds += time.perf_counter() - busy
     except BaseException:
         interrupted = True

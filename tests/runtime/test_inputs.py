@@ -242,6 +242,19 @@ def test_dynamic_reaction_includes_the_inertia():
     assert np.max(np.abs(run.end_rotations()["end"])) < 1e-9
 
 
+def test_the_summary_s_end_rotation_is_the_series_last_bit_for_bit():
+    """summary.json's end rotation comes from the last output time alone
+    (``end_rotations(last=True)``): the same numbers as the series' last column."""
+    run = simulate(load_problem("cantilever", {"n_elements": 6, "t_end": 0.3}))
+    full, last = run.end_rotations(), run.end_rotations(last=True)
+    assert full.keys() == last.keys() == {"start", "end"}
+    for end in full:
+        assert last[end].shape == (3, 1) and np.array_equal(full[end][:, -1:], last[end])
+    assert np.linalg.norm(last["end"]) > 0.1          # a bent tip: not a trivial zero
+    assert run.summary()["end_rotation"]["end"]["rotation_vector"] == [
+        float(v) for v in full["end"][:, -1]]
+
+
 def test_end_rotation_of_a_bent_cantilever_is_second_order():
     """Tip rotation of a cantilever under a small tip force against Euler-Bernoulli
     F L^2 / (2 EI) plus nothing from shear: the frame extrapolated half a segment beyond

@@ -448,6 +448,45 @@ def test_study_csv_is_appended_not_rewritten(tmp_path):
     assert _assert_table_complete(tmp_path, s).keys() == rows.keys()
 
 
+def test_a_due_plot_waits_for_the_engine_and_the_report_says_where_time_went(
+        tmp_path, monkeypatch):
+    """record() only marks the plots due; they are drawn by refresh_plots(), which the
+    engines call once their workers have work again (the Dask feeder after topping up
+    its tasks), never in the middle of taking results. The report's phases come in
+    order and the CLI's timing line shows them."""
+    import runtime.study.sweep as sweep
+
+    drawn: list[int] = []
+    records: list[int] = []
+    monkeypatch.setattr(sweep, "write_plots", lambda out, study, rows: drawn.append(len(rows)))
+    record = sweep.StudyRecorder.record
+
+    def counted(self, result):
+        r = record(self, result)
+        records.append(len(self.rows))
+        assert self._plot_due and len(drawn) == len(records) - 1   # due, not drawn yet
+        return r
+    monkeypatch.setattr(sweep.StudyRecorder, "record", counted)
+    monkeypatch.setattr(sweep.StudyRecorder, "__init__", _with_interval(
+        sweep.StudyRecorder.__init__, 0.0))                 # every result makes it due
+    s = study_from_dict({"fixed": {**TINY, "n_elements": 4, "t_end": 0.2},
+                         "grid": {"tau": [0.01, 0.02, 0.03]}})
+    report = run_study_serial(s, tmp_path)
+    assert records == [1, 2, 3] and drawn == [1, 2, 3, 3]   # after each point, at the end
+    ph = report.phases
+    assert 0 <= ph["first_point"] <= ph["last_point"] <= ph["closed"] <= ph["end"]
+    assert ph["plots_during_run"] >= 0 and ph["final_plots"] >= 0
+    line = report.timing_line()
+    assert line.startswith("timing: points returned from") and "end at" in line
+
+
+def _with_interval(init, interval: float):
+    def wrapped(self, *a, **k):
+        k["plot_interval"] = interval
+        init(self, *a, **k)
+    return wrapped
+
+
 @pytest.mark.parametrize("then", ["returns", "raises"])
 def test_ctrl_c_stops_a_serial_study_whatever_the_point_made_of_it(tmp_path, monkeypatch, then):
     """A Ctrl-C that the point's own code catches (a run's outputs cut short by it, a
