@@ -99,7 +99,9 @@ def _command(study: Path, out: Path, *flags: str) -> dict[str, Any]:
         with open(out / "study.csv", newline="") as f:
             rows = list(csv.DictReader(f))
     finished = [r for r in rows if r["status"] == "finished"]
+    timing = next((ln for ln in p.stdout.splitlines() if ln.startswith("timing:")), "")
     return {"command": " ".join(cmd[1:]), "wall_s": wall, "rc": p.returncode,
+            "timing": timing,
             "points": len(rows), "finished": len(finished),
             "points_s": sum(float(r["wall_time_s"]) for r in finished),
             "stderr_tail": p.stderr.strip().splitlines()[-3:] if p.returncode else []}
@@ -160,6 +162,10 @@ def markdown(doc: dict[str, Any]) -> list[str]:
         f"{doc['efficiency_min']:.0%}: {verdict})",
         f"- the points' own serial seconds / ({doc['workers']} x parallel wall) = "
         f"{effp_s}",
+        "", "Where the commands' time went (their own timing lines, from the run's start "
+        "after the interpreter's):", "",
+        f"- serial: {s.get('timing') or '(not printed)'}",
+        f"- parallel: {p.get('timing') or '(not printed)'}",
         ""]
 
 
