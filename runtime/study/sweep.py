@@ -77,7 +77,7 @@ from typing import Any
 
 from runtime.io.atomic import write_bytes, write_text
 from runtime.io.results import write_json, write_run
-from runtime.study.plots import UNITS, write_plots
+from runtime.study.plots import UNITS, plot_axis, write_plots
 from runtime.study.points import (
     FAILED,
     FINISHED,
@@ -732,7 +732,7 @@ class StudyRecorder:
         self._plot_due = False
         self.started_at = time.time()
         self._t0 = time.perf_counter()
-        if plots:
+        if plots and plot_axis(study) is not None:      # something to draw
             _preload_pyplot()
         self.out.mkdir(parents=True, exist_ok=True)
         if study.source:
