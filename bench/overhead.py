@@ -371,15 +371,17 @@ def main(argv: list[str] | None = None) -> int:
                          "script's rounds are left out where CasADi is not installed), "
                          "with the machine, into this JSON file (a quiet machine's check: "
                          "python -m bench.sweep_cores's device run)")
-    ap.add_argument("--rounds", type=int, default=ROUNDS)
+    ap.add_argument("--rounds", type=int, default=None,
+                    help=f"rounds (default {ROUNDS}; {QUICK_ROUNDS} with --quick)")
     args = ap.parse_args(argv)
+    rounds = args.rounds or (QUICK_ROUNDS if args.quick else ROUNDS)
     if args.integrator_alone:
         wall, counters = time_solve(integrator_alone(args.n_elements, args.t_end))
         print(json.dumps({"solve_s": wall, "counters": counters}))
         return 0
     if args.processes_only is not None:
         m0 = machine()
-        doc = processes(args.quick, args.rounds)
+        doc = processes(args.quick, rounds)
         doc.update(machine_before=m0, machine_after=machine(),
                    affinity=sorted(os.sched_getaffinity(0)))
         args.processes_only.write_text(json.dumps(doc, indent=1) + "\n")
@@ -387,7 +389,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"summary wall / integrator alone: {so['median_ratio']} (paired median of "
               f"{len(so['ratios'])} rounds; per round {[round(r, 3) for r in so['ratios']]})")
         return 0
-    print("\n".join(markdown(run(args.quick))))
+    print("\n".join(markdown(run(args.quick, rounds=rounds))))
     return 0
 
 

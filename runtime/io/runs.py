@@ -237,19 +237,26 @@ def _run_in_folder(out: Path, params: dict, state: dict | None, overwrite: bool,
     return run, summary
 
 
-def load_compiled() -> None:
-    """Load the compiled rod kernels and the solver's C helpers (compiling them on a
-    machine's first run: tens of seconds) with the checks before a run, before its folder
-    is locked and its clock starts: the summary's ``wall_time_s`` is the run's, not a
-    one-off compilation's, and a first run says "compiling" before its progress starts.
-    Each library is loaded once per process (:func:`runtime.model.build.load_library`,
-    :func:`runtime.solvers.native.loader.load`); without a compiler the CasADi fallback's
-    warning comes here."""
+def load_compiled(problem=None) -> None:
+    """Load the compiled rod kernels and the solver's C helpers, and the contact kernels
+    where ``problem`` (a rod's or an assembly's) touches obstacles or itself (compiling
+    them on a machine's first run: tens of seconds), with the checks before a run,
+    before its folder is locked and its clock starts: the summary's ``wall_time_s`` is
+    the run's, not a one-off compilation's, and a first run says "compiling" before its
+    progress starts. Each library is loaded once per process
+    (:func:`runtime.model.build.load_library`, :func:`runtime.solvers.native.loader.
+    load`, :func:`runtime.model.build.load_contact_library`); without a compiler the
+    CasADi fallback's warning comes here, and contact's
+    :class:`~runtime.errors.GeneratedCodeError` (it has no fallback) before anything is
+    written."""
     from runtime.model import build
     from runtime.solvers.native import loader
 
     build.load_library()
     loader.load()
+    contact = getattr(problem, "contact", None)
+    if getattr(problem, "obstacles", ()) or (contact is not None and contact.self_contact):
+        build.load_contact_library()
 
 
 def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: bool = False,
@@ -310,7 +317,7 @@ def run_and_write(problem, out: Path, label: str, plots: bool = False, resume: b
         n = rod_layout.n_state(problem.rod.elements, problem.relaxation_terms())
         _check_resume_state(state, n, out, "problem")
     build.require_generated()
-    load_compiled()
+    load_compiled(problem)
     if (state is None and problem.simulation.initial == "static"
             and not (problem.start.clamped or problem.end.clamped)):
         # rigid motions may be free: a static start under loads along them is refused
@@ -391,7 +398,7 @@ def run_assembly_and_write(problem, out: Path, label: str, plots: bool = False,
         F.refuse_existing(out, "simulate", overwrite=overwrite, resumable=True)
     state = load_checkpoint(out, params) if resume else None
     build.require_generated()
-    load_compiled()
+    load_compiled(problem)
     amap = build_system(problem)
     if vtk_every is not None:
         from runtime.io.assembly_vtk import check_rod_names
@@ -475,11 +482,11 @@ def static_and_write(problem, out: Path, overwrite: bool = False,
         from runtime.problem.parameters import resolve_parameters
 
         resolved = resolve_parameters(problem, sensitivities)
+    build.require_generated()
+    load_compiled(problem)              # before the clock of either kind of statics
     if is_assembly(problem):
         return static_assembly_and_write(problem, out, overwrite=overwrite,
                                          sensitivities=sensitivities)
-    build.require_generated()
-    load_compiled()
     wall0 = time.perf_counter()
     model = build_model(problem)
     check_statics(model)            # an ill-posed problem is refused before the folder

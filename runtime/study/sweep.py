@@ -466,7 +466,7 @@ def run_point_into(out: Path, problem: str, point_id: str, params: Mapping[str, 
     last); returns the summary. Never raises but for Ctrl-C (nothing of this point is
     written then: also when ``interrupted()`` says a Ctrl-C came, whatever the run made
     of it). A series.npz of an earlier attempt is removed when this run has none."""
-    t0 = time.perf_counter()
+    t0, started = time.perf_counter(), time.time()
     params = dict(params)
     run, status, message = _simulate(problem, params)
     if interrupted is not None and interrupted():
@@ -475,8 +475,19 @@ def run_point_into(out: Path, problem: str, point_id: str, params: Mapping[str, 
     d.mkdir(parents=True, exist_ok=True)
     if run is None:
         (d / "series.npz").unlink(missing_ok=True)
-    return _write_point_files(d, problem, point_id, params, run, status, message,
-                              time.perf_counter() - t0)
+    try:
+        return _write_point_files(d, problem, point_id, params, run, status, message,
+                                  time.perf_counter() - t0)
+    except KeyboardInterrupt:
+        # Ctrl-C between the files (summary.json comes last): what this attempt wrote
+        # goes, unless its summary made it (then the point is finished and whole)
+        s = _read_summary(d / "summary.json")
+        meta = s.get("point") if isinstance(s, dict) else None
+        done = isinstance(meta, dict) and isinstance(meta.get("computed_at"), (int, float))
+        if not (done and meta["computed_at"] >= started):
+            for name in ("series.npz", "problem.toml"):
+                (d / name).unlink(missing_ok=True)
+        raise
 
 
 #: the study folder's token file: the client writes a fresh token into it when a run
@@ -732,8 +743,7 @@ class StudyRecorder:
         self._plot_due = False
         self.started_at = time.time()
         self._t0 = time.perf_counter()
-        if plots and plot_axis(study) is not None:      # something to draw
-            _preload_pyplot()
+        self._preload: threading.Thread | None = None
         self.out.mkdir(parents=True, exist_ok=True)
         if study.source:
             write_text(self.out / "study.toml", study.source)
@@ -750,6 +760,8 @@ class StudyRecorder:
             self.order[p.id] = i
         self._keep = set(self.rows)
         self.n_todo = len(study.points) - len(self._keep)
+        if plots and self.n_todo and plot_axis(study) is not None:   # points to draw
+            self._preload = _preload_pyplot()
         self.progress = SweepProgress(total=len(study.points), skipped=len(self._keep))
         #: worker threads executing points (None: unknown, all in-flight count as running)
         self.slots: int | None = None
@@ -826,8 +838,10 @@ class StudyRecorder:
         pr.last, pr.last_status = point.id, status
 
     def record(self, result: PointResult) -> SweepProgress:
-        """A returned point: its files (when the worker sent them), its row, the counts,
-        progress.json and (throttled) the plots."""
+        """A returned point: its files (when the worker sent them), its row, the counts
+        and progress.json; the plots, throttled, are only marked due here: the engine
+        draws them with :meth:`refresh_plots` once its workers have work again (and
+        :meth:`close` at the end)."""
         i, point = self.in_flight.pop(result.point_id)
         if result.files is not None:
             write_point(self.out, PointOutcome(point.id, point.params, result.status, "",
@@ -879,6 +893,9 @@ class StudyRecorder:
             self.progress.queued = 0
             self._progress_file.close(self._counts())
         self.mark("closed")
+        if self._preload is not None:
+            # not left importing when the process ends (write_plots may draw nothing)
+            self._preload.join(timeout=30.0)
         if self.plots:
             t = time.perf_counter()
             self._plot()
@@ -887,15 +904,16 @@ class StudyRecorder:
         return self.report
 
 
-def _preload_pyplot() -> None:
+def _preload_pyplot() -> threading.Thread | None:
     """Import matplotlib's pyplot (``runtime.io.figures.pyplot``: ~0.5 s) on a thread
     while the first points run, so that the study's plots do not import it on the
     client's critical path: at the end of the run, or in a refresh while workers wait
     for tasks. Much of an import holds the GIL, but the client mostly waits on its
     workers then (a serial study's points run in C, without it). A failed import is
-    left to the plots themselves, which raise it where they always did."""
+    left to the plots themselves, which raise it where they always did. Returns the
+    thread (:meth:`StudyRecorder.close` joins it), or None when pyplot is loaded."""
     if "matplotlib.pyplot" in sys.modules:
-        return
+        return None
 
     def load() -> None:
         with contextlib.suppress(Exception):
@@ -903,7 +921,9 @@ def _preload_pyplot() -> None:
 
             pyplot()
 
-    threading.Thread(target=load, name="kvrod-pyplot", daemon=True).start()
+    thread = threading.Thread(target=load, name="kvrod-pyplot", daemon=True)
+    thread.start()
+    return thread
 
 
 @contextlib.contextmanager
@@ -952,6 +972,7 @@ def run_study_serial(study: Study, out: Path,
             on_start(rec.progress)
         with ctrl_c_noticed() as interrupted:
             for i, p in rec.todo():
+                rec.refresh_plots()          # due after the last point: close() draws
                 rec.mark_running([(i, p)])
                 t = time.perf_counter()
                 try:
@@ -964,7 +985,6 @@ def run_study_serial(study: Study, out: Path,
                 pr = rec.record(PointResult(p.id, summary["status"],
                                             table_row(study, p, summary),
                                             time.perf_counter() - t))
-                rec.refresh_plots()
                 if progress is not None:
                     progress(pr)
     finally:

@@ -376,7 +376,8 @@ def run_study_dask(study: Study, out: Path, *, client: Client | None = None,
                         if progress is not None:
                             progress(pr)
                 feeder.fill()
-                rec.refresh_plots()          # once the workers have their tasks again
+                if feeder.batches:           # once the workers have their tasks again
+                    rec.refresh_plots()      # (after the last point: close() draws)
             rec.report.client_seconds += time.perf_counter() - busy
     except BaseException:
         interrupted = True

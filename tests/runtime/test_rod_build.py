@@ -272,3 +272,48 @@ def test_the_user_cache_folder_is_platformdirs_own(monkeypatch, xdg, home):
     if not sys.platform.startswith("linux") or (home is None and xdg is None):
         pytest.skip("the shortcut is Linux's")
     assert native.cache_dir() == Path(platformdirs.user_cache_dir("kvrod"))
+
+
+@pytest.mark.parametrize("command, name, over", [
+    ("simulate", "examples/contact_flat_drop.toml", {"simulation.t_end": 0.002}),
+    ("static", "examples/assembly_l_frame.toml", {"rods.column.rod.elements": 4,
+                                                  "rods.beam.rod.elements": 3}),
+    ("simulate", "cantilever", {"n_elements": 4, "t_end": 0.01})])
+def test_the_libraries_load_before_the_folder_and_the_clock(tmp_path, monkeypatch, command,
+                                                            name, over):
+    """runs.load_compiled: the rod kernels, the solver's helpers and (where the problem
+    touches something) the contact kernels are loaded, compiling on a first run, with
+    the checks: before the results folder exists and before any model is built (the
+    model build starts the run's clock), so that no compilation counts in the run's
+    wall_time_s and a failure to build comes before anything is written."""
+    from runtime.io import runs
+    from runtime.model.rod import RodModel
+    from runtime.problem.registry import load_problem
+    from runtime.solvers.native import loader
+
+    out = tmp_path / "out"
+    events: list[tuple[str, bool]] = []
+
+    def watch(owner, fn):
+        original = getattr(owner, fn)
+
+        def called(*a, **k):
+            events.append((fn, out.exists()))
+            return original(*a, **k)
+        monkeypatch.setattr(owner, fn, called)
+
+    watch(build, "load_library")
+    watch(build, "load_contact_library")
+    watch(loader, "load")
+    watch(RodModel, "__init__")
+    problem = load_problem(name, over)
+    if command == "static":
+        runs.static_and_write(problem, out)
+    else:
+        runs.run_and_write(problem, out, "t")
+    touches = name.endswith("contact_flat_drop.toml")
+    libs = {"load_library", "load"} | ({"load_contact_library"} if touches else set())
+    first_model = next(k for k, (fn, _) in enumerate(events) if fn == "__init__")
+    before = events[:first_model]
+    assert {fn for fn, _ in before} == libs and not any(seen for _, seen in before)
+    assert (out / "summary.json").exists()
