@@ -375,6 +375,8 @@ def main(argv: list[str] | None = None) -> int:
                     help=f"rounds (default {ROUNDS}; {QUICK_ROUNDS} with --quick)")
     args = ap.parse_args(argv)
     rounds = args.rounds or (QUICK_ROUNDS if args.quick else ROUNDS)
+    if args.processes_only is not None and not args.processes_only.parent.is_dir():
+        ap.error(f"--processes-only: the folder {args.processes_only.parent} does not exist")
     if args.integrator_alone:
         wall, counters = time_solve(integrator_alone(args.n_elements, args.t_end))
         print(json.dumps({"solve_s": wall, "counters": counters}))

@@ -35,16 +35,12 @@ import time
 from pathlib import Path
 from typing import Any
 
+from bench.overhead import machine
+
 POINTS_SIDE = 16                    # 16 x 16 = 256 points
 POINT_S = 0.35                      # s: the point's time aimed at
 EFFICIENCY_MIN = 0.9
 CALIBRATION_T = 10.0                # s simulated in the first calibration run
-
-
-def _machine() -> dict[str, Any]:
-    from bench.overhead import machine
-
-    return machine()
 
 
 def calibrate(point_s: float = POINT_S, side: int = POINTS_SIDE) -> dict[str, Any]:
@@ -110,7 +106,7 @@ def _command(study: Path, out: Path, *flags: str) -> dict[str, Any]:
 def run(workers: int, point_s: float = POINT_S, side: int = POINTS_SIDE,
         log=print) -> dict[str, Any]:
     """The document of the module docstring."""
-    m0 = _machine()
+    m0 = machine()
     cal = calibrate(point_s, side)
     log(f"calibration (t_end s, wall s): {cal['calibration_runs']} -> t_end {cal['t_end']:g} s")
     with tempfile.TemporaryDirectory(prefix="kvrod-bench-cores-") as tmp:
@@ -132,7 +128,7 @@ def run(workers: int, point_s: float = POINT_S, side: int = POINTS_SIDE,
             "efficiency_whole_commands": eff, "efficiency_points": eff_points,
             "efficiency_min": EFFICIENCY_MIN,
             "met": None if eff is None else bool(eff >= EFFICIENCY_MIN),
-            "machine_before": m0, "machine_after": _machine(),
+            "machine_before": m0, "machine_after": machine(),
             "python": platform.python_version(), "cpu_count": os.cpu_count()}
 
 

@@ -661,8 +661,7 @@ class StudyReport:
         if "first_point" in ph:
             parts.append(f"points returned from {ph['first_point']:.2f} to "
                          f"{ph['last_point']:.2f} s")
-        if "closed" in ph:
-            parts.append(f"closed at {ph['closed']:.2f} s")
+        parts.append(f"closed at {ph['closed']:.2f} s")
         parts.append(f"plots {ph.get('final_plots', 0.0):.2f} s at the end, "
                      f"{ph.get('plots_during_run', 0.0):.2f} s during the run")
         return "timing: " + "; ".join(parts) + f"; end at {ph['end']:.2f} s"

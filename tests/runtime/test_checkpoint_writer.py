@@ -110,9 +110,9 @@ def test_as_a_context_it_waits_and_keeps_a_failed_checkpoint_on_the_exception():
             w.submit({"t": 1.0})
 
 
-def test_a_run_shorter_than_a_checkpoints_worth_writes_none(tmp_path, monkeypatch):
-    """By default (runs.CHECKPOINT_WALL: a second of wall time) a run of milliseconds
-    writes no checkpoint and ends as it does with one every simulated second."""
+def _count_checkpoints(monkeypatch) -> list[float]:
+    """The times of the checkpoints written from now on (results.write_checkpoint still
+    writes them)."""
     import runtime.io.results as results
 
     written: list[float] = []
@@ -123,6 +123,13 @@ def test_a_run_shorter_than_a_checkpoints_worth_writes_none(tmp_path, monkeypatc
         return original(out, params, state)
 
     monkeypatch.setattr(results, "write_checkpoint", counted)
+    return written
+
+
+def test_a_run_shorter_than_a_checkpoints_worth_writes_none(tmp_path, monkeypatch):
+    """By default (runs.CHECKPOINT_WALL: a second of wall time) a run of milliseconds
+    writes no checkpoint and ends as it does with one every simulated second."""
+    written = _count_checkpoints(monkeypatch)
     monkeypatch.delenv("KVROD_CHECKPOINT_WALL")
     assert _main([*ARGV, "--out", tmp_path / "a"]) == 0
     assert written == []
@@ -137,18 +144,10 @@ def test_an_assembly_keeps_the_same_checkpoint_rule(tmp_path, monkeypatch):
     """An assembly's run (runs.run_assembly_and_write) writes its checkpoints by the same
     wall-time rule as a rod's: none in a run of milliseconds by default, one per
     ``checkpoint_every`` with KVROD_CHECKPOINT_WALL=0, and the same results either way."""
-    import runtime.io.results as results
     from runtime.io.runs import run_and_write
     from runtime.problem.registry import load_problem
 
-    written: list[float] = []
-    original = results.write_checkpoint
-
-    def counted(out, params, state):
-        written.append(float(state["t"]))
-        return original(out, params, state)
-
-    monkeypatch.setattr(results, "write_checkpoint", counted)
+    written = _count_checkpoints(monkeypatch)
     p = load_problem("examples/assembly_l_frame.toml",
                      {"rods.column.rod.elements": 4, "rods.beam.rod.elements": 3,
                       "simulation.t_end": 0.02, "simulation.output_step": 0.001})
