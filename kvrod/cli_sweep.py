@@ -83,6 +83,10 @@ def _cmd_sweep(args) -> int:
             raise CliError(f"kvrod sweep: {str(out)!r} holds a different study (study.toml); "
                            "use --overwrite to replace it or choose another --out")
     if not args.serial:           # the engine is importable before anything is written
+        if not args.scheduler:    # our own workers' imports, on another core meanwhile
+            from runtime.study.worker_boot import start_fork_server
+
+            start_fork_server()
         import runtime.study.sweep_dask  # noqa: F401
     with F.claim(out, "sweep", overwrite=args.overwrite,
                  names=("study.toml", "study.csv", "progress.json", "summary.png",

@@ -271,7 +271,7 @@ def validation_markdown() -> str:
 
 def _compile_kernels() -> None:
     """Load (compiling on first use) the C kernels and the compiled BDF step loop, as a
-    sweep worker does (runtime.study.sweep_dask.warm_up)."""
+    sweep worker does (runtime.study.worker_boot.warm_up)."""
     from runtime.model import build
 
     build.load_library()

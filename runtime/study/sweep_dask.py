@@ -37,8 +37,6 @@ import contextlib
 import logging
 import math
 import os
-import signal
-import threading
 import time
 import uuid
 from collections.abc import Callable, Iterator
@@ -47,6 +45,7 @@ from pathlib import Path
 from distributed import Client, LocalCluster, WorkerPlugin, as_completed
 
 from runtime.io.atomic import write_text
+from runtime.study import worker_boot
 from runtime.study.points import StudyPoint
 from runtime.study.sweep import (
     TOKEN_NAME,
@@ -81,31 +80,9 @@ LOCAL_CLUSTER_CONFIG = {"distributed.worker.profile.enabled": False,
                         "distributed.worker.memory.monitor-interval": "1s"}
 
 
-def warm_up() -> dict:
-    """Load (compiling on first use) the generated kernels in this process.
-
-    Returns {"pid", "library"} for diagnostics; ``library`` is None when the in-process
-    CasADi fallback is used (no C compiler).
-    """
-    import runtime.simulate.simulate  # noqa: F401 - pay the import once, not in the first task
-    from runtime.model import build
-
-    # a sweep's workers fill the cores with points: the energy audit's second thread
-    # (step_loop.audit_thread_wanted) would only add its own cost to every point
-    os.environ.setdefault("KVROD_AUDIT_THREAD", "0")
-
-    lib = build.load_library()
-    try:  # compiled BDF helpers, when this checkout has them
-        from runtime.solvers.native import loader
-
-        loader.load()
-    except (ImportError, AttributeError):
-        pass
-    return {"pid": os.getpid(), "library": None if lib is None else str(lib._name)}
-
-
 class KvrodWorkerSetup(WorkerPlugin):
-    """Worker plugin: compile/load the generated kernels once per worker process."""
+    """Worker plugin: compile/load the generated kernels once per worker process (a
+    worker forked from the fork server has them already: then this costs nothing)."""
 
     name = "kvrod-setup"
     idempotent = True
@@ -113,7 +90,7 @@ class KvrodWorkerSetup(WorkerPlugin):
     async def setup(self, worker) -> None:  # noqa: D401 - WorkerPlugin API
         """Run :func:`warm_up` off the event loop (compiling takes a few seconds)."""
         loop = asyncio.get_running_loop()
-        await loop.run_in_executor(None, warm_up)
+        await loop.run_in_executor(None, worker_boot.warm_up)
 
 
 def task_seconds(slots: int) -> float:
@@ -176,25 +153,10 @@ def default_workers() -> int:
     return max(1, os.cpu_count() or 1)
 
 
-@contextlib.contextmanager
-def _children_ignore_sigint() -> Iterator[None]:
-    """Start child processes with SIGINT ignored (an ignored disposition survives exec,
-    and Python then installs no KeyboardInterrupt handler): Ctrl-C in the terminal reaches
-    the whole process group, and the workers would each print a traceback. Only this
-    process handles it, cancels the tasks and closes the cluster."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, previous)
-
-
 def start_local_cluster(n_workers: int | None = None) -> LocalCluster:
     """A LocalCluster of single-threaded worker processes (scheduler and dashboard on free
-    ports) that leave Ctrl-C to this process."""
+    ports) that leave Ctrl-C to this process, forked from this process's fork server
+    (started here if need be) where :func:`runtime.study.worker_boot.start_method` allows."""
     # silence_logs: the workers log a warning for every task cancelled by an interrupted
     # study, and, when the cluster closes (at the end or after Ctrl-C), a worker whose
     # heartbeat meets the scheduler already gone logs an ERROR with two tracebacks
@@ -204,7 +166,10 @@ def start_local_cluster(n_workers: int | None = None) -> LocalCluster:
     # with their message, so the workers of our own cluster log only what is critical
     import dask
 
-    with _children_ignore_sigint(), dask.config.set(LOCAL_CLUSTER_CONFIG):
+    worker_boot.start_fork_server()
+    config = {**LOCAL_CLUSTER_CONFIG,
+              "distributed.worker.multiprocessing-method": worker_boot.start_method()}
+    with worker_boot.children_ignore_sigint(), dask.config.set(config):
         return LocalCluster(n_workers=n_workers or default_workers(), threads_per_worker=1,
                             processes=True, dashboard_address=":0", scheduler_port=0,
                             silence_logs=logging.CRITICAL)
@@ -352,7 +317,8 @@ def run_study_dask(study: Study, out: Path, *, client: Client | None = None,
                     import dask
 
                     own_cluster = start_local_cluster(n_workers)
-                    engine = f"dask LocalCluster ({len(own_cluster.workers)} workers)"
+                    engine = (f"dask LocalCluster ({len(own_cluster.workers)} workers, "
+                              f"{worker_boot.start_method()})")
                     with dask.config.set(LOCAL_CLUSTER_CONFIG):
                         client = own_client = Client(own_cluster)
             else:

@@ -780,7 +780,7 @@ def test_a_sweeps_workers_keep_the_audit_in_the_loop(monkeypatch):
     """Their cores run points: a second thread per point would only add its cost."""
     import os
 
-    from runtime.study.sweep_dask import warm_up
+    from runtime.study.worker_boot import warm_up
 
     monkeypatch.setenv("KVROD_AUDIT_THREAD", "")      # restored (to unset) afterwards
     monkeypatch.delenv("KVROD_AUDIT_THREAD")

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import multiprocessing
 import os
 import shutil
 import signal
@@ -37,6 +38,7 @@ distributed = pytest.importorskip("distributed")
 from runtime.study.sweep_dask import (  # noqa: E402
     BatchPlanner,
     run_study_dask,
+    start_local_cluster,
     task_seconds,
 )
 
@@ -83,8 +85,9 @@ def _wait_idle(client, timeout: float = 60.0) -> None:
 
 @pytest.fixture(scope="module")
 def client():
-    cluster = distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1,
-                                       dashboard_address=":0", scheduler_port=0)
+    """The LocalCluster a sweep starts (start_local_cluster: workers forked from the fork
+    server where the platform has one)."""
+    cluster = start_local_cluster(2)
     c = distributed.Client(cluster, timeout=60)
     c.wait_for_workers(2, timeout=60)
     yield c
@@ -154,6 +157,51 @@ def test_bad_study_is_a_one_line_error(data, words):
 
 
 # ------------------------------------------------------------------ engine
+
+
+@pytest.mark.skipif("forkserver" not in multiprocessing.get_all_start_methods(),
+                    reason="no fork server on this platform")
+def test_our_cluster_forks_its_workers_with_the_kernels_loaded(client):
+    """start_local_cluster's workers come from this process's fork server, which imported
+    Dask's worker side and kvrod and loaded the kernels once (runtime.study.worker_boot),
+    not from a new interpreter each (spawn: their parent would be this process)."""
+    parents = client.run(os.getppid)
+    assert len(parents) == 2 and os.getpid() not in parents.values()
+    assert len(set(parents.values())) == 1                   # one fork server
+    preloaded = client.run(eval, "'runtime.study.worker_preload' in "
+                                 "__import__('sys').modules")
+    assert all(preloaded.values()), preloaded
+
+
+def test_a_changed_kvrod_environment_falls_back_to_spawn(monkeypatch):
+    """A worker forked from the fork server has the kernels and the environment the server
+    started with: once this process's KVROD_* variables differ (a kernel cache folder set
+    since), workers are spawned."""
+    from runtime.study import worker_boot
+
+    if not worker_boot.start_fork_server():
+        assert worker_boot.start_method() == "spawn"
+        return
+    assert worker_boot.start_method() == "forkserver"
+    monkeypatch.setenv("SOMETHING_ELSE", "1")
+    assert worker_boot.start_method() == "forkserver"
+    monkeypatch.setenv("KVROD_CACHE_DIR", "/nonexistent/elsewhere")
+    assert worker_boot.start_method() == "spawn"
+    monkeypatch.undo()
+    assert worker_boot.start_method() == "forkserver"
+
+
+def test_the_fork_server_has_the_environment_dask_gives_a_spawned_worker(client):
+    """One BLAS/OpenMP thread and the rest of ``distributed.nanny.pre-spawn-environ``, as
+    distributed computes it (dask_pre_spawn_environ replicates it without importing
+    distributed), in the workers of our cluster."""
+    from runtime.study.worker_boot import dask_pre_spawn_environ
+
+    nanny = distributed.Nanny("tcp://127.0.0.1:1", nthreads=1)   # made, never started
+    ours = dask_pre_spawn_environ()
+    assert ours == nanny.pre_spawn_env and ours["OPENBLAS_NUM_THREADS"] == "1"
+    got = client.run(eval, f"{{k: __import__('os').environ.get(k) for k in {sorted(ours)!r}}}")
+    assert all(v == ours for v in got.values()), got
 
 
 def test_dask_results_equal_serial_runs(dask_run, study, tmp_path):
