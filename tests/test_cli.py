@@ -74,3 +74,21 @@ def test_kvrod_warnings_reach_the_user(tmp_path):
     lines = [ln for ln in r.stderr.splitlines() if "in-process instead" in ln]
     assert len(lines) == 1 and lines[0].startswith("kvrod: ")
     assert "Warning" not in r.stderr          # the message, not Python's file:line format
+
+
+def test_the_program_leaves_its_heap_to_the_os(monkeypatch, capsys):
+    """As the program (argv None) a command ends by freezing the heap (the interpreter's
+    last full collection then skips it: 0.1-0.5 s of a command's exit); called with its
+    arguments (tests, scripts), main leaves the collector alone."""
+    import gc
+
+    gc.unfreeze()
+    try:
+        assert main(["problem-keys"]) == 0
+        assert gc.get_freeze_count() == 0
+        monkeypatch.setattr(sys, "argv", ["kvrod", "problem-keys"])
+        assert main() == 0
+        assert gc.get_freeze_count() > 0
+    finally:
+        gc.unfreeze()
+    assert "youngs_modulus" in capsys.readouterr().out
