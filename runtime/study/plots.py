@@ -26,9 +26,19 @@ def plot_axis(study) -> str | None:
     return numeric[0] if numeric else None
 
 
+#: up to this many lines (combinations of the other varied parameters) get a legend
+#: entry each; more are coloured along a colour scale, with a colour bar
+LEGEND_MAX = 8
+
+
 def write_plots(out: Path, study, rows: Mapping[str, Mapping[str, Any]]) -> Path | None:
     """``DIR/summary.png``: first/last damping ratio and mean period against the first
     varied parameter (tau if varied), one line per combination of the other varied ones.
+
+    Up to :data:`LEGEND_MAX` lines are named in a legend; more (a 16 x 16 grid has 16) are
+    coloured along a colour scale in study order, its colour bar labelled with the other
+    parameter's values where there is one, so that the figure stays readable (and is
+    drawn in a third of the time: a 48-entry legend was half of the drawing).
 
     ``rows``: table rows (:func:`runtime.study.table.row_of`) by point id, in study order
     (the order of the legend). Returns None when there is nothing to plot yet.
@@ -49,25 +59,63 @@ def write_plots(out: Path, study, rows: Mapping[str, Mapping[str, Any]]) -> Path
 
     plt = pyplot()
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.5))
-    for key, pts in groups.items():
+    scale = _ColourScale(plt, others, list(groups)) if len(groups) > LEGEND_MAX else None
+    for i, (key, pts) in enumerate(groups.items()):
         pts.sort(key=lambda t: t[0])
         xs = [t[0] for t in pts]
         label = ", ".join(f"{k}={slug_value(v)}" for k, v in zip(others, key, strict=True))
-        line, = ax1.plot(xs, [t[1]["zeta_first"] for t in pts], "o-",
-                         label=f"first {label}".strip())
+        colour = None if scale is None else scale.colour(i)
+        line, = ax1.plot(xs, [t[1]["zeta_first"] for t in pts], "o-", color=colour,
+                         ms=4 if scale else 6, label=f"first {label}".strip())
         ax1.plot(xs, [t[1]["zeta_last"] for t in pts], "s--", color=line.get_color(),
-                 label=f"last {label}".strip())
+                 ms=3 if scale else 6, label=f"last {label}".strip())
         per = [(a, r["period_mean"]) for a, r in pts if r.get("period_mean") != ""]
         if per:
             ax2.plot([a for a, _ in per], [b for _, b in per], "o-", color=line.get_color(),
-                     label=label or None)
+                     ms=4 if scale else 6, label=label or None)
     xlabel = f"{x} [{UNITS.get(x, '-')}]"
     ax1.set_xlabel(xlabel)
     ax1.set_ylabel("damping ratio zeta [-] (first and last cycle)")
     ax2.set_xlabel(xlabel)
     ax2.set_ylabel("mean period of the tip maxima [s]")
-    ax1.legend(fontsize=7)
-    if others:
-        ax2.legend(fontsize=7)
+    if scale is None:
+        ax1.legend(fontsize=7)
+        if others:
+            ax2.legend(fontsize=7)
+    else:
+        ax1.legend(handles=[ax1.lines[0], ax1.lines[1]], labels=["first cycle", "last cycle"],
+                   fontsize=7)
+        scale.colour_bar(fig, (ax1, ax2))
     fig.suptitle(f"study {study.name}: {sum(len(v) for v in groups.values())} finished points")
     return save(fig, Path(out) / "summary.png", dpi=120, bbox_inches="tight")
+
+
+class _ColourScale:
+    """Colours of many lines along viridis, in study order; the colour bar says what they
+    stand for: the other varied parameter's values where there is exactly one (ticks at
+    a few of them), else the combination's number in study order."""
+
+    def __init__(self, plt, others: list[str], keys: list[tuple]) -> None:
+        self._cmap = plt.get_cmap("viridis")
+        self._keys = keys
+        self._other = others[0] if len(others) == 1 else None
+
+    def colour(self, i: int):
+        return self._cmap(i / max(len(self._keys) - 1, 1))
+
+    def colour_bar(self, fig, axes) -> None:
+        import matplotlib as mpl
+
+        n = len(self._keys)
+        sm = mpl.cm.ScalarMappable(cmap=self._cmap,
+                                   norm=mpl.colors.Normalize(vmin=0, vmax=max(n - 1, 1)))
+        bar = fig.colorbar(sm, ax=list(axes), pad=0.02, fraction=0.03)
+        ticks = sorted({0, n - 1, *range(0, n, max(1, n // 5))})
+        bar.set_ticks(ticks)
+        if self._other is not None:
+            bar.set_ticklabels([slug_value(self._keys[t][0]) for t in ticks])
+            bar.set_label(f"{self._other} [{UNITS.get(self._other, '-')}]", fontsize=8)
+        else:
+            bar.set_ticklabels([str(t + 1) for t in ticks])
+            bar.set_label("combination of the other varied parameters (study order)",
+                          fontsize=8)

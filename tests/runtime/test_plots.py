@@ -405,3 +405,40 @@ def test_plot_says_what_it_cannot_plot(tmp_path, capsys):
         rc, _, err = run_cli(["plot", d], capsys)
         assert rc == 2 and f"`{command}` result" in err and "not stored" in err
         assert len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("n_moduli, colour_bar", [(3, False), (12, True)])
+def test_sweep_summary_names_few_lines_and_colours_many(n_moduli, colour_bar, tmp_path,
+                                                        monkeypatch):
+    """summary.png: up to LEGEND_MAX lines get a legend entry each (first and last
+    cycle); more get a colour scale with a colour bar labelled with the other parameter,
+    and a two-entry legend for the line styles."""
+    from runtime.io import figures
+    from runtime.study.plots import LEGEND_MAX, write_plots
+    from runtime.study.sweep import study_from_dict
+
+    assert (n_moduli > LEGEND_MAX) == colour_bar
+    s = study_from_dict({"problem": "cantilever", "fixed": {"n_elements": 4},
+                         "grid": {"tau": [0.01, 0.02, 0.03],
+                                  "youngs_modulus": [1e6 * (1 + i) for i in range(n_moduli)]}})
+    rows = {p.id: {**p.params, "status": "finished", "zeta_first": 0.1 + p.params["tau"],
+                   "zeta_last": 0.1, "period_mean": 1e3 / p.params["youngs_modulus"] ** 0.5}
+            for p in s.points}
+    drawn = []
+    real_save = figures.save
+    monkeypatch.setattr(figures, "save", lambda fig, path, **kw: (drawn.append(fig),
+                                                                  real_save(fig, path, **kw))[1])
+    path = write_plots(tmp_path, s, rows)
+    fig, = drawn
+    picture(path)
+    assert_labelled(fig)
+    ax1 = fig.axes[0]
+    entries = [t.get_text() for t in ax1.get_legend().get_texts()]
+    if colour_bar:
+        assert len(fig.axes) == 3 and entries == ["first cycle", "last cycle"]
+        assert fig.axes[2].get_ylabel() == "youngs_modulus [Pa]"
+        colours = {tuple(line.get_color()) for line in ax1.lines}
+        assert len(colours) == n_moduli                     # one colour a line
+    else:
+        assert len(fig.axes) == 2 and len(entries) == 2 * n_moduli
+        assert entries[0] == "first youngs_modulus=1e+06"
