@@ -48,6 +48,23 @@ def test_derived_efficiency_and_markdown():
     assert slow["client_utilisation"] > 1 and slow["efficiency"] < d["efficiency"] / 2
 
 
+def test_the_efficiency_verdict_comes_from_the_largest_machine_measured(tmp_path):
+    """A many-core record (bench.sweep_cores) gives the verdict; the figure derived from
+    this machine's costs stands beside it. Without one, the derived figure is marked so."""
+    import json
+
+    est = {"efficiency": 0.98, "efficiency_with_cluster_start": 0.89}
+    rec = tmp_path / "sweep_cores.json"
+    rec.write_text(json.dumps({
+        "efficiency_whole_commands": 0.43, "points": 256, "workers": 16,
+        "point_s_measured": 0.258,
+        "machine_before": {"cpus": 16, "cpu_model": "Some CPU"}}))
+    t = sw.efficiency_target(est, rec)
+    assert t["value"] == 0.43 and t["verdict"] == "missed"
+    assert "MEASURED" in t["note"] and "16 CPUs" in t["note"] and "0.98" in t["note"]
+    t = sw.efficiency_target(est, tmp_path / "none.json")
+    assert t["value"] == 0.98 and t["verdict"] == "met" and "DERIVED" in t["note"]
+
 
 def test_the_tiny_study_is_the_issues_tiny_point():
     import tomllib
