@@ -86,7 +86,7 @@ def _cmd_sweep(args) -> int:
         if not args.scheduler:    # our own workers' imports, on another core meanwhile
             from runtime.study.worker_boot import start_fork_server
 
-            start_fork_server()
+            start_fork_server()   # stopped when this process exits
         import runtime.study.sweep_dask  # noqa: F401
     with F.claim(out, "sweep", overwrite=args.overwrite,
                  names=("study.toml", "study.csv", "progress.json", "summary.png",

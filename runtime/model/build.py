@@ -235,10 +235,9 @@ def compile_library(compiler: str, gdir: Path | None = None, outdir: Path | None
     gdir = gdir or generated_dir()
     outdir = outdir or cache_dir()
     outdir.mkdir(parents=True, exist_ok=True)
-    suffix = ".dll" if sys.platform == "win32" else ".so"
-    target = outdir / f"{spec.prefix}_{library_key(compiler, gdir, spec)[:32]}{suffix}"
+    target = _library_path(compiler, gdir, outdir, spec)
     sidecar = target.with_name(target.name + ".sha256")
-    if target.exists() and sidecar.exists() and sidecar.read_text().strip() == file_hash(target):
+    if _is_built(target):
         return target
     # missing, or a library whose bytes do not match the hash recorded when it was built
     # (corrupted or replaced): rebuild, never load it
@@ -260,6 +259,29 @@ def compile_library(compiler: str, gdir: Path | None = None, outdir: Path | None
         if os.path.exists(tmp):
             os.unlink(tmp)
     return target
+
+
+def _library_path(compiler: str, gdir: Path, outdir: Path, spec: LibrarySpec) -> Path:
+    suffix = ".dll" if sys.platform == "win32" else ".so"
+    return outdir / f"{spec.prefix}_{library_key(compiler, gdir, spec)[:32]}{suffix}"
+
+
+def _is_built(target: Path) -> bool:
+    """The library is there, with the hash recorded when it was built."""
+    sidecar = target.with_name(target.name + ".sha256")
+    try:
+        return sidecar.read_text().strip() == file_hash(target)
+    except OSError:
+        return False
+
+
+def library_built() -> bool:
+    """Whether :func:`load_library` would load the rod library without compiling it (a
+    compiler is found and the cache holds the library of these sources, intact)."""
+    compiler = find_compiler()
+    if compiler is None or not generated_dir().is_dir():
+        return False
+    return _is_built(_library_path(compiler, generated_dir(), cache_dir(), ROD_LIBRARY))
 
 
 def _declare(lib: ctypes.CDLL) -> ctypes.CDLL:

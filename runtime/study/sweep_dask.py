@@ -88,7 +88,8 @@ class KvrodWorkerSetup(WorkerPlugin):
     idempotent = True
 
     async def setup(self, worker) -> None:  # noqa: D401 - WorkerPlugin API
-        """Run :func:`warm_up` off the event loop (compiling takes a few seconds)."""
+        """Run :func:`runtime.study.worker_boot.warm_up` off the event loop (compiling
+        takes a few seconds)."""
         loop = asyncio.get_running_loop()
         await loop.run_in_executor(None, worker_boot.warm_up)
 
@@ -155,8 +156,10 @@ def default_workers() -> int:
 
 def start_local_cluster(n_workers: int | None = None) -> LocalCluster:
     """A LocalCluster of single-threaded worker processes (scheduler and dashboard on free
-    ports) that leave Ctrl-C to this process, forked from this process's fork server
-    (started here if need be) where :func:`runtime.study.worker_boot.start_method` allows."""
+    ports) that leave Ctrl-C to this process: forked from this process's fork server
+    where :func:`runtime.study.worker_boot.start_method` allows (a caller keeps
+    :func:`runtime.study.worker_boot.cluster_config` set for the cluster's lifetime so
+    that restarted workers are forked too), else spawned."""
     # silence_logs: the workers log a warning for every task cancelled by an interrupted
     # study, and, when the cluster closes (at the end or after Ctrl-C), a worker whose
     # heartbeat meets the scheduler already gone logs an ERROR with two tracebacks
@@ -166,10 +169,20 @@ def start_local_cluster(n_workers: int | None = None) -> LocalCluster:
     # with their message, so the workers of our own cluster log only what is critical
     import dask
 
-    worker_boot.start_fork_server()
-    config = {**LOCAL_CLUSTER_CONFIG,
-              "distributed.worker.multiprocessing-method": worker_boot.start_method()}
-    with worker_boot.children_ignore_sigint(), dask.config.set(config):
+    start = worker_boot.cluster_config()
+    if start:
+        # our fork server runs already with its own preload list: distributed's first
+        # forkserver context would otherwise import every optional package it knows
+        # (pandas, ...) in this process only to set a list that no longer matters
+        import distributed.utils
+
+        distributed.utils._forkserver_preload_set = True
+    # spawned workers take this process's SIGINT disposition, forked ones the fork
+    # server's (ignored); either way this process ignores SIGINT while the cluster starts
+    # (a second or so: the fork server never compiles): a LocalCluster interrupted half
+    # started cannot be closed cleanly (distributed's own tracebacks at exit)
+    with worker_boot.children_ignore_sigint(), \
+            dask.config.set({**LOCAL_CLUSTER_CONFIG, **start}):
         return LocalCluster(n_workers=n_workers or default_workers(), threads_per_worker=1,
                             processes=True, dashboard_address=":0", scheduler_port=0,
                             silence_logs=logging.CRITICAL)
@@ -303,6 +316,7 @@ def run_study_dask(study: Study, out: Path, *, client: Client | None = None,
     token_file = rec.out / TOKEN_NAME
     feeder: _Feeder | None = None
     interrupted = False
+    lifetime = contextlib.ExitStack()          # settings held until the cluster closed
     try:
         if on_start is not None:
             on_start(rec.progress)
@@ -316,9 +330,12 @@ def run_study_dask(study: Study, out: Path, *, client: Client | None = None,
                 else:
                     import dask
 
+                    # restarted workers start as the first ones did (cluster_config)
+                    lifetime.enter_context(dask.config.set(worker_boot.cluster_config()))
+                    method = worker_boot.start_method()
                     own_cluster = start_local_cluster(n_workers)
                     engine = (f"dask LocalCluster ({len(own_cluster.workers)} workers, "
-                              f"{worker_boot.start_method()})")
+                              f"{method})")
                     with dask.config.set(LOCAL_CLUSTER_CONFIG):
                         client = own_client = Client(own_cluster)
             else:
@@ -353,7 +370,10 @@ def run_study_dask(study: Study, out: Path, *, client: Client | None = None,
     finally:
         with contextlib.suppress(OSError):
             token_file.unlink(missing_ok=True)       # running batches stop
-        with _quiet_distributed() if interrupted else contextlib.nullcontext():
+        # a Ctrl-C amid the close would leave the cluster half closed, for distributed's
+        # exit handler to wait 10 s on: the close (a fraction of a second) goes on
+        with lifetime, worker_boot.children_ignore_sigint(), \
+                _quiet_distributed() if interrupted else contextlib.nullcontext():
             if own_client is not None:
                 own_client.close()
             if own_cluster is not None:

@@ -317,3 +317,25 @@ def test_the_libraries_load_before_the_folder_and_the_clock(tmp_path, monkeypatc
     before = events[:first_model]
     assert {fn for fn, _ in before} == libs and not any(seen for _, seen in before)
     assert (out / "summary.json").exists()
+
+
+@needs_cc
+def test_library_built_says_whether_loading_would_compile(tmp_path, monkeypatch):
+    """What a sweep's fork server asks before it loads the kernels (it never compiles):
+    true for the cache's intact library of these sources, false for an empty cache or a
+    library whose recorded hash no longer matches."""
+    from runtime.solvers.native import loader
+
+    build.load_library()
+    loader.load()
+    assert build.library_built() and loader.built()
+    target = build._library_path(native.find_compiler(), build.generated_dir(),
+                                 native.cache_dir(), build.ROD_LIBRARY)
+    monkeypatch.setenv("KVROD_CACHE_DIR", str(tmp_path))
+    assert not build.library_built() and not loader.built()
+    copy = tmp_path / target.name
+    shutil.copy(target, copy)
+    shutil.copy(target.with_name(target.name + ".sha256"), tmp_path)
+    assert build.library_built()
+    copy.write_bytes(copy.read_bytes()[:-64] + b"\0" * 64)       # damaged: would rebuild
+    assert not build.library_built()

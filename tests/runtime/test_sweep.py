@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import math
-import multiprocessing
 import os
 import shutil
 import signal
@@ -85,14 +84,20 @@ def _wait_idle(client, timeout: float = 60.0) -> None:
 
 @pytest.fixture(scope="module")
 def client():
-    """The LocalCluster a sweep starts (start_local_cluster: workers forked from the fork
-    server where the platform has one)."""
-    cluster = start_local_cluster(2)
-    c = distributed.Client(cluster, timeout=60)
-    c.wait_for_workers(2, timeout=60)
-    yield c
-    c.close()
-    cluster.close()
+    """The LocalCluster a sweep starts: its workers forked from this process's fork
+    server (started as ``kvrod sweep`` starts it) where the platform has one."""
+    import dask
+
+    from runtime.study import worker_boot
+
+    worker_boot.start_fork_server()
+    with dask.config.set(worker_boot.cluster_config()):      # as run_study_dask holds it
+        cluster = start_local_cluster(2)
+        c = distributed.Client(cluster, timeout=60)
+        c.wait_for_workers(2, timeout=60)
+        yield c
+        c.close()
+        cluster.close()
 
 
 @pytest.fixture(scope="module")
@@ -159,8 +164,24 @@ def test_bad_study_is_a_one_line_error(data, words):
 # ------------------------------------------------------------------ engine
 
 
-@pytest.mark.skipif("forkserver" not in multiprocessing.get_all_start_methods(),
-                    reason="no fork server on this platform")
+FORKS = pytest.mark.skipif(not sys.platform.startswith("linux"),
+                           reason="the fork server is used on Linux only")
+
+
+def _python(code: str, env: dict[str, str] | None = None) -> str:
+    """Run ``code`` in a new interpreter at the checkout's root; its stdout."""
+    import subprocess
+
+    root = Path(__file__).resolve().parents[2]
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       timeout=120, cwd=root,
+                       env={**(env if env is not None else os.environ),
+                            "PYTHONPATH": str(root)})
+    assert r.returncode == 0, r.stderr[-2000:]
+    return r.stdout
+
+
+@FORKS
 def test_our_cluster_forks_its_workers_with_the_kernels_loaded(client):
     """start_local_cluster's workers come from this process's fork server, which imported
     Dask's worker side and kvrod and loaded the kernels once (runtime.study.worker_boot),
@@ -173,35 +194,70 @@ def test_our_cluster_forks_its_workers_with_the_kernels_loaded(client):
     assert all(preloaded.values()), preloaded
 
 
-def test_a_changed_kvrod_environment_falls_back_to_spawn(monkeypatch):
+@FORKS
+def test_a_changed_environment_falls_back_to_spawn(monkeypatch):
     """A worker forked from the fork server has the kernels and the environment the server
-    started with: once this process's KVROD_* variables differ (a kernel cache folder set
-    since), workers are spawned."""
+    started with: once what they depend on differs here (a kernel cache folder, the
+    compiler), workers are spawned; other variables do not matter."""
     from runtime.study import worker_boot
 
-    if not worker_boot.start_fork_server():
-        assert worker_boot.start_method() == "spawn"
-        return
+    assert worker_boot.start_fork_server()
     assert worker_boot.start_method() == "forkserver"
+    assert worker_boot.cluster_config() == {
+        "distributed.worker.multiprocessing-method": "forkserver"}
     monkeypatch.setenv("SOMETHING_ELSE", "1")
     assert worker_boot.start_method() == "forkserver"
-    monkeypatch.setenv("KVROD_CACHE_DIR", "/nonexistent/elsewhere")
-    assert worker_boot.start_method() == "spawn"
-    monkeypatch.undo()
+    for name, value in (("KVROD_CACHE_DIR", "/nonexistent/elsewhere"), ("CC", "clang")):
+        monkeypatch.setenv(name, value)
+        assert worker_boot.start_method() == "spawn"
+        assert worker_boot.cluster_config() == {}         # a user's own setting stands
+        monkeypatch.undo()
     assert worker_boot.start_method() == "forkserver"
 
 
-def test_the_fork_server_has_the_environment_dask_gives_a_spawned_worker(client):
-    """One BLAS/OpenMP thread and the rest of ``distributed.nanny.pre-spawn-environ``, as
-    distributed computes it (dask_pre_spawn_environ replicates it without importing
-    distributed), in the workers of our cluster."""
-    from runtime.study.worker_boot import dask_pre_spawn_environ
+@FORKS
+def test_the_fork_server_gives_its_workers_dasks_environment_and_no_ctrl_c():
+    """In a fresh interpreter without Dask's pre-spawn variables: the fork server's
+    children have one BLAS/OpenMP thread and the rest of what a Dask nanny gives a worker
+    it spawns (computed here without importing distributed, and equal to a Nanny's own
+    figure), and ignore SIGINT; the server is gone when the process has exited."""
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS",
+                        "MALLOC_TRIM_THRESHOLD_", "PYTHONHASHSEED")}
+    out = _python(
+        "import json, multiprocessing, os, signal\n"
+        "from multiprocessing import forkserver\n"
+        "from runtime.study import worker_boot\n"
+        "assert worker_boot.start_fork_server()\n"
+        "ours = worker_boot.dask_pre_spawn_environ()\n"
+        "ctx = multiprocessing.get_context('forkserver')\n"
+        "with ctx.Pool(1) as pool:\n"
+        "    child = {k: pool.apply(os.getenv, (k,)) for k in ours}\n"
+        "    sigint = pool.apply(signal.getsignal, (signal.SIGINT,))\n"
+        "import distributed\n"
+        "nanny = distributed.Nanny('tcp://127.0.0.1:1', nthreads=1)\n"
+        "print(json.dumps({'ours': ours, 'nanny': nanny.pre_spawn_env, 'child': child,\n"
+        "                  'sigint_ignored': sigint == signal.SIG_IGN,\n"
+        "                  'here': os.environ.get('OPENBLAS_NUM_THREADS'),\n"
+        "                  'server': forkserver._forkserver._forkserver_pid}))\n", env)
+    got = json.loads(out.strip().splitlines()[-1])
+    assert got["ours"] == got["nanny"] and got["ours"]["OPENBLAS_NUM_THREADS"] == "1"
+    assert got["child"] == got["ours"] and got["sigint_ignored"]
+    assert got["here"] is None            # only the server's environment has them
+    assert not Path(f"/proc/{got['server']}").exists()          # stopped at exit
 
-    nanny = distributed.Nanny("tcp://127.0.0.1:1", nthreads=1)   # made, never started
-    ours = dask_pre_spawn_environ()
-    assert ours == nanny.pre_spawn_env and ours["OPENBLAS_NUM_THREADS"] == "1"
-    got = client.run(eval, f"{{k: __import__('os').environ.get(k) for k in {sorted(ours)!r}}}")
-    assert all(v == ours for v in got.values()), got
+
+@FORKS
+def test_someone_elses_fork_server_is_left_alone():
+    """A fork server that this process started for its own use (a forkserver pool)
+    before the sweep is neither taken over nor given kvrod's preloads: spawn."""
+    out = _python(
+        "import multiprocessing\n"
+        "from multiprocessing import forkserver\n"
+        "forkserver.ensure_running()\n"
+        "from runtime.study import worker_boot\n"
+        "print(worker_boot.start_fork_server(), worker_boot.start_method())\n")
+    assert out.split() == ["False", "spawn"]
 
 
 def test_dask_results_equal_serial_runs(dask_run, study, tmp_path):

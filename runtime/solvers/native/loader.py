@@ -54,6 +54,18 @@ def _compile(cc: str, dest: Path) -> None:
         os.replace(out, dest)
 
 
+def _library_path(cc: str) -> Path:
+    key = hashlib.sha256((SOURCE + " ".join((*native.compile_command(cc), *_EXTRA, *_THREADS))
+                          + native.host_id()).encode()).hexdigest()[:16]
+    return native.cache_dir() / f"kvrod_bdf_{key}.so"
+
+
+def built() -> bool:
+    """Whether :func:`load` would load the helpers without compiling them."""
+    cc = native.find_compiler()
+    return cc is not None and _library_path(cc).exists()
+
+
 def load() -> ctypes.CDLL | None:
     """The compiled helpers (cached per source hash), or None if they cannot be built."""
     global _lib, _tried
@@ -63,9 +75,7 @@ def load() -> ctypes.CDLL | None:
     cc = native.find_compiler()
     if cc is None:
         return None
-    key = hashlib.sha256((SOURCE + " ".join((*native.compile_command(cc), *_EXTRA, *_THREADS))
-                          + native.host_id()).encode()).hexdigest()[:16]
-    path = native.cache_dir() / f"kvrod_bdf_{key}.so"
+    path = _library_path(cc)
     try:
         if not path.exists():
             _compile(cc, path)
