@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -59,12 +60,15 @@ def write_plots(out: Path, study, rows: Mapping[str, Mapping[str, Any]]) -> Path
 
     plt = pyplot()
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.5))
-    scale = _ColourScale(plt, others, list(groups)) if len(groups) > LEGEND_MAX else None
-    for i, (key, pts) in enumerate(groups.items()):
+    scale = (_ColourScale(plt, study, others, list(groups)) if len(groups) > LEGEND_MAX
+             else None)
+    order = list(groups) if scale is None else scale.keys
+    for key in order:
+        pts = groups[key]
         pts.sort(key=lambda t: t[0])
         xs = [t[0] for t in pts]
         label = ", ".join(f"{k}={slug_value(v)}" for k, v in zip(others, key, strict=True))
-        colour = None if scale is None else scale.colour(i)
+        colour = None if scale is None else scale.colour(key)
         line, = ax1.plot(xs, [t[1]["zeta_first"] for t in pts], "o-", color=colour,
                          ms=4 if scale else 6, label=f"first {label}".strip())
         ax1.plot(xs, [t[1]["zeta_last"] for t in pts], "s--", color=line.get_color(),
@@ -91,31 +95,47 @@ def write_plots(out: Path, study, rows: Mapping[str, Mapping[str, Any]]) -> Path
 
 
 class _ColourScale:
-    """Colours of many lines along viridis, in study order; the colour bar says what they
-    stand for: the other varied parameter's values where there is exactly one (ticks at
-    a few of them), else the combination's number in study order."""
+    """Colours of many lines along viridis, and the colour bar that says what they stand
+    for. With one other varied parameter, a number at every point: the colour is a
+    function of its value over the study's range of it (logarithmic where its values are
+    positive and span a decade or more), the same at every refresh, and the colour bar
+    is that parameter's axis. Otherwise: the combination's rank in sorted order."""
 
-    def __init__(self, plt, others: list[str], keys: list[tuple]) -> None:
+    def __init__(self, plt, study, others: list[str], keys: list[tuple]) -> None:
+        import matplotlib as mpl
+
         self._cmap = plt.get_cmap("viridis")
-        self._keys = keys
-        self._other = others[0] if len(others) == 1 else None
+        self.label = "combination of the other varied parameters (sorted)"
+        values = (list(study.points.column_values(others[0])) if len(others) == 1
+                  else [])
+        if values and all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                          for v in values):
+            lo, hi = min(values), max(values)
+            log = lo > 0 and hi >= 10 * lo
+            norm = (mpl.colors.LogNorm if log else mpl.colors.Normalize)(
+                vmin=lo, vmax=hi if hi > lo else lo + (abs(lo) or 1.0))
+            self.keys = sorted(keys, key=lambda k: k[0])
+            self._value = lambda key: key[0]
+            self.label = f"{others[0]} [{UNITS.get(others[0], '-')}]"
+            self._ticks = None
+        else:
+            self.keys = sorted(keys, key=lambda k: json.dumps(k, default=str))
+            rank = {k: i for i, k in enumerate(self.keys)}
+            self._value = rank.__getitem__
+            norm = mpl.colors.Normalize(vmin=0, vmax=max(len(keys) - 1, 1))
+            n = len(keys)
+            self._ticks = sorted({0, n - 1, *range(0, n, max(1, n // 5))})
+        self._norm = norm
 
-    def colour(self, i: int):
-        return self._cmap(i / max(len(self._keys) - 1, 1))
+    def colour(self, key: tuple):
+        return self._cmap(self._norm(self._value(key)))
 
     def colour_bar(self, fig, axes) -> None:
         import matplotlib as mpl
 
-        n = len(self._keys)
-        sm = mpl.cm.ScalarMappable(cmap=self._cmap,
-                                   norm=mpl.colors.Normalize(vmin=0, vmax=max(n - 1, 1)))
+        sm = mpl.cm.ScalarMappable(cmap=self._cmap, norm=self._norm)
         bar = fig.colorbar(sm, ax=list(axes), pad=0.02, fraction=0.03)
-        ticks = sorted({0, n - 1, *range(0, n, max(1, n // 5))})
-        bar.set_ticks(ticks)
-        if self._other is not None:
-            bar.set_ticklabels([slug_value(self._keys[t][0]) for t in ticks])
-            bar.set_label(f"{self._other} [{UNITS.get(self._other, '-')}]", fontsize=8)
-        else:
-            bar.set_ticklabels([str(t + 1) for t in ticks])
-            bar.set_label("combination of the other varied parameters (study order)",
-                          fontsize=8)
+        if self._ticks is not None:
+            bar.set_ticks(self._ticks)
+            bar.set_ticklabels([str(t + 1) for t in self._ticks])
+        bar.set_label(self.label, fontsize=8)

@@ -415,12 +415,14 @@ def test_sweep_summary_names_few_lines_and_colours_many(n_moduli, colour_bar, tm
     and a two-entry legend for the line styles."""
     from runtime.io import figures
     from runtime.study.plots import LEGEND_MAX, write_plots
+    from runtime.study.points import slug_value
     from runtime.study.sweep import study_from_dict
 
     assert (n_moduli > LEGEND_MAX) == colour_bar
     s = study_from_dict({"problem": "cantilever", "fixed": {"n_elements": 4},
                          "grid": {"tau": [0.01, 0.02, 0.03],
-                                  "youngs_modulus": [1e6 * (1 + i) for i in range(n_moduli)]}})
+                                  "youngs_modulus": [1e6 * (n_moduli - i)   # descending
+                                                     for i in range(n_moduli)]}})
     rows = {p.id: {**p.params, "status": "finished", "zeta_first": 0.1 + p.params["tau"],
                    "zeta_last": 0.1, "period_mean": 1e3 / p.params["youngs_modulus"] ** 0.5}
             for p in s.points}
@@ -439,6 +441,16 @@ def test_sweep_summary_names_few_lines_and_colours_many(n_moduli, colour_bar, tm
         assert fig.axes[2].get_ylabel() == "youngs_modulus [Pa]"
         colours = {tuple(line.get_color()) for line in ax1.lines}
         assert len(colours) == n_moduli                     # one colour a line
+        # the colour is the modulus's value on a logarithmic scale (1e6 ... 1.2e7), so
+        # it does not depend on the grid's order or on which points have finished
+        import matplotlib as mpl
+        import numpy as np
+
+        by_label = {line.get_label(): line.get_color() for line in ax1.lines}
+        viridis = mpl.colormaps["viridis"]
+        for e, at in ((1e6, 0.0), (1.2e7, 1.0), (4e6, np.log(4) / np.log(12))):
+            got = by_label[f"first youngs_modulus={slug_value(e)}"]
+            assert np.allclose(got, viridis(at), atol=0.01), (e, got)
     else:
         assert len(fig.axes) == 2 and len(entries) == 2 * n_moduli
-        assert entries[0] == "first youngs_modulus=1e+06"
+        assert entries[0] == f"first youngs_modulus={slug_value(3e6)}"   # study order
