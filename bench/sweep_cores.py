@@ -129,7 +129,19 @@ def run(workers: int, point_s: float = POINT_S, side: int = POINTS_SIDE,
             "efficiency_min": EFFICIENCY_MIN,
             "met": None if eff is None else bool(eff >= EFFICIENCY_MIN),
             "machine_before": m0, "machine_after": machine(),
-            "python": platform.python_version(), "cpu_count": os.cpu_count()}
+            "python": platform.python_version(), "cpu_count": os.cpu_count(),
+            "measured_at": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+            "commit": _commit()}
+
+
+def _commit() -> str | None:
+    """The checkout's commit (a record says which code it measured), None outside git."""
+    try:
+        r = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
+                           text=True, timeout=10, cwd=Path(__file__).resolve().parents[1])
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return r.stdout.strip() or None
 
 
 def markdown(doc: dict[str, Any]) -> list[str]:

@@ -398,9 +398,11 @@ def efficiency_target(est: dict[str, Any], record: Path = SWEEP_CORES_RECORD) ->
         rec = json.loads(record.read_text())
         value = float(rec["efficiency_whole_commands"])
         m = rec["machine_before"]
+        when = (f"at {rec['commit']}, {rec['measured_at']}" if rec.get("commit")
+                else "by an earlier version (round 13, before the fork server)")
         where = (f"MEASURED by bench.sweep_cores on {m['cpus']} CPUs ({m['cpu_model']}), "
                  f"{rec['points']} points of {rec['point_s_measured']:.3f} s on "
-                 f"{rec['workers']} workers, whole commands")
+                 f"{rec['workers']} workers, whole commands, {when}")
     except (OSError, ValueError, KeyError, TypeError):
         return target(text, est["efficiency"], EFFICIENCY_MIN, below=False,
                       note=f"DERIVED, not measured ({derived_note})")
