@@ -5,8 +5,8 @@ work inside this process, taken side by side: the commands of a pair run in turn
 (A B A B ...) after one warm-up each, and a ratio is the median of the per-pair ratios,
 so that the shared machine's slow spells spoil a pair, not a command. Wall time is a
 monotonic clock around the child; CPU time is the child's own (``os.wait4``: user +
-system, of it and of the processes it waited for; not a sweep's Dask workers, which its
-fork server starts and waits for: their CPU is measured in-process, below).
+system, of it and of the processes it waited for: a sweep's Dask workers are reaped by
+its fork server, which the sweep reaps at exit, so their CPU is in it).
 
 Children run with a bytecode cache (``PYTHONPYCACHEPREFIX`` in a temporary folder,
 ``PYTHONDONTWRITEBYTECODE`` removed, filled by the warm-up): an installed kvrod has its
@@ -197,16 +197,11 @@ def tiny_sweep(size: Size, root: Path, env: dict[str, str], log) -> dict[str, An
 
     r = paired(dask, serial, size.sweep_pairs, env, root, log,
                "kvrod sweep --workers 2 | --serial")
-    # A's cpu is its own and its scheduler's and nannies': the workers come from the
-    # sweep's fork server (runtime.study.worker_boot), whose children it does not wait for
-    r.update(points=n, points_per_s=n / r["A_wall"], serial_points_per_s=n / r["B_wall"])
+    # on 2 cores with nothing else running the command cannot beat its CPU time / 2 (the
+    # workers' CPU is in it: the sweep reaps its fork server, their parent, at exit)
+    r.update(points=n, points_per_s=n / r["A_wall"], serial_points_per_s=n / r["B_wall"],
+             cpu_bound_points_per_s=n / (r["A_cpu"] / 2))
     return r
-
-
-def cpu_bound(client: dict[str, Any], cores: int = 2) -> float:
-    """Points/s that ``cores`` idle cores cannot beat: a point costs a worker its CPU time
-    and the client process (scheduler and nannies in it) its share."""
-    return cores / (client["worker_cpu_per_point"] + client["process_cpu_per_point"])
 
 
 def worker_cost(size: Size, root: Path) -> dict[str, Any]:
@@ -432,7 +427,6 @@ def run(quick: bool = False, log: Callable[[str], object] = print,
         log("  a large serial study: its first row ...")
         large = first_row(size, root, env)
         shutil.rmtree(root / "pycache", ignore_errors=True)
-    sweep["cpu_bound_points_per_s"] = cpu_bound(client)
     est = derived(worker, client, client["cluster_start_s"])
     doc = {"size": size.__dict__, "load_average_at_start": load_start, "startup": start,
            "tiny_sweep": sweep, "worker": worker, "client": client, "large_serial": large,
@@ -448,8 +442,8 @@ def run(quick: bool = False, log: Callable[[str], object] = print,
                note=f"cpu {start['simulate']['A_cpu']:.3f} s"),
         target(f"tiny points on 2 local workers, whole kvrod sweep: >= {TINY_RATE_MIN:g} "
                "points/s", sweep["points_per_s"], TINY_RATE_MIN, below=False,
-               note=f"{sweep['points']} points; the workers' and the client's CPU a "
-                    f"point allow at most {sweep['cpu_bound_points_per_s']:.0f} "
+               note=f"{sweep['points']} points; cpu of the whole command "
+                    f"{sweep['A_cpu']:.1f} s: at most {sweep['cpu_bound_points_per_s']:.0f} "
                     "points/s on 2 idle cores"),
         target(f"a tiny point (cantilever N = 4, 0.05 s) on a worker < "
                f"{TINY_POINT_MAX_S * 1e3:g} ms (CPU time)", worker["point_cpu"],
@@ -494,10 +488,8 @@ def markdown(doc: dict[str, Any]) -> list[str]:
                f"{t['ratio_wall']:.2f} |")
     out += ["", f"Tiny points (cantilever N = 4, 0.05 s): {t['points_per_s']:.1f} points/s "
             f"on 2 workers, whole command ({t['serial_points_per_s']:.1f} serial). "
-            f"The CPU a point costs a worker and the client bounds it at "
-            f"{t['cpu_bound_points_per_s']:.0f} points/s on 2 idle cores (the sweep's "
-            f"'A cpu s' is its own process's: its workers come from its fork server). "
-            f"A tiny point on a worker: {_ms(w['point_cpu'])} ms "
+            f"The whole command's CPU time bounds it at {t['cpu_bound_points_per_s']:.0f} "
+            f"points/s on 2 idle cores. A tiny point on a worker: {_ms(w['point_cpu'])} ms "
             f"cpu ({_ms(w['point_wall'])} ms wall), of which simulate() "
             f"{_ms(w['simulate_cpu'])} ms; fixed cost (problem, model, files, row) "
             f"{_ms(w['fixed_cpu'])} ms cpu.",
@@ -512,8 +504,9 @@ def markdown(doc: dict[str, Any]) -> list[str]:
             f"{'-' if first is None else f'{first:.2f}'} s; Ctrl-C kept "
             f"{big['rows_kept_after_ctrl_c']} row(s) (exit {big['exit_code']}).",
             "",
-            f"Derived (not measured; the largest machine measured has "
-            f"{doc['meta']['cpus']} cores): {d['points']} points of {d['point_s']} s on "
+            f"Derived from this machine's costs ({doc['meta']['cpus']} cores; a "
+            f"measurement on many cores, where there is one, is in the target below): "
+            f"{d['points']} points of {d['point_s']} s on "
             f"{d['workers']} workers: a point costs {d['point_s']} + {_ms(d['fixed_s'])} ms "
             f"fixed + {_ms(d['dask_s'])} ms Dask; the client's {_ms(d['client_s_per_point'])}"
             f" ms a point is {d['client_utilisation']:.1%} of its time, so the efficiency is "
