@@ -234,11 +234,12 @@ def test_the_fork_server_gives_its_workers_dasks_environment_and_no_ctrl_c():
         "with ctx.Pool(1) as pool:\n"
         "    child = {k: pool.apply(os.getenv, (k,)) for k in ours}\n"
         "    sigint = pool.apply(signal.getsignal, (signal.SIGINT,))\n"
+        "here = os.environ.get('OPENBLAS_NUM_THREADS')\n"
         "import distributed\n"
         "nanny = distributed.Nanny('tcp://127.0.0.1:1', nthreads=1)\n"
         "print(json.dumps({'ours': ours, 'nanny': nanny.pre_spawn_env, 'child': child,\n"
         "                  'sigint_ignored': sigint == signal.SIG_IGN,\n"
-        "                  'here': os.environ.get('OPENBLAS_NUM_THREADS'),\n"
+        "                  'here': here,\n"
         "                  'server': forkserver._forkserver._forkserver_pid}))\n", env)
     got = json.loads(out.strip().splitlines()[-1])
     assert got["ours"] == got["nanny"] and got["ours"]["OPENBLAS_NUM_THREADS"] == "1"
