@@ -164,8 +164,9 @@ def _platform_forks() -> bool:
 def start_fork_server() -> bool:
     """Start the fork server of this process's sweep workers (see the module docstring),
     returning at once: its imports run in its own process. Idempotent. False, starting
-    nothing, where it is not used: not Linux, no ``distributed``, or a fork server that
-    this process did not start is running already (someone else's: left alone)."""
+    nothing, where it is not used: not Linux, no ``distributed``, a fork server that this
+    process did not start is running already (someone else's: left alone), or it cannot
+    start (say, no writable temporary folder for its socket)."""
     global _server_pid, _started_with
     if _server_pid is not None:
         return True
@@ -179,8 +180,11 @@ def start_fork_server() -> bool:
         return False
     env = dask_pre_spawn_environ()              # imports dask.config: before SIGINT goes
     multiprocessing.get_context("forkserver").set_forkserver_preload(list(PRELOAD))
-    with children_ignore_sigint(), _environ(env):
-        forkserver.ensure_running()
+    try:
+        with children_ignore_sigint(), _environ(env):
+            forkserver.ensure_running()
+    except OSError:               # no socket in the temporary folder, no process: spawn
+        return False
     _server_pid = getattr(server, "_forkserver_pid", None)
     _started_with = _fingerprint()
     atexit.register(stop_fork_server)

@@ -261,6 +261,21 @@ def test_someone_elses_fork_server_is_left_alone():
     assert out.split() == ["False", "spawn"]
 
 
+@FORKS
+def test_a_fork_server_that_cannot_start_means_spawned_workers():
+    """No socket for the server (say, no writable temporary folder): workers are spawned,
+    the sweep is not stopped."""
+    out = _python(
+        "from multiprocessing import forkserver\n"
+        "def refuse():\n"
+        "    raise OSError(30, 'Read-only file system')\n"
+        "forkserver.ensure_running = refuse\n"
+        "from runtime.study import worker_boot\n"
+        "print(worker_boot.start_fork_server(), worker_boot.start_method(),\n"
+        "      worker_boot.cluster_config())\n")
+    assert out.split() == ["False", "spawn", "{}"]
+
+
 def test_dask_results_equal_serial_runs(dask_run, study, tmp_path):
     out, report = dask_run
     assert report.total == 7 and not report.skipped
