@@ -60,8 +60,7 @@ def write_plots(out: Path, study, rows: Mapping[str, Mapping[str, Any]]) -> Path
 
     plt = pyplot()
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.5))
-    scale = (_ColourScale(plt, study, others, list(groups)) if len(groups) > LEGEND_MAX
-             else None)
+    scale = _ColourScale(study, others, list(groups)) if len(groups) > LEGEND_MAX else None
     order = list(groups) if scale is None else scale.keys
     for key in order:
         pts = groups[key]
@@ -101,10 +100,10 @@ class _ColourScale:
     positive and span a decade or more), the same at every refresh, and the colour bar
     is that parameter's axis. Otherwise: the combination's rank in sorted order."""
 
-    def __init__(self, plt, study, others: list[str], keys: list[tuple]) -> None:
+    def __init__(self, study, others: list[str], keys: list[tuple]) -> None:
         import matplotlib as mpl
 
-        self._cmap = plt.get_cmap("viridis")
+        self._cmap = mpl.colormaps["viridis"]
         self.label = "combination of the other varied parameters (sorted)"
         values = (list(study.points.column_values(others[0])) if len(others) == 1
                   else [])

@@ -45,6 +45,7 @@ from pathlib import Path
 from distributed import Client, LocalCluster, WorkerPlugin, as_completed
 
 from runtime.io.atomic import write_text
+from runtime.signals import held_signals
 from runtime.study import worker_boot
 from runtime.study.points import StudyPoint
 from runtime.study.sweep import (
@@ -371,14 +372,15 @@ def run_study_dask(study: Study, out: Path, *, client: Client | None = None,
         with contextlib.suppress(OSError):
             token_file.unlink(missing_ok=True)       # running batches stop
         # a Ctrl-C amid the close would leave the cluster half closed, for distributed's
-        # exit handler to wait 10 s on: the close (a fraction of a second) goes on
-        with lifetime, worker_boot.children_ignore_sigint(), \
-                _quiet_distributed() if interrupted else contextlib.nullcontext():
-            if own_client is not None:
-                own_client.close()
-            if own_cluster is not None:
-                own_cluster.close()
-        report = rec.close()
+        # exit handler to wait 10 s on: it is held until the cluster is closed and the
+        # table complete (a fraction of a second), then delivered
+        with held_signals():
+            with lifetime, _quiet_distributed() if interrupted else contextlib.nullcontext():
+                if own_client is not None:
+                    own_client.close()
+                if own_cluster is not None:
+                    own_cluster.close()
+            report = rec.close()
     report.wall_time_s = time.perf_counter() - t0
     report.engine = engine
     report.tasks = feeder.tasks if feeder is not None else 0
